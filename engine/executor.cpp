@@ -1,0 +1,210 @@
+#include "engine/executor.h"
+
+#include <algorithm>
+#include <climits>
+#include <cstring>
+
+#include "engine/error.h"
+#include "engine/op.h"
+#include "runtime/context.h"
+
+namespace vtloc {
+
+void check_inputs(const Graph& g, const TensorMap& inputs) {
+    size_t n = 0;
+    for (const Value& v : g.values()) {
+        if (v.kind != ValueKind::Input) continue;
+        ++n;
+        auto it = inputs.find(v.name);
+        if (it == inputs.end()) throw Error("graph input '" + v.name + "' was not given");
+        if (it->second.shape != v.shape)
+            throw Error("graph input '" + v.name + "' has shape " + shape_str(it->second.shape) +
+                        ", expected " + shape_str(v.shape));
+        if (int64_t(it->second.data.size()) != numel(v.shape))
+            throw Error("graph input '" + v.name + "': data size does not match its shape");
+    }
+    if (inputs.size() != n)
+        for (auto& [name, t] : inputs) {
+            bool known = false;
+            for (const Value& v : g.values()) known |= v.kind == ValueKind::Input && v.name == name;
+            if (!known) throw Error("'" + name + "' is not an input of this graph");
+        }
+}
+
+TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs) {
+    check_inputs(g, inputs);
+    std::vector<HostTensor> vals(g.values().size());
+    std::vector<const HostTensor*> ptr(g.values().size(), nullptr);
+    for (size_t i = 0; i < g.values().size(); ++i) {
+        const Value& v = g.values()[i];
+        if (v.kind == ValueKind::Input) ptr[i] = &inputs.at(v.name);
+        if (v.kind == ValueKind::Weight) ptr[i] = &weights.get(v.name, v.shape);
+    }
+    for (int ni : g.topo_order()) {
+        const Node& n = g.nodes()[size_t(ni)];
+        std::vector<const HostTensor*> in;
+        std::vector<HostTensor*> out;
+        for (int id : n.inputs) in.push_back(ptr[size_t(id)]);
+        for (int id : n.outputs) {
+            vals[size_t(id)] = HostTensor(g.value(id).shape);
+            ptr[size_t(id)] = &vals[size_t(id)];
+            out.push_back(&vals[size_t(id)]);
+        }
+        find_op(n.op).cpu(in, out, n.params);
+    }
+    TensorMap result;
+    for (auto& [name, id] : g.outputs()) result[name] = *ptr[size_t(id)];
+    return result;
+}
+
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment) {
+    const size_t nv = g.values().size();
+    std::vector<int> first(nv, INT_MAX), last(nv, -2);
+    for (size_t i = 0; i < nv; ++i)
+        if (g.values()[i].kind == ValueKind::Input) first[i] = last[i] = -1;
+    for (size_t pos = 0; pos < order.size(); ++pos) {
+        const Node& n = g.nodes()[size_t(order[pos])];
+        for (int id : n.outputs) first[size_t(id)] = last[size_t(id)] = int(pos);
+        for (int id : n.inputs) last[size_t(id)] = std::max(last[size_t(id)], int(pos));
+    }
+    for (auto& [name, id] : g.outputs()) last[size_t(id)] = INT_MAX;
+
+    MemoryPlan plan;
+    plan.offset.assign(nv, -1);
+    std::vector<uint64_t> bytes(nv, 0);
+    std::vector<size_t> todo;
+    for (size_t i = 0; i < nv; ++i) {
+        if (g.values()[i].kind == ValueKind::Weight) continue;
+        bytes[i] = (std::max<uint64_t>(4, uint64_t(numel(g.values()[i].shape)) * 4) + alignment - 1) /
+                   alignment * alignment;
+        plan.total_bytes += bytes[i];
+        todo.push_back(i);
+    }
+    // Largest first, each at the lowest offset free of every placed value whose
+    // lifetime overlaps its own.
+    std::stable_sort(todo.begin(), todo.end(), [&](size_t a, size_t b) { return bytes[a] > bytes[b]; });
+    std::vector<size_t> placed;
+    for (size_t v : todo) {
+        std::vector<std::pair<uint64_t, uint64_t>> busy;
+        for (size_t u : placed)
+            if (first[u] <= last[v] && first[v] <= last[u])
+                busy.push_back({uint64_t(plan.offset[u]), uint64_t(plan.offset[u]) + bytes[u]});
+        std::sort(busy.begin(), busy.end());
+        uint64_t at = 0;
+        for (auto& [b, e] : busy) {
+            if (at + bytes[v] <= b) break;
+            at = std::max(at, e);
+        }
+        plan.offset[v] = int64_t(at);
+        plan.arena_bytes = std::max(plan.arena_bytes, at + bytes[v]);
+        placed.push_back(v);
+    }
+    return plan;
+}
+
+GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile)
+    : ctx_(ctx),
+      graph_(g),
+      order_(graph_.topo_order()),
+      weights_(std::min<uint64_t>(ctx.info().max_storage_buffer_range, 1ull << 30),
+               std::max<uint64_t>(16, ctx.info().storage_offset_alignment)) {
+    const rt::DeviceInfo& info = ctx_.info();
+    const uint64_t align = std::max<uint64_t>(16, info.storage_offset_alignment);
+    seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
+
+    // Weights: packed into as few immutable buffers as the binding range allows.
+    std::vector<std::pair<int, const HostTensor*>> used;
+    for (size_t i = 0; i < graph_.values().size(); ++i) {
+        const Value& v = graph_.values()[i];
+        if (v.kind != ValueKind::Weight) continue;
+        const HostTensor& t = weights.get(v.name, v.shape);
+        weight_slots_[int(i)] = weights_.reserve(std::max<uint64_t>(4, t.data.size() * 4));
+        used.push_back({int(i), &t});
+    }
+    weights_.allocate(ctx_, rt::MemoryKind::Device);
+    if (!used.empty()) {
+        rt::Buffer staging(ctx_, weights_.total_bytes() + used.size() * align, rt::MemoryKind::Staging);
+        seq_->begin();
+        uint64_t at = 0;
+        for (auto& [id, t] : used) {
+            rt::BufferView dst = weights_.view(weight_slots_[id]);
+            std::memcpy(static_cast<char*>(staging.mapped()) + at, t->data.data(), t->data.size() * 4);
+            seq_->copy({staging.handle(), at, dst.size}, dst);
+            at += dst.size;
+        }
+        seq_->end();
+        seq_->submit_and_wait();
+    }
+
+    // Activations: one arena, reused across values with disjoint lifetimes.
+    plan_ = plan_memory(graph_, order_, align);
+    arena_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Device);
+
+    uint64_t in_bytes = 0, out_bytes = 0;
+    for (const Value& v : graph_.values())
+        if (v.kind == ValueKind::Input) {
+            in_offsets_[v.name] = in_bytes;
+            in_bytes += uint64_t(numel(v.shape)) * 4;
+        }
+    for (auto& [name, id] : graph_.outputs()) {
+        out_offsets_[name] = out_bytes;
+        out_bytes += uint64_t(numel(graph_.value(id).shape)) * 4;
+    }
+    staging_in_ = rt::Buffer(ctx_, in_bytes, rt::MemoryKind::Staging);
+    staging_out_ = rt::Buffer(ctx_, out_bytes, rt::MemoryKind::Staging);
+
+    // The whole graph: one command buffer, recorded once.
+    seq_->begin();
+    for (size_t i = 0; i < graph_.values().size(); ++i) {
+        const Value& v = graph_.values()[i];
+        if (v.kind != ValueKind::Input) continue;
+        uint64_t n = uint64_t(numel(v.shape)) * 4;
+        seq_->copy({staging_in_.handle(), in_offsets_[v.name], n}, {arena_.handle(), uint64_t(plan_.offset[i]), n});
+    }
+    for (int ni : order_) {
+        const Node& n = graph_.nodes()[size_t(ni)];
+        std::vector<GpuTensor> in, out;
+        for (int id : n.inputs) in.push_back({view_of(id), graph_.value(id).shape});
+        for (int id : n.outputs) out.push_back({view_of(id), graph_.value(id).shape});
+        seq_->begin_node(n.name);
+        try {
+            find_op(n.op).gpu(GpuOpArgs{ctx_, *seq_, in, out, n.params});
+        } catch (const Error& e) {
+            throw Error("node '" + n.name + "' (" + n.op + "): " + e.what());
+        }
+        seq_->end_node();
+    }
+    for (auto& [name, id] : graph_.outputs()) {
+        rt::BufferView src = view_of(id);
+        uint64_t n = uint64_t(numel(graph_.value(id).shape)) * 4;
+        seq_->copy({src.buffer, src.offset, n}, {staging_out_.handle(), out_offsets_[name], n});
+    }
+    seq_->end();
+}
+
+GpuExecutor::~GpuExecutor() = default;
+
+rt::BufferView GpuExecutor::view_of(int value) const {
+    const Value& v = graph_.value(value);
+    if (v.kind == ValueKind::Weight) return weights_.view(weight_slots_.at(value));
+    return {arena_.handle(), uint64_t(plan_.offset[size_t(value)]),
+            std::max<uint64_t>(4, uint64_t(numel(v.shape)) * 4)};
+}
+
+TensorMap GpuExecutor::run(const TensorMap& inputs) {
+    check_inputs(graph_, inputs);
+    for (auto& [name, t] : inputs)
+        std::memcpy(static_cast<char*>(staging_in_.mapped()) + in_offsets_.at(name), t.data.data(),
+                    t.data.size() * 4);
+    seq_->submit_and_wait();
+    TensorMap out;
+    for (auto& [name, id] : graph_.outputs()) {
+        HostTensor t(graph_.value(id).shape);
+        std::memcpy(t.data.data(), static_cast<const char*>(staging_out_.mapped()) + out_offsets_.at(name),
+                    t.data.size() * 4);
+        out[name] = std::move(t);
+    }
+    return out;
+}
+
+}  // namespace vtloc

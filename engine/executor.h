@@ -1,0 +1,66 @@
+#pragma once
+// Runs a Graph: on the CPU with the reference implementations (the oracle),
+// or on the GPU as one pre-recorded command buffer submitted per run.
+#include <map>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include "engine/graph.h"
+#include "engine/tensor.h"
+#include "engine/weights.h"
+#include "runtime/memory.h"
+#include "runtime/sequence.h"
+
+namespace vtloc {
+
+namespace rt {
+class Context;
+}
+
+using TensorMap = std::map<std::string, HostTensor>;
+
+// Checks that `inputs` holds exactly the graph's inputs with their shapes.
+void check_inputs(const Graph& g, const TensorMap& inputs);
+
+TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs);
+
+// Where each input/intermediate value lives in the activation arena. Values
+// whose lifetimes (first write .. last read, in schedule order) do not overlap
+// share bytes.
+struct MemoryPlan {
+    std::vector<int64_t> offset;  // per value; -1 for weights
+    uint64_t arena_bytes = 0;     // size of the arena
+    uint64_t total_bytes = 0;     // what one buffer per tensor would take
+};
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment);
+
+class GpuExecutor {
+public:
+    // Uploads the weights the graph uses, plans memory and records the graph.
+    GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile = false);
+    ~GpuExecutor();
+
+    TensorMap run(const TensorMap& inputs);
+
+    const MemoryPlan& memory_plan() const { return plan_; }
+    uint64_t weight_bytes() const { return weights_.total_bytes(); }
+    const rt::Sequence& sequence() const { return *seq_; }
+    std::vector<rt::Sequence::NodeTime> node_times() const { return seq_->node_times(); }
+
+private:
+    rt::BufferView view_of(int value) const;
+
+    rt::Context& ctx_;
+    Graph graph_;
+    std::vector<int> order_;
+    MemoryPlan plan_;
+    rt::ChunkedBuffers weights_;
+    std::map<int, rt::ChunkedBuffers::Slot> weight_slots_;
+    rt::Buffer arena_;
+    rt::Buffer staging_in_, staging_out_;
+    std::map<std::string, uint64_t> in_offsets_, out_offsets_;
+    std::unique_ptr<rt::Sequence> seq_;
+};
+
+}  // namespace vtloc

@@ -1,0 +1,94 @@
+#include "engine/graph.h"
+
+#include <algorithm>
+
+#include "engine/error.h"
+#include "engine/op.h"
+
+namespace vtloc {
+
+int Graph::new_value(const std::string& name, Shape shape, ValueKind kind) {
+    for (int64_t d : shape)
+        if (d < 0) throw Error("value '" + name + "' has a negative dimension " + shape_str(shape));
+    values_.push_back({name, std::move(shape), kind});
+    return int(values_.size() - 1);
+}
+
+int Graph::input(const std::string& name, Shape shape) {
+    for (const Value& v : values_)
+        if (v.kind == ValueKind::Input && v.name == name) throw Error("duplicate graph input '" + name + "'");
+    return new_value(name, std::move(shape), ValueKind::Input);
+}
+
+int Graph::weight(const std::string& name, Shape shape) {
+    for (size_t i = 0; i < values_.size(); ++i)
+        if (values_[i].kind == ValueKind::Weight && values_[i].name == name) {
+            if (values_[i].shape != shape)
+                throw Error("weight '" + name + "' used with shapes " + shape_str(values_[i].shape) +
+                            " and " + shape_str(shape));
+            return int(i);
+        }
+    return new_value(name, std::move(shape), ValueKind::Weight);
+}
+
+std::vector<int> Graph::add(const std::string& op, const std::vector<int>& inputs, Params params,
+                            const std::string& name) {
+    const OpDef& def = find_op(op);
+    std::string label = name.empty() ? op + "_" + std::to_string(nodes_.size()) : name;
+    std::vector<Shape> in_shapes;
+    for (int id : inputs) {
+        if (id < 0 || size_t(id) >= values_.size())
+            throw Error("node '" + label + "': input value " + std::to_string(id) + " does not exist");
+        in_shapes.push_back(values_[size_t(id)].shape);
+    }
+    std::vector<Shape> out_shapes;
+    try {
+        out_shapes = def.infer(in_shapes, params);
+    } catch (const Error& e) {
+        throw Error("node '" + label + "' (" + op + "): " + e.what());
+    }
+    Node n{op, label, inputs, {}, std::move(params)};
+    for (size_t i = 0; i < out_shapes.size(); ++i)
+        n.outputs.push_back(new_value(label + (out_shapes.size() > 1 ? ":" + std::to_string(i) : ""),
+                                      out_shapes[i], ValueKind::Intermediate));
+    nodes_.push_back(std::move(n));
+    return nodes_.back().outputs;
+}
+
+void Graph::output(int value, const std::string& name) {
+    if (value < 0 || size_t(value) >= values_.size())
+        throw Error("graph output '" + name + "': value does not exist");
+    for (auto& [n, v] : outputs_)
+        if (n == name) throw Error("duplicate graph output '" + name + "'");
+    outputs_.push_back({name, value});
+}
+
+std::vector<int> Graph::topo_order() const {
+    // Kahn's algorithm, taking ready nodes in insertion order for a stable schedule.
+    std::vector<int> producer(values_.size(), -1);
+    for (size_t i = 0; i < nodes_.size(); ++i)
+        for (int o : nodes_[i].outputs) producer[size_t(o)] = int(i);
+    std::vector<int> missing(nodes_.size(), 0);
+    std::vector<std::vector<int>> consumers(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i)
+        for (int in : nodes_[i].inputs)
+            if (int p = producer[size_t(in)]; p >= 0) {
+                ++missing[i];
+                consumers[size_t(p)].push_back(int(i));
+            }
+    std::vector<int> order, ready;
+    for (size_t i = 0; i < nodes_.size(); ++i)
+        if (!missing[i]) ready.push_back(int(i));
+    while (!ready.empty()) {
+        auto it = std::min_element(ready.begin(), ready.end());
+        int n = *it;
+        ready.erase(it);
+        order.push_back(n);
+        for (int c : consumers[size_t(n)])
+            if (--missing[size_t(c)] == 0) ready.push_back(c);
+    }
+    if (order.size() != nodes_.size()) throw Error("graph has a cycle");
+    return order;
+}
+
+}  // namespace vtloc

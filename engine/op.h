@@ -1,0 +1,45 @@
+#pragma once
+// What an op is: shape inference, a plain C++ reference (the test oracle) and
+// a GPU recorder that dispatches its shader(s). Ops are listed in
+// engine/ops/registry.cpp; adding one = a .comp, an engine/ops/<op>.cpp,
+// a test and a registry line.
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "engine/graph.h"
+#include "engine/tensor.h"
+#include "runtime/memory.h"
+
+namespace vtloc {
+namespace rt {
+class Context;
+class Sequence;
+}  // namespace rt
+
+struct GpuTensor {
+    rt::BufferView view;
+    Shape shape;
+};
+
+struct GpuOpArgs {
+    rt::Context& ctx;
+    rt::Sequence& seq;
+    const std::vector<GpuTensor>& in;
+    const std::vector<GpuTensor>& out;
+    const Params& params;
+};
+
+struct OpDef {
+    std::string_view name;
+    // Throws vtloc::Error describing the mismatch (the graph adds the node's name).
+    std::vector<Shape> (*infer)(const std::vector<Shape>& in, const Params& p);
+    void (*cpu)(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out,
+                const Params& p);
+    void (*gpu)(const GpuOpArgs& a);
+};
+
+const OpDef& find_op(std::string_view name);
+std::vector<std::string_view> op_names();
+
+}  // namespace vtloc

@@ -1,0 +1,52 @@
+#include "engine/ops/common.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/error.h"
+
+namespace vtloc::ops {
+
+float apply_act(float v, uint32_t act, float slope) {
+    switch (act) {
+        case kActRelu: return v > 0.0f ? v : 0.0f;
+        case kActLeaky: return v >= 0.0f ? v : v * slope;
+        case kActTanh: return std::tanh(v);
+        case kActSigmoid: return float(1.0 / (1.0 + std::exp(-double(v))));
+        default: return v;
+    }
+}
+
+uint32_t elementwise_local_size(const rt::DeviceInfo& d) {
+    uint32_t limit = std::min({256u, d.max_invocations, d.max_workgroup_size[0]});
+    uint32_t sg = std::max(1u, d.subgroup_size);
+    return limit >= sg ? limit / sg * sg : limit;
+}
+
+uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d) {
+    uint64_t groups = (n + local_size - 1) / local_size;
+    // Beyond a few thousand groups a grid-stride loop costs nothing and keeps
+    // every size within maxComputeWorkGroupCount.
+    uint64_t cap = std::min<uint64_t>(d.max_workgroup_count[0], 4096);
+    return uint32_t(std::clamp<uint64_t>(groups, 1, cap));
+}
+
+const rt::Pipeline& pipeline(rt::Context& ctx, const char* shader, uint32_t bindings,
+                             uint32_t push_bytes, std::vector<uint32_t> spec) {
+    return ctx.pipelines().get(rt::PipelineDesc{shader, bindings, push_bytes, std::move(spec)});
+}
+
+uint32_t to_u32(int64_t v, const char* what) {
+    if (v < 0 || v > int64_t(std::numeric_limits<uint32_t>::max()))
+        throw Error(std::string(what) + " (" + std::to_string(v) + ") does not fit 32-bit shader indexing");
+    return uint32_t(v);
+}
+
+void expect_input_count(const std::vector<Shape>& in, size_t lo, size_t hi) {
+    if (in.size() < lo || in.size() > hi)
+        throw Error("takes " + (lo == hi ? std::to_string(lo) : std::to_string(lo) + ".." + std::to_string(hi)) +
+                    " inputs, got " + std::to_string(in.size()));
+}
+
+}  // namespace vtloc::ops

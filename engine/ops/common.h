@@ -1,0 +1,32 @@
+#pragma once
+// Helpers shared by the op implementations in engine/ops/.
+#include <cstdint>
+#include <vector>
+
+#include "engine/op.h"
+#include "runtime/context.h"
+#include "runtime/pipeline.h"
+#include "runtime/sequence.h"
+
+namespace vtloc::ops {
+
+// Activation codes; the same numbers as shaders/act.glsl.
+enum Act : uint32_t { kActNone = 0, kActRelu = 1, kActLeaky = 2, kActTanh = 3, kActSigmoid = 4 };
+
+// CPU mirror of apply_act in shaders/act.glsl (textbook formulas: the oracle).
+float apply_act(float v, uint32_t act, float slope);
+
+// Workgroup size for 1-D elementwise shaders: up to 256 invocations, a multiple
+// of the subgroup size, within the device's limits.
+uint32_t elementwise_local_size(const rt::DeviceInfo& d);
+// Workgroup count for a grid-stride loop over n items.
+uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d);
+
+const rt::Pipeline& pipeline(rt::Context& ctx, const char* shader, uint32_t bindings,
+                             uint32_t push_bytes, std::vector<uint32_t> spec);
+
+// Shaders index with 32-bit integers; larger tensors are rejected clearly.
+uint32_t to_u32(int64_t v, const char* what);
+void expect_input_count(const std::vector<Shape>& in, size_t lo, size_t hi);
+
+}  // namespace vtloc::ops

@@ -1,0 +1,88 @@
+// linear: y = act(x W^T + b), W stored [N, K] as PyTorch does; x [..., K] is
+// flattened to M rows. -> shaders/gemm.comp (tiled, fused bias + activation).
+// Params: act (see Act, default none), slope (leaky, default 0.01).
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/gemm_tiles.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+
+GemmTiles choose_gemm_tiles(const rt::DeviceInfo& d, int64_t M, int64_t N) {
+    static const GemmTiles kSmallM[] = {{16, 64, 16, 1, 4}, {8, 32, 16, 1, 2}, {4, 16, 8, 1, 2}};
+    static const GemmTiles kGeneral[] = {{64, 64, 16, 4, 4}, {32, 64, 16, 4, 4}, {32, 32, 16, 4, 4},
+                                         {16, 32, 16, 2, 4}, {16, 16, 8, 2, 2}, {8, 8, 8, 2, 2},
+                                         {4, 4, 4, 2, 2}};
+    auto fits = [&](const GemmTiles& t) {
+        return t.threads() <= d.max_invocations && t.threads() <= d.max_workgroup_size[0] &&
+               t.shared_bytes() <= d.max_shared_memory;
+    };
+    const bool small_m = M <= 16 && N >= 32;
+    for (int pass = 0; pass < 2; ++pass) {  // pass 0 also wants whole subgroups
+        auto ok = [&](const GemmTiles& t) {
+            return fits(t) && (pass == 1 || t.threads() % d.subgroup_size == 0);
+        };
+        if (small_m)
+            for (const GemmTiles& t : kSmallM) if (ok(t)) return t;
+        for (const GemmTiles& t : kGeneral) if (ok(t)) return t;
+    }
+    throw Error("device '" + d.name + "' cannot run even a 4x4 GEMM tile");
+}
+
+namespace {
+
+std::vector<Shape> infer(const std::vector<Shape>& in, const Params&) {
+    expect_input_count(in, 2, 3);
+    const Shape& x = in[0];
+    const Shape& w = in[1];
+    if (x.empty()) throw Error("input must have at least one dimension");
+    if (w.size() != 2) throw Error("weight must be [out, in], got " + shape_str(w));
+    if (x.back() != w[1])
+        throw Error("input " + shape_str(x) + " has " + std::to_string(x.back()) +
+                    " features but weight " + shape_str(w) + " expects " + std::to_string(w[1]));
+    if (in.size() == 3 && in[2] != Shape{w[0]})
+        throw Error("bias " + shape_str(in[2]) + " does not match weight " + shape_str(w));
+    Shape y = x;
+    y.back() = w[0];
+    return {y};
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    const HostTensor& x = *in[0];
+    const HostTensor& w = *in[1];
+    const int64_t K = w.shape[1], N = w.shape[0];
+    const int64_t M = N ? out[0]->size() / N : 0;
+    const uint32_t act = uint32_t(p.get("act", kActNone));
+    const float slope = float(p.get("slope", 0.01));
+    for (int64_t m = 0; m < M; ++m)
+        for (int64_t n = 0; n < N; ++n) {
+            double acc = in.size() == 3 ? in[2]->data[size_t(n)] : 0.0;
+            for (int64_t k = 0; k < K; ++k) acc += double(x.data[size_t(m * K + k)]) * w.data[size_t(n * K + k)];
+            out[0]->data[size_t(m * N + n)] = apply_act(float(acc), act, slope);
+        }
+}
+
+void gpu(const GpuOpArgs& a) {
+    const Shape& ws = a.in[1].shape;
+    const int64_t K = ws[1], N = ws[0];
+    const int64_t M = numel(a.out[0].shape) / std::max<int64_t>(1, N);
+    GemmTiles t = choose_gemm_tiles(a.ctx.info(), M, N);
+    const rt::Pipeline& pipe = pipeline(a.ctx, "gemm", 4, 24, {t.threads(), t.bm, t.bn, t.bk, t.tm, t.tn});
+    struct { uint32_t M, N, K, has_bias, act; float slope; } push{
+        to_u32(M, "GEMM rows"), to_u32(N, "GEMM columns"), to_u32(K, "GEMM depth"),
+        a.in.size() == 3 ? 1u : 0u, uint32_t(a.params.get("act", kActNone)), float(a.params.get("slope", 0.01))};
+    to_u32(M * K, "GEMM input size");
+    to_u32(M * N, "GEMM output size");
+    // Without a bias any read-only buffer fills the binding; the shader skips it.
+    const rt::BufferView& bias = a.in.size() == 3 ? a.in[2].view : a.in[1].view;
+    a.seq.dispatch(pipe,
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
+                    {bias, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), uint32_t((N + t.bn - 1) / t.bn), uint32_t((M + t.bm - 1) / t.bm));
+}
+
+}  // namespace
+
+const OpDef op_linear{"linear", infer, cpu, gpu};
+
+}  // namespace vtloc::ops

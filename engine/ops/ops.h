@@ -1,0 +1,14 @@
+#pragma once
+// Every op the engine has; registry.cpp lists them by name.
+#include "engine/op.h"
+
+namespace vtloc::ops {
+extern const OpDef op_linear;      // linear.cpp
+extern const OpDef op_add;         // binary.cpp
+extern const OpDef op_mul;         // binary.cpp
+extern const OpDef op_relu;        // activation.cpp
+extern const OpDef op_leaky_relu;  // activation.cpp
+extern const OpDef op_tanh;        // activation.cpp
+extern const OpDef op_sigmoid;     // activation.cpp
+extern const OpDef op_concat;      // concat.cpp
+}  // namespace vtloc::ops

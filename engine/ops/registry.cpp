@@ -1,0 +1,31 @@
+#include "engine/error.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc {
+
+namespace {
+const OpDef* const kOps[] = {
+    &ops::op_linear,
+    &ops::op_add,
+    &ops::op_mul,
+    &ops::op_relu,
+    &ops::op_leaky_relu,
+    &ops::op_tanh,
+    &ops::op_sigmoid,
+    &ops::op_concat,
+};
+}  // namespace
+
+const OpDef& find_op(std::string_view name) {
+    for (const OpDef* op : kOps)
+        if (op->name == name) return *op;
+    throw Error("unknown op '" + std::string(name) + "'");
+}
+
+std::vector<std::string_view> op_names() {
+    std::vector<std::string_view> out;
+    for (const OpDef* op : kOps) out.push_back(op->name);
+    return out;
+}
+
+}  // namespace vtloc

@@ -1,0 +1,320 @@
+#include "runtime/context.h"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdlib>
+#include <cstring>
+#include <utility>
+
+#include "engine/error.h"
+#include "runtime/pipeline.h"
+
+namespace vtloc::rt {
+
+const char* vk_result_name(VkResult r) {
+    switch (r) {
+        case VK_SUCCESS: return "VK_SUCCESS";
+        case VK_NOT_READY: return "VK_NOT_READY";
+        case VK_TIMEOUT: return "VK_TIMEOUT";
+        case VK_ERROR_OUT_OF_HOST_MEMORY: return "VK_ERROR_OUT_OF_HOST_MEMORY";
+        case VK_ERROR_OUT_OF_DEVICE_MEMORY: return "VK_ERROR_OUT_OF_DEVICE_MEMORY";
+        case VK_ERROR_INITIALIZATION_FAILED: return "VK_ERROR_INITIALIZATION_FAILED";
+        case VK_ERROR_DEVICE_LOST: return "VK_ERROR_DEVICE_LOST";
+        case VK_ERROR_LAYER_NOT_PRESENT: return "VK_ERROR_LAYER_NOT_PRESENT";
+        case VK_ERROR_EXTENSION_NOT_PRESENT: return "VK_ERROR_EXTENSION_NOT_PRESENT";
+        case VK_ERROR_INCOMPATIBLE_DRIVER: return "VK_ERROR_INCOMPATIBLE_DRIVER";
+        case VK_ERROR_TOO_MANY_OBJECTS: return "VK_ERROR_TOO_MANY_OBJECTS";
+        case VK_ERROR_OUT_OF_POOL_MEMORY: return "VK_ERROR_OUT_OF_POOL_MEMORY";
+        default: return "VkResult error";
+    }
+}
+
+void check_vk(VkResult r, const char* what) {
+    if (r != VK_SUCCESS)
+        throw Error(std::string("Vulkan: ") + what + " failed with " + vk_result_name(r) +
+                    " (" + std::to_string(int(r)) + ")");
+}
+
+const char* device_type_name(VkPhysicalDeviceType t) {
+    switch (t) {
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return "discrete GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return "integrated GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return "virtual GPU";
+        case VK_PHYSICAL_DEVICE_TYPE_CPU: return "CPU";
+        default: return "other";
+    }
+}
+
+namespace {
+
+bool env_flag(const char* name) {
+    const char* v = std::getenv(name);
+    if (!v) return false;
+    std::string s(v);
+    std::transform(s.begin(), s.end(), s.begin(), ::tolower);
+    return s == "1" || s == "on" || s == "true" || s == "yes";
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                              VkDebugUtilsMessageTypeFlagsEXT,
+                                              const VkDebugUtilsMessengerCallbackDataEXT* data,
+                                              void* user) {
+    ValidationMessage m;
+    m.severity = (severity & VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT) ? "error" : "warning";
+    m.text = data && data->pMessage ? data->pMessage : "(no text)";
+    static_cast<Context*>(user)->on_validation_message(m);
+    return VK_FALSE;
+}
+
+bool has_layer(const char* name) {
+    uint32_t n = 0;
+    vkEnumerateInstanceLayerProperties(&n, nullptr);
+    std::vector<VkLayerProperties> layers(n);
+    vkEnumerateInstanceLayerProperties(&n, layers.data());
+    for (auto& l : layers)
+        if (std::strcmp(l.layerName, name) == 0) return true;
+    return false;
+}
+
+VkInstance make_instance(bool validation) {
+    VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO};
+    app.pApplicationName = "vtloc";
+    app.pEngineName = "vtloc";
+    app.apiVersion = VK_API_VERSION_1_1;
+    VkInstanceCreateInfo ci{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO};
+    ci.pApplicationInfo = &app;
+    const char* layer = "VK_LAYER_KHRONOS_validation";
+    const char* ext = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+    if (validation) {
+        if (!has_layer(layer))
+            throw Error("validation was requested but VK_LAYER_KHRONOS_validation is not "
+                        "installed (Debian: apt-get install vulkan-validationlayers)");
+        ci.enabledLayerCount = 1;
+        ci.ppEnabledLayerNames = &layer;
+        ci.enabledExtensionCount = 1;
+        ci.ppEnabledExtensionNames = &ext;
+    }
+    VkInstance inst = VK_NULL_HANDLE;
+    VkResult r = vkCreateInstance(&ci, nullptr, &inst);
+    if (r == VK_ERROR_INCOMPATIBLE_DRIVER)
+        throw Error("no Vulkan driver found (Debian: apt-get install mesa-vulkan-drivers for "
+                    "the lavapipe CPU device)");
+    check_vk(r, "vkCreateInstance");
+    return inst;
+}
+
+std::vector<VkPhysicalDevice> physical_devices(VkInstance inst) {
+    uint32_t n = 0;
+    check_vk(vkEnumeratePhysicalDevices(inst, &n, nullptr), "vkEnumeratePhysicalDevices");
+    std::vector<VkPhysicalDevice> devs(n);
+    check_vk(vkEnumeratePhysicalDevices(inst, &n, devs.data()), "vkEnumeratePhysicalDevices");
+    return devs;
+}
+
+int compute_queue_family(VkPhysicalDevice pd) {
+    uint32_t n = 0;
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+    std::vector<VkQueueFamilyProperties> fams(n);
+    vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+    // Prefer a compute queue that also does graphics: it is the one that has
+    // timestamps everywhere; a dedicated async-compute family is no faster here.
+    int best = -1;
+    for (uint32_t i = 0; i < n; ++i) {
+        if (!(fams[i].queueFlags & VK_QUEUE_COMPUTE_BIT)) continue;
+        if (best < 0 || (fams[i].queueFlags & VK_QUEUE_GRAPHICS_BIT)) best = int(i);
+        if (fams[i].queueFlags & VK_QUEUE_GRAPHICS_BIT) break;
+    }
+    return best;
+}
+
+DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
+    VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
+    VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
+    p2.pNext = &sub;
+    vkGetPhysicalDeviceProperties2(pd, &p2);
+    const VkPhysicalDeviceProperties& p = p2.properties;
+    const VkPhysicalDeviceLimits& l = p.limits;
+    DeviceInfo d;
+    d.index = index;
+    d.name = p.deviceName;
+    d.type = p.deviceType;
+    d.api_version = p.apiVersion;
+    d.driver_version = p.driverVersion;
+    d.vendor_id = p.vendorID;
+    d.subgroup_size = std::max(1u, sub.subgroupSize);
+    d.max_shared_memory = l.maxComputeSharedMemorySize;
+    d.max_invocations = l.maxComputeWorkGroupInvocations;
+    for (int i = 0; i < 3; ++i) {
+        d.max_workgroup_size[i] = l.maxComputeWorkGroupSize[i];
+        d.max_workgroup_count[i] = l.maxComputeWorkGroupCount[i];
+    }
+    d.max_storage_buffer_range = l.maxStorageBufferRange;
+    d.storage_offset_alignment = std::max<uint64_t>(1, l.minStorageBufferOffsetAlignment);
+    d.max_push_constants = l.maxPushConstantsSize;
+    d.timestamp_period = l.timestampPeriod;
+    int fam = compute_queue_family(pd);
+    d.has_compute_queue = fam >= 0;
+    if (fam >= 0) {
+        uint32_t n = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, nullptr);
+        std::vector<VkQueueFamilyProperties> fams(n);
+        vkGetPhysicalDeviceQueueFamilyProperties(pd, &n, fams.data());
+        d.has_timestamps = fams[fam].timestampValidBits > 0 && l.timestampPeriod > 0.0f;
+    }
+    VkPhysicalDeviceMemoryProperties mp;
+    vkGetPhysicalDeviceMemoryProperties(pd, &mp);
+    for (uint32_t i = 0; i < mp.memoryHeapCount; ++i)
+        if (mp.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
+            d.device_local_bytes += mp.memoryHeaps[i].size;
+    return d;
+}
+
+int type_rank(VkPhysicalDeviceType t) {
+    switch (t) {
+        case VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU: return 0;
+        case VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU: return 1;
+        case VK_PHYSICAL_DEVICE_TYPE_VIRTUAL_GPU: return 2;
+        case VK_PHYSICAL_DEVICE_TYPE_CPU: return 3;
+        default: return 4;
+    }
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), ::tolower);
+    return s;
+}
+
+// discrete > integrated > virtual > CPU, unless `want` names one (index or name substring).
+size_t choose_device(const std::vector<DeviceInfo>& devs, const std::string& want) {
+    std::string names;
+    for (auto& d : devs) names += "\n  " + std::to_string(d.index) + ": " + d.name;
+    if (!want.empty()) {
+        bool numeric = std::all_of(want.begin(), want.end(), ::isdigit);
+        for (size_t i = 0; i < devs.size(); ++i) {
+            if (!devs[i].has_compute_queue) continue;
+            if (numeric ? devs[i].index == std::stoul(want)
+                        : lower(devs[i].name).find(lower(want)) != std::string::npos)
+                return i;
+        }
+        throw Error("no Vulkan compute device matches VTLOC_DEVICE='" + want + "'; devices:" + names);
+    }
+    size_t best = devs.size();
+    for (size_t i = 0; i < devs.size(); ++i) {
+        if (!devs[i].has_compute_queue || devs[i].api_version < VK_API_VERSION_1_1) continue;
+        if (best == devs.size() || type_rank(devs[i].type) < type_rank(devs[best].type)) best = i;
+    }
+    if (best == devs.size()) throw Error("no Vulkan 1.1 device with a compute queue; devices:" + names);
+    return best;
+}
+
+}  // namespace
+
+std::vector<DeviceInfo> Context::list_devices() {
+    VkInstance inst = make_instance(false);
+    std::vector<DeviceInfo> out;
+    try {
+        auto devs = physical_devices(inst);
+        for (uint32_t i = 0; i < devs.size(); ++i) out.push_back(query_info(devs[i], i));
+    } catch (...) {
+        vkDestroyInstance(inst, nullptr);
+        throw;
+    }
+    vkDestroyInstance(inst, nullptr);
+    return out;
+}
+
+Context::Context(const ContextOptions& options) {
+    bool validation = options.validation < 0 ? env_flag("VTLOC_VALIDATION") : options.validation == 1;
+    std::string want = options.device;
+    if (want.empty() && std::getenv("VTLOC_DEVICE")) want = std::getenv("VTLOC_DEVICE");
+
+    instance_ = make_instance(validation);
+    try {
+        if (validation) {
+            VkDebugUtilsMessengerCreateInfoEXT mi{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT};
+            mi.messageSeverity = VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT |
+                                 VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT;
+            mi.messageType = VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT |
+                             VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT |
+                             VK_DEBUG_UTILS_MESSAGE_TYPE_PERFORMANCE_BIT_EXT;
+            mi.pfnUserCallback = debug_callback;
+            mi.pUserData = this;
+            auto create = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(
+                vkGetInstanceProcAddr(instance_, "vkCreateDebugUtilsMessengerEXT"));
+            if (!create) throw Error("validation: vkCreateDebugUtilsMessengerEXT is unavailable");
+            check_vk(create(instance_, &mi, nullptr, &messenger_), "vkCreateDebugUtilsMessengerEXT");
+        }
+
+        auto devs = physical_devices(instance_);
+        std::vector<DeviceInfo> infos;
+        for (uint32_t i = 0; i < devs.size(); ++i) infos.push_back(query_info(devs[i], i));
+        if (infos.empty()) throw Error("no Vulkan device found (is mesa-vulkan-drivers installed?)");
+        size_t pick = choose_device(infos, want);
+        physical_ = devs[pick];
+        info_ = infos[pick];
+        queue_family_ = uint32_t(compute_queue_family(physical_));
+        vkGetPhysicalDeviceMemoryProperties(physical_, &memory_props_);
+
+        float prio = 1.0f;
+        VkDeviceQueueCreateInfo qi{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO};
+        qi.queueFamilyIndex = queue_family_;
+        qi.queueCount = 1;
+        qi.pQueuePriorities = &prio;
+        VkDeviceCreateInfo di{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO};
+        di.queueCreateInfoCount = 1;
+        di.pQueueCreateInfos = &qi;
+        check_vk(vkCreateDevice(physical_, &di, nullptr, &device_), "vkCreateDevice");
+        vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+        pipelines_ = std::make_unique<PipelineCache>(*this);
+    } catch (...) {
+        release();
+        throw;
+    }
+}
+
+Context::~Context() { release(); }
+
+void Context::release() {
+    pipelines_.reset();
+    if (device_) vkDestroyDevice(device_, nullptr);
+    device_ = VK_NULL_HANDLE;
+    if (messenger_) {
+        auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(
+            vkGetInstanceProcAddr(instance_, "vkDestroyDebugUtilsMessengerEXT"));
+        if (destroy) destroy(instance_, messenger_, nullptr);
+        messenger_ = VK_NULL_HANDLE;
+    }
+    if (instance_) vkDestroyInstance(instance_, nullptr);
+    instance_ = VK_NULL_HANDLE;
+}
+
+uint32_t Context::memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
+                              VkMemoryPropertyFlags preferred) const {
+    int fallback = -1;
+    for (uint32_t i = 0; i < memory_props_.memoryTypeCount; ++i) {
+        if (!(type_bits & (1u << i))) continue;
+        VkMemoryPropertyFlags f = memory_props_.memoryTypes[i].propertyFlags;
+        if ((f & required) != required) continue;
+        if ((f & preferred) == preferred) return i;
+        if (fallback < 0) fallback = int(i);
+    }
+    if (fallback < 0) throw Error("Vulkan: no memory type with the required properties");
+    return uint32_t(fallback);
+}
+
+void Context::on_validation_message(const ValidationMessage& m) {
+    std::lock_guard<std::mutex> lock(messages_mutex_);
+    messages_.push_back(m);
+}
+
+std::vector<ValidationMessage> Context::take_validation_messages() {
+    std::lock_guard<std::mutex> lock(messages_mutex_);
+    return std::exchange(messages_, {});
+}
+
+size_t Context::validation_message_count() const {
+    std::lock_guard<std::mutex> lock(messages_mutex_);
+    return messages_.size();
+}
+
+}  // namespace vtloc::rt

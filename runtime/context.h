@@ -1,0 +1,105 @@
+#pragma once
+// Vulkan instance + one compute queue on one physical device.
+// Vulkan 1.1 core only; no device extension is required.
+#include <vulkan/vulkan.h>
+
+#include <array>
+#include <cstdint>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace vtloc::rt {
+
+class PipelineCache;
+
+// The device properties that shaders and tile choices depend on.
+struct DeviceInfo {
+    uint32_t index = 0;
+    std::string name;
+    VkPhysicalDeviceType type = VK_PHYSICAL_DEVICE_TYPE_OTHER;
+    uint32_t api_version = 0;
+    uint32_t driver_version = 0;
+    uint32_t vendor_id = 0;
+    uint32_t subgroup_size = 1;
+    uint32_t max_shared_memory = 0;           // bytes per workgroup
+    uint32_t max_invocations = 0;             // per workgroup
+    std::array<uint32_t, 3> max_workgroup_size{};
+    std::array<uint32_t, 3> max_workgroup_count{};
+    uint64_t max_storage_buffer_range = 0;
+    uint64_t storage_offset_alignment = 1;
+    uint32_t max_push_constants = 0;
+    float timestamp_period = 0.0f;            // ns per tick
+    bool has_timestamps = false;
+    bool has_compute_queue = false;
+    uint64_t device_local_bytes = 0;
+};
+
+const char* device_type_name(VkPhysicalDeviceType t);
+
+struct ContextOptions {
+    // Empty: VTLOC_VALIDATION decides (1/on/true turns the Khronos layer on).
+    int validation = -1;  // -1 from env, 0 off, 1 on
+    // Empty: VTLOC_DEVICE decides; otherwise a device index or a name substring.
+    std::string device;
+};
+
+// A message from the validation layer (warnings and errors only).
+struct ValidationMessage {
+    std::string severity;
+    std::string text;
+};
+
+class Context {
+public:
+    explicit Context(const ContextOptions& options = {});
+    ~Context();
+    Context(const Context&) = delete;
+    Context& operator=(const Context&) = delete;
+
+    // All Vulkan devices with compute, in enumeration order (no logical device made).
+    static std::vector<DeviceInfo> list_devices();
+
+    VkInstance instance() const { return instance_; }
+    VkPhysicalDevice physical_device() const { return physical_; }
+    VkDevice device() const { return device_; }
+    VkQueue queue() const { return queue_; }
+    uint32_t queue_family() const { return queue_family_; }
+    const DeviceInfo& info() const { return info_; }
+    bool validation_enabled() const { return messenger_ != VK_NULL_HANDLE; }
+    PipelineCache& pipelines() { return *pipelines_; }
+
+    // Memory type index with all of `required` (and `preferred` where possible).
+    uint32_t memory_type(uint32_t type_bits, VkMemoryPropertyFlags required,
+                         VkMemoryPropertyFlags preferred) const;
+
+    // Validation messages seen since the last take (thread-safe).
+    std::vector<ValidationMessage> take_validation_messages();
+    size_t validation_message_count() const;
+
+    // Called by the debug messenger; public only for the C callback.
+    void on_validation_message(const ValidationMessage& m);
+
+private:
+    void release();  // destroys the Vulkan objects; safe on a half-built context
+
+    VkInstance instance_ = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger_ = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_ = VK_NULL_HANDLE;
+    VkDevice device_ = VK_NULL_HANDLE;
+    VkQueue queue_ = VK_NULL_HANDLE;
+    uint32_t queue_family_ = 0;
+    DeviceInfo info_;
+    VkPhysicalDeviceMemoryProperties memory_props_{};
+    std::unique_ptr<PipelineCache> pipelines_;
+    mutable std::mutex messages_mutex_;
+    std::vector<ValidationMessage> messages_;
+};
+
+// Throws vtloc::Error naming the call when r is not VK_SUCCESS.
+void check_vk(VkResult r, const char* what);
+const char* vk_result_name(VkResult r);
+
+}  // namespace vtloc::rt

@@ -1,0 +1,114 @@
+#include "runtime/pipeline.h"
+
+#include <tuple>
+
+#include "engine/error.h"
+#include "runtime/context.h"
+#include "runtime/shader_registry.h"
+
+namespace vtloc::rt {
+
+bool PipelineDesc::operator<(const PipelineDesc& o) const {
+    return std::tie(shader, bindings, push_bytes, spec) <
+           std::tie(o.shader, o.bindings, o.push_bytes, o.spec);
+}
+
+PipelineCache::~PipelineCache() {
+    VkDevice dev = ctx_.device();
+    for (auto& [desc, p] : pipelines_) {
+        vkDestroyPipeline(dev, p->pipeline, nullptr);
+        vkDestroyPipelineLayout(dev, p->layout, nullptr);
+        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
+    }
+}
+
+size_t PipelineCache::size() const {
+    std::lock_guard<std::mutex> lock(mutex_);
+    return pipelines_.size();
+}
+
+const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
+    std::lock_guard<std::mutex> lock(mutex_);
+    auto it = pipelines_.find(desc);
+    if (it != pipelines_.end()) return *it->second;
+
+    const DeviceInfo& info = ctx_.info();
+    auto spirv = find_spirv(desc.shader);
+    if (spirv.empty()) throw Error("no embedded shader named '" + desc.shader + "'");
+    if (desc.push_bytes > info.max_push_constants)
+        throw Error("shader '" + desc.shader + "' needs " + std::to_string(desc.push_bytes) +
+                    " bytes of push constants; the device allows " +
+                    std::to_string(info.max_push_constants));
+    uint32_t lx = desc.spec.empty() ? 1 : desc.spec[0];
+    if (lx == 0 || lx > info.max_workgroup_size[0] || lx > info.max_invocations)
+        throw Error("shader '" + desc.shader + "': workgroup size " + std::to_string(lx) +
+                    " is outside the device's limits");
+
+    VkDevice dev = ctx_.device();
+    auto p = std::make_unique<Pipeline>();
+    p->desc = desc;
+
+    std::vector<VkDescriptorSetLayoutBinding> binds(desc.bindings);
+    for (uint32_t i = 0; i < desc.bindings; ++i) {
+        binds[i] = {};
+        binds[i].binding = i;
+        binds[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        binds[i].descriptorCount = 1;
+        binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
+    }
+    VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
+    dl.bindingCount = desc.bindings;
+    dl.pBindings = binds.data();
+    check_vk(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &p->set_layout),
+             "vkCreateDescriptorSetLayout");
+
+    VkPushConstantRange pc{VK_SHADER_STAGE_COMPUTE_BIT, 0, desc.push_bytes};
+    VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
+    pl.setLayoutCount = 1;
+    pl.pSetLayouts = &p->set_layout;
+    pl.pushConstantRangeCount = desc.push_bytes ? 1 : 0;
+    pl.pPushConstantRanges = &pc;
+    VkResult r = vkCreatePipelineLayout(dev, &pl, nullptr, &p->layout);
+    if (r != VK_SUCCESS) {
+        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
+        check_vk(r, "vkCreatePipelineLayout");
+    }
+
+    VkShaderModuleCreateInfo sm{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
+    sm.codeSize = spirv.size() * sizeof(uint32_t);
+    sm.pCode = spirv.data();
+    VkShaderModule module = VK_NULL_HANDLE;
+    r = vkCreateShaderModule(dev, &sm, nullptr, &module);
+    if (r != VK_SUCCESS) {
+        vkDestroyPipelineLayout(dev, p->layout, nullptr);
+        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
+        check_vk(r, "vkCreateShaderModule");
+    }
+
+    std::vector<VkSpecializationMapEntry> entries(desc.spec.size());
+    for (uint32_t i = 0; i < desc.spec.size(); ++i)
+        entries[i] = {i, uint32_t(i * sizeof(uint32_t)), sizeof(uint32_t)};
+    VkSpecializationInfo si{};
+    si.mapEntryCount = uint32_t(entries.size());
+    si.pMapEntries = entries.data();
+    si.dataSize = desc.spec.size() * sizeof(uint32_t);
+    si.pData = desc.spec.data();
+
+    VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
+    ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
+    ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
+    ci.stage.module = module;
+    ci.stage.pName = "main";
+    ci.stage.pSpecializationInfo = desc.spec.empty() ? nullptr : &si;
+    ci.layout = p->layout;
+    r = vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &p->pipeline);
+    vkDestroyShaderModule(dev, module, nullptr);
+    if (r != VK_SUCCESS) {
+        vkDestroyPipelineLayout(dev, p->layout, nullptr);
+        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
+        check_vk(r, ("vkCreateComputePipelines for shader " + desc.shader).c_str());
+    }
+    return *(pipelines_[desc] = std::move(p));
+}
+
+}  // namespace vtloc::rt

@@ -1,0 +1,55 @@
+#pragma once
+// Compute pipelines, created once per (shader, specialization constants) and cached.
+// Conventions every shader follows:
+//   - bindings 0..n-1 of set 0 are storage buffers, in the order the op passes them;
+//   - specialization constant 0 is local_size_x (the host picks it from device limits);
+//   - constants 1.. are the shader's own (tile sizes, modes), 32-bit each;
+//   - small per-dispatch numbers go in push constants.
+#include <vulkan/vulkan.h>
+
+#include <cstdint>
+#include <map>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <vector>
+
+namespace vtloc::rt {
+
+class Context;
+
+struct PipelineDesc {
+    std::string shader;            // name of shaders/<name>.comp
+    uint32_t bindings = 0;         // storage buffers
+    uint32_t push_bytes = 0;       // push-constant block size
+    std::vector<uint32_t> spec;    // constant_id i = spec[i]; spec[0] = local_size_x
+
+    bool operator<(const PipelineDesc& o) const;
+};
+
+struct Pipeline {
+    VkPipeline pipeline = VK_NULL_HANDLE;
+    VkPipelineLayout layout = VK_NULL_HANDLE;
+    VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+    PipelineDesc desc;
+    uint32_t local_size_x() const { return desc.spec.empty() ? 1 : desc.spec[0]; }
+};
+
+class PipelineCache {
+public:
+    explicit PipelineCache(Context& ctx) : ctx_(ctx) {}
+    ~PipelineCache();
+    PipelineCache(const PipelineCache&) = delete;
+    PipelineCache& operator=(const PipelineCache&) = delete;
+
+    // Thread-safe; the returned reference lives as long as the cache.
+    const Pipeline& get(const PipelineDesc& desc);
+    size_t size() const;
+
+private:
+    Context& ctx_;
+    mutable std::mutex mutex_;
+    std::map<PipelineDesc, std::unique_ptr<Pipeline>> pipelines_;
+};
+
+}  // namespace vtloc::rt

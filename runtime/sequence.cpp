@@ -1,0 +1,264 @@
+#include "runtime/sequence.h"
+
+#include "engine/error.h"
+#include "runtime/context.h"
+#include "runtime/pipeline.h"
+
+namespace vtloc::rt {
+
+namespace {
+constexpr uint32_t kSetsPerPool = 128;
+constexpr uint32_t kDescriptorsPerPool = 1024;
+constexpr uint64_t kSubmitTimeoutNs = 600ull * 1000 * 1000 * 1000;  // 10 min: report, never hang
+}  // namespace
+
+Sequence::Sequence(Context& ctx, bool profile) : ctx_(ctx), profile_(profile) {
+    if (profile_ && !ctx_.info().has_timestamps)
+        profile_ = false;  // the queue has no timestamps: profiling is silently unavailable
+    VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
+    pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
+    pi.queueFamilyIndex = ctx_.queue_family();
+    check_vk(vkCreateCommandPool(ctx_.device(), &pi, nullptr, &pool_), "vkCreateCommandPool");
+    VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
+    ai.commandPool = pool_;
+    ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
+    ai.commandBufferCount = 1;
+    VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
+    VkResult r = vkAllocateCommandBuffers(ctx_.device(), &ai, &cmd_);
+    if (r == VK_SUCCESS) r = vkCreateFence(ctx_.device(), &fi, nullptr, &fence_);
+    if (r != VK_SUCCESS) {
+        vkDestroyCommandPool(ctx_.device(), pool_, nullptr);
+        check_vk(r, "Sequence setup");
+    }
+}
+
+Sequence::~Sequence() {
+    VkDevice dev = ctx_.device();
+    for (auto p : query_pools_) vkDestroyQueryPool(dev, p, nullptr);
+    for (auto p : descriptor_pools_) vkDestroyDescriptorPool(dev, p, nullptr);
+    if (fence_) vkDestroyFence(dev, fence_, nullptr);
+    if (pool_) vkDestroyCommandPool(dev, pool_, nullptr);
+}
+
+void Sequence::check_recording(const char* what) const {
+    if (!recording_) throw Error(std::string("Sequence::") + what + " outside begin()/end()");
+}
+
+void Sequence::begin() {
+    check_vk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
+    for (auto p : descriptor_pools_) vkResetDescriptorPool(ctx_.device(), p, 0);
+    pools_used_ = 0;
+    VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
+    check_vk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
+    recording_ = true;
+    ended_ = false;
+    pending_reads_.clear();
+    pending_writes_.clear();
+    pending_stages_ = 0;
+    pending_write_access_ = 0;
+    barriers_ = 0;
+    dispatches_ = 0;
+    queries_used_ = 0;
+    node_labels_.clear();
+    in_node_ = false;
+}
+
+void Sequence::barrier(VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
+    VkMemoryBarrier mb{VK_STRUCTURE_TYPE_MEMORY_BARRIER};
+    mb.srcAccessMask = pending_write_access_;
+    mb.dstAccessMask = dst_access;
+    vkCmdPipelineBarrier(cmd_, pending_stages_ ? pending_stages_ : VkPipelineStageFlags(VK_PIPELINE_STAGE_TOP_OF_PIPE_BIT),
+                         dst_stage, 0, 1, &mb, 0, nullptr, 0, nullptr);
+    ++barriers_;
+    pending_reads_.clear();
+    pending_writes_.clear();
+    pending_stages_ = 0;
+    pending_write_access_ = 0;
+}
+
+void Sequence::track(const std::vector<std::pair<BufferView, Access>>& accesses,
+                     VkPipelineStageFlags stage) {
+    bool hazard = false;
+    for (auto& [view, access] : accesses) {
+        Range r{view.buffer, view.offset, view.offset + view.size};
+        bool writes = uint8_t(access) & uint8_t(Access::Write);
+        for (auto& w : pending_writes_) hazard |= r.overlaps(w);           // RAW, WAW
+        if (writes)
+            for (auto& rd : pending_reads_) hazard |= r.overlaps(rd);      // WAR
+    }
+    if (hazard) {
+        // Whatever comes next (compute or transfer) is ordered after everything
+        // before the barrier, so all pending ranges can be forgotten.
+        barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
+                VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                    VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
+    }
+    for (auto& [view, access] : accesses) {
+        Range r{view.buffer, view.offset, view.offset + view.size};
+        if (uint8_t(access) & uint8_t(Access::Read)) pending_reads_.push_back(r);
+        if (uint8_t(access) & uint8_t(Access::Write)) {
+            pending_writes_.push_back(r);
+            pending_write_access_ |= stage == VK_PIPELINE_STAGE_TRANSFER_BIT
+                                         ? VK_ACCESS_TRANSFER_WRITE_BIT
+                                         : VK_ACCESS_SHADER_WRITE_BIT;
+        }
+    }
+    pending_stages_ |= stage;
+}
+
+void Sequence::copy(const BufferView& src, const BufferView& dst) {
+    check_recording("copy");
+    if (src.size != dst.size)
+        throw Error("Sequence::copy: source and destination sizes differ");
+    if (src.size == 0) return;
+    track({{src, Access::Read}, {dst, Access::Write}}, VK_PIPELINE_STAGE_TRANSFER_BIT);
+    VkBufferCopy region{src.offset, dst.offset, src.size};
+    vkCmdCopyBuffer(cmd_, src.buffer, dst.buffer, 1, &region);
+}
+
+VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
+    VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
+    ai.descriptorSetCount = 1;
+    ai.pSetLayouts = &p.set_layout;
+    VkDescriptorSet set = VK_NULL_HANDLE;
+    while (true) {
+        if (pools_used_ == descriptor_pools_.size()) {
+            VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
+                                      std::max(kDescriptorsPerPool, p.desc.bindings)};
+            VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
+            pi.maxSets = kSetsPerPool;
+            pi.poolSizeCount = 1;
+            pi.pPoolSizes = &size;
+            VkDescriptorPool pool;
+            check_vk(vkCreateDescriptorPool(ctx_.device(), &pi, nullptr, &pool),
+                     "vkCreateDescriptorPool");
+            descriptor_pools_.push_back(pool);
+        }
+        ai.descriptorPool = descriptor_pools_[pools_used_];
+        VkResult r = vkAllocateDescriptorSets(ctx_.device(), &ai, &set);
+        if (r == VK_SUCCESS) return set;
+        if (r != VK_ERROR_OUT_OF_POOL_MEMORY && r != VK_ERROR_FRAGMENTED_POOL)
+            check_vk(r, "vkAllocateDescriptorSets");
+        ++pools_used_;  // this pool is full: move on to the next (or a new) one
+    }
+}
+
+void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
+                        const void* push, uint32_t push_bytes, uint32_t gx, uint32_t gy,
+                        uint32_t gz) {
+    check_recording("dispatch");
+    const DeviceInfo& info = ctx_.info();
+    if (bindings.size() != p.desc.bindings)
+        throw Error("shader '" + p.desc.shader + "' takes " + std::to_string(p.desc.bindings) +
+                    " buffers, got " + std::to_string(bindings.size()));
+    if (push_bytes != p.desc.push_bytes)
+        throw Error("shader '" + p.desc.shader + "': push-constant size mismatch");
+    if (gx == 0 || gy == 0 || gz == 0) return;  // empty tensor: nothing to do
+    if (gx > info.max_workgroup_count[0] || gy > info.max_workgroup_count[1] ||
+        gz > info.max_workgroup_count[2])
+        throw Error("shader '" + p.desc.shader + "': dispatch of " + std::to_string(gx) + "x" +
+                    std::to_string(gy) + "x" + std::to_string(gz) +
+                    " workgroups exceeds the device's maxComputeWorkGroupCount");
+
+    std::vector<std::pair<BufferView, Access>> accesses;
+    std::vector<VkDescriptorBufferInfo> infos(bindings.size());
+    std::vector<VkWriteDescriptorSet> writes(bindings.size());
+    VkDescriptorSet set = allocate_set(p);
+    for (size_t i = 0; i < bindings.size(); ++i) {
+        const BufferView& v = bindings[i].view;
+        if (v.size > info.max_storage_buffer_range)
+            throw Error("shader '" + p.desc.shader + "': binding " + std::to_string(i) +
+                        " is larger than maxStorageBufferRange");
+        if (v.offset % info.storage_offset_alignment)
+            throw Error("shader '" + p.desc.shader + "': binding " + std::to_string(i) +
+                        " is not aligned to minStorageBufferOffsetAlignment");
+        infos[i] = {v.buffer, v.offset, v.size ? v.size : 4};
+        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        writes[i].dstSet = set;
+        writes[i].dstBinding = uint32_t(i);
+        writes[i].descriptorCount = 1;
+        writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        writes[i].pBufferInfo = &infos[i];
+        accesses.push_back({v, bindings[i].access});
+    }
+    vkUpdateDescriptorSets(ctx_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
+    track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+
+    vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
+    vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, 0, 1, &set, 0, nullptr);
+    if (push_bytes)
+        vkCmdPushConstants(cmd_, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
+    vkCmdDispatch(cmd_, gx, gy, gz);
+    ++dispatches_;
+}
+
+void Sequence::timestamp() {
+    uint32_t pool_index = queries_used_ / kQueriesPerPool;
+    if (pool_index == query_pools_.size()) {
+        VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
+        qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
+        qi.queryCount = kQueriesPerPool;
+        VkQueryPool qp;
+        check_vk(vkCreateQueryPool(ctx_.device(), &qi, nullptr, &qp), "vkCreateQueryPool");
+        query_pools_.push_back(qp);
+    }
+    uint32_t q = queries_used_ % kQueriesPerPool;
+    if (q == 0) vkCmdResetQueryPool(cmd_, query_pools_[pool_index], 0, kQueriesPerPool);
+    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, query_pools_[pool_index], q);
+    ++queries_used_;
+}
+
+void Sequence::begin_node(const std::string& label) {
+    check_recording("begin_node");
+    if (in_node_) throw Error("Sequence::begin_node: nodes do not nest");
+    in_node_ = true;
+    if (!profile_) return;
+    node_labels_.push_back(label);
+    timestamp();
+}
+
+void Sequence::end_node() {
+    check_recording("end_node");
+    if (!in_node_) throw Error("Sequence::end_node without begin_node");
+    in_node_ = false;
+    if (profile_) timestamp();
+}
+
+void Sequence::end() {
+    check_recording("end");
+    if (pending_stages_) barrier(VK_PIPELINE_STAGE_HOST_BIT, VK_ACCESS_HOST_READ_BIT);
+    check_vk(vkEndCommandBuffer(cmd_), "vkEndCommandBuffer");
+    recording_ = false;
+    ended_ = true;
+}
+
+void Sequence::submit_and_wait() {
+    if (!ended_) throw Error("Sequence::submit_and_wait before end()");
+    VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
+    si.commandBufferCount = 1;
+    si.pCommandBuffers = &cmd_;
+    check_vk(vkResetFences(ctx_.device(), 1, &fence_), "vkResetFences");
+    check_vk(vkQueueSubmit(ctx_.queue(), 1, &si, fence_), "vkQueueSubmit");
+    VkResult r = vkWaitForFences(ctx_.device(), 1, &fence_, VK_TRUE, kSubmitTimeoutNs);
+    if (r == VK_TIMEOUT) throw Error("GPU work did not finish within 10 minutes");
+    check_vk(r, "vkWaitForFences");
+}
+
+std::vector<Sequence::NodeTime> Sequence::node_times() const {
+    std::vector<NodeTime> out;
+    if (!profile_ || queries_used_ == 0) return out;
+    std::vector<uint64_t> ticks(queries_used_);
+    for (size_t p = 0; p * kQueriesPerPool < queries_used_; ++p) {
+        uint32_t n = std::min<uint32_t>(kQueriesPerPool, queries_used_ - uint32_t(p) * kQueriesPerPool);
+        check_vk(vkGetQueryPoolResults(ctx_.device(), query_pools_[p], 0, n, n * sizeof(uint64_t),
+                                       ticks.data() + p * kQueriesPerPool, sizeof(uint64_t),
+                                       VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
+                 "vkGetQueryPoolResults");
+    }
+    double period = ctx_.info().timestamp_period;  // float ns per tick, kept fractional
+    for (size_t i = 0; i < node_labels_.size(); ++i)
+        out.push_back({node_labels_[i], double(ticks[2 * i + 1] - ticks[2 * i]) * period * 1e-6});
+    return out;
+}
+
+}  // namespace vtloc::rt

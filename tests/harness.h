@@ -1,0 +1,36 @@
+#pragma once
+// Shared test helpers: one validated Vulkan context per process, seeded
+// random tensors, and fp32 comparison with a stated tolerance.
+#include <string>
+
+#include "engine/executor.h"
+#include "engine/graph.h"
+#include "engine/tensor.h"
+#include "engine/weights.h"
+#include "runtime/context.h"
+
+namespace vtloc::test {
+
+// The process-wide context, created on first use with the Khronos validation layer on.
+rt::Context& gpu();
+bool gpu_created();
+
+// Fails the current test (CHECK) if the validation layer said anything since the last call.
+void require_no_validation_messages();
+
+HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo = -1.0f, float hi = 1.0f);
+
+// fp32 default: |got - want| <= abs + rel * |want| elementwise.
+struct Tolerance {
+    double abs = 1e-4;
+    double rel = 1e-4;
+};
+void require_close(const HostTensor& got, const HostTensor& want, Tolerance tol, const std::string& what);
+
+// Runs g on the GPU (validation on) and with the CPU references; every output must agree.
+TensorMap run_gpu_and_compare(const Graph& g, const WeightStore& w, const TensorMap& inputs,
+                              Tolerance tol = {});
+
+std::string temp_path(const std::string& name);
+
+}  // namespace vtloc::test

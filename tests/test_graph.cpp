@@ -1,0 +1,143 @@
+// The executor end to end: a 3-layer MLP read from a safetensors file the test
+// writes, run on lavapipe and on the CPU references, with memory reuse.
+#include <catch2/catch.hpp>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/safetensors.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+
+namespace {
+
+// x[B,24] -> linear 24->64 + relu -> linear 64->48, leaky -> concat with x ->
+// linear 72->10 -> tanh, plus a residual-style add of two branches.
+Graph mlp_graph(int64_t batch) {
+    Graph g;
+    int x = g.input("x", {batch, 24});
+    int h1 = g.add1("linear", {x, g.weight("mlp.0.weight", {64, 24}), g.weight("mlp.0.bias", {64})}, {}, "fc0");
+    int a1 = g.add1("relu", {h1}, {}, "relu0");
+    int h2 = g.add1("linear", {a1, g.weight("mlp.2.weight", {48, 64}), g.weight("mlp.2.bias", {48})}, {}, "fc2");
+    int a2 = g.add1("leaky_relu", {h2}, {{"slope", 0.01}}, "leaky2");
+    int cat = g.add1("concat", {a2, x}, {}, "cat");
+    int h3 = g.add1("linear", {cat, g.weight("mlp.4.weight", {10, 72}), g.weight("mlp.4.bias", {10})}, {}, "fc4");
+    int y = g.add1("tanh", {h3}, {}, "tanh4");
+    int gate = g.add1("sigmoid", {h3}, {}, "gate");
+    int mixed = g.add1("mul", {y, gate}, {}, "mix");
+    g.output(g.add1("add", {mixed, g.weight("mlp.4.bias", {10})}, {}, "out"), "y");
+    g.output(a1, "hidden");
+    return g;
+}
+
+std::string write_mlp_file(const std::string& name) {
+    std::vector<TensorBlob> t;
+    auto add = [&](const std::string& n, Shape s, uint32_t seed, float scale) {
+        t.push_back(TensorBlob::f32(n, s, random_tensor(s, seed, -scale, scale).data));
+    };
+    add("mlp.0.weight", {64, 24}, 1, 0.2f);
+    add("mlp.0.bias", {64}, 2, 0.2f);
+    add("mlp.2.weight", {48, 64}, 3, 0.125f);
+    add("mlp.2.bias", {48}, 4, 0.125f);
+    add("mlp.4.weight", {10, 72}, 5, 0.12f);
+    add("mlp.4.bias", {10}, 6, 0.12f);
+    std::string path = test::temp_path(name);
+    write_safetensors(path, t, {{"vtloc.config", R"({"name": "mlp-test"})"}});
+    return path;
+}
+
+}  // namespace
+
+TEST_CASE("an MLP graph from a safetensors file runs equal on GPU and CPU", "[graph]") {
+    WeightStore w = WeightStore::load(write_mlp_file("mlp.safetensors"));
+    CHECK(w.config()["name"] == "mlp-test");
+    for (int64_t batch : {1, 5, 333}) {
+        Graph g = mlp_graph(batch);
+        TensorMap in{{"x", random_tensor({batch, 24}, 100 + uint32_t(batch), -2.f, 2.f)}};
+        TensorMap out = test::run_gpu_and_compare(g, w, in);
+        CHECK(out.at("y").shape == Shape{batch, 10});
+        CHECK(out.at("hidden").shape == Shape{batch, 64});
+    }
+}
+
+TEST_CASE("intermediates share arena memory", "[graph]") {
+    WeightStore w = WeightStore::load(write_mlp_file("mlp-arena.safetensors"));
+    Graph g = mlp_graph(200);
+    GpuExecutor exec(test::gpu(), g, w);
+    const MemoryPlan& plan = exec.memory_plan();
+    INFO("arena " << plan.arena_bytes << " bytes, tensors " << plan.total_bytes << " bytes");
+    CHECK(plan.arena_bytes < plan.total_bytes);
+    // No two values that are alive at once may overlap: the run must stay correct.
+    TensorMap in{{"x", random_tensor({200, 24}, 7)}};
+    TensorMap want = run_cpu(g, w, in);
+    TensorMap got = exec.run(in);
+    test::require_no_validation_messages();
+    test::require_close(got.at("y"), want.at("y"), {}, "y");
+    test::require_close(got.at("hidden"), want.at("hidden"), {}, "hidden");
+}
+
+TEST_CASE("a recorded graph is resubmitted with new inputs", "[graph]") {
+    WeightStore w = WeightStore::load(write_mlp_file("mlp-resubmit.safetensors"));
+    Graph g = mlp_graph(3);
+    GpuExecutor exec(test::gpu(), g, w);
+    for (uint32_t seed : {1u, 2u, 3u}) {
+        TensorMap in{{"x", random_tensor({3, 24}, seed)}};
+        test::require_close(exec.run(in).at("y"), run_cpu(g, w, in).at("y"), {}, "y");
+    }
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("memory plan never overlaps values that are alive together", "[graph]") {
+    Graph g = mlp_graph(17);
+    auto order = g.topo_order();
+    MemoryPlan plan = plan_memory(g, order, 64);
+    // Recompute lifetimes independently and check every pair.
+    const auto& vals = g.values();
+    std::vector<int> first(vals.size(), 1 << 30), last(vals.size(), -1);
+    for (size_t i = 0; i < vals.size(); ++i)
+        if (vals[i].kind == ValueKind::Input) first[i] = last[i] = -1;
+    for (size_t pos = 0; pos < order.size(); ++pos) {
+        for (int o : g.nodes()[size_t(order[pos])].outputs) first[size_t(o)] = last[size_t(o)] = int(pos);
+        for (int in : g.nodes()[size_t(order[pos])].inputs) last[size_t(in)] = std::max(last[size_t(in)], int(pos));
+    }
+    for (auto& [n, id] : g.outputs()) last[size_t(id)] = 1 << 30;
+    for (size_t a = 0; a < vals.size(); ++a)
+        for (size_t b = a + 1; b < vals.size(); ++b) {
+            if (plan.offset[a] < 0 || plan.offset[b] < 0) continue;
+            bool alive_together = first[a] <= last[b] && first[b] <= last[a];
+            int64_t ea = plan.offset[a] + numel(vals[a].shape) * 4, eb = plan.offset[b] + numel(vals[b].shape) * 4;
+            bool overlap = plan.offset[a] < eb && plan.offset[b] < ea;
+            INFO(vals[a].name << " and " << vals[b].name);
+            CHECK(!(alive_together && overlap));
+        }
+}
+
+TEST_CASE("topological order puts producers first", "[graph]") {
+    Graph g = mlp_graph(2);
+    auto order = g.topo_order();
+    REQUIRE(order.size() == g.nodes().size());
+    std::vector<int> pos_of_value(g.values().size(), -1);
+    for (size_t p = 0; p < order.size(); ++p)
+        for (int o : g.nodes()[size_t(order[p])].outputs) pos_of_value[size_t(o)] = int(p);
+    for (size_t p = 0; p < order.size(); ++p)
+        for (int in : g.nodes()[size_t(order[p])].inputs) CHECK(pos_of_value[size_t(in)] < int(p));
+}
+
+TEST_CASE("graph inputs are checked by name and shape", "[graph]") {
+    WeightStore w = WeightStore::load(write_mlp_file("mlp-inputs.safetensors"));
+    Graph g = mlp_graph(4);
+    REQUIRE_THROWS_WITH(run_cpu(g, w, {}), Catch::Contains("'x' was not given"));
+    REQUIRE_THROWS_WITH(run_cpu(g, w, {{"x", HostTensor({4, 23})}}),
+                        Catch::Contains("shape [4, 23], expected [4, 24]"));
+    REQUIRE_THROWS_WITH(run_cpu(g, w, {{"x", HostTensor({4, 24})}, {"z", HostTensor({1})}}),
+                        Catch::Contains("'z' is not an input"));
+    GpuExecutor exec(test::gpu(), g, w);
+    REQUIRE_THROWS_WITH(exec.run({{"x", HostTensor({4, 25})}}), Catch::Contains("expected [4, 24]"));
+}
+
+TEST_CASE("a weight missing from the file is named", "[graph]") {
+    Graph g;
+    g.output(g.add1("linear", {g.input("x", {1, 3}), g.weight("nope.weight", {2, 3})}), "y");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, WeightStore{}), Catch::Contains("'nope.weight' is missing"));
+}

@@ -1,0 +1,134 @@
+// Every op: GPU (lavapipe, validation on) against its CPU reference, at odd
+// shapes with fixed seeds. Tolerance: the fp32 default 1e-4 + 1e-4*|ref|; the
+// CPU GEMM accumulates in double, so this bounds the shader's fp32 rounding.
+#include <catch2/catch.hpp>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/gemm_tiles.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+using vtloc::test::run_gpu_and_compare;
+
+namespace {
+
+void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, uint32_t seed) {
+    const int64_t in = x_shape.back();
+    Graph g;
+    WeightStore w;
+    // Weights scaled like PyTorch's default init, so outputs stay O(1).
+    float bound = 1.0f / std::sqrt(float(std::max<int64_t>(1, in)));
+    w.add("fc.weight", random_tensor({out, in}, seed + 1, -bound, bound));
+    w.add("fc.bias", random_tensor({out}, seed + 2, -bound, bound));
+    int x = g.input("x", x_shape);
+    std::vector<int> ins{x, g.weight("fc.weight", {out, in})};
+    if (bias) ins.push_back(g.weight("fc.bias", {out}));
+    g.output(g.add1("linear", ins, {{"act", double(act)}, {"slope", 0.2}}), "y");
+    INFO("linear x" << shape_str(x_shape) << " -> " << out << " bias " << bias << " act " << act);
+    run_gpu_and_compare(g, w, {{"x", random_tensor(x_shape, seed, -2.0f, 2.0f)}});
+}
+
+void check_unary(const std::string& op, const Shape& shape, uint32_t seed, float range) {
+    Graph g;
+    g.output(g.add1(op, {g.input("x", shape)}, {{"slope", 0.05}}), "y");
+    INFO(op << " " << shape_str(shape) << " range " << range);
+    run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(shape, seed, -range, range)}});
+}
+
+}  // namespace
+
+TEST_CASE("linear matches the CPU reference at odd shapes", "[op][linear]") {
+    check_linear({1, 37}, 29, true, ops::kActNone, 1);
+    check_linear({5, 127, 33}, 65, true, ops::kActNone, 2);
+    check_linear({1, 513}, 300, true, ops::kActNone, 3);   // one row: the short-M tile
+    check_linear({7, 1}, 3, true, ops::kActNone, 4);       // K = 1
+    check_linear({3, 1000}, 5, false, ops::kActNone, 5);   // long K, no bias
+    check_linear({130, 70}, 129, true, ops::kActNone, 6);  // several tiles, ragged edges
+}
+
+TEST_CASE("linear fuses every activation into its epilogue", "[op][linear]") {
+    for (uint32_t act : {ops::kActRelu, ops::kActLeaky, ops::kActTanh, ops::kActSigmoid})
+        check_linear({9, 31}, 17, true, act, 10 + act);
+}
+
+TEST_CASE("linear tiles fit the device and its subgroups", "[op][linear]") {
+    const rt::DeviceInfo& d = test::gpu().info();
+    for (int64_t m : {1, 16, 17, 4096}) {
+        ops::GemmTiles t = ops::choose_gemm_tiles(d, m, 256);
+        CHECK(t.threads() <= d.max_invocations);
+        CHECK(t.shared_bytes() <= d.max_shared_memory);
+        CHECK(t.threads() % d.subgroup_size == 0);
+        CHECK(t.bm % t.tm == 0);
+        CHECK(t.bn % t.tn == 0);
+    }
+    // A device with tiny limits still gets a legal tile.
+    rt::DeviceInfo small = d;
+    small.max_invocations = 16;
+    small.max_workgroup_size = {16, 16, 16};
+    small.max_shared_memory = 1024;
+    small.subgroup_size = 4;
+    ops::GemmTiles t = ops::choose_gemm_tiles(small, 100, 100);
+    CHECK(t.threads() <= 16);
+    CHECK(t.shared_bytes() <= 1024);
+}
+
+TEST_CASE("activations match the CPU reference", "[op][activation]") {
+    for (const char* op : {"relu", "leaky_relu", "tanh", "sigmoid"}) {
+        check_unary(op, {1, 37}, 20, 3.0f);
+        check_unary(op, {5, 127, 33}, 21, 3.0f);
+        check_unary(op, {1000}, 22, 60.0f);  // saturation: tanh/sigmoid must not overflow to NaN
+    }
+}
+
+TEST_CASE("add and mul match the CPU reference, with suffix broadcasting", "[op][binary]") {
+    struct Case { Shape a, b; };
+    for (const char* op : {"add", "mul"})
+        for (const Case& c : {Case{{1, 37}, {1, 37}}, Case{{5, 127, 33}, {5, 127, 33}},
+                              Case{{5, 127, 33}, {33}}, Case{{5, 127, 33}, {127, 33}}}) {
+            Graph g;
+            g.output(g.add1(op, {g.input("a", c.a), g.input("b", c.b)}), "y");
+            INFO(op << " " << shape_str(c.a) << " with " << shape_str(c.b));
+            run_gpu_and_compare(g, WeightStore{},
+                                {{"a", random_tensor(c.a, 30)}, {"b", random_tensor(c.b, 31)}});
+        }
+}
+
+TEST_CASE("binary ops reject shapes that do not broadcast", "[op][binary]") {
+    Graph g;
+    int a = g.input("a", {5, 7}), b = g.input("b", {5});
+    REQUIRE_THROWS_WITH(g.add1("add", {a, b}, {}, "bad_add"),
+                        Catch::Contains("bad_add") && Catch::Contains("do not broadcast"));
+}
+
+TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]") {
+    struct Case { std::vector<Shape> in; };
+    for (const Case& c : {Case{{{1, 37}, {1, 1}}}, Case{{{5, 7, 3}, {5, 7, 1}, {5, 7, 12}}},
+                          Case{{{127, 33}, {127, 64}, {127, 5}, {127, 2}}}}) {
+        Graph g;
+        TensorMap inputs;
+        std::vector<int> ids;
+        for (size_t i = 0; i < c.in.size(); ++i) {
+            std::string name = "x" + std::to_string(i);
+            ids.push_back(g.input(name, c.in[i]));
+            inputs[name] = random_tensor(c.in[i], 40 + uint32_t(i));
+        }
+        g.output(g.add1("concat", ids), "y");
+        run_gpu_and_compare(g, WeightStore{}, inputs);
+    }
+}
+
+TEST_CASE("concat rejects mismatched leading dimensions", "[op][concat]") {
+    Graph g;
+    int a = g.input("a", {5, 7}), b = g.input("b", {4, 7});
+    REQUIRE_THROWS_WITH(g.add1("concat", {a, b}), Catch::Contains("differ outside the last axis"));
+}
+
+TEST_CASE("linear reports mismatched shapes with the node's name", "[op][linear]") {
+    Graph g;
+    int x = g.input("x", {4, 10});
+    int w = g.weight("fc.weight", {8, 11});
+    REQUIRE_THROWS_WITH(g.add1("linear", {x, w}, {}, "fc1"),
+                        Catch::Contains("fc1") && Catch::Contains("expects 11"));
+}

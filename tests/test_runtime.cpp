@@ -1,0 +1,150 @@
+// The Vulkan runtime: device choice, embedded shaders, pipeline cache,
+// automatic barriers (only on hazards) and timestamps.
+#include <catch2/catch.hpp>
+#include <cstring>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "runtime/shader_registry.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
+    const rt::DeviceInfo& d = test::gpu().info();
+    INFO(d.name << " subgroup " << d.subgroup_size << " shared " << d.max_shared_memory);
+    CHECK(test::gpu().validation_enabled());
+    CHECK(d.subgroup_size >= 1);
+    CHECK((d.subgroup_size & (d.subgroup_size - 1)) == 0);
+    CHECK(d.max_shared_memory >= 16384);  // Vulkan's guaranteed minimum
+    CHECK(d.max_invocations >= 128);
+    CHECK(d.max_storage_buffer_range >= (1u << 27));
+    CHECK(d.api_version >= VK_API_VERSION_1_1);
+}
+
+TEST_CASE("devices can be listed and picked by name or index", "[runtime]") {
+    auto devs = rt::Context::list_devices();
+    REQUIRE(!devs.empty());
+    rt::ContextOptions by_name;
+    by_name.validation = 1;
+    by_name.device = devs[0].name.substr(0, 4);
+    rt::Context a(by_name);
+    CHECK(a.info().name.find(by_name.device) != std::string::npos);
+    CHECK(a.take_validation_messages().empty());
+
+    rt::ContextOptions by_index;
+    by_index.device = "0";
+    CHECK(rt::Context(by_index).info().name == devs[0].name);
+
+    rt::ContextOptions none;
+    none.device = "no-such-gpu-xyz";
+    REQUIRE_THROWS_WITH(rt::Context(none), Catch::Contains("no-such-gpu-xyz") && Catch::Contains(devs[0].name));
+}
+
+TEST_CASE("every shader is embedded and unknown ones are reported", "[runtime]") {
+    auto names = rt::embedded_shader_names();
+    for (const char* n : {"gemm", "activation", "binary", "concat"}) {
+        INFO(n);
+        CHECK(std::find(names.begin(), names.end(), n) != names.end());
+        auto words = rt::find_spirv(n);
+        REQUIRE(!words.empty());
+        CHECK(words[0] == 0x07230203u);  // SPIR-V magic
+    }
+    REQUIRE_THROWS_WITH(ops::pipeline(test::gpu(), "not_a_shader", 1, 0, {64}),
+                        Catch::Contains("no embedded shader named 'not_a_shader'"));
+}
+
+TEST_CASE("pipelines are cached per shader and specialization", "[runtime]") {
+    rt::Context& ctx = test::gpu();
+    const rt::Pipeline& a = ops::pipeline(ctx, "activation", 2, 8, {32, ops::kActRelu});
+    size_t n = ctx.pipelines().size();
+    const rt::Pipeline& b = ops::pipeline(ctx, "activation", 2, 8, {32, ops::kActRelu});
+    CHECK(&a == &b);
+    CHECK(ctx.pipelines().size() == n);
+    const rt::Pipeline& c = ops::pipeline(ctx, "activation", 2, 8, {32, ops::kActTanh});
+    CHECK(&a != &c);
+    CHECK(ctx.pipelines().size() == n + 1);
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("barriers are inserted on hazards and only there", "[runtime]") {
+    rt::Context& ctx = test::gpu();
+    const uint32_t n = 1000;
+    rt::Buffer buf(ctx, 6 * 4096, rt::MemoryKind::Device);
+    rt::Buffer host(ctx, 2 * 4096, rt::MemoryKind::Staging);
+    auto view = [&](int i) { return rt::BufferView{buf.handle(), VkDeviceSize(i) * 4096, n * 4}; };
+    rt::BufferView host_in{host.handle(), 0, n * 4}, host_out{host.handle(), 4096, n * 4};
+    std::vector<float> x(n);
+    for (uint32_t i = 0; i < n; ++i) x[i] = float(i) - 500.0f;
+    std::memcpy(host.mapped(), x.data(), n * 4);
+
+    uint32_t local = ops::elementwise_local_size(ctx.info());
+    const rt::Pipeline& relu = ops::pipeline(ctx, "activation", 2, 8, {local, ops::kActRelu});
+    const rt::Pipeline& neg = ops::pipeline(ctx, "activation", 2, 8, {local, ops::kActLeaky});
+    struct { uint32_t n; float slope; } push{n, -1.0f};
+    uint32_t groups = ops::grid_groups(n, local, ctx.info());
+
+    rt::Sequence seq(ctx);
+    seq.begin();
+    seq.copy(host_in, view(0));                       // upload
+    CHECK(seq.barrier_count() == 0);
+    seq.dispatch(relu, {{view(0), rt::Access::Read}, {view(1), rt::Access::Write}}, &push, 8, groups);
+    CHECK(seq.barrier_count() == 1);                  // RAW on view 0 after the copy
+    seq.dispatch(neg, {{view(0), rt::Access::Read}, {view(2), rt::Access::Write}}, &push, 8, groups);
+    CHECK(seq.barrier_count() == 1);                  // independent of the relu: no barrier
+    seq.dispatch(relu, {{view(1), rt::Access::Read}, {view(3), rt::Access::Write}}, &push, 8, groups);
+    CHECK(seq.barrier_count() == 2);                  // RAW on view 1
+    seq.dispatch(neg, {{view(4), rt::Access::Read}, {view(3), rt::Access::Write}}, &push, 8, groups);
+    CHECK(seq.barrier_count() == 3);                  // WAW on view 3
+    seq.dispatch(relu, {{view(2), rt::Access::Read}, {view(4), rt::Access::Write}}, &push, 8, groups);
+    CHECK(seq.barrier_count() == 4);                  // WAR on view 4
+    seq.copy(view(1), host_out);
+    CHECK(seq.barrier_count() == 4);                  // view 1 was written before the last barrier
+    seq.end();
+    seq.submit_and_wait();
+    test::require_no_validation_messages();
+
+    std::vector<float> y(n);
+    std::memcpy(y.data(), static_cast<char*>(host.mapped()) + 4096, n * 4);
+    for (uint32_t i = 0; i < n; ++i) REQUIRE(y[i] == std::max(x[i], 0.0f));
+}
+
+TEST_CASE("profiling records a GPU time per node", "[runtime]") {
+    rt::Context& ctx = test::gpu();
+    if (!ctx.info().has_timestamps) {
+        WARN("device has no timestamps; profiling is unavailable");
+        CHECK_FALSE(rt::Sequence(ctx, true).profiling());
+        return;
+    }
+    Graph g;
+    int x = g.input("x", {64, 64});
+    int h = g.add1("linear", {x, g.weight("w", {64, 64})}, {}, "fc");
+    g.output(g.add1("relu", {h}, {}, "act"), "y");
+    WeightStore w;
+    w.add("w", test::random_tensor({64, 64}, 1));
+    GpuExecutor exec(ctx, g, w, /*profile=*/true);
+    exec.run({{"x", test::random_tensor({64, 64}, 2)}});
+    auto times = exec.node_times();
+    REQUIRE(times.size() == 2);
+    CHECK(times[0].label == "fc");
+    CHECK(times[1].label == "act");
+    for (auto& t : times) CHECK(t.ms >= 0.0);
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("validation messages reach the test harness", "[runtime]") {
+    // A deliberately invalid call (a zero-sized buffer) on a context of its own,
+    // so that the check that fails every other test is known to work.
+    rt::ContextOptions o;
+    o.validation = 1;
+    rt::Context ctx(o);
+    VkBufferCreateInfo bi{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
+    bi.size = 0;
+    bi.usage = VK_BUFFER_USAGE_STORAGE_BUFFER_BIT;
+    VkBuffer b = VK_NULL_HANDLE;
+    vkCreateBuffer(ctx.device(), &bi, nullptr, &b);
+    if (b) vkDestroyBuffer(ctx.device(), b, nullptr);
+    auto msgs = ctx.take_validation_messages();
+    REQUIRE(!msgs.empty());
+    CHECK(msgs[0].text.find("size") != std::string::npos);
+}
