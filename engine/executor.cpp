@@ -20,6 +20,9 @@ void check_inputs(const Graph& g, const TensorMap& inputs) {
         if (it->second.shape != v.shape)
             throw Error("graph input '" + v.name + "' has shape " + shape_str(it->second.shape) +
                         ", expected " + shape_str(v.shape));
+        if (it->second.type != v.type)
+            throw Error("graph input '" + v.name + "' has element type " + elem_type_name(it->second.type) +
+                        ", expected " + elem_type_name(v.type));
         if (int64_t(it->second.data.size()) != numel(v.shape))
             throw Error("graph input '" + v.name + "': data size does not match its shape");
     }
@@ -46,7 +49,7 @@ TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& i
         std::vector<HostTensor*> out;
         for (int id : n.inputs) in.push_back(ptr[size_t(id)]);
         for (int id : n.outputs) {
-            vals[size_t(id)] = HostTensor(g.value(id).shape);
+            vals[size_t(id)] = HostTensor(g.value(id).shape, g.value(id).type);
             ptr[size_t(id)] = &vals[size_t(id)];
             out.push_back(&vals[size_t(id)]);
         }
@@ -199,7 +202,7 @@ TensorMap GpuExecutor::run(const TensorMap& inputs) {
     seq_->submit_and_wait();
     TensorMap out;
     for (auto& [name, id] : graph_.outputs()) {
-        HostTensor t(graph_.value(id).shape);
+        HostTensor t(graph_.value(id).shape, graph_.value(id).type);
         std::memcpy(t.data.data(), static_cast<const char*>(staging_out_.mapped()) + out_offsets_.at(name),
                     t.data.size() * 4);
         out[name] = std::move(t);

@@ -7,17 +7,17 @@
 
 namespace vtloc {
 
-int Graph::new_value(const std::string& name, Shape shape, ValueKind kind) {
+int Graph::new_value(const std::string& name, Shape shape, ValueKind kind, ElemType type) {
     for (int64_t d : shape)
         if (d < 0) throw Error("value '" + name + "' has a negative dimension " + shape_str(shape));
-    values_.push_back({name, std::move(shape), kind});
+    values_.push_back({name, std::move(shape), kind, type});
     return int(values_.size() - 1);
 }
 
-int Graph::input(const std::string& name, Shape shape) {
+int Graph::input(const std::string& name, Shape shape, ElemType type) {
     for (const Value& v : values_)
         if (v.kind == ValueKind::Input && v.name == name) throw Error("duplicate graph input '" + name + "'");
-    return new_value(name, std::move(shape), ValueKind::Input);
+    return new_value(name, std::move(shape), ValueKind::Input, type);
 }
 
 int Graph::weight(const std::string& name, Shape shape) {
@@ -35,22 +35,22 @@ std::vector<int> Graph::add(const std::string& op, const std::vector<int>& input
                             const std::string& name) {
     const OpDef& def = find_op(op);
     std::string label = name.empty() ? op + "_" + std::to_string(nodes_.size()) : name;
-    std::vector<Shape> in_shapes;
+    std::vector<TensorDesc> in_descs;
     for (int id : inputs) {
         if (id < 0 || size_t(id) >= values_.size())
             throw Error("node '" + label + "': input value " + std::to_string(id) + " does not exist");
-        in_shapes.push_back(values_[size_t(id)].shape);
+        in_descs.push_back({values_[size_t(id)].shape, values_[size_t(id)].type});
     }
-    std::vector<Shape> out_shapes;
+    std::vector<TensorDesc> out_descs;
     try {
-        out_shapes = def.infer(in_shapes, params);
+        out_descs = def.infer(in_descs, params);
     } catch (const Error& e) {
         throw Error("node '" + label + "' (" + op + "): " + e.what());
     }
     Node n{op, label, inputs, {}, std::move(params)};
-    for (size_t i = 0; i < out_shapes.size(); ++i)
-        n.outputs.push_back(new_value(label + (out_shapes.size() > 1 ? ":" + std::to_string(i) : ""),
-                                      out_shapes[i], ValueKind::Intermediate));
+    for (size_t i = 0; i < out_descs.size(); ++i)
+        n.outputs.push_back(new_value(label + (out_descs.size() > 1 ? ":" + std::to_string(i) : ""),
+                                      out_descs[i].shape, ValueKind::Intermediate, out_descs[i].type));
     nodes_.push_back(std::move(n));
     return nodes_.back().outputs;
 }

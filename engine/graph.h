@@ -32,6 +32,7 @@ struct Value {
     std::string name;
     Shape shape;
     ValueKind kind = ValueKind::Intermediate;
+    ElemType type = ElemType::F32;
 };
 
 struct Node {
@@ -43,7 +44,7 @@ struct Node {
 
 class Graph {
 public:
-    int input(const std::string& name, Shape shape);
+    int input(const std::string& name, Shape shape, ElemType type = ElemType::F32);
     // A weight looked up by name (and checked for this shape) when the graph is run.
     int weight(const std::string& name, Shape shape);
     std::vector<int> add(const std::string& op, const std::vector<int>& inputs, Params params = {},
@@ -63,7 +64,7 @@ public:
     std::vector<int> topo_order() const;
 
 private:
-    int new_value(const std::string& name, Shape shape, ValueKind kind);
+    int new_value(const std::string& name, Shape shape, ValueKind kind, ElemType type = ElemType::F32);
     std::vector<Value> values_;
     std::vector<Node> nodes_;
     std::vector<std::pair<std::string, int>> outputs_;

@@ -33,7 +33,7 @@ struct GpuOpArgs {
 struct OpDef {
     std::string_view name;
     // Throws vtloc::Error describing the mismatch (the graph adds the node's name).
-    std::vector<Shape> (*infer)(const std::vector<Shape>& in, const Params& p);
+    std::vector<TensorDesc> (*infer)(const std::vector<TensorDesc>& in, const Params& p);
     void (*cpu)(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out,
                 const Params& p);
     void (*gpu)(const GpuOpArgs& a);

@@ -8,8 +8,9 @@ namespace {
 
 float slope_of(const Params& p) { return float(p.get("slope", 0.01)); }
 
-std::vector<Shape> infer(const std::vector<Shape>& in, const Params&) {
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     expect_input_count(in, 1, 1);
+    expect_f32(in);
     return {in[0]};
 }
 

@@ -9,10 +9,11 @@
 namespace vtloc::ops {
 namespace {
 
-std::vector<Shape> infer(const std::vector<Shape>& in, const Params&) {
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     expect_input_count(in, 2, 2);
-    const Shape& a = in[0];
-    const Shape& b = in[1];
+    expect_f32(in);
+    const Shape& a = in[0].shape;
+    const Shape& b = in[1].shape;
     bool suffix = b.size() <= a.size() && std::equal(b.rbegin(), b.rend(), a.rbegin());
     if (!suffix || (numel(b) == 0 && numel(a) != 0))
         throw Error("shapes " + shape_str(a) + " and " + shape_str(b) +

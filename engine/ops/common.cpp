@@ -43,10 +43,16 @@ uint32_t to_u32(int64_t v, const char* what) {
     return uint32_t(v);
 }
 
-void expect_input_count(const std::vector<Shape>& in, size_t lo, size_t hi) {
+void expect_input_count(const std::vector<TensorDesc>& in, size_t lo, size_t hi) {
     if (in.size() < lo || in.size() > hi)
         throw Error("takes " + (lo == hi ? std::to_string(lo) : std::to_string(lo) + ".." + std::to_string(hi)) +
                     " inputs, got " + std::to_string(in.size()));
+}
+
+void expect_f32(const std::vector<TensorDesc>& in) {
+    for (size_t i = 0; i < in.size(); ++i)
+        if (in[i].type != ElemType::F32)
+            throw Error("input " + std::to_string(i) + " is " + elem_type_name(in[i].type) + ", expected F32");
 }
 
 }  // namespace vtloc::ops

@@ -27,6 +27,8 @@ const rt::Pipeline& pipeline(rt::Context& ctx, const char* shader, uint32_t bind
 
 // Shaders index with 32-bit integers; larger tensors are rejected clearly.
 uint32_t to_u32(int64_t v, const char* what);
-void expect_input_count(const std::vector<Shape>& in, size_t lo, size_t hi);
+void expect_input_count(const std::vector<TensorDesc>& in, size_t lo, size_t hi);
+// Throws unless every input is fp32 (most ops).
+void expect_f32(const std::vector<TensorDesc>& in);
 
 }  // namespace vtloc::ops

@@ -6,14 +6,17 @@
 namespace vtloc::ops {
 namespace {
 
-std::vector<Shape> infer(const std::vector<Shape>& in, const Params&) {
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     if (in.empty()) throw Error("takes at least one input");
-    Shape out = in[0];
+    expect_f32(in);
+    const Shape& first = in[0].shape;
+    Shape out = first;
     if (out.empty()) throw Error("cannot concatenate scalars");
     out.back() = 0;
-    for (const Shape& s : in) {
-        if (s.size() != in[0].size() || !std::equal(s.begin(), s.end() - 1, in[0].begin()))
-            throw Error("shapes " + shape_str(in[0]) + " and " + shape_str(s) +
+    for (const TensorDesc& d : in) {
+        const Shape& s = d.shape;
+        if (s.size() != first.size() || !std::equal(s.begin(), s.end() - 1, first.begin()))
+            throw Error("shapes " + shape_str(first) + " and " + shape_str(s) +
                         " differ outside the last axis");
         out.back() += s.back();
     }

@@ -31,17 +31,18 @@ GemmTiles choose_gemm_tiles(const rt::DeviceInfo& d, int64_t M, int64_t N) {
 
 namespace {
 
-std::vector<Shape> infer(const std::vector<Shape>& in, const Params&) {
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     expect_input_count(in, 2, 3);
-    const Shape& x = in[0];
-    const Shape& w = in[1];
+    expect_f32(in);
+    const Shape& x = in[0].shape;
+    const Shape& w = in[1].shape;
     if (x.empty()) throw Error("input must have at least one dimension");
     if (w.size() != 2) throw Error("weight must be [out, in], got " + shape_str(w));
     if (x.back() != w[1])
         throw Error("input " + shape_str(x) + " has " + std::to_string(x.back()) +
                     " features but weight " + shape_str(w) + " expects " + std::to_string(w[1]));
-    if (in.size() == 3 && in[2] != Shape{w[0]})
-        throw Error("bias " + shape_str(in[2]) + " does not match weight " + shape_str(w));
+    if (in.size() == 3 && in[2].shape != Shape{w[0]})
+        throw Error("bias " + shape_str(in[2].shape) + " does not match weight " + shape_str(w));
     Shape y = x;
     y.back() = w[0];
     return {y};
