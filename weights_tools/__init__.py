@@ -1,0 +1,3 @@
+"""PyTorch reference for the VTLoc engine: model, weight export and goldens.
+
+See README.md in this directory."""

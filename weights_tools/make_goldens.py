@@ -1,0 +1,53 @@
+"""Regenerate the committed goldens (byte for byte):
+
+  python3 -m weights_tools.make_goldens [--out weights_tools/goldens]
+
+For each small config: random weights (seed 0) -> NAME.safetensors, and a
+golden run on synthetic tactile seed 0 / synthetic cloud seed 0 with the
+config's defaults (ILU iterations, K, candidates = the cloud) ->
+NAME.golden.safetensors.
+"""
+
+import argparse
+import os
+import sys
+
+import torch
+
+from . import config, golden, model
+from .export import random_model
+
+CONFIGS = ("vtloc-tiny", "vtloc-mcr-tiny")
+DEFAULT_OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "goldens")
+
+
+def make_all(out_dir, names=CONFIGS):
+    threads = torch.get_num_threads()
+    torch.set_num_threads(1)  # one fixed reduction order
+    try:
+        os.makedirs(out_dir, exist_ok=True)
+        written = []
+        for name in names:
+            w = os.path.join(out_dir, f"{name}.safetensors")
+            model.save(random_model(config.named(name), seed=0), w)
+            g = os.path.join(out_dir, f"{name}.golden.safetensors")
+            tensors, meta, cfg = golden.make(w, synthetic_tactile=0, synthetic_cloud=0)
+            golden.write(g, tensors, cfg, meta)
+            written += [w, g]
+        return written
+    finally:
+        torch.set_num_threads(threads)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python3 -m weights_tools.make_goldens", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--out", default=DEFAULT_OUT)
+    a = ap.parse_args(argv)
+    for path in make_all(a.out):
+        print(f"{os.path.getsize(path):8d}  {path}")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,95 @@
+"""PLY point clouds: read the vertex element (ascii / binary, either endianness),
+write binary little-endian x y z nx ny nz."""
+
+import numpy as np
+
+_TYPES = {
+    "char": "i1", "int8": "i1", "uchar": "u1", "uint8": "u1",
+    "short": "i2", "int16": "i2", "ushort": "u2", "uint16": "u2",
+    "int": "i4", "int32": "i4", "uint": "u4", "uint32": "u4",
+    "float": "f4", "float32": "f4", "double": "f8", "float64": "f8",
+}
+
+
+def _parse_header(f):
+    if f.readline().strip() != b"ply":
+        raise ValueError("not a PLY file")
+    fmt, elements = None, []
+    while True:
+        line = f.readline()
+        if not line:
+            raise ValueError("PLY header without end_header")
+        words = line.decode("ascii", "replace").split()
+        if not words or words[0] in ("comment", "obj_info"):
+            continue
+        if words[0] == "end_header":
+            return fmt, elements
+        if words[0] == "format":
+            fmt = words[1]
+        elif words[0] == "element":
+            elements.append((words[1], int(words[2]), []))
+        elif words[0] == "property":
+            if words[1] == "list":  # (name, count type, item type)
+                elements[-1][2].append((words[4], ("list", _TYPES[words[2]], _TYPES[words[3]])))
+            else:
+                elements[-1][2].append((words[2], _TYPES[words[1]]))
+
+
+def _skip_binary(f, count, props, endian):
+    """Skip an element we do not need (may hold list properties, e.g. faces)."""
+    if all(not isinstance(t, tuple) for _, t in props):
+        f.read(count * sum(np.dtype(t).itemsize for _, t in props))
+        return
+    for _ in range(count):
+        for _, t in props:
+            if isinstance(t, tuple):
+                n = int(np.frombuffer(f.read(np.dtype(t[1]).itemsize), endian + t[1])[0])
+                f.read(n * np.dtype(t[2]).itemsize)
+            else:
+                f.read(np.dtype(t).itemsize)
+
+
+def read_ply(path):
+    """Return an N x 3 or N x 6 float32 array: x y z, plus nx ny nz when present."""
+    with open(path, "rb") as f:
+        fmt, elements = _parse_header(f)
+        endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
+        if fmt != "ascii" and endian is None:
+            raise ValueError(f"unsupported PLY format {fmt!r}")
+        ascii_lines = f.read().decode("ascii").splitlines() if fmt == "ascii" else None
+        row = 0
+        for name, count, props in elements:
+            if name != "vertex":
+                if ascii_lines is not None:
+                    row += count
+                else:
+                    _skip_binary(f, count, props, endian)
+                continue
+            if any(isinstance(t, tuple) for _, t in props):
+                raise ValueError("list properties in the vertex element are not supported")
+            names = [p for p, _ in props]
+            if ascii_lines is not None:
+                rows = [ln.split() for ln in ascii_lines[row:row + count]]
+                data = {p: np.array([float(r[i]) for r in rows]) for i, p in enumerate(names)}
+            else:
+                dt = np.dtype([(p, endian + t) for p, t in props])
+                arr = np.frombuffer(f.read(count * dt.itemsize), dtype=dt, count=count)
+                data = {p: arr[p].astype(np.float64) for p in names}
+            cols = ["x", "y", "z"]
+            if not all(c in data for c in cols):
+                raise ValueError("PLY vertices need x, y, z")
+            if all(c in data for c in ("nx", "ny", "nz")):
+                cols += ["nx", "ny", "nz"]
+            return np.stack([data[c] for c in cols], axis=1).astype(np.float32)
+    raise ValueError("PLY file has no vertex element")
+
+
+def write_ply(path, points):
+    """points: N x 3 or N x 6 (xyz [+ normals]) -> binary little-endian PLY."""
+    pts = np.ascontiguousarray(points, dtype="<f4")
+    names = ["x", "y", "z", "nx", "ny", "nz"][:pts.shape[1]]
+    head = ["ply", "format binary_little_endian 1.0", f"element vertex {len(pts)}"]
+    head += [f"property float {n}" for n in names] + ["end_header", ""]
+    with open(path, "wb") as f:
+        f.write("\n".join(head).encode("ascii"))
+        f.write(pts.tobytes())
