@@ -1,6 +1,7 @@
 #include "tests/golden.h"
 
 #include <catch2/catch.hpp>
+#include <filesystem>
 
 namespace vtloc::test {
 
@@ -28,5 +29,15 @@ void Golden::compare_exact(const std::string& name, const std::vector<int32_t>& 
 }
 
 std::string goldens_dir() { return VTLOC_SOURCE_DIR "/weights_tools/goldens"; }
+
+std::string build_goldens_dir() { return VTLOC_BUILD_GOLDENS_DIR; }
+
+std::string require_golden_file(const std::string& dir, const std::string& name) {
+    std::string path = dir + "/" + name;
+    INFO("golden file " << path << " is missing; `ctest --test-dir build -R goldens.paper` writes the "
+         "paper-size ones, `/usr/bin/python3 -m weights_tools.make_goldens` the committed ones");
+    REQUIRE(std::filesystem::exists(path));
+    return path;
+}
 
 }  // namespace vtloc::test

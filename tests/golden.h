@@ -30,5 +30,10 @@ private:
 
 // The directory holding committed goldens (weights_tools/goldens).
 std::string goldens_dir();
+// The directory where the CTest fixture `goldens.paper` writes the paper-size
+// weights and goldens (vtloc-r18, vtloc-mcr): build/goldens.
+std::string build_goldens_dir();
+// Loads `dir/name`, failing the test with a hint when the file is missing.
+std::string require_golden_file(const std::string& dir, const std::string& name);
 
 }  // namespace vtloc::test

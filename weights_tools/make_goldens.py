@@ -1,6 +1,11 @@
 """Regenerate the committed goldens (byte for byte):
 
   python3 -m weights_tools.make_goldens [--out weights_tools/goldens]
+  python3 -m weights_tools.make_goldens --paper --out build/goldens
+
+--paper writes the paper-size configs (vtloc-r18, vtloc-mcr; ~120 MB of
+weights, so not committed) and skips the work when its outputs are newer
+than every weights_tools source file.
 
 For each small config: random weights (seed 0) -> NAME.safetensors, and a
 golden run on synthetic tactile seed 0 / synthetic cloud seed 0 with the
@@ -18,6 +23,7 @@ from . import config, golden, model
 from .export import random_model
 
 CONFIGS = ("vtloc-tiny", "vtloc-mcr-tiny")
+PAPER_CONFIGS = ("vtloc-r18", "vtloc-mcr")
 DEFAULT_OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "goldens")
 
 
@@ -39,12 +45,28 @@ def make_all(out_dir, names=CONFIGS):
         torch.set_num_threads(threads)
 
 
+def outputs(out_dir, names):
+    return [os.path.join(out_dir, f"{n}{suffix}.safetensors") for n in names for suffix in ("", ".golden")]
+
+
+def up_to_date(paths):
+    """All paths exist and are newer than every source file of this package."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    newest_src = max(os.path.getmtime(os.path.join(here, f)) for f in os.listdir(here) if f.endswith(".py"))
+    return all(os.path.exists(p) and os.path.getmtime(p) > newest_src for p in paths)
+
+
 def main(argv=None):
     ap = argparse.ArgumentParser(prog="python3 -m weights_tools.make_goldens", description=__doc__,
                                  formatter_class=argparse.RawDescriptionHelpFormatter)
     ap.add_argument("--out", default=DEFAULT_OUT)
+    ap.add_argument("--paper", action="store_true", help="the paper-size configs instead of the tiny ones")
     a = ap.parse_args(argv)
-    for path in make_all(a.out):
+    names = PAPER_CONFIGS if a.paper else CONFIGS
+    if a.paper and up_to_date(outputs(a.out, names)):
+        print(f"paper goldens in {a.out} are up to date")
+        return 0
+    for path in make_all(a.out, names):
         print(f"{os.path.getsize(path):8d}  {path}")
     return 0
 
