@@ -1,7 +1,7 @@
 #version 450
 // out = a (op) b, with b repeated when it is shorter (b's shape is a suffix of a's).
 layout(local_size_x_id = 0) in;
-layout(constant_id = 1) const uint OP = 0;  // 0 add, 1 mul
+layout(constant_id = 1) const uint OP = 0;  // 0 add, 1 mul, 2 sub
 
 layout(std430, binding = 0) readonly buffer A_ { float A[]; };
 layout(std430, binding = 1) readonly buffer B_ { float B[]; };
@@ -12,6 +12,6 @@ void main() {
     uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     for (uint i = gl_GlobalInvocationID.x; i < p.n; i += stride) {
         float b = B[i % p.nb];
-        O[i] = OP == 0u ? A[i] + b : A[i] * b;
+        O[i] = OP == 0u ? A[i] + b : OP == 1u ? A[i] * b : A[i] - b;
     }
 }

@@ -82,9 +82,9 @@ TEST_CASE("activations match the CPU reference", "[op][activation]") {
     }
 }
 
-TEST_CASE("add and mul match the CPU reference, with suffix broadcasting", "[op][binary]") {
+TEST_CASE("add, sub and mul match the CPU reference, with suffix broadcasting", "[op][binary]") {
     struct Case { Shape a, b; };
-    for (const char* op : {"add", "mul"})
+    for (const char* op : {"add", "sub", "mul"})
         for (const Case& c : {Case{{1, 37}, {1, 37}}, Case{{5, 127, 33}, {5, 127, 33}},
                               Case{{5, 127, 33}, {33}}, Case{{5, 127, 33}, {127, 33}}}) {
             Graph g;

@@ -1,4 +1,4 @@
-// add / mul of a and b, where b's shape equals a's or is a suffix of it
+// add / sub / mul of a and b, where b's shape equals a's or is a suffix of it
 // (b repeats, as a bias does) -> shaders/binary.comp
 #include <algorithm>
 
@@ -27,7 +27,7 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const auto& b = in[1]->data;
     for (size_t i = 0; i < a.size(); ++i) {
         float y = b[i % b.size()];
-        out[0]->data[i] = OP == 0 ? a[i] + y : a[i] * y;
+        out[0]->data[i] = OP == 0 ? a[i] + y : OP == 1 ? a[i] * y : a[i] - y;
     }
 }
 
@@ -48,5 +48,6 @@ void gpu(const GpuOpArgs& a) {
 
 const OpDef op_add{"add", infer, cpu<0>, gpu<0>};
 const OpDef op_mul{"mul", infer, cpu<1>, gpu<1>};
+const OpDef op_sub{"sub", infer, cpu<2>, gpu<2>};
 
 }  // namespace vtloc::ops

@@ -6,6 +6,7 @@ namespace vtloc::ops {
 extern const OpDef op_linear;      // linear.cpp
 extern const OpDef op_add;         // binary.cpp
 extern const OpDef op_mul;         // binary.cpp
+extern const OpDef op_sub;         // binary.cpp
 extern const OpDef op_relu;        // activation.cpp
 extern const OpDef op_leaky_relu;  // activation.cpp
 extern const OpDef op_tanh;        // activation.cpp

@@ -8,6 +8,7 @@ const OpDef* const kOps[] = {
     &ops::op_linear,
     &ops::op_add,
     &ops::op_mul,
+    &ops::op_sub,
     &ops::op_relu,
     &ops::op_leaky_relu,
     &ops::op_tanh,

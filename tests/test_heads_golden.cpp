@@ -1,0 +1,65 @@
+// The ILU and MCR heads, fed the golden F^t and F^p, reproduce the PyTorch
+// reference's c_1..c_N and c^p. Goldens are float64 rounded to float32; the
+// engine works in float32 through a few Linear layers per iteration, so the
+// default 1e-4 + 1e-4*|ref| holds.
+#include <catch2/catch.hpp>
+
+#include "engine/model/heads.h"
+#include "tests/golden.h"
+
+using namespace vtloc;
+
+namespace {
+
+struct HeadsCase {
+    WeightStore weights;
+    test::Golden golden;
+    Graph graph;
+    TensorMap inputs;
+};
+
+HeadsCase load_case(const std::string& name) {
+    WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), name + ".safetensors"));
+    test::Golden gold(test::require_golden_file(test::goldens_dir(), name + ".golden.safetensors"));
+    int64_t C = w.config().at("C").get<int64_t>();
+    HostTensor ft = gold.f32("tactile.feature"), fp = gold.f32("point.feature");
+    REQUIRE(ft.shape == Shape{C});
+    ft.shape = fp.shape = {1, C};
+    return {std::move(w), std::move(gold), Graph{}, {{"ft", ft}, {"fp", fp}}};
+}
+
+}  // namespace
+
+TEST_CASE("ILU iterations match the PyTorch golden (vtloc-tiny)", "[heads][golden]") {
+    HeadsCase hc = load_case("vtloc-tiny");
+    int64_t C = hc.weights.config().at("C").get<int64_t>();
+    int iters = hc.weights.config().at("ilu").at("iters").get<int>();
+    REQUIRE(hc.golden.shape("ilu.c") == Shape{iters, 3});
+    Graph& g = hc.graph;
+    auto cs = build_ilu(g, hc.weights, g.input("ft", {1, C}), g.input("fp", {1, C}), iters);
+    REQUIRE(int(cs.size()) == iters);
+    for (int k = 0; k < iters; ++k) g.output(cs[size_t(k)], "c" + std::to_string(k + 1));
+    TensorMap out = test::run_gpu_and_compare(g, hc.weights, hc.inputs);
+
+    HostTensor all({int64_t(iters), 3});
+    for (int k = 0; k < iters; ++k)
+        for (int j = 0; j < 3; ++j) all.data[size_t(k * 3 + j)] = out.at("c" + std::to_string(k + 1)).data[size_t(j)];
+    hc.golden.compare("ilu.c", all);
+    HostTensor last({3}, {all.data.end() - 3, all.data.end()});
+    hc.golden.compare("contact", last);
+}
+
+TEST_CASE("ILU with zero iterations has no updates", "[heads]") {
+    Graph g;
+    CHECK(build_ilu(g, WeightStore{}, g.input("ft", {1, 4}), g.input("fp", {1, 4}), 0).empty());
+    REQUIRE_THROWS_WITH(build_ilu(g, WeightStore{}, 0, 1, 65), Catch::Contains("0..64"));
+}
+
+TEST_CASE("MCR head matches the PyTorch golden (vtloc-mcr-tiny)", "[heads][golden]") {
+    HeadsCase hc = load_case("vtloc-mcr-tiny");
+    int64_t C = hc.weights.config().at("C").get<int64_t>();
+    Graph& g = hc.graph;
+    g.output(build_mcr(g, hc.weights, hc.weights.config(), g.input("ft", {1, C}), g.input("fp", {1, C})), "c");
+    TensorMap out = test::run_gpu_and_compare(g, hc.weights, hc.inputs);
+    hc.golden.compare("contact", HostTensor({3}, out.at("c").data));
+}
