@@ -1,0 +1,80 @@
+#include "engine/io/image.h"
+
+#include <cstring>
+
+#include <opencv2/core.hpp>
+#include <opencv2/core/utils/logger.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "engine/io/file_bytes.h"
+
+namespace vtloc::io {
+
+namespace {
+
+// OpenCV logs its own warnings for undecodable data; our Error says it once.
+void quiet_opencv() {
+    static const bool once = [] {
+        cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
+        return true;
+    }();
+    (void)once;
+}
+
+}  // namespace
+
+RgbImage load_tactile_image(const std::string& path) {
+    quiet_opencv();
+    std::vector<uint8_t> bytes = read_file_bytes(path);
+    if (bytes.empty()) fail(path, "file is empty, not an image");
+    cv::Mat raw;
+    try {
+        // IMREAD_UNCHANGED keeps grey/alpha/16-bit visible to us and skips EXIF rotation.
+        raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
+    } catch (const cv::Exception& e) {
+        fail(path, "cannot decode image (" + e.msg + ")");
+    }
+    if (raw.empty()) {
+        // imdecode cannot tell us why; the signature check says whether any codec claims the bytes.
+        bool known = false;
+        try {
+            known = cv::haveImageReader(path);
+        } catch (const cv::Exception&) {
+        }
+        fail(path, known ? "image data is corrupt or truncated" : "not an image (no image format recognised)");
+    }
+    if (raw.depth() == CV_16U) {
+        raw.convertTo(raw, CV_8U, 1.0 / 257.0);  // 65535 -> 255
+    } else if (raw.depth() != CV_8U) {
+        fail(path, "unsupported pixel type (only 8- and 16-bit integer images are read)");
+    }
+    cv::Mat rgb;
+    switch (raw.channels()) {
+        case 1: cv::cvtColor(raw, rgb, cv::COLOR_GRAY2RGB); break;
+        case 3: cv::cvtColor(raw, rgb, cv::COLOR_BGR2RGB); break;
+        case 4: cv::cvtColor(raw, rgb, cv::COLOR_BGRA2RGB); break;
+        default: fail(path, "unsupported image with " + std::to_string(raw.channels()) + " channels");
+    }
+    if (rgb.rows < kMinImageSide || rgb.cols < kMinImageSide)
+        fail(path, "image is " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
+                       " pixels; at least " + std::to_string(kMinImageSide) + "x" +
+                       std::to_string(kMinImageSide) + " needed");
+    RgbImage out(rgb.rows, rgb.cols);
+    for (int y = 0; y < rgb.rows; ++y)
+        std::memcpy(out.at(y, 0), rgb.ptr<uint8_t>(y), size_t(rgb.cols) * 3);
+    return out;
+}
+
+void save_png(const std::string& path, const RgbImage& image) {
+    quiet_opencv();
+    if (image.height <= 0 || image.width <= 0) fail(path, "cannot write an empty image");
+    cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.pixels.data()));
+    cv::Mat bgr;
+    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+    std::vector<uint8_t> png;
+    if (!cv::imencode(".png", bgr, png)) fail(path, "PNG encoding failed");
+    write_file_bytes(path, png.data(), png.size());
+}
+
+}  // namespace vtloc::io

@@ -1,0 +1,47 @@
+#pragma once
+// Triangle meshes: glTF 2.0 (.gltf with its buffers, or .glb) flattened into
+// one list of triangles in the object's frame, and area-weighted surface
+// sampling that turns a mesh into the model's point cloud (SPEC section 1).
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/tensor.h"
+
+namespace vtloc::io {
+
+struct TriangleMesh {
+    std::vector<float> positions;   // 3 per vertex, object units, node transforms applied
+    std::vector<float> normals;     // empty, or 3 per vertex (unit); (0,0,0) = this vertex has none
+    std::vector<uint32_t> triangles;  // 3 vertex indices each; counter-clockwise seen from the front
+
+    size_t vertex_count() const { return positions.size() / 3; }
+    size_t triangle_count() const { return triangles.size() / 3; }
+};
+
+// Every primitive of mode TRIANGLES (indexed or not) of every mesh instance
+// in the default scene (else scene 0, else every root node), with its node's
+// world transform applied (normals by the inverse transpose; triangles of
+// mirrored nodes re-wound so that counter-clockwise stays the front). Other
+// primitive modes (points, lines, strips, fans) are skipped. Coordinates are
+// taken as the object's units as they are (no metre conversion). Textures,
+// materials, skins and morph targets are ignored. Throws vtloc::Error naming
+// the file for a missing/unreadable/malformed file, unsupported accessors,
+// out-of-range indices, non-finite coordinates, zero normals (naming the
+// vertex), or no triangles at all.
+TriangleMesh load_gltf_mesh(const std::string& path);
+
+inline constexpr uint64_t kDefaultSampleSeed = 0;
+
+// N x 6 (xyz, unit normal) by area-weighted surface sampling, deterministic:
+// rng = SplitMix64(seed); for each sample, t = uniform() * total area picks
+// the first triangle whose running area sum (double, triangle order) exceeds
+// t, then u = uniform(), v = uniform() give barycentrics (1 - sqrt(u),
+// sqrt(u) (1 - v), sqrt(u) v) over the triangle's vertices (a, b, c). The
+// normal is the interpolated vertex normal where all three vertices have
+// one (and it is not degenerate), else the face normal (b - a) x (c - a).
+// `source` names the mesh in errors (no triangle with non-zero area).
+HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed = kDefaultSampleSeed,
+                          const std::string& source = "mesh");
+
+}  // namespace vtloc::io
