@@ -8,9 +8,18 @@
 
 namespace vtloc {
 
-// ILU over `iters` iterations from F^t, F^p ([1, C] each). Returns c_1..c_N
-// ([1, 3] each, empty for N = 0, where c^p = c_0 = 0). Built from primitive ops.
-std::vector<int> build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters);
+// ILU from F^t, F^p ([1, C] each), fused into one op (engine/ops/ilu.cpp).
+// `iters` is a graph value, I32 [1], holding N (0..max_iters) at run time, so N
+// changes without rebuilding; max_iters is 0..64. c: [max_iters, 3] = c_1..c_N
+// then zero rows; contact: [3] = c^p = c_N (0 for N = 0).
+struct IluOutputs {
+    int c = -1;
+    int contact = -1;
+};
+IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters);
+
+// The run-time input for `iters`; throws unless 0 <= n <= max_iters.
+HostTensor ilu_iters_input(int n, int max_iters);
 
 // MCR: c^p = tanh(MLP([F^t, F^p])), hidden sizes from config["mcr"]["hidden"].
 int build_mcr(Graph& g, const WeightStore& w, const nlohmann::json& config, int ft, int fp);

@@ -12,4 +12,11 @@ extern const OpDef op_leaky_relu;  // activation.cpp
 extern const OpDef op_tanh;        // activation.cpp
 extern const OpDef op_sigmoid;     // activation.cpp
 extern const OpDef op_concat;      // concat.cpp
+extern const OpDef op_disentangle;  // disentangle.cpp (GMA)
+extern const OpDef op_gma_decode;   // gma_decode.cpp
+extern const OpDef op_chamfer;      // chamfer.cpp
+extern const OpDef op_ilu;          // ilu.cpp
+extern const OpDef op_topk;         // topk.cpp
+extern const OpDef op_heatmap;      // heatmap.cpp
+extern const OpDef op_belief;       // belief.cpp
 }  // namespace vtloc::ops

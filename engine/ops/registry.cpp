@@ -14,6 +14,13 @@ const OpDef* const kOps[] = {
     &ops::op_tanh,
     &ops::op_sigmoid,
     &ops::op_concat,
+    &ops::op_disentangle,
+    &ops::op_gma_decode,
+    &ops::op_chamfer,
+    &ops::op_ilu,
+    &ops::op_topk,
+    &ops::op_heatmap,
+    &ops::op_belief,
 };
 }  // namespace
 

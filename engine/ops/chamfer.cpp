@@ -1,0 +1,97 @@
+// chamfer: mean_a min_b ||a - b||^2 + mean_b min_a ||a - b||^2 (SPEC 3) over rows
+// of width 3 or 6 (the last axis; leading axes are flattened into rows).
+// -> shaders/chamfer_nn.comp (both nearest-neighbour searches, tiled through
+// shared memory) then shaders/chamfer_sum.comp (the means, one workgroup).
+// Outputs: 0 = the distance (a 0-d scalar), 1 = the per-row nearest squared
+// distances [Na + Nb] (A's rows, then B's), which the second pass reduces.
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+namespace {
+
+int64_t rows_of(const Shape& s) { return numel(s) / s.back(); }
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
+    expect_input_count(in, 2, 2);
+    expect_f32(in);
+    for (size_t i = 0; i < 2; ++i) {
+        const Shape& s = in[i].shape;
+        if (s.empty() || (s.back() != 3 && s.back() != 6))
+            throw Error(std::string("point set ") + (i ? "B " : "A ") + shape_str(s) + " must have rows of width 3 or 6");
+        if (rows_of(s) == 0) throw Error(std::string("point set ") + (i ? "B" : "A") + " is empty");
+    }
+    if (in[0].shape.back() != in[1].shape.back())
+        throw Error("point sets have rows of different widths: " + shape_str(in[0].shape) + " and " +
+                    shape_str(in[1].shape));
+    return {TensorDesc{Shape{}}, TensorDesc{Shape{rows_of(in[0].shape) + rows_of(in[1].shape)}}};
+}
+
+// min over `to` of the squared distance to row q of `from`, in double.
+double nearest(const HostTensor& from, int64_t q, const HostTensor& to, int64_t D) {
+    double best = std::numeric_limits<double>::infinity();
+    for (int64_t j = 0; j < to.size() / D; ++j) {
+        double d = 0.0;
+        for (int64_t c = 0; c < D; ++c) {
+            double e = double(from.data[size_t(q * D + c)]) - to.data[size_t(j * D + c)];
+            d += e * e;
+        }
+        best = std::min(best, d);
+    }
+    return best;
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    const HostTensor &a = *in[0], &b = *in[1];
+    for (int i = 0; i < 2; ++i)
+        for (float v : in[size_t(i)]->data)
+            if (!std::isfinite(v)) throw Error(std::string("chamfer: point set ") + (i ? "B" : "A") + " holds NaN or inf");
+    const int64_t D = a.shape.back(), Na = a.size() / D, Nb = b.size() / D;
+    double sa = 0.0, sb = 0.0;
+    for (int64_t q = 0; q < Na; ++q) {
+        double d = nearest(a, q, b, D);
+        out[1]->data[size_t(q)] = float(d);
+        sa += d;
+    }
+    for (int64_t q = 0; q < Nb; ++q) {
+        double d = nearest(b, q, a, D);
+        out[1]->data[size_t(Na + q)] = float(d);
+        sb += d;
+    }
+    out[0]->data[0] = float(sa / double(Na) + sb / double(Nb));
+}
+
+void gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t D = uint32_t(a.in[0].shape.back());
+    const uint32_t Na = to_u32(rows_of(a.in[0].shape), "rows of A");
+    const uint32_t Nb = to_u32(rows_of(a.in[1].shape), "rows of B");
+    // The tile holds one target row per thread: one or two vec3 (16 bytes each in
+    // shared memory). Each thread queries two rows.
+    uint32_t local = elementwise_local_size(d);
+    while (local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
+    const uint64_t ga = (Na + 2 * local - 1) / (2 * local), gb = (Nb + 2 * local - 1) / (2 * local);
+    if (ga + gb > d.max_workgroup_count[0])
+        throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
+                    " rows need more workgroups than the device allows");
+    struct { uint32_t Na, Nb, groups_a; } push{Na, Nb, uint32_t(ga)};
+    a.seq.dispatch(pipeline(a.ctx, "chamfer_nn", 3, 12, {local, D == 6 ? 1u : 0u}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
+                    {a.out[1].view, rt::Access::Write}},
+                   &push, sizeof(push), uint32_t(ga + gb));
+    uint32_t sum_local = elementwise_local_size(d);
+    while (sum_local > 1 && sum_local * 8 > d.max_shared_memory) sum_local /= 2;
+    a.seq.dispatch(pipeline(a.ctx, "chamfer_sum", 2, 8, {sum_local}),
+                   {{a.out[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, 8, 1);
+}
+
+}  // namespace
+
+const OpDef op_chamfer{"chamfer", infer, cpu, gpu};
+
+}  // namespace vtloc::ops

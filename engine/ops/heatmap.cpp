@@ -1,0 +1,102 @@
+// heatmap: rank-weighted heat-map over the cloud (SPEC 3, weights_tools/post.py
+// heatmap): w = rank of the nearest top-K centre (lowest rank on a tie),
+// s_p = exp(-||p - c*_w||) / w, min-max normalised (all zeros when flat).
+// -> shaders/heatmap_score.comp (per point) + shaders/heatmap_norm.comp (the
+// min/max reduction and the normalisation, one workgroup).
+// Inputs: cloud [P, D >= 3] (xyz first), candidates [M, 3], topk index I32 [K]
+// (rank order), optionally the symmetry prior as T affine maps [T, 12] (3x4
+// row-major, symmetry_transforms in engine/model/post.h makes them). Output [P].
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <limits>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+namespace {
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
+    expect_input_count(in, 3, 4);
+    const Shape &cloud = in[0].shape, &cand = in[1].shape, &idx = in[2].shape;
+    if (in[0].type != ElemType::F32 || in[1].type != ElemType::F32 || (in.size() == 4 && in[3].type != ElemType::F32))
+        throw Error("cloud, candidates and symmetry maps must be F32");
+    if (in[2].type != ElemType::I32) throw Error("top-K index must be I32");
+    if (cloud.size() != 2 || cloud[1] < 3) throw Error("cloud must be [P, D >= 3], got " + shape_str(cloud));
+    if (cloud[0] == 0) throw Error("the cloud is empty");
+    if (cand.size() != 2 || cand[1] != 3 || cand[0] == 0) throw Error("candidates must be [M > 0, 3], got " + shape_str(cand));
+    if (idx.size() != 1 || idx[0] == 0) throw Error("top-K index must be [K > 0], got " + shape_str(idx));
+    if (in.size() == 4 && (in[3].shape.size() != 2 || in[3].shape[1] != 12 || in[3].shape[0] == 0))
+        throw Error("symmetry maps must be [T > 0, 12], got " + shape_str(in[3].shape));
+    to_u32(numel(cloud), "cloud size");
+    to_u32(numel(cand), "candidate array size");
+    return {TensorDesc{{cloud[0]}}};
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    const HostTensor &cloud = *in[0], &cand = *in[1], &idx = *in[2];
+    const int64_t P = cloud.shape[0], D = cloud.shape[1], M = cand.shape[0], K = idx.size();
+    for (const HostTensor* t : {in[0], in[1]})
+        for (float v : t->data)
+            if (!std::isfinite(v)) throw Error(std::string("heat-map: the ") + (t == in[0] ? "cloud" : "candidates") + " hold NaN or inf");
+    // Centres with their ranks, copy order (rank, copy) as the reference builds them.
+    std::vector<std::array<double, 3>> centres;
+    std::vector<int> ranks;
+    const int64_t T = in.size() == 4 ? in[3]->shape[0] : 0;
+    for (int64_t j = 0; j < K; ++j) {
+        int32_t ci = idx.int_at(size_t(j));
+        if (ci < 0 || ci >= M) throw Error("heat-map: top-K index " + std::to_string(ci) + " is outside 0.." + std::to_string(M - 1));
+        const float* c = &cand.data[size_t(3 * ci)];
+        for (int64_t t = 0; t < std::max<int64_t>(T, 1); ++t) {
+            std::array<double, 3> ct{c[0], c[1], c[2]};
+            if (T > 0) {
+                const float* a = &in[3]->data[size_t(12 * t)];
+                for (int r = 0; r < 3; ++r)
+                    ct[size_t(r)] = double(a[4 * r]) * c[0] + double(a[4 * r + 1]) * c[1] + double(a[4 * r + 2]) * c[2] + a[4 * r + 3];
+            }
+            centres.push_back(ct);
+            ranks.push_back(int(j + 1));
+        }
+    }
+    std::vector<double> s(static_cast<size_t>(P));
+    for (int64_t i = 0; i < P; ++i) {
+        const float* pt = &cloud.data[size_t(i * D)];
+        double best = std::numeric_limits<double>::infinity();
+        int w = 1;
+        for (size_t c = 0; c < centres.size(); ++c) {
+            double dx = pt[0] - centres[c][0], dy = pt[1] - centres[c][1], dz = pt[2] - centres[c][2];
+            double d = std::sqrt((dx * dx + dy * dy) + dz * dz);
+            if (d < best) best = d, w = ranks[c];  // strict: ties keep the lower rank
+        }
+        s[size_t(i)] = std::exp(-best) / w;
+    }
+    auto [lo, hi] = std::minmax_element(s.begin(), s.end());
+    for (int64_t i = 0; i < P; ++i)
+        out[0]->data[size_t(i)] = *hi == *lo ? 0.0f : float((s[size_t(i)] - *lo) / (*hi - *lo));
+}
+
+void gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t local = elementwise_local_size(d);
+    const bool sym = a.in.size() == 4;
+    struct { uint32_t P, D, M, K, T; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[0].shape[1]),
+                                          uint32_t(a.in[1].shape[0]), to_u32(a.in[2].shape[0], "K"),
+                                          sym ? to_u32(a.in[3].shape[0], "symmetry maps") : 0u};
+    a.seq.dispatch(pipeline(a.ctx, "heatmap_score", 5, 20, {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
+                    {a.in[2].view, rt::Access::Read}, {(sym ? a.in[3] : a.in[1]).view, rt::Access::Read},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), grid_groups(push.P, local, d));
+    uint32_t norm_local = local;
+    while (norm_local > 1 && norm_local * 8 > d.max_shared_memory) norm_local /= 2;
+    a.seq.dispatch(pipeline(a.ctx, "heatmap_norm", 1, 4, {norm_local}), {{a.out[0].view, rt::Access::ReadWrite}},
+                   &push.P, 4, 1);
+}
+
+}  // namespace
+
+const OpDef op_heatmap{"heatmap", infer, cpu, gpu};
+
+}  // namespace vtloc::ops

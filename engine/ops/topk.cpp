@@ -1,0 +1,128 @@
+// topk: the K candidates nearest c^p (SPEC 3): S_i = ||c^p - c_i||^2 ascending,
+// ties to the lower index. -> shaders/topk.comp, a few passes, each sorting
+// chunks of S keys in shared memory and keeping K per chunk.
+// Inputs: contact [3] (or [1, 3]), candidates [M, 3]. Param k (1..256, <= M).
+// Outputs: index I32 [K], score F32 [K], and a workspace (I32, contents
+// unspecified) holding the intermediate key lists of the passes.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+namespace {
+
+constexpr int64_t kMaxK = 256;
+constexpr int64_t kRegionAlign = 256;  // the largest minStorageBufferOffsetAlignment Vulkan allows
+
+int64_t pow2_at_least(int64_t v) {
+    int64_t p = 1;
+    while (p < v) p *= 2;
+    return p;
+}
+// The smallest chunk the host may pick; workspace regions are sized for it, so
+// any larger chunk (fewer groups) fits too.
+int64_t min_chunk(int64_t K) { return std::max<int64_t>(64, pow2_at_least(2 * K)); }
+int64_t ceil_div(int64_t a, int64_t b) { return (a + b - 1) / b; }
+
+struct Regions {
+    int64_t a_words, b_offset_words, total_words;
+};
+Regions regions(int64_t M, int64_t K) {
+    const int64_t S = min_chunk(K);
+    int64_t a_keys = ceil_div(M, S) * K, b_keys = ceil_div(a_keys, S) * K;
+    int64_t b_off = ceil_div(2 * a_keys * 4, kRegionAlign) * kRegionAlign / 4;
+    return {2 * a_keys, b_off, b_off + 2 * b_keys};
+}
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 2, 2);
+    expect_f32(in);
+    if (numel(in[0].shape) != 3 || in[0].shape.empty() || in[0].shape.back() != 3)
+        throw Error("contact must be [3] or [1, 3], got " + shape_str(in[0].shape));
+    const Shape& c = in[1].shape;
+    if (c.size() != 2 || c[1] != 3) throw Error("candidates must be [M, 3], got " + shape_str(c));
+    if (c[0] == 0) throw Error("the candidate set is empty");
+    const double k = p.get("k", 0);
+    if (!(k >= 1 && k <= double(kMaxK)) || k != std::floor(k))
+        throw Error("K must be an integer in 1.." + std::to_string(kMaxK) + ", got " + std::to_string(k));
+    if (int64_t(k) > c[0])
+        throw Error("K = " + std::to_string(int64_t(k)) + " exceeds the " + std::to_string(c[0]) + " candidates");
+    to_u32(c[0] * 3, "candidate array size");
+    const int64_t K = int64_t(k);
+    return {TensorDesc{{K}, ElemType::I32}, TensorDesc{{K}}, TensorDesc{{regions(c[0], K).total_words}, ElemType::I32}};
+}
+
+float score_of(const float* c, const float* p) {
+    // The reference's order and roundings: (dx*dx + dy*dy) + dz*dz in float.
+    float dx = p[0] - c[0], dy = p[1] - c[1], dz = p[2] - c[2];
+    float xx = dx * dx, yy = dy * dy, zz = dz * dz;
+    float xy = xx + yy;
+    return xy + zz;
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    const float* c = in[0]->data.data();
+    const HostTensor& cand = *in[1];
+    for (int i = 0; i < 3; ++i)
+        if (!std::isfinite(c[i])) throw Error("top-K: the contact holds NaN or inf");
+    const int64_t M = cand.shape[0], K = out[0]->size();
+    std::vector<float> s(static_cast<size_t>(M));
+    for (int64_t i = 0; i < M; ++i) {
+        s[size_t(i)] = score_of(c, &cand.data[size_t(3 * i)]);
+        if (!std::isfinite(s[size_t(i)]))
+            throw Error("top-K: candidate " + std::to_string(i) + " holds NaN or inf (or its score overflows)");
+    }
+    std::vector<int32_t> order(static_cast<size_t>(M));
+    std::iota(order.begin(), order.end(), 0);
+    std::partial_sort(order.begin(), order.begin() + K, order.end(), [&](int32_t a, int32_t b) {
+        return s[size_t(a)] < s[size_t(b)] || (s[size_t(a)] == s[size_t(b)] && a < b);
+    });
+    for (int64_t j = 0; j < K; ++j) {
+        out[0]->set_int(size_t(j), order[size_t(j)]);
+        out[1]->data[size_t(j)] = s[size_t(order[size_t(j)])];
+    }
+}
+
+void gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const int64_t M = a.in[1].shape[0], K = a.out[0].shape[0];
+    // The largest chunk using at most half the shared memory, up to 2048 keys,
+    // and no larger than the candidates need (a smaller sort).
+    int64_t S = min_chunk(K);
+    while (S < 2048 && S < M && S * 2 * 8 <= int64_t(d.max_shared_memory) / 2) S *= 2;
+    if (S * 8 > int64_t(d.max_shared_memory))
+        throw Error("top-K with K = " + std::to_string(K) + " needs more shared memory than the device has");
+    const uint32_t L = std::min<uint32_t>(elementwise_local_size(d), uint32_t(S / 2));
+    const Regions r = regions(M, K);
+    const rt::BufferView& ws = a.out[2].view;
+    const rt::BufferView region[2] = {{ws.buffer, ws.offset, uint64_t(std::max<int64_t>(1, r.a_words)) * 4},
+                                      {ws.buffer, ws.offset + uint64_t(r.b_offset_words) * 4,
+                                       uint64_t(std::max<int64_t>(1, r.total_words - r.b_offset_words)) * 4}};
+    int64_t n = M;
+    for (int pass = 0;; ++pass) {
+        const int64_t groups = ceil_div(n, S);
+        if (groups > int64_t(d.max_workgroup_count[0])) throw Error("too many candidates for one top-K pass on this device");
+        const bool first = pass == 0, final = groups == 1;
+        struct { uint32_t n, K; } push{uint32_t(n), uint32_t(K)};
+        const rt::BufferView& src = first ? a.in[1].view : region[(pass - 1) % 2];
+        const rt::BufferView& dst = final ? a.in[0].view : region[pass % 2];  // unused when final
+        a.seq.dispatch(pipeline(a.ctx, "topk", 5, 8, {L, uint32_t(S), first, final}),
+                       {{a.in[0].view, rt::Access::Read}, {src, rt::Access::Read},
+                        {dst, final ? rt::Access::Read : rt::Access::Write},
+                        {a.out[0].view, final ? rt::Access::Write : rt::Access::Read},
+                        {a.out[1].view, final ? rt::Access::Write : rt::Access::Read}},
+                       &push, sizeof(push), uint32_t(groups));
+        if (final) break;
+        n = groups * K;
+    }
+}
+
+}  // namespace
+
+const OpDef op_topk{"topk", infer, cpu, gpu};
+
+}  // namespace vtloc::ops

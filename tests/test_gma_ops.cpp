@@ -1,0 +1,135 @@
+// GMA ops (disentangle, gma_decode) and chamfer: GPU against the CPU references
+// at odd sizes, fixed seeds; the weight row-chunk planner with forced small limits.
+// Tolerance: the default 1e-4 + 1e-4*|ref| (the CPU sums in double, the shaders
+// in fp32; measured max errors are ~1e-6 relative, see the report).
+#include <catch2/catch.hpp>
+
+#include "engine/error.h"
+#include "engine/model/gma.h"
+#include "engine/ops/common.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+using vtloc::test::run_gpu_and_compare;
+
+namespace {
+
+// x [rows, K] times W [K, J, L] split into chunks of `chunk_rows` rows.
+void check_disentangle(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t chunk_rows, uint32_t seed) {
+    WeightStore w;
+    w.add("wd", random_tensor({K, J, L}, seed + 1, -0.3f, 0.3f));
+    std::vector<std::string> names = split_weight_rows(w, "wd", uint64_t(chunk_rows * J * L * 4));
+    CHECK(names.size() == size_t((K + chunk_rows - 1) / chunk_rows));
+    Graph g;
+    std::vector<int> in{g.input("x", {rows, K})};
+    for (const std::string& n : names) in.push_back(g.weight(n, w.get(n).shape));
+    g.output(g.add1("disentangle", in, {{"act", double(ops::kActLeaky)}, {"slope", 0.01}}), "y");
+    REQUIRE(g.value(g.outputs()[0].second).shape == Shape{rows, J, L});
+    INFO("disentangle " << rows << "x" << K << " by [" << K << ", " << J << ", " << L << "] in " << names.size() << " chunks");
+    run_gpu_and_compare(g, w, {{"x", random_tensor({rows, K}, seed, -2.0f, 2.0f)}});
+}
+
+}  // namespace
+
+TEST_CASE("row-chunk planner keeps every chunk within the limit", "[op][disentangle]") {
+    CHECK(plan_row_chunks(256, 262144, 1ull << 27) == std::vector<int64_t>{256});  // paper W^d, lavapipe
+    CHECK(plan_row_chunks(256, 262144, 100 * 262144) == std::vector<int64_t>{100, 100, 56});
+    CHECK(plan_row_chunks(7, 10, 10) == std::vector<int64_t>(7, 1));
+    CHECK(plan_row_chunks(0, 10, 100).empty());
+    REQUIRE_THROWS_WITH(plan_row_chunks(3, 101, 100), Catch::Contains("exceeds the binding limit"));
+    WeightStore w;
+    w.add("t", random_tensor({10, 3}, 1));
+    CHECK(split_weight_rows(w, "t", 1000) == std::vector<std::string>{"t"});  // fits: not copied
+    auto names = split_weight_rows(w, "t", 4 * 3 * 4);
+    REQUIRE(names == std::vector<std::string>{"t#0", "t#1", "t#2"});
+    CHECK(w.get("t#2").shape == Shape{2, 3});
+    CHECK(w.get("t#2").data[5] == w.get("t").data[29]);
+    CHECK(weight_row_chunks(w, "t") == names);
+    REQUIRE_THROWS_WITH(split_weight_rows(w, "t", 8 * 3 * 4), Catch::Contains("already split"));
+}
+
+TEST_CASE("disentangle matches the CPU reference, whole and split", "[op][disentangle]") {
+    check_disentangle(1, 37, 13, 7, 37, 1);   // one chunk
+    check_disentangle(1, 37, 13, 7, 10, 2);   // 10 + 10 + 10 + 7 rows
+    check_disentangle(3, 64, 129, 5, 1, 3);   // one row per chunk, several input rows
+    check_disentangle(1, 256, 300, 64, 97, 4);  // long rows, ragged column blocks
+}
+
+TEST_CASE("disentangle rejects mismatched chunks", "[op][disentangle]") {
+    Graph g;
+    int x = g.input("x", {1, 10});
+    int a = g.weight("a", {6, 4, 2}), b = g.weight("b", {3, 4, 2}), c = g.weight("c", {4, 4, 3});
+    REQUIRE_THROWS_WITH(g.add1("disentangle", {x, a, b}), Catch::Contains("hold 9 rows"));
+    REQUIRE_THROWS_WITH(g.add1("disentangle", {x, a, c}), Catch::Contains("differ after the first axis"));
+}
+
+TEST_CASE("gma_decode matches the CPU reference", "[op][gma_decode]") {
+    HostTensor o = random_tensor({1, 37, 6}, 7, -3.0f, 3.0f);
+    for (int c = 3; c < 6; ++c) o.data[size_t(6 * 5 + c)] = 0.0f;  // a zero normal stays zero
+    for (int c = 3; c < 6; ++c) o.data[size_t(6 * 6 + c)] = c == 3 ? 1e-8f : 0.0f;  // below the 1e-6 clamp
+    Graph g;
+    g.output(g.add1("gma_decode", {g.input("o", o.shape)}), "y");
+    TensorMap out = run_gpu_and_compare(g, WeightStore{}, {{"o", o}});
+    const float* r = &out.at("y").data[6 * 9];
+    CHECK(std::abs(r[3] * r[3] + r[4] * r[4] + r[5] * r[5] - 1.0f) < 1e-5f);
+    CHECK(out.at("y").data[6 * 5 + 4] == 0.0f);
+    CHECK(std::abs(out.at("y").data[6 * 6 + 3] - 0.01f) < 1e-6f);
+}
+
+namespace {
+
+TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed) {
+    Graph g;
+    std::vector<int> out = g.add("chamfer", {g.input("a", a), g.input("b", b)});
+    g.output(out[0], "chamfer");
+    g.output(out[1], "mins");
+    INFO("chamfer " << shape_str(a) << " vs " << shape_str(b));
+    return run_gpu_and_compare(g, WeightStore{},
+                               {{"a", random_tensor(a, seed, -1.0f, 1.0f)}, {"b", random_tensor(b, seed + 1, -1.0f, 1.0f)}});
+}
+
+}  // namespace
+
+TEST_CASE("chamfer matches the CPU reference at odd sizes, widths 3 and 6", "[op][chamfer]") {
+    check_chamfer({37, 3}, {53, 3}, 1);
+    check_chamfer({1, 6}, {1, 6}, 2);
+    check_chamfer({1, 300, 6}, {257, 6}, 3);  // leading axes are flattened into rows
+    check_chamfer({1000, 3}, {7, 3}, 4);
+}
+
+TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
+    // a = {0}, b = {1, 2} on the x axis: 1 + (1 + 4) / 2
+    Graph g;
+    g.output(g.add("chamfer", {g.input("a", {1, 3}), g.input("b", {2, 3})})[0], "d");
+    GpuExecutor exec(test::gpu(), g, WeightStore{});
+    TensorMap out = exec.run({{"a", HostTensor({1, 3}, {0, 0, 0})}, {"b", HostTensor({2, 3}, {1, 0, 0, 2, 0, 0})}});
+    test::require_no_validation_messages();
+    CHECK(out.at("d").shape == Shape{});
+    CHECK(out.at("d").data[0] == 3.5f);
+    HostTensor same = random_tensor({77, 6}, 9);
+    Graph g2;
+    g2.output(g2.add("chamfer", {g2.input("a", {77, 6}), g2.input("b", {77, 6})})[0], "d");
+    CHECK(GpuExecutor(test::gpu(), g2, WeightStore{}).run({{"a", same}, {"b", same}}).at("d").data[0] == 0.0f);
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("chamfer at 16384 x 16384", "[op][chamfer]") {
+    check_chamfer({16384, 6}, {16384, 6}, 11);  // ~6 s on lavapipe: ~3 s GPU, ~3 s CPU oracle
+}
+
+TEST_CASE("chamfer rejects empty sets, bad and mismatched widths, NaN", "[op][chamfer]") {
+    Graph g;
+    int a3 = g.input("a3", {5, 3}), b6 = g.input("b6", {4, 6}), e = g.input("e", {0, 3}), w4 = g.input("w4", {2, 4});
+    REQUIRE_THROWS_WITH(g.add("chamfer", {a3, b6}), Catch::Contains("different widths"));
+    REQUIRE_THROWS_WITH(g.add("chamfer", {a3, e}), Catch::Contains("B is empty"));
+    REQUIRE_THROWS_WITH(g.add("chamfer", {w4, w4}), Catch::Contains("width 3 or 6"));
+    Graph g2;
+    g2.output(g2.add("chamfer", {g2.input("a", {2, 3}), g2.input("b", {2, 3})})[0], "d");
+    HostTensor bad({2, 3}, {0, 0, 0, 1, std::nanf(""), 0});
+    REQUIRE_THROWS_WITH(run_cpu(g2, WeightStore{}, {{"a", bad}, {"b", bad}}), Catch::Contains("NaN"));
+    // The GPU cannot throw: it reports NaN instead of a number that looks valid.
+    float d = GpuExecutor(test::gpu(), g2, WeightStore{}).run({{"a", bad}, {"b", bad}}).at("d").data[0];
+    test::require_no_validation_messages();
+    CHECK(std::isnan(d));
+}

@@ -1,0 +1,120 @@
+// The fused ILU op: GPU against the CPU reference (double) with random weights at
+// odd sizes, the iteration count changed between runs of one recorded graph, and
+// N = 0. Tolerance: the default 1e-4 + 1e-4*|ref|; c accumulates N head outputs
+// computed in fp32, measured max error ~1e-6 (see the report).
+#include <catch2/catch.hpp>
+
+#include "engine/error.h"
+#include "engine/model/heads.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+
+namespace {
+
+WeightStore random_ilu(int64_t C, int64_t H, uint32_t seed) {
+    WeightStore w;
+    float g = 1.0f / std::sqrt(float(3 * C)), hb = 1.0f / std::sqrt(float(C)), ob = 1.0f / std::sqrt(float(H));
+    uint32_t s = seed;
+    for (const char* gate : {"convz", "convr", "convq"}) {
+        w.add(std::string("ilu.") + gate + ".weight", random_tensor({C, 3 * C}, ++s, -g, g));
+        w.add(std::string("ilu.") + gate + ".bias", random_tensor({C}, ++s, -g, g));
+    }
+    w.add("ilu.head.0.weight", random_tensor({H, C}, ++s, -hb, hb));
+    w.add("ilu.head.0.bias", random_tensor({H}, ++s, -hb, hb));
+    w.add("ilu.head.2.weight", random_tensor({3, H}, ++s, -ob, ob));
+    w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
+    return w;
+}
+
+struct IluGraph {
+    Graph g;
+    TensorMap inputs;
+};
+
+IluGraph ilu_graph(const WeightStore& w, int64_t C, int max_iters, uint32_t seed) {
+    IluGraph r;
+    IluOutputs o = build_ilu(r.g, w, r.g.input("ft", {1, C}), r.g.input("fp", {1, C}),
+                             r.g.input("iters", {1}, ElemType::I32), max_iters);
+    r.g.output(o.contact, "contact");
+    if (max_iters > 0) r.g.output(o.c, "c");
+    r.inputs = {{"ft", random_tensor({1, C}, seed, -2.0f, 2.0f)}, {"fp", random_tensor({1, C}, seed + 1, -2.0f, 2.0f)},
+                {"iters", ilu_iters_input(max_iters, max_iters)}};
+    return r;
+}
+
+}  // namespace
+
+TEST_CASE("ilu matches the CPU reference at odd sizes", "[op][ilu]") {
+    struct Case { int64_t C, H; int iters; };
+    for (Case c : {Case{1, 1, 1}, Case{37, 19, 7}, Case{16, 16, 64}, Case{128, 64, 16}, Case{301, 33, 3}, Case{512, 64, 4}}) {
+        INFO("C " << c.C << " H " << c.H << " N " << c.iters);
+        WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C));
+        IluGraph ig = ilu_graph(w, c.C, c.iters, 5);
+        test::run_gpu_and_compare(ig.g, w, ig.inputs);
+    }
+}
+
+TEST_CASE("ilu matches the CPU reference with 1, 4 and 16 lanes per row", "[op][ilu]") {
+    // The shader's row groups: 1 lane (no partial sums) up to 16 (coalesced rows).
+    const int64_t C = 37, H = 19;
+    WeightStore w = random_ilu(C, H, 11);
+    for (double lanes : {1.0, 4.0, 16.0}) {
+        INFO("lanes " << lanes);
+        Graph g;
+        std::vector<int> in{g.input("ft", {1, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
+        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+            in.push_back(g.weight(n, w.get(n).shape));
+        std::vector<int> out = g.add("ilu", in, {{"max_iters", 5}, {"lanes", lanes}});
+        g.output(out[0], "c");
+        test::run_gpu_and_compare(g, w, {{"ft", random_tensor({1, C}, 1, -2.0f, 2.0f)},
+                                         {"fp", random_tensor({1, C}, 2, -2.0f, 2.0f)}, {"iters", ilu_iters_input(5, 5)}});
+    }
+}
+
+TEST_CASE("ilu takes N at run time: one recorded graph, N = 7, 2, 0", "[op][ilu]") {
+    const int64_t C = 45, H = 21;
+    const int nmax = 7;
+    WeightStore w = random_ilu(C, H, 3);
+    IluGraph ig = ilu_graph(w, C, nmax, 9);
+    GpuExecutor exec(test::gpu(), ig.g, w);
+    HostTensor full_c;
+    for (int n : {7, 2, 0}) {
+        INFO("N = " << n);
+        ig.inputs["iters"] = ilu_iters_input(n, nmax);
+        TensorMap want = run_cpu(ig.g, w, ig.inputs), got = exec.run(ig.inputs);
+        test::require_no_validation_messages();
+        test::require_close(got.at("c"), want.at("c"), {}, "c");
+        test::require_close(got.at("contact"), want.at("contact"), {}, "contact");
+        if (n == nmax) full_c = got.at("c");
+        // The first n rows are c_1..c_n (a prefix of the longer run), the rest zeros.
+        for (int r = 0; r < nmax; ++r)
+            for (int j = 0; j < 3; ++j) {
+                float v = got.at("c").data[size_t(3 * r + j)];
+                if (r < n) CHECK(v == full_c.data[size_t(3 * r + j)]);
+                else CHECK(v == 0.0f);
+            }
+        if (n == 0) CHECK(got.at("contact").data == std::vector<float>{0, 0, 0});
+    }
+}
+
+TEST_CASE("ilu with max_iters = 0 gives c^p = 0", "[op][ilu]") {
+    WeightStore w = random_ilu(8, 4, 1);
+    IluGraph ig = ilu_graph(w, 8, 0, 2);
+    TensorMap out = test::run_gpu_and_compare(ig.g, w, ig.inputs);
+    CHECK(out.at("contact").data == std::vector<float>{0, 0, 0});
+}
+
+TEST_CASE("ilu rejects bad shapes and iteration counts", "[op][ilu]") {
+    WeightStore w = random_ilu(8, 4, 1);
+    Graph g;
+    int ft = g.input("ft", {1, 8}), fp = g.input("fp", {1, 9}), n = g.input("n", {1}, ElemType::I32);
+    REQUIRE_THROWS_WITH(build_ilu(g, w, ft, fp, n, 4), Catch::Contains("F^p is [1, 9]"));
+    int nf = g.input("nf", {1});
+    REQUIRE_THROWS_WITH(build_ilu(g, w, ft, ft, nf, 4), Catch::Contains("I32 [1]"));
+    IluGraph ig = ilu_graph(w, 8, 4, 2);
+    ig.inputs["iters"] = HostTensor::from_ints({1}, {5});
+    REQUIRE_THROWS_WITH(run_cpu(ig.g, w, ig.inputs), Catch::Contains("outside 0..4"));
+}
