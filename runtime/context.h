@@ -31,6 +31,7 @@ struct DeviceInfo {
     uint64_t max_storage_buffer_range = 0;
     uint64_t storage_offset_alignment = 1;
     uint32_t max_push_constants = 0;
+    uint32_t max_storage_buffers = 0;         // per shader stage (Vulkan guarantees only 4)
     float timestamp_period = 0.0f;            // ns per tick
     bool has_timestamps = false;
     bool has_compute_queue = false;

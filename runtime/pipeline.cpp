@@ -39,6 +39,10 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
         throw Error("shader '" + desc.shader + "' needs " + std::to_string(desc.push_bytes) +
                     " bytes of push constants; the device allows " +
                     std::to_string(info.max_push_constants));
+    if (desc.bindings > info.max_storage_buffers)
+        throw Error("shader '" + desc.shader + "' binds " + std::to_string(desc.bindings) +
+                    " storage buffers; the device allows " + std::to_string(info.max_storage_buffers) +
+                    " per stage");
     uint32_t lx = desc.spec.empty() ? 1 : desc.spec[0];
     if (lx == 0 || lx > info.max_workgroup_size[0] || lx > info.max_invocations)
         throw Error("shader '" + desc.shader + "': workgroup size " + std::to_string(lx) +

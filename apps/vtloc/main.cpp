@@ -35,9 +35,10 @@ void print_device(const rt::DeviceInfo& d, bool chosen) {
                 rt::device_type_name(d.type), VK_API_VERSION_MAJOR(d.api_version),
                 VK_API_VERSION_MINOR(d.api_version));
     std::printf("      subgroup %u, shared memory %u KiB, workgroup <= %u invocations, "
-                "storage binding <= %llu MiB, timestamps %s\n",
+                "storage binding <= %llu MiB, %u storage buffers per stage, timestamps %s\n",
                 d.subgroup_size, d.max_shared_memory / 1024, d.max_invocations,
-                (unsigned long long)(d.max_storage_buffer_range >> 20), d.has_timestamps ? "yes" : "no");
+                (unsigned long long)(d.max_storage_buffer_range >> 20), d.max_storage_buffers,
+                d.has_timestamps ? "yes" : "no");
 }
 
 int cmd_devices(int argc, char** argv) {
