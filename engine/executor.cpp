@@ -110,9 +110,10 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
       graph_(g),
       order_(graph_.topo_order()),
       weights_(std::min<uint64_t>(ctx.info().max_storage_buffer_range, 1ull << 30),
-               std::max<uint64_t>(16, ctx.info().storage_offset_alignment)) {
+               std::max<uint64_t>({16, ctx.info().storage_offset_alignment, ctx.info().texel_offset_alignment})) {
     const rt::DeviceInfo& info = ctx_.info();
-    const uint64_t align = std::max<uint64_t>(16, info.storage_offset_alignment);
+    // Any tensor may be bound as a storage or a texel buffer: both alignments hold.
+    const uint64_t align = std::max<uint64_t>({16, info.storage_offset_alignment, info.texel_offset_alignment});
     seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
 
     // Weights: packed into as few immutable buffers as the binding range allows.

@@ -152,6 +152,8 @@ DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     d.storage_offset_alignment = std::max<uint64_t>(1, l.minStorageBufferOffsetAlignment);
     d.max_push_constants = l.maxPushConstantsSize;
     d.max_storage_buffers = l.maxPerStageDescriptorStorageBuffers;
+    d.texel_offset_alignment = std::max<uint64_t>(1, l.minTexelBufferOffsetAlignment);
+    d.max_texel_elements = l.maxTexelBufferElements;
     d.timestamp_period = l.timestampPeriod;
     int fam = compute_queue_family(pd);
     d.has_compute_queue = fam >= 0;

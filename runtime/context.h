@@ -32,6 +32,9 @@ struct DeviceInfo {
     uint64_t storage_offset_alignment = 1;
     uint32_t max_push_constants = 0;
     uint32_t max_storage_buffers = 0;         // per shader stage (Vulkan guarantees only 4)
+    // Uniform texel buffers (read-only samplerBuffer bindings, see PipelineDesc).
+    uint64_t texel_offset_alignment = 1;      // minTexelBufferOffsetAlignment
+    uint32_t max_texel_elements = 0;          // maxTexelBufferElements (Vulkan guarantees 65536)
     float timestamp_period = 0.0f;            // ns per tick
     bool has_timestamps = false;
     bool has_compute_queue = false;

@@ -1,5 +1,6 @@
 #include "runtime/pipeline.h"
 
+#include <bit>
 #include <tuple>
 
 #include "engine/error.h"
@@ -9,8 +10,8 @@
 namespace vtloc::rt {
 
 bool PipelineDesc::operator<(const PipelineDesc& o) const {
-    return std::tie(shader, bindings, push_bytes, spec) <
-           std::tie(o.shader, o.bindings, o.push_bytes, o.spec);
+    return std::tie(shader, bindings, push_bytes, spec, texel_bindings) <
+           std::tie(o.shader, o.bindings, o.push_bytes, o.spec, o.texel_bindings);
 }
 
 PipelineCache::~PipelineCache() {
@@ -39,8 +40,12 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
         throw Error("shader '" + desc.shader + "' needs " + std::to_string(desc.push_bytes) +
                     " bytes of push constants; the device allows " +
                     std::to_string(info.max_push_constants));
-    if (desc.bindings > info.max_storage_buffers)
-        throw Error("shader '" + desc.shader + "' binds " + std::to_string(desc.bindings) +
+    // Texel buffers count against maxPerStageDescriptorSampledImages (at least 16).
+    const uint32_t storage = desc.bindings - uint32_t(std::popcount(desc.texel_bindings));
+    if (desc.texel_bindings >> desc.bindings)
+        throw Error("shader '" + desc.shader + "': texel binding mask names a binding it does not have");
+    if (storage > info.max_storage_buffers)
+        throw Error("shader '" + desc.shader + "' binds " + std::to_string(storage) +
                     " storage buffers; the device allows " + std::to_string(info.max_storage_buffers) +
                     " per stage");
     uint32_t lx = desc.spec.empty() ? 1 : desc.spec[0];
@@ -56,7 +61,8 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     for (uint32_t i = 0; i < desc.bindings; ++i) {
         binds[i] = {};
         binds[i].binding = i;
-        binds[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        binds[i].descriptorType = (desc.texel_bindings >> i) & 1 ? VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER
+                                                                 : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         binds[i].descriptorCount = 1;
         binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }

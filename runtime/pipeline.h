@@ -20,9 +20,13 @@ class Context;
 
 struct PipelineDesc {
     std::string shader;            // name of shaders/<name>.comp
-    uint32_t bindings = 0;         // storage buffers
+    uint32_t bindings = 0;         // storage buffers (some may be texel buffers, below)
     uint32_t push_bytes = 0;       // push-constant block size
     std::vector<uint32_t> spec;    // constant_id i = spec[i]; spec[0] = local_size_x
+    // Bit i set: binding i is a uniform texel buffer (a read-only samplerBuffer read
+    // with texelFetch) instead of a storage buffer. On CPU devices a texel fetch is a
+    // branch-free gather while a storage-buffer load is a loop over the lanes.
+    uint32_t texel_bindings = 0;
 
     bool operator<(const PipelineDesc& o) const;
 };

@@ -36,6 +36,7 @@ Sequence::~Sequence() {
     VkDevice dev = ctx_.device();
     for (auto p : query_pools_) vkDestroyQueryPool(dev, p, nullptr);
     for (auto p : descriptor_pools_) vkDestroyDescriptorPool(dev, p, nullptr);
+    for (auto v : texel_views_) vkDestroyBufferView(dev, v, nullptr);
     if (fence_) vkDestroyFence(dev, fence_, nullptr);
     if (pool_) vkDestroyCommandPool(dev, pool_, nullptr);
 }
@@ -48,6 +49,8 @@ void Sequence::begin() {
     check_vk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
     for (auto p : descriptor_pools_) vkResetDescriptorPool(ctx_.device(), p, 0);
     pools_used_ = 0;
+    for (auto v : texel_views_) vkDestroyBufferView(ctx_.device(), v, nullptr);
+    texel_views_.clear();
     VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     check_vk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
     recording_ = true;
@@ -123,12 +126,13 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
     VkDescriptorSet set = VK_NULL_HANDLE;
     while (true) {
         if (pools_used_ == descriptor_pools_.size()) {
-            VkDescriptorPoolSize size{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER,
-                                      std::max(kDescriptorsPerPool, p.desc.bindings)};
+            const uint32_t n = std::max(kDescriptorsPerPool, p.desc.bindings);
+            VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, n},
+                                             {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, n}};
             VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
             pi.maxSets = kSetsPerPool;
-            pi.poolSizeCount = 1;
-            pi.pPoolSizes = &size;
+            pi.poolSizeCount = 2;
+            pi.pPoolSizes = sizes;
             VkDescriptorPool pool;
             check_vk(vkCreateDescriptorPool(ctx_.device(), &pi, nullptr, &pool),
                      "vkCreateDescriptorPool");
@@ -141,6 +145,32 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
             check_vk(r, "vkAllocateDescriptorSets");
         ++pools_used_;  // this pool is full: move on to the next (or a new) one
     }
+}
+
+VkBufferView Sequence::texel_view(const Pipeline& p, uint32_t index, const Binding& b) {
+    const DeviceInfo& info = ctx_.info();
+    const std::string what = "shader '" + p.desc.shader + "': texel binding " + std::to_string(index);
+    VkDeviceSize texel = b.texel_format == VK_FORMAT_R32_SFLOAT            ? 4
+                         : b.texel_format == VK_FORMAT_R32G32B32A32_SFLOAT ? 16
+                                                                           : 0;
+    if (!texel) throw Error(what + " needs texel_format R32_SFLOAT or R32G32B32A32_SFLOAT");
+    if (b.access != Access::Read) throw Error(what + " is read-only");
+    if (b.view.offset % info.texel_offset_alignment)
+        throw Error(what + " is not aligned to minTexelBufferOffsetAlignment");
+    VkDeviceSize range = b.view.size / texel * texel;  // whole texels only
+    if (range == 0) throw Error(what + " is smaller than one texel");
+    if (range / texel > info.max_texel_elements)
+        throw Error(what + " has " + std::to_string(range / texel) + " texels; the device allows " +
+                    std::to_string(info.max_texel_elements));
+    VkBufferViewCreateInfo vi{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
+    vi.buffer = b.view.buffer;
+    vi.format = b.texel_format;
+    vi.offset = b.view.offset;
+    vi.range = range;
+    VkBufferView view = VK_NULL_HANDLE;
+    check_vk(vkCreateBufferView(ctx_.device(), &vi, nullptr, &view), "vkCreateBufferView");
+    texel_views_.push_back(view);
+    return view;
 }
 
 void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
@@ -162,10 +192,22 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
 
     std::vector<std::pair<BufferView, Access>> accesses;
     std::vector<VkDescriptorBufferInfo> infos(bindings.size());
+    std::vector<VkBufferView> views(bindings.size(), VK_NULL_HANDLE);
     std::vector<VkWriteDescriptorSet> writes(bindings.size());
     VkDescriptorSet set = allocate_set(p);
     for (size_t i = 0; i < bindings.size(); ++i) {
         const BufferView& v = bindings[i].view;
+        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
+        writes[i].dstSet = set;
+        writes[i].dstBinding = uint32_t(i);
+        writes[i].descriptorCount = 1;
+        accesses.push_back({v, bindings[i].access});
+        if ((p.desc.texel_bindings >> i) & 1) {
+            views[i] = texel_view(p, uint32_t(i), bindings[i]);
+            writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
+            writes[i].pTexelBufferView = &views[i];
+            continue;
+        }
         if (v.size > info.max_storage_buffer_range)
             throw Error("shader '" + p.desc.shader + "': binding " + std::to_string(i) +
                         " is larger than maxStorageBufferRange");
@@ -173,13 +215,8 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
             throw Error("shader '" + p.desc.shader + "': binding " + std::to_string(i) +
                         " is not aligned to minStorageBufferOffsetAlignment");
         infos[i] = {v.buffer, v.offset, v.size ? v.size : 4};
-        writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
-        writes[i].dstSet = set;
-        writes[i].dstBinding = uint32_t(i);
-        writes[i].descriptorCount = 1;
         writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         writes[i].pBufferInfo = &infos[i];
-        accesses.push_back({v, bindings[i].access});
     }
     vkUpdateDescriptorSets(ctx_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
     track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);

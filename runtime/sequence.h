@@ -21,6 +21,9 @@ enum class Access : uint8_t { Read = 1, Write = 2, ReadWrite = 3 };
 struct Binding {
     BufferView view;
     Access access = Access::Read;
+    // For a texel binding (PipelineDesc::texel_bindings): R32_SFLOAT or
+    // R32G32B32A32_SFLOAT, the element the shader's texelFetch returns.
+    VkFormat texel_format = VK_FORMAT_UNDEFINED;
 };
 
 class Sequence {
@@ -63,6 +66,7 @@ private:
                VkPipelineStageFlags stage);
     void barrier(VkPipelineStageFlags dst_stage, VkAccessFlags dst_access);
     VkDescriptorSet allocate_set(const Pipeline& p);
+    VkBufferView texel_view(const Pipeline& p, uint32_t index, const Binding& b);
     void timestamp();
     void check_recording(const char* what) const;
 
@@ -74,6 +78,7 @@ private:
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
     VkFence fence_ = VK_NULL_HANDLE;
     std::vector<VkDescriptorPool> descriptor_pools_;
+    std::vector<VkBufferView> texel_views_;  // live until the next begin()
     size_t pools_used_ = 0;
 
     // Hazard tracking: what commands since the last barrier read and wrote.

@@ -12,6 +12,11 @@ extern const OpDef op_leaky_relu;  // activation.cpp
 extern const OpDef op_tanh;        // activation.cpp
 extern const OpDef op_sigmoid;     // activation.cpp
 extern const OpDef op_concat;      // concat.cpp
+extern const OpDef op_conv2d;              // conv2d.cpp
+extern const OpDef op_max_pool2d;          // pool2d.cpp
+extern const OpDef op_global_avg_pool;     // pool2d.cpp
+extern const OpDef op_tactile_preprocess;  // tactile_preprocess.cpp
+extern const OpDef op_flatten;             // flatten.cpp
 extern const OpDef op_disentangle;  // disentangle.cpp (GMA)
 extern const OpDef op_gma_decode;   // gma_decode.cpp
 extern const OpDef op_chamfer;      // chamfer.cpp

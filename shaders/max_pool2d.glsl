@@ -1,0 +1,39 @@
+// Body of max_pool2d.comp (texel-buffer input) and max_pool2d_ssbo.comp (storage
+// buffer, for inputs beyond the device's texel-buffer limit); they declare
+// binding 0 and LOAD_X.
+//
+// PyTorch MaxPool2d (dilation 1, floor mode): padding never wins the max. One
+// invocation per output row (grid-stride over plane x OH rows), walking the row:
+// integer division, which CPU devices do lane by lane, happens once per row. The
+// kernel is a specialization constant so the window unrolls into branch-free
+// fetches and selects.
+layout(local_size_x_id = 0) in;
+layout(constant_id = 1) const uint KH = 3;
+layout(constant_id = 2) const uint KW = 3;
+
+layout(std430, binding = 1) writeonly buffer Y_ { float Y[]; };
+layout(push_constant) uniform Push { uint planes, H, W, OH, OW, sh, sw; int ph, pw; } p;
+
+void main() {
+    uint rows = p.planes * p.OH;
+    uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    for (uint row = gl_GlobalInvocationID.x; row < rows; row += stride) {
+        uint plane = row / p.OH, oy = row % p.OH;
+        int y0 = int(oy * p.sh) - p.ph;
+        bool rowok[KH];
+        [[unroll]] for (uint ky = 0; ky < KH; ++ky) rowok[ky] = y0 + int(ky) >= 0 && y0 + int(ky) < int(p.H);
+        int base = int(plane * p.H * p.W) + y0 * int(p.W);
+        for (uint ox = 0; ox < p.OW; ++ox) {
+            int x0 = int(ox * p.sw) - p.pw;
+            float m = uintBitsToFloat(0xff800000u);  // -inf
+            [[unroll]] for (uint ky = 0; ky < KH; ++ky)
+                [[unroll]] for (uint kx = 0; kx < KW; ++kx) {
+                    int x = x0 + int(kx);
+                    bool ok = rowok[ky] && x >= 0 && x < int(p.W);
+                    float v = LOAD_X(ok ? base + int(ky * p.W) + x : 0);
+                    m = ok ? max(m, v) : m;
+                }
+            Y[row * p.OW + ox] = m;
+        }
+    }
+}

@@ -1,0 +1,172 @@
+// conv2d, max_pool2d and global_avg_pool: GPU (validation on) against the CPU
+// references at odd shapes, with fixed seeds. Tolerance: the fp32 default
+// 1e-4 + 1e-4*|ref|; the CPU conv accumulates in double over at most a few
+// hundred terms of O(1) values, so this bounds the shader's fp32 rounding
+// (measured max |gpu - cpu| 9.5e-7 on lavapipe; printed with -s).
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/conv2d.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+using vtloc::test::run_gpu_and_compare;
+
+namespace {
+
+struct ConvCase {
+    Shape x;              // N, Cin, H, W
+    int64_t cout, kh, kw;
+    int64_t sh, sw, ph, pw;
+    bool bias, residual;
+    uint32_t act;
+    uint32_t layout;
+    bool texel = true;  // false: the storage-buffer fallback
+};
+
+void check_conv(const ConvCase& c, uint32_t seed) {
+    const int64_t cin = c.x[1];
+    const int64_t oh = (c.x[2] + 2 * c.ph - c.kh) / c.sh + 1, ow = (c.x[3] + 2 * c.pw - c.kw) / c.sw + 1;
+    // PyTorch-like init bound keeps outputs O(1).
+    float bound = 1.0f / std::sqrt(float(cin * c.kh * c.kw));
+    HostTensor w = random_tensor({c.cout, cin, c.kh, c.kw}, seed + 1, -bound, bound);
+    if (c.layout == ops::kConvIHWO) w = ops::conv_weight_to_ihwo(w);
+    WeightStore ws;
+    ws.add("w", w);
+    ws.add("b", random_tensor({c.cout}, seed + 2, -0.5f, 0.5f));
+    Graph g;
+    std::vector<int> in{g.input("x", c.x), g.weight("w", w.shape)};
+    if (c.bias) in.push_back(g.weight("b", {c.cout}));
+    TensorMap inputs{{"x", random_tensor(c.x, seed, -2.0f, 2.0f)}};
+    if (c.residual) {
+        Shape rs{c.x[0], c.cout, oh, ow};
+        in.push_back(g.input("res", rs));
+        inputs["res"] = random_tensor(rs, seed + 3);
+    }
+    Params p{{"stride_h", double(c.sh)}, {"stride_w", double(c.sw)}, {"pad_h", double(c.ph)},
+             {"pad_w", double(c.pw)}, {"act", double(c.act)}, {"slope", 0.1},
+             {"residual", c.residual ? 1.0 : 0.0}, {"weight_layout", double(c.layout)},
+             {"texel", c.texel ? 1.0 : 0.0}};
+    g.output(g.add1("conv2d", in, p), "y");
+    INFO("conv x" << shape_str(c.x) << " -> " << c.cout << " k" << c.kh << "x" << c.kw << " s" << c.sh << "," << c.sw
+                  << " p" << c.ph << "," << c.pw << " layout " << c.layout << " bias " << c.bias << " res "
+                  << c.residual << " texel " << c.texel);
+    TensorMap got = run_gpu_and_compare(g, ws, inputs);
+    const TensorMap cpu_out = run_cpu(g, ws, inputs);
+    const HostTensor& want = cpu_out.at("y");
+    double worst = 0;
+    for (size_t i = 0; i < want.data.size(); ++i)
+        worst = std::max(worst, double(std::abs(got.at("y").data[i] - want.data[i])));
+    INFO("max |gpu - cpu| " << worst);
+    CHECK(worst < 1e-4);  // the default tolerance's absolute part; shown with -s
+}
+
+}  // namespace
+
+TEST_CASE("conv2d matches the CPU reference at odd shapes", "[op][conv2d]") {
+    using ops::kConvIHWO, ops::kConvOIHW;
+    // The ResNet stem's geometry on an odd image: 7x7, stride 2, pad 3.
+    check_conv({{1, 3, 37, 53}, 10, 7, 7, 2, 2, 3, 3, true, false, ops::kActRelu, kConvOIHW}, 1);
+    // 1x1 stride 2 (downsample), odd channels, residual, IHWO read one float at a time.
+    check_conv({{2, 13, 17, 19}, 6, 1, 1, 2, 2, 0, 0, true, true, ops::kActNone, kConvIHWO}, 2);
+    // 3x3 pad 1 with channel counts that no tile divides, both layouts.
+    check_conv({{1, 5, 11, 9}, 7, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvOIHW}, 3);
+    check_conv({{1, 6, 13, 10}, 12, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO}, 4);  // vec4 weights
+    // 3x3 stride 2 pad 1 with a partial channel block on the vec4 path.
+    check_conv({{1, 9, 15, 14}, 20, 3, 3, 2, 2, 1, 1, false, false, ops::kActNone, kConvIHWO}, 5);
+    // Rectangular kernel, different strides and pads per axis, leaky ReLU, no bias.
+    check_conv({{2, 4, 12, 23}, 5, 2, 5, 2, 1, 0, 2, false, false, ops::kActLeaky, kConvOIHW}, 6);
+    // A single output pixel (kernel = padded input).
+    check_conv({{1, 8, 3, 3}, 4, 5, 5, 1, 1, 1, 1, true, false, ops::kActTanh, kConvIHWO}, 7);
+    // Fewer output channels than the smallest channel block (4).
+    check_conv({{1, 5, 9, 8}, 3, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvOIHW}, 8);
+    // Rows of a multiple of 4 floats, stride 1 and 2: every window row shares one
+    // offset mod 4 (the shader's XSHIFT path; the shapes above take the per-row one).
+    check_conv({{1, 7, 12, 16}, 8, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO}, 9);
+    check_conv({{1, 4, 16, 16}, 8, 3, 3, 2, 2, 1, 1, true, false, ops::kActNone, kConvIHWO}, 10);
+}
+
+TEST_CASE("conv2d's storage-buffer fallback matches the CPU reference", "[op][conv2d]") {
+    using ops::kConvIHWO, ops::kConvOIHW;
+    // What runs when a tensor exceeds the device's maxTexelBufferElements.
+    check_conv({{1, 3, 37, 53}, 10, 7, 7, 2, 2, 3, 3, true, false, ops::kActRelu, kConvOIHW, false}, 11);
+    check_conv({{1, 6, 13, 10}, 12, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO, false}, 12);
+    check_conv({{2, 13, 17, 19}, 6, 1, 1, 2, 2, 0, 0, false, true, ops::kActNone, kConvIHWO, false}, 13);
+}
+
+TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
+    const rt::DeviceInfo& d = test::gpu().info();
+    for (ops::ConvShape s : {ops::ConvShape{1, 3, 224, 224, 64, 7, 7, 2, 2, 112, 112},
+                             ops::ConvShape{1, 512, 7, 7, 512, 3, 3, 1, 1, 7, 7},
+                             ops::ConvShape{1, 1, 1, 1, 1, 1, 1, 1, 1, 1, 1}}) {
+        ops::ConvTiles t = ops::choose_conv_tiles(d, s, true, true);
+        CHECK(t.local <= d.max_invocations);
+        CHECK(t.local <= d.max_workgroup_size[0]);
+        CHECK(t.tm % 4 == 0);
+        CHECK(t.r <= s.oh);
+        CHECK(t.c <= s.ow);
+        CHECK(t.accumulators() <= 392);  // the chooser's bound (compile time)
+        CHECK((t.kh_block == s.kh || t.kh_block == 1));
+    }
+    // The shapes check_conv uses for the window-offset and vec4-store paths get
+    // the ones they test (vec4 stores: OW and the block width multiples of 4).
+    auto tiles = [&](ops::ConvShape s) { return ops::choose_conv_tiles(d, s, true, true); };
+    CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).x_shift == 3);
+    CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).c % 4 == 0);
+    CHECK(tiles({1, 4, 16, 16, 8, 3, 3, 2, 2, 8, 8, 1}).x_shift == 3);
+    CHECK(tiles({1, 6, 13, 10, 12, 3, 3, 1, 1, 13, 10, 1}).x_shift == 4);
+    // A GPU-like device with small limits still gets a legal tile.
+    rt::DeviceInfo small = d;
+    small.type = VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU;
+    small.max_invocations = 32;
+    small.max_workgroup_size = {32, 32, 32};
+    small.subgroup_size = 32;
+    ops::ConvTiles t = ops::choose_conv_tiles(small, {1, 16, 9, 9, 16, 3, 3, 1, 1, 9, 9}, true, false);
+    CHECK(t.local <= 32);
+    CHECK(t.tm % 4 == 0);
+}
+
+TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
+    Graph g;
+    int x = g.input("x", {1, 3, 8, 8});
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, g.weight("w4", {4, 2, 3, 3})}, {}, "c1"),
+                        Catch::Contains("c1") && Catch::Contains("3 channels") && Catch::Contains("expects 2"));
+    int w = g.weight("w", {4, 3, 3, 3});
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w}, {{"stride", 0}}), Catch::Contains("stride_h must be an integer >= 1"));
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, g.weight("w9", {4, 3, 9, 9})}),
+                        Catch::Contains("kernel 9x9 is larger than the padded input 8x8"));
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w, g.weight("b", {5})}), Catch::Contains("bias [5]"));
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w, g.input("r", {1, 4, 7, 7})}, {{"residual", 1}}),
+                        Catch::Contains("residual [1, 4, 7, 7] does not match the output [1, 4, 6, 6]"));
+}
+
+TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool]") {
+    struct Case { Shape x; Params p; };
+    for (const Case& c : {Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}}},
+                          Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}, {"texel", 0}}},
+                          Case{{2, 3, 8, 9}, {{"kernel", 2}}},
+                          Case{{1, 4, 11, 7}, {{"kernel_h", 3}, {"kernel_w", 2}, {"stride_h", 1}, {"stride_w", 2},
+                                               {"pad_h", 1}}}}) {
+        Graph g;
+        g.output(g.add1("max_pool2d", {g.input("x", c.x)}, c.p), "y");
+        INFO("max_pool2d " << shape_str(c.x));
+        run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(c.x, 50, -3.0f, 3.0f)}}, {0.0, 0.0});
+    }
+    Graph g;
+    int x = g.input("x", {1, 1, 4, 4});
+    REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}, {{"kernel", 3}, {"pad", 2}}), Catch::Contains("at most half"));
+    REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}), Catch::Contains("needs a kernel size"));
+}
+
+TEST_CASE("global_avg_pool matches the CPU reference", "[op][pool]") {
+    for (const Shape& s : {Shape{1, 7, 5, 3}, Shape{2, 33, 7, 7}, Shape{1, 3, 56, 57}}) {
+        Graph g;
+        g.output(g.add1("global_avg_pool", {g.input("x", s)}), "y");
+        INFO("global_avg_pool " << shape_str(s));
+        run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(s, 60, -2.0f, 2.0f)}}, {1e-6, 1e-5});
+    }
+}
