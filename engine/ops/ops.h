@@ -24,4 +24,10 @@ extern const OpDef op_ilu;          // ilu.cpp
 extern const OpDef op_topk;         // topk.cpp
 extern const OpDef op_heatmap;      // heatmap.cpp
 extern const OpDef op_belief;       // belief.cpp
+extern const OpDef op_fps;              // fps.cpp (point cloud)
+extern const OpDef op_ball_query;       // ball_query.cpp
+extern const OpDef op_point_group;      // point_group.cpp
+extern const OpDef op_group_max;        // point_group.cpp
+extern const OpDef op_group_linear;     // group_linear.cpp
+extern const OpDef op_cloud_normalize;  // cloud_normalize.cpp
 }  // namespace vtloc::ops

@@ -26,6 +26,12 @@ const OpDef* const kOps[] = {
     &ops::op_topk,
     &ops::op_heatmap,
     &ops::op_belief,
+    &ops::op_fps,
+    &ops::op_ball_query,
+    &ops::op_point_group,
+    &ops::op_group_max,
+    &ops::op_group_linear,
+    &ops::op_cloud_normalize,
 };
 }  // namespace
 

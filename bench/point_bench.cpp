@@ -1,0 +1,183 @@
+// vtloc-bench-point [weights.safetensors]: the point encoder (PointNet++ MSG of
+// SPEC 2, paper config vtloc-r18) on the default device for 1024, 4096 and 16384
+// points: median ms per run, the share of FPS and ball query in the profiled GPU
+// time, and the GFLOP/s of the MLP part (1x1 convolutions = GEMMs and the head,
+// 2 FLOPs per multiply-add) as a fraction of the fma probe measured in the same
+// run. Without a weight file it uses random weights of the vtloc-r18 shapes
+// (timing does not depend on the values; the cloud is a unit sphere, so ball
+// queries fill as on real objects).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <map>
+#include <random>
+
+#include "bench/probe.h"
+#include "engine/error.h"
+#include "engine/executor.h"
+#include "engine/model/point_encoder.h"
+#include "runtime/context.h"
+
+using namespace vtloc;
+
+namespace {
+
+const char* kR18Point = R"({"C": 128, "point": {"n_points": 1024, "use_normals": true,
+  "sa": [{"npoint": 512, "radii": [0.1, 0.2, 0.4], "nsample": [16, 32, 128], "mlps": [[32, 32, 64], [64, 64, 128], [64, 96, 128]]},
+         {"npoint": 128, "radii": [0.2, 0.4, 0.8], "nsample": [32, 64, 128], "mlps": [[64, 64, 128], [128, 128, 256], [128, 128, 256]]}],
+  "group_all_mlp": [256, 512, 1024], "mlp": [512]}})";
+
+WeightStore random_weights(const nlohmann::json& cfg) {
+    WeightStore w;
+    w.set_config(cfg);
+    std::mt19937 rng(11);
+    auto add = [&](const std::string& name, Shape s, double stddev, double mean = 0) {
+        std::normal_distribution<float> d{float(mean), float(stddev)};
+        HostTensor t(s);
+        for (float& v : t.data) v = d(rng);
+        w.add(name, std::move(t));
+    };
+    auto conv_bn = [&](const std::string& conv, const std::string& bn, int64_t out, int64_t in) {
+        add(conv + ".weight", {out, in, 1, 1}, std::sqrt(2.0 / double(in)));
+        add(conv + ".bias", {out}, 0.1);
+        add(bn + ".weight", {out}, 0.1, 1.0);
+        add(bn + ".bias", {out}, 0.1);
+        add(bn + ".running_mean", {out}, 0.1);
+        add(bn + ".running_var", {out}, 0.1, 1.0);
+    };
+    const nlohmann::json& p = cfg["point"];
+    int64_t ch = 3;
+    for (size_t i = 0; i < p["sa"].size(); ++i) {
+        int64_t next = 0;
+        for (size_t s = 0; s < p["sa"][i]["mlps"].size(); ++s) {
+            int64_t in = ch + 3;
+            for (size_t l = 0; l < p["sa"][i]["mlps"][s].size(); ++l) {
+                const std::string k = "point.sa" + std::to_string(i + 1) + ".%s." + std::to_string(s) + "." + std::to_string(l);
+                int64_t out = p["sa"][i]["mlps"][s][l].get<int64_t>();
+                std::string conv = k, bn = k;
+                conv.replace(conv.find("%s"), 2, "conv_blocks");
+                bn.replace(bn.find("%s"), 2, "bn_blocks");
+                conv_bn(conv, bn, out, in);
+                in = out;
+            }
+            next += in;
+        }
+        ch = next;
+    }
+    int64_t in = ch + 3;
+    const std::string ga = "point.sa" + std::to_string(p["sa"].size() + 1);
+    for (size_t l = 0; l < p["group_all_mlp"].size(); ++l) {
+        int64_t out = p["group_all_mlp"][l].get<int64_t>();
+        conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), out, in);
+        in = out;
+    }
+    std::vector<int64_t> sizes{in};
+    for (auto& h : p["mlp"]) sizes.push_back(h.get<int64_t>());
+    sizes.push_back(cfg["C"].get<int64_t>());
+    for (size_t i = 0; i + 1 < sizes.size(); ++i) {
+        add("point.mlp." + std::to_string(2 * i) + ".weight", {sizes[i + 1], sizes[i]}, 1.0 / std::sqrt(double(sizes[i])));
+        add("point.mlp." + std::to_string(2 * i) + ".bias", {sizes[i + 1]}, 0.1);
+    }
+    return w;
+}
+
+// N points uniformly on the unit sphere with their normals: an object's
+// surface in the normalised frame.
+HostTensor sphere_cloud(int64_t n, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> d;
+    HostTensor c({n, 6});
+    for (int64_t i = 0; i < n; ++i) {
+        float v[3] = {d(rng), d(rng), d(rng)};
+        float r = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        for (int k = 0; k < 3; ++k) c.data[size_t(6 * i + k)] = c.data[size_t(6 * i + 3 + k)] = v[k] / r;
+    }
+    return c;
+}
+
+// FLOPs of the MLP nodes: 2 per multiply-add of group_linear (rows before the
+// max; weight [K, N]) and linear (weight [N, K]).
+std::map<std::string, double> mlp_flops(const Graph& g) {
+    std::map<std::string, double> f;
+    for (const Node& n : g.nodes()) {
+        double rows = 0, wsize = 0;
+        if (n.op == "group_linear") {
+            const int mode = int(n.params.get("in", 0));
+            wsize = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
+            rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
+                             : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
+        } else if (n.op == "linear") {
+            wsize = double(numel(g.value(n.inputs[1]).shape));
+            rows = double(numel(g.value(n.inputs[0]).shape) / g.value(n.inputs[0]).shape.back());
+        } else {
+            continue;
+        }
+        f[n.name] = 2.0 * rows * wsize;
+    }
+    return f;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        rt::Context ctx;
+        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(kR18Point));
+        const nlohmann::json& cfg = w.config();
+        std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
+        const double probe = bench::peak_gflops(ctx);
+        std::printf("fma probe: %.1f GFLOP/s\n\n", probe);
+        std::printf("%7s %10s %8s %8s %8s %9s %9s %8s\n", "points", "median ms", "p10", "p90", "FPS %", "ball %",
+                    "MLP GF/s", "of peak");
+        std::vector<int64_t> sizes{1024, 4096, 16384};
+        if (const char* only = std::getenv("VTLOC_BENCH_POINTS")) sizes = {std::atoll(only)};
+        for (int64_t n : sizes) {
+            Graph g;
+            PointEncoderOutputs p = build_point_encoder(g, w, cfg, g.input("point.cloud", {n, 6}));
+            g.output(p.feature, "point.feature");
+            TensorMap in{{"point.cloud", sphere_cloud(n, 3)}};
+            GpuExecutor exec(ctx, g, w);
+            exec.run(in);  // the first run compiles the shaders
+            const int reps = n <= 4096 ? 10 : 5;
+            bench::Stats st = bench::summarize(bench::time_ms([&] { exec.run(in); }, 1, reps));
+
+            GpuExecutor prof(ctx, g, w, /*profile=*/true);
+            prof.run(in);
+            std::map<std::string, double> node_ms;  // per node: the fastest of 3 profiled runs
+            for (int r = 0; r < 3; ++r) {
+                prof.run(in);
+                for (const auto& t : prof.node_times())
+                    node_ms[t.label] = node_ms.count(t.label) ? std::min(node_ms[t.label], t.ms) : t.ms;
+            }
+            std::map<std::string, std::string> op_of;
+            for (const Node& nd : g.nodes()) op_of[nd.name] = nd.op;
+            double total = 0, fps = 0, ball = 0, mlp_ms = 0, mlp_f = 0;
+            const std::map<std::string, double> flops = mlp_flops(g);
+            for (auto& [label, ms] : node_ms) {
+                total += ms;
+                const std::string& op = op_of[label];
+                if (op == "fps") fps += ms;
+                if (op == "ball_query") ball += ms;
+                if (flops.count(label)) mlp_ms += ms, mlp_f += flops.at(label);
+            }
+            const double gf = mlp_f / (mlp_ms * 1e-3) * 1e-9;
+            std::printf("%7lld %10.2f %8.2f %8.2f %7.1f%% %8.1f%% %9.1f %7.0f%%\n", (long long)n, st.median, st.p10, st.p90,
+                        100 * fps / total, 100 * ball / total, gf, 100 * gf / probe);
+            std::printf("        (profiled node sum %.2f ms: FPS %.2f, ball query %.2f, MLP %.2f ms for %.2f GFLOP)\n",
+                        total, fps, ball, mlp_ms, mlp_f * 1e-9);
+            std::vector<std::pair<double, std::string>> slow;
+            for (auto& [label, ms] : node_ms) slow.push_back({ms, label});
+            std::sort(slow.rbegin(), slow.rend());
+            for (size_t i = 0; i < slow.size() && i < 6; ++i) {
+                const double f = flops.count(slow[i].second) ? flops.at(slow[i].second) : 0;
+                std::printf("        %8.2f ms  %-32s %s\n", slow[i].first, slow[i].second.c_str(),
+                            f > 0 ? (std::to_string(int(f / (slow[i].first * 1e-3) * 1e-9 * 10) / 10.0).substr(0, 5) + " GFLOP/s").c_str() : "");
+            }
+        }
+    } catch (const Error& e) {
+        std::fprintf(stderr, "vtloc-bench-point: %s\n", e.what());
+        return 1;
+    }
+    return 0;
+}

@@ -1,0 +1,216 @@
+#include "engine/model/point_encoder.h"
+
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/model/batchnorm_fold.h"
+#include "engine/model/layers.h"
+#include "engine/ops/common.h"
+#include "engine/ops/point_common.h"
+
+namespace vtloc {
+
+namespace {
+
+struct Stage {
+    int64_t npoint = 0;
+    std::vector<double> radii;
+    std::vector<int64_t> nsample;
+    std::vector<std::vector<int64_t>> mlps;
+};
+
+struct PointConfig {
+    bool normals = false;
+    std::vector<Stage> sa;
+    std::vector<int64_t> group_all, mlp;
+    int64_t C = 0;
+};
+
+const nlohmann::json& key(const nlohmann::json& j, const char* k, const std::string& where) {
+    if (!j.is_object() || !j.contains(k)) throw Error("config " + where + ": missing \"" + k + "\"");
+    return j[k];
+}
+
+int64_t pos_int(const nlohmann::json& j, const std::string& where) {
+    if (!j.is_number_integer() || j.get<int64_t>() <= 0) throw Error("config " + where + ": expected a positive integer");
+    return j.get<int64_t>();
+}
+
+std::vector<int64_t> pos_ints(const nlohmann::json& j, const std::string& where, bool nonempty) {
+    if (!j.is_array() || (nonempty && j.empty())) throw Error("config " + where + ": expected a list of positive integers");
+    std::vector<int64_t> v;
+    for (size_t i = 0; i < j.size(); ++i) v.push_back(pos_int(j[i], where + "[" + std::to_string(i) + "]"));
+    return v;
+}
+
+PointConfig point_config(const nlohmann::json& config) {
+    const nlohmann::json& p = key(config, "point", "");
+    PointConfig c;
+    const nlohmann::json& un = key(p, "use_normals", "point");
+    if (!un.is_boolean()) throw Error("config point.use_normals: expected true or false");
+    c.normals = un.get<bool>();
+    const nlohmann::json& sa = key(p, "sa", "point");
+    if (!sa.is_array() || sa.empty()) throw Error("config point.sa: expected a non-empty list of stages");
+    for (size_t i = 0; i < sa.size(); ++i) {
+        const std::string where = "point.sa[" + std::to_string(i) + "]";
+        Stage st;
+        st.npoint = pos_int(key(sa[i], "npoint", where), where + ".npoint");
+        const nlohmann::json& radii = key(sa[i], "radii", where);
+        if (!radii.is_array() || radii.empty()) throw Error("config " + where + ".radii: expected a list of radii");
+        for (const auto& r : radii) {
+            if (!r.is_number() || !(r.get<double>() > 0.0)) throw Error("config " + where + ".radii: expected positive numbers");
+            st.radii.push_back(r.get<double>());
+        }
+        st.nsample = pos_ints(key(sa[i], "nsample", where), where + ".nsample", true);
+        const nlohmann::json& mlps = key(sa[i], "mlps", where);
+        if (!mlps.is_array()) throw Error("config " + where + ".mlps: expected one list of widths per scale");
+        for (size_t s = 0; s < mlps.size(); ++s)
+            st.mlps.push_back(pos_ints(mlps[s], where + ".mlps[" + std::to_string(s) + "]", true));
+        if (st.nsample.size() != st.radii.size() || st.mlps.size() != st.radii.size())
+            throw Error("config " + where + ": radii, nsample and mlps must have one entry per scale");
+        c.sa.push_back(std::move(st));
+    }
+    c.group_all = pos_ints(key(p, "group_all_mlp", "point"), "point.group_all_mlp", true);
+    c.mlp = pos_ints(key(p, "mlp", "point"), "point.mlp", false);
+    c.C = pos_int(key(config, "C", ""), "C");
+    return c;
+}
+
+// A 1x1 Conv2d with its BatchNorm folded: the weight as [out, in] (linear's
+// layout) or, for group_linear, input-major [in, out]; and the bias.
+std::pair<int, int> conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string& bn, int64_t in,
+                            int64_t out, bool input_major) {
+    const std::string w2d = conv + ".weight#bn#2d", wkn = conv + ".weight#bn#kn", bname = conv + ".bias#bn";
+    if (!w.has(w2d) || !w.has(wkn) || !w.has(bname)) {  // a second graph on the same store reuses them
+        w.get(conv + ".weight", {out, in, 1, 1});  // names the layer if the file disagrees with the config
+        FoldedNames f = fold_batchnorm(w, conv, bn);
+        if (f.bias != bname) throw Error("unexpected folded bias name '" + f.bias + "'");
+        HostTensor t = w.get(f.weight);
+        w.add(wkn, ops::point_weight_kn(t));
+        t.shape = {out, in};
+        w.add(w2d, std::move(t));
+    }
+    return {input_major ? g.weight(wkn, {in, out}) : g.weight(w2d, {out, in}), g.weight(bname, {out})};
+}
+
+const Params kRelu{{"act", double(ops::kActRelu)}};
+
+}  // namespace
+
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud) {
+    return build_point_encoder(g, w, config, cloud, PointEncoderOptions{});
+}
+
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud,
+                                        const PointEncoderOptions& options) {
+    const PointConfig c = point_config(config);
+    const Shape& cs = g.value(cloud).shape;
+    const int64_t width = c.normals ? 6 : 3;
+    if (cs.size() != 2 || cs[1] != width)
+        throw Error(std::string("the point cloud must be [N, ") + (c.normals ? "6] (xyz, normals)" : "3] (xyz)") +
+                    " for this config, got " + shape_str(cs));
+    if (cs[0] == 0) throw Error("the point cloud is empty");
+    if (g.value(cloud).type != ElemType::F32) throw Error("the point cloud must be F32");
+
+    PointEncoderOutputs out;
+    // Stage input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`.
+    int xyz = cloud, feat = c.normals ? cloud : -1;
+    int64_t feat_begin = c.normals ? 3 : 0, channels = c.normals ? 3 : 0, points = cs[0];
+    for (size_t i = 0; i < c.sa.size(); ++i) {
+        const Stage& st = c.sa[i];
+        const std::string pre = "point.sa" + std::to_string(i + 1);
+        if (st.npoint > points)
+            throw Error(pre + " samples " + std::to_string(st.npoint) + " points but gets only " + std::to_string(points) +
+                        (i == 0 ? " (the cloud is too small for this model)" : ""));
+        std::vector<int> fps = g.add("fps", {xyz}, {{"npoint", double(st.npoint)}}, pre + ".fps");
+        out.indices.push_back({pre + ".fps", fps[0]});
+        const int centres = fps[1];
+        std::vector<int> scales;
+        int64_t next_channels = 0;
+        for (size_t s = 0; s < st.radii.size(); ++s) {
+            const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
+            const double ns = double(st.nsample[s]);
+            int ball = g.add1("ball_query", {xyz, centres}, {{"radius", st.radii[s]}, {"nsample", ns}}, ball_name);
+            out.indices.push_back({ball_name, ball});
+            std::vector<int> gather_in{xyz, centres, ball};
+            const int64_t fb = feat_begin;
+            int x = -1;
+            if (!options.fuse) {
+                if (feat >= 0) gather_in.push_back(feat);
+                x = g.add1("point_group", gather_in, {{"feat_begin", double(fb)}}, pre + ".group." + si);
+            }
+            int64_t in = channels + 3;
+            const std::vector<int64_t>& widths = st.mlps[s];
+            for (size_t l = 0; l < widths.size(); ++l) {
+                const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
+                auto [wv, bv] = conv_bn(g, w, node, pre + ".bn_blocks." + si + "." + std::to_string(l), in, widths[l],
+                                        options.fuse);
+                in = widths[l];
+                if (!options.fuse) {
+                    x = g.add1("linear", {x, wv, bv}, kRelu, node);
+                    continue;
+                }
+                // Fused: the first layer gathers its rows from the cloud, the last
+                // one keeps only the max over each centre's neighbours.
+                Params p = kRelu;
+                std::vector<int> ins{x};
+                if (l == 0) {
+                    ins = gather_in;
+                    p.set("in", 1).set("feat_begin", double(fb));
+                }
+                ins.insert(ins.end(), {wv, bv});
+                if (l == 0 && feat >= 0) ins.push_back(feat);
+                if (l + 1 == widths.size()) p.set("max", 1).set("group", ns);
+                x = g.add1("group_linear", ins, p, node);
+            }
+            if (!options.fuse) x = g.add1("group_max", {x}, {{"group", ns}}, pre + ".max." + si);
+            scales.push_back(x);
+            next_channels += widths.back();
+        }
+        feat = scales.size() == 1 ? scales[0] : g.add1("concat", scales, {}, pre + ".concat");
+        xyz = centres, feat_begin = 0, channels = next_channels, points = st.npoint;
+    }
+
+    // Group all: one group of every point, input [xyz, features] (xyz first, not centred).
+    const std::string pre = "point.sa" + std::to_string(c.sa.size() + 1);
+    int x = options.fuse ? -1 : g.add1("concat", {xyz, feat}, {}, pre + ".input");
+    int64_t in = channels + 3;
+    for (size_t l = 0; l < c.group_all.size(); ++l) {
+        const std::string node = pre + ".mlp_convs." + std::to_string(l);
+        auto [wv, bv] = conv_bn(g, w, node, pre + ".mlp_bns." + std::to_string(l), in, c.group_all[l], options.fuse);
+        in = c.group_all[l];
+        if (!options.fuse) {
+            x = g.add1("linear", {x, wv, bv}, kRelu, node);
+            continue;
+        }
+        // Not fused with the max: one group leaves too few invocations for the
+        // fused layer's group-per-invocation max; a separate max is cheap.
+        Params p = kRelu;
+        std::vector<int> ins = l == 0 ? std::vector<int>{xyz, wv, bv, feat} : std::vector<int>{x, wv, bv};
+        if (l == 0) p.set("in", 2);
+        x = g.add1("group_linear", ins, p, node);
+    }
+    x = g.add1("group_max", {x}, {{"group", double(points)}, {"channel_major", options.fuse ? 1.0 : 0.0}}, pre + ".max");
+    out.feature = add_mlp(g, w, "point.mlp", x, int(c.mlp.size()) + 1);
+    if (g.value(out.feature).shape != Shape{1, c.C})
+        throw Error("point.mlp gives " + shape_str(g.value(out.feature).shape) + ", expected [1, " + std::to_string(c.C) + "]");
+    return out;
+}
+
+void check_point_cloud(const HostTensor& cloud, const nlohmann::json& config) {
+    const PointConfig c = point_config(config);
+    const int64_t width = c.normals ? 6 : 3;
+    if (cloud.shape.size() != 2 || cloud.shape[1] != width)
+        throw Error("the point cloud must be [N, " + std::to_string(width) + "] for this config, got " +
+                    shape_str(cloud.shape));
+    if (cloud.shape[0] == 0) throw Error("the point cloud is empty");
+    if (!c.sa.empty() && cloud.shape[0] < c.sa[0].npoint)
+        throw Error("the point cloud has " + std::to_string(cloud.shape[0]) + " points, fewer than the " +
+                    std::to_string(c.sa[0].npoint) + " that point.sa1 samples");
+    for (size_t i = 0; i < cloud.data.size(); ++i)
+        if (!std::isfinite(cloud.data[i]))
+            throw Error("the point cloud has a NaN or infinite value at point " + std::to_string(int64_t(i) / width) +
+                        ", column " + std::to_string(int64_t(i) % width));
+}
+
+}  // namespace vtloc

@@ -1,0 +1,49 @@
+#pragma once
+// The point branch of SPEC section 2: PointNet++ set abstraction (MSG, or SSG
+// with one scale per stage), a group-all stage and the MLP head, giving F^p.
+// Every number comes from the config (weight-file metadata "point" and "C").
+#include <nlohmann/json.hpp>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "engine/graph.h"
+#include "engine/tensor.h"
+#include "engine/weights.h"
+
+namespace vtloc {
+
+struct PointEncoderOutputs {
+    int feature = -1;  // F^p, [1, C]
+    // SPEC 8 names -> I32 index values: {"point.sa1.fps", id}, {"point.sa1.ball.0", id}, ...
+    std::vector<std::pair<std::string, int>> indices;
+};
+
+struct PointEncoderOptions {
+    // Fused: neighbour gather inside the first MLP layer's GEMM and the max over
+    // neighbours inside the last. Unfused (false): point_group, linear, group_max
+    // as separate nodes; the same numbers, kept as a cross-check.
+    bool fuse = true;
+};
+
+// cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in
+// the normalised frame (object_frame.h). Reads `point.sa{i}.conv_blocks.*`,
+// `bn_blocks.*`, `point.sa{n+1}.mlp_convs.*`, `mlp_bns.*` and `point.mlp.*`;
+// each BatchNorm is folded into its 1x1 convolution, added to `w` as
+// `<conv>.weight#bn#kn` ([in, out], group_linear's layout), `<conv>.weight#bn#2d`
+// ([out, in], linear's, for the unfused path) and `<conv>.bias#bn` (originals stay).
+// Fused graph per scale: fps, ball_query, group_linear (gather) -> group_linear
+// ... -> group_linear (max); scales concatenated; group all: group_linear on
+// [xyz, features] -> ... -> group_max; then the point.mlp head (linear).
+// Throws vtloc::Error on a config that does not fit the schema, a cloud of the
+// wrong width, or fewer points than a stage samples.
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud);
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud,
+                                        const PointEncoderOptions& options);
+
+// Host-side check of a network input cloud before a GPU run (shaders cannot
+// throw): [N, 6] or [N, 3] as the config wants, at least sa1's npoint points,
+// finite values. Throws vtloc::Error naming the problem.
+void check_point_cloud(const HostTensor& cloud, const nlohmann::json& config);
+
+}  // namespace vtloc

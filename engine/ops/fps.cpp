@@ -1,0 +1,75 @@
+// fps: farthest point sampling (SPEC 2) -> shaders/fps.comp, one workgroup.
+// Input: points [N, D >= 3] (xyz = columns 0..2, the rest ignored).
+// Param npoint (1..N). Outputs: index I32 [npoint], centres F32 [npoint, 3]
+// (the picked xyz, what the next stage groups around), and a workspace F32 [N]
+// (running minimum distances when they do not fit in registers; contents unspecified).
+#include <algorithm>
+#include <cmath>
+#include <limits>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+#include "engine/ops/point_common.h"
+
+namespace vtloc::ops {
+namespace {
+
+constexpr uint32_t kMaxPer = 16;  // points a thread keeps in registers
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 1, 1);
+    expect_f32(in);
+    const Shape& s = in[0].shape;
+    if (s.size() != 2 || s[1] < 3) throw Error("points must be [N, D >= 3], got " + shape_str(s));
+    if (s[0] == 0) throw Error("the point cloud is empty");
+    const int64_t S = int_param(p, "npoint", 1, std::numeric_limits<int32_t>::max());
+    if (S > s[0])
+        throw Error("cannot sample " + std::to_string(S) + " points from a cloud of " + std::to_string(s[0]));
+    to_u32(numel(s), "point array size");
+    return {TensorDesc{{S}, ElemType::I32}, TensorDesc{{S, 3}}, TensorDesc{{s[0]}}};
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    const HostTensor& x = *in[0];
+    const int64_t N = x.shape[0], D = x.shape[1], S = out[0]->size();
+    require_finite_xyz(x, "fps");
+    std::vector<float> mind(size_t(N), std::numeric_limits<float>::infinity());
+    int64_t far = 0;
+    for (int64_t s = 0; s < S; ++s) {
+        out[0]->set_int(size_t(s), int32_t(far));
+        const float* c = &x.data[size_t(far * D)];
+        for (int k = 0; k < 3; ++k) out[1]->data[size_t(3 * s + k)] = c[k];
+        int64_t best_i = 0;
+        float best = -1.0f;
+        for (int64_t i = 0; i < N; ++i) {
+            mind[size_t(i)] = std::min(mind[size_t(i)], sqdist3(&x.data[size_t(i * D)], c));
+            if (mind[size_t(i)] > best) best = mind[size_t(i)], best_i = i;  // first maximum = lowest index
+        }
+        far = best_i;
+    }
+}
+
+void gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t N = to_u32(a.in[0].shape[0], "points"), S = to_u32(a.out[0].shape[0], "npoint");
+    // A power of two (the tree reduction halves it) within the limits and the
+    // shared memory (2 x 8 bytes per thread), about 8 points per thread: each
+    // step costs log2(L) barriers, so more threads than that only add barriers.
+    const uint32_t cap = std::min({1024u, d.max_invocations, d.max_workgroup_size[0], d.max_shared_memory / 16});
+    uint32_t L = 1;
+    while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
+    const uint32_t per = (N + L - 1) / L;
+    const bool regs = per <= kMaxPer && !a.params.get("no_registers", 0);
+    struct { uint32_t N, D, S; } push{N, to_u32(a.in[0].shape[1], "point width"), S};
+    a.seq.dispatch(pipeline(a.ctx, "fps", 4, sizeof(push), {L, regs ? per : 1u, regs ? 1u : 0u}),
+                   {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write},
+                    {a.out[1].view, rt::Access::Write}, {a.out[2].view, rt::Access::ReadWrite}},
+                   &push, sizeof(push), 1);
+}
+
+}  // namespace
+
+const OpDef op_fps{"fps", infer, cpu, gpu};
+
+}  // namespace vtloc::ops

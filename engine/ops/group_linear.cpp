@@ -1,0 +1,181 @@
+// group_linear: one PointNet++ MLP layer (1x1 conv with BatchNorm folded, then
+// act) -> shaders/point_mlp.comp. The weight is input-major W^T [K, N] (4 output
+// channels = one vec4), and activations between layers are channel-major [C, M]
+// (4 rows = one vec4), so the shader reads everything as vec4s. Param texel
+// (default 1): read activations and the cloud as texel buffers where the device allows.
+// Param `in` picks the input (optional features always last):
+//   0: x^T [K, M] (channel-major, the previous layer's output): [x^T, W^T, bias]
+//   1: grouping fused (SPEC 2, as point_group): [points [P, D >= 3], centres [S, 3],
+//      idx I32 [S, NS], W^T, bias (, features [P, DF])]; row m = s * NS + j is
+//      [features of q from column feat_begin, xyz of q - centre s], q = idx[s, j].
+//   2: group all: [xyz [M, 3], W^T, bias (, features [M, C])]; row m is
+//      [xyz of m, features of m] (xyz first, not centred).
+// Param max = 1: the output is the max over each group of NS consecutive rows,
+// point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
+// else channel-major [N, M]. Params act, slope as linear's.
+#include <algorithm>
+#include <limits>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+#include "engine/ops/point_common.h"
+
+namespace vtloc::ops {
+namespace {
+
+struct Layout {
+    int mode = 0;
+    bool max = false;
+    GatherShape g;  // in = 1 (in = 2: P = M, D = 3, DF = C)
+    int64_t M = 0, K = 0, N = 0, NS = 1;
+    size_t w = 1;   // index of W^T among the inputs
+    bool feat = false;
+};
+
+Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
+    Layout l;
+    l.mode = p.has("in") ? int(int_param(p, "in", 0, 2)) : 0;
+    l.max = p.get("max", 0) != 0;
+    for (size_t i = 0; i < in.size(); ++i)
+        if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
+            throw Error("input " + std::to_string(i) + " has the wrong element type");
+    if (l.mode == 1) {
+        expect_input_count(in, 5, 6);
+        l.feat = in.size() == 6;
+        l.g = gather_shape(in[0], in[1], in[2], l.feat ? &in[5] : nullptr, p);
+        l.M = l.g.rows(), l.K = l.g.K(), l.NS = l.g.NS, l.w = 3;
+    } else {
+        expect_input_count(in, 3, l.mode == 2 ? 4 : 3);
+        const Shape& x = in[0].shape;
+        if (x.size() != 2 || (l.mode == 2 && x[1] != 3))
+            throw Error(std::string(l.mode == 2 ? "xyz must be [M, 3]" : "x must be channel-major [K, M]") + ", got " +
+                        shape_str(x));
+        if (l.mode == 0) {
+            l.K = x[0], l.M = x[1];
+        } else {
+            l.feat = in.size() == 4;
+            l.M = x[0];
+            l.g.P = l.M, l.g.D = 3;
+            if (l.feat) {
+                if (in[3].shape.size() != 2 || in[3].shape[0] != l.M)
+                    throw Error("features " + shape_str(in[3].shape) + " must have one row per point (" + std::to_string(l.M) + ")");
+                l.g.DF = l.g.CF = in[3].shape[1];
+            }
+            l.K = 3 + l.g.CF;
+        }
+        if (l.max) l.NS = int_param(p, "group", 1, std::max<int64_t>(1, l.M));
+    }
+    if (l.M == 0) throw Error("no rows");
+    if (l.M % l.NS != 0) throw Error(std::to_string(l.M) + " rows do not split into groups of " + std::to_string(l.NS));
+    const Shape &w = in[l.w].shape, &b = in[l.w + 1].shape;
+    if (w.size() != 2 || w[0] != l.K)
+        throw Error("weight " + shape_str(w) + " must be input-major [" + std::to_string(l.K) + ", out]");
+    l.N = w[1];
+    if (b != Shape{l.N}) throw Error("bias " + shape_str(b) + " does not match weight " + shape_str(w));
+    to_u32(l.M * std::max(l.K, l.N), "layer size");
+    to_u32(std::max(l.g.P * l.g.D, l.g.P * l.g.DF), "point array size");
+    return l;
+}
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
+    Layout l = layout_of(in, p);
+    return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    std::vector<TensorDesc> d;
+    for (const HostTensor* t : in) d.push_back({t->shape, t->type});
+    const Layout l = layout_of(d, p);
+    const HostTensor &w = *in[l.w], &b = *in[l.w + 1];
+    const HostTensor* feat = l.feat ? in.back() : nullptr;
+    const uint32_t act = uint32_t(p.get("act", kActNone));
+    const float slope = float(p.get("slope", 0.01));
+    std::vector<float> row(size_t(l.K));
+    if (l.max) std::fill(out[0]->data.begin(), out[0]->data.end(), -std::numeric_limits<float>::infinity());
+    for (int64_t m = 0; m < l.M; ++m) {
+        for (int64_t k = 0; k < l.K; ++k)
+            row[size_t(k)] = l.mode == 1   ? gather_value(*in[0], *in[1], *in[2], feat, l.g, m, k)
+                             : l.mode == 2 ? (k < 3 ? in[0]->data[size_t(3 * m + k)] : feat->data[size_t(m * l.g.CF + k - 3)])
+                                           : in[0]->data[size_t(k * l.M + m)];
+        for (int64_t n = 0; n < l.N; ++n) {
+            double acc = b.data[size_t(n)];
+            for (int64_t k = 0; k < l.K; ++k) acc += double(row[size_t(k)]) * w.data[size_t(k * l.N + n)];
+            const float v = apply_act(float(acc), act, slope);
+            if (l.max) {
+                float& o = out[0]->data[size_t((m / l.NS) * l.N + n)];
+                o = std::max(o, v);
+            } else {
+                out[0]->data[size_t(n * l.M + m)] = v;
+            }
+        }
+    }
+}
+
+void gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    std::vector<TensorDesc> ds;
+    for (size_t i = 0; i < a.in.size(); ++i)
+        ds.push_back({a.in[i].shape, a.params.get("in", 0) == 1 && i == 2 ? ElemType::I32 : ElemType::F32});
+    const Layout l = layout_of(ds, a.params);
+    // TM x TN accumulators per invocation: 8 rows x 16 channels (fewer channels
+    // for narrow layers), both multiples of 4 (the shader's vec4 granularity). On
+    // lavapipe 8 x 16 and 16 x 16 ran best of 4x16 .. 16x16, 8x32 (more spills).
+    const uint32_t TM = 8;
+    const uint32_t TN = l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
+    const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
+    // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
+    // spare invocations redo the last block.
+    uint32_t L = std::min(64u, elementwise_local_size(d));
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    while (L > sg && L / 2 >= blocks) L /= 2;
+    const uint64_t gx = (blocks + L - 1) / L, gy = (uint64_t(l.N) + TN - 1) / TN;
+    if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
+        throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
+    const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
+    const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
+    struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
+        uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
+        uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
+        uint32_t((l.NS + TM - 1) / TM)};
+    // The activations / cloud (bindings 0, 1) and features (8, 9) are read as
+    // texel buffers where the device's texel-buffer limit allows (param texel = 0
+    // forces storage buffers); bindings 1 and 9 are the same tensors as vec4s.
+    const GpuTensor& src = a.in[0];
+    const GpuTensor& fsrc = l.feat ? a.in.back() : src;  // without features: any texel-able buffer
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(src.shape)) <= d.max_texel_elements &&
+                       uint64_t(numel(fsrc.shape)) <= d.max_texel_elements;
+    auto fmt = [&](const GpuTensor& t, bool vec4) {
+        if (!texel) return VK_FORMAT_UNDEFINED;
+        return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
+    };
+    rt::PipelineDesc desc{texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push),
+                          {L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
+                           l.N % 4 == 0},
+                          texel ? 0x303u : 0u};
+    // Bindings the mode does not read are filled with the weight buffer.
+    const rt::BufferView& filler = a.in[l.w].view;
+    const rt::Access R = rt::Access::Read;
+    a.seq.dispatch(a.ctx.pipelines().get(desc),
+                   {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)}, {a.in[l.w].view, R},
+                    {a.in[l.w].view, R}, {a.in[l.w + 1].view, R}, {a.out[0].view, rt::Access::Write},
+                    {l.mode == 1 ? a.in[1].view : filler, R}, {l.mode == 1 ? a.in[2].view : filler, R},
+                    {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
+                   &push, sizeof(push), uint32_t(gx), uint32_t(gy));
+}
+
+}  // namespace
+
+const OpDef op_group_linear{"group_linear", infer, cpu, gpu};
+
+// W [N, K] (PyTorch Linear / squeezed 1x1 conv) -> W^T [K, N], group_linear's layout.
+HostTensor point_weight_kn(const HostTensor& w) {
+    if (w.shape.size() < 2) throw Error("point_weight_kn: weight must be [out, in, ...], got " + shape_str(w.shape));
+    const int64_t N = w.shape[0], K = w.size() / std::max<int64_t>(1, N);
+    HostTensor t({K, N});
+    for (int64_t n = 0; n < N; ++n)
+        for (int64_t k = 0; k < K; ++k) t.data[size_t(k * N + n)] = w.data[size_t(n * K + k)];
+    return t;
+}
+
+}  // namespace vtloc::ops

@@ -1,0 +1,267 @@
+// The point-cloud ops: FPS and ball query (indices exact: GPU = CPU reference =
+// PyTorch reference), grouping, the fused PointNet++ MLP layer, the max over
+// neighbours and cloud normalisation (fp32: the default 1e-4 + 1e-4*|ref|; the
+// CPU GEMM accumulates in double, so this bounds the shader's fp32 rounding
+// over K <= 70 terms of O(1)).
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <cstdlib>
+#include <filesystem>
+#include <unistd.h>
+#include <random>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/point_common.h"
+#include "engine/safetensors.h"
+#include "tests/golden.h"
+#include "tests/run_both.h"
+
+using namespace vtloc;
+
+namespace {
+
+HostTensor cloud_tensor(const std::vector<float>& xyz, int64_t D = 3) {
+    const int64_t N = int64_t(xyz.size()) / 3;
+    HostTensor t({N, D});
+    for (int64_t i = 0; i < N; ++i)
+        for (int64_t k = 0; k < D; ++k) t.data[size_t(i * D + k)] = k < 3 ? xyz[size_t(3 * i + k)] : 0.1f * float(k + i % 5);
+    return t;
+}
+
+HostTensor random_cloud(int64_t N, uint32_t seed, int64_t D = 3) {
+    return test::random_tensor({N, D}, seed);
+}
+
+struct Scale {
+    double radius;
+    int64_t nsample;
+};
+
+// FPS then one ball query per scale, on the GPU and the CPU; returns both.
+test::BothRuns fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vector<Scale>& scales,
+                             bool no_registers = false) {
+    Graph g;
+    int x = g.input("cloud", cloud.shape);
+    Params fp{{"npoint", double(npoint)}};
+    if (no_registers) fp.set("no_registers", 1);
+    std::vector<int> f = g.add("fps", {x}, fp, "fps");
+    g.output(f[0], "fps");
+    g.output(f[1], "centres");
+    for (size_t s = 0; s < scales.size(); ++s)
+        g.output(g.add1("ball_query", {x, f[1]}, {{"radius", scales[s].radius}, {"nsample", double(scales[s].nsample)}}),
+                 "ball." + std::to_string(s));
+    return test::run_both(g, WeightStore{}, {{"cloud", cloud}});
+}
+
+void check_fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vector<Scale>& scales,
+                         bool no_registers = false) {
+    INFO("N " << cloud.shape[0] << " D " << cloud.shape[1] << " npoint " << npoint << " workspace path " << no_registers);
+    test::BothRuns r = fps_and_balls(cloud, npoint, scales, no_registers);
+    test::require_same_ints(r.gpu.at("fps"), r.cpu.at("fps"), "fps");
+    CHECK(r.gpu.at("centres").data == r.cpu.at("centres").data);
+    for (size_t s = 0; s < scales.size(); ++s)
+        test::require_same_ints(r.gpu.at("ball." + std::to_string(s)), r.cpu.at("ball." + std::to_string(s)), "ball");
+}
+
+// Runs tests/point_cases.py (the PyTorch reference's FPS and ball query) into a
+// file of this process's own: the sg4/ copy of the test may run at the same time.
+std::string point_cases_file() {
+    const std::string path = test::temp_path("point_cases." + std::to_string(::getpid()) + ".safetensors");
+    const std::string cmd =
+        "cd '" VTLOC_SOURCE_DIR "' && PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 tests/point_cases.py '" + path + "'";
+    INFO("writing the PyTorch reference cases: " << cmd);
+    REQUIRE(std::system(cmd.c_str()) == 0);
+    return path;
+}
+
+}  // namespace
+
+TEST_CASE("FPS and ball query equal the PyTorch reference on ties, duplicates, grids, 16..16384 points",
+          "[op][fps][ball_query]") {
+    const std::string file = point_cases_file();
+    test::Golden cases(file);
+    for (const char* name : {"random_1000", "duplicates", "identical", "collinear", "grid", "n16", "n17", "n4097",
+                             "n16384"}) {
+        INFO("case " << name);
+        const std::string n = name;
+        HostTensor params = cases.f32(n + ".params"), cloud = cases.f32(n + ".cloud");
+        std::vector<Scale> scales;
+        for (size_t i = 1; i + 1 < params.data.size(); i += 2) scales.push_back({params.data[i], int64_t(params.data[i + 1])});
+        test::BothRuns r = fps_and_balls(cloud, int64_t(params.data[0]), scales);
+        const std::vector<int32_t> fps = cases.i32(n + ".fps");
+        CHECK(r.cpu.at("fps").ints() == fps);
+        CHECK(r.gpu.at("fps").ints() == fps);
+        for (size_t s = 0; s < scales.size(); ++s) {
+            const std::string b = ".ball." + std::to_string(s);
+            const std::vector<int32_t> ball = cases.i32(n + b);
+            CHECK(r.cpu.at(b.substr(1)).ints() == ball);
+            CHECK(r.gpu.at(b.substr(1)).ints() == ball);
+        }
+    }
+    std::filesystem::remove(file);
+}
+
+TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", "[op][fps][ball_query]") {
+    check_fps_and_balls(random_cloud(1000, 1), 1000, {{0.3, 16}});        // npoint = N, N not a power of two
+    check_fps_and_balls(random_cloud(333, 2, 6), 100, {{0.2, 7}, {0.9, 64}});  // [N, 6]: xyz + normals
+    check_fps_and_balls(random_cloud(5000, 3), 512, {{0.1, 32}});
+    check_fps_and_balls(random_cloud(2000, 4), 300, {{0.4, 20}}, true);   // the workspace path (minima in memory)
+    check_fps_and_balls(random_cloud(16384, 5), 64, {{2.0, 3}}, true);
+    // A grid with ties everywhere, points shuffled, and duplicates of every point.
+    std::vector<float> xyz;
+    for (int i = 0; i < 6; ++i)
+        for (int j = 0; j < 6; ++j)
+            for (int k = 0; k < 7; ++k) xyz.insert(xyz.end(), {i * 0.5f, j * 0.5f, k * 0.25f});
+    std::vector<float> twice = xyz;
+    twice.insert(twice.end(), xyz.begin(), xyz.end());
+    check_fps_and_balls(cloud_tensor(twice), 504, {{0.5, 9}, {0.25, 3}});
+}
+
+TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the CPU reference", "[op][group_linear]") {
+    for (bool normals : {true, false}) {
+        INFO("features " << normals);
+        const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
+        const int64_t K = normals ? 6 : 3;
+        WeightStore w;
+        auto add = [&](const std::string& name, Shape s, uint32_t seed, float r) {
+            HostTensor t = test::random_tensor(s, seed, -r, r);
+            if (s.size() == 2) w.add(name + "t", ops::point_weight_kn(t));  // group_linear's [in, out]
+            w.add(name, std::move(t));
+        };
+        add("w1", {C1, K}, 11, 0.5f);
+        add("b1", {C1}, 12, 0.2f);
+        add("w2", {C2, C1}, 13, 0.3f);
+        add("b2", {C2}, 14, 0.2f);
+        add("w3", {C3, 3 + C1}, 15, 0.3f);
+        add("b3", {C3}, 16, 0.2f);
+        Graph g;
+        int x = g.input("cloud", {N, 6});
+        std::vector<int> f = g.add("fps", {x}, {{"npoint", double(S)}});
+        int ball = g.add1("ball_query", {x, f[1]}, {{"radius", 0.6}, {"nsample", double(ns)}});
+        int w1 = g.weight("w1", {C1, K}), b1 = g.weight("b1", {C1}), w2 = g.weight("w2", {C2, C1}), b2 = g.weight("b2", {C2});
+        int w1t = g.weight("w1t", {K, C1}), w2t = g.weight("w2t", {C1, C2}), w3 = g.weight("w3", {C3, 3 + C1}),
+            w3t = g.weight("w3t", {3 + C1, C3}), b3 = g.weight("b3", {C3});
+        const double relu = ops::kActRelu;
+        std::vector<int> gin{x, f[1], ball};
+        if (normals) gin.push_back(x);
+        // Unfused: point_group, linear, linear, group_max.
+        int grouped = g.add1("point_group", gin, {{"feat_begin", 3}});
+        g.output(grouped, "grouped");
+        int h = g.add1("linear", {grouped, w1, b1}, {{"act", relu}});
+        int y = g.add1("linear", {h, w2, b2}, {{"act", relu}});
+        g.output(g.add1("group_max", {y}, {{"group", double(ns)}}), "unfused");
+        // Fused: gather in the first layer, max in the last; and both in one layer.
+        std::vector<int> fin{x, f[1], ball, w1t, b1};
+        if (normals) fin.push_back(x);
+        int fh = g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}});
+        g.output(fh, "first");  // channel-major [C1, S * ns]
+        g.output(g.add1("group_max", {fh}, {{"group", double(ns)}, {"channel_major", 1}}), "max_cm");
+        g.output(g.add1("group_max", {h}, {{"group", double(ns)}}), "max_pm");
+        g.output(g.add1("group_linear", {fh, w2t, b2}, {{"max", 1}, {"group", double(ns)}, {"act", relu}}), "fused");
+        int one = g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu}});
+        g.output(one, "one_layer");
+        g.output(g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu}, {"texel", 0}}),
+                 "one_layer_ssbo");
+        // Group all: [xyz, features] -> layer -> max over all S rows, fused and not.
+        g.output(g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)}}), "all");
+        g.output(g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)}, {"texel", 0}}),
+                 "all_ssbo");
+        int cat = g.add1("concat", {f[1], one});
+        g.output(g.add1("group_max", {g.add1("linear", {cat, w3, b3})}, {{"group", double(S)}}), "all_unfused");
+        TensorMap out = test::run_gpu_and_compare(g, w, {{"cloud", random_cloud(N, 21, 6)}});
+        test::require_close(out.at("fused"), out.at("unfused"), {}, "fused = unfused");
+        test::require_close(out.at("all"), out.at("all_unfused"), {}, "group all fused = unfused");
+        test::require_close(out.at("max_cm"), out.at("max_pm"), {}, "group_max channel-major = point-major");
+        CHECK(out.at("first").shape == Shape{C1, S * ns});
+        CHECK(out.at("one_layer").shape == Shape{S, C1});
+        CHECK(out.at("all").shape == Shape{1, C3});
+    }
+}
+
+TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
+    struct Case {
+        int64_t M, K, N, group;
+    };
+    // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
+    // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
+    for (Case c : {Case{20 * 128, 131, 96, 128}, Case{2560, 64, 200, 5}, Case{1001, 37, 37, 13}, Case{36, 8, 8, 12}}) {
+        WeightStore w;
+        w.add("w", test::random_tensor({c.K, c.N}, 31, -0.15f, 0.15f));
+        w.add("b", test::random_tensor({c.N}, 32, -0.1f, 0.1f));
+        Graph g;
+        int x = g.input("x", {c.K, c.M});
+        int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
+        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}, {"act", ops::kActRelu}}),
+                 "max_relu");
+        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}}), "max");  // negative maxima
+        g.output(g.add1("group_linear", {x, wv, bv}, {{"act", ops::kActLeaky}, {"slope", 0.1}}), "plain");
+        // The storage-buffer variant (devices whose texel-buffer limit the tensors exceed).
+        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}, {"texel", 0}}), "max_ssbo");
+        g.output(g.add1("group_linear", {x, wv, bv}, {{"texel", 0}}), "plain_ssbo");
+        INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
+        test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
+    }
+}
+
+TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {
+    for (int64_t N : {1, 2, 1000, 4097}) {
+        HostTensor c = test::random_tensor({N, 6}, uint32_t(40 + N), -50.0f, 80.0f);
+        if (N == 1) c.data[0] += 1.0f;  // one point: scale 0 -> the CPU reference throws; tested below
+        Graph g;
+        auto o = g.add("cloud_normalize", {g.input("c", {N, 6})});
+        g.output(o[0], "cloud");
+        g.output(o[1], "frame");
+        INFO("N " << N);
+        if (N == 1) {
+            REQUIRE_THROWS_WITH(run_cpu(g, WeightStore{}, {{"c", c}}), Catch::Contains("identical"));
+            continue;
+        }
+        // The fp32 mean of coordinates up to 80 carries ~1e-5 absolute error; the
+        // normalised coordinates (divided by a scale of ~100) are well within 1e-4.
+        TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, {{"c", c}}, {2e-4, 1e-4});
+        const HostTensor& y = out.at("cloud");
+        double max_norm = 0;
+        for (int64_t i = 0; i < N; ++i)
+            max_norm = std::max(max_norm, std::hypot(double(y.data[size_t(6 * i)]), double(y.data[size_t(6 * i + 1)]),
+                                                     double(y.data[size_t(6 * i + 2)])));
+        CHECK(max_norm == Approx(1.0).epsilon(1e-5));
+    }
+}
+
+TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query]") {
+    auto infer_error = [](const std::string& op, std::vector<TensorDesc> in, Params p) {
+        try {
+            find_op(op).infer(in, p);
+        } catch (const Error& e) {
+            return std::string(e.what());
+        }
+        return std::string("no error");
+    };
+    CHECK_THAT(infer_error("fps", {TensorDesc{{0, 3}}}, {{"npoint", 1}}), Catch::Contains("empty"));
+    CHECK_THAT(infer_error("fps", {TensorDesc{{10, 3}}}, {{"npoint", 11}}), Catch::Contains("cannot sample 11"));
+    CHECK_THAT(infer_error("fps", {TensorDesc{{10, 2}}}, {{"npoint", 1}}), Catch::Contains("[N, D >= 3]"));
+    CHECK_THAT(infer_error("fps", {TensorDesc{{10, 3}}}, {}), Catch::Contains("npoint"));
+    CHECK_THAT(infer_error("ball_query", {TensorDesc{{10, 3}}, TensorDesc{{4, 2}}}, {{"radius", 1}, {"nsample", 2}}),
+               Catch::Contains("centres must be [S, 3]"));
+    CHECK_THAT(infer_error("ball_query", {TensorDesc{{10, 3}}, TensorDesc{{4, 3}}}, {{"radius", -1}, {"nsample", 2}}),
+               Catch::Contains("radius"));
+    CHECK_THAT(infer_error("ball_query", {TensorDesc{{10, 3}}, TensorDesc{{4, 3}}}, {{"radius", 1}}),
+               Catch::Contains("nsample"));
+    CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{3, 4}}, TensorDesc{{4}}},
+                           {{"max", 1}, {"group", 3}}),
+               Catch::Contains("do not split"));
+    CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{4, 3}}, TensorDesc{{3}}}, {}),
+               Catch::Contains("input-major [3, out]"));
+    // NaN / inf coordinates: the CPU references throw (the GPU path relies on the host check).
+    for (float bad : {std::nanf(""), INFINITY}) {
+        HostTensor c = random_cloud(50, 7);
+        c.data[31] = bad;
+        Graph g;
+        std::vector<int> f = g.add("fps", {g.input("c", {50, 3})}, {{"npoint", 5}});
+        g.output(f[0], "i");
+        REQUIRE_THROWS_WITH(run_cpu(g, WeightStore{}, {{"c", c}}), Catch::Contains("point 10 has a NaN or infinite"));
+    }
+    test::require_no_validation_messages();
+}
