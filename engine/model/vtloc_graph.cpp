@@ -1,0 +1,79 @@
+#include "engine/model/vtloc_graph.h"
+
+#include "engine/error.h"
+#include "engine/model/gma.h"
+#include "engine/model/heads.h"
+#include "engine/model/point_encoder.h"
+#include "engine/model/tactile_encoder.h"
+
+namespace vtloc {
+
+std::string touch_suffix(int64_t b, int64_t batch) {
+    std::string s;
+    if (batch != 1) s = "/" + std::to_string(b);
+    return s;
+}
+
+Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec) {
+    const nlohmann::json& cfg = w.config();
+    const int64_t C = cfg.at("C").get<int64_t>();
+    const bool normals = cfg.at("point").at("use_normals").get<bool>();
+    const bool ilu_head = cfg.at("head").get<std::string>() == "ilu";
+    const bool gma = spec.gma && cfg.contains("gma") && !cfg.at("gma").is_null();
+    const bool touches = spec.image_height > 0;
+    if (spec.batch < 1) throw Error("a batch holds at least one touch");
+    if (spec.n_points <= 0) throw Error("the object cloud is empty");
+
+    Graph g;
+    int cloud = -1, fp = -1;
+    if (spec.encode_object || gma || spec.n_candidates > 0)
+        cloud = g.input("point.cloud", {spec.n_points, normals ? 6 : 3});
+    if (spec.encode_object) {
+        PointEncoderOutputs p = build_point_encoder(g, w, cfg, cloud);
+        for (auto& [name, id] : p.indices) g.output(id, name);
+        fp = p.feature;
+        g.output(fp, "point.feature");
+    } else {
+        fp = g.input("point.feature", {1, C});
+    }
+    if (!touches) return g;
+
+    int gma_target = !gma ? -1 : normals ? cloud : g.input("gma.target", {spec.n_points, 6});
+    int iters = ilu_head ? g.input("ilu.iters", {1}, ElemType::I32) : -1;
+    int candidates = spec.n_candidates > 0 ? g.input("candidates", {spec.n_candidates, 3}) : -1;
+    int symmetry = spec.symmetry_order > 1 ? g.input("symmetry", {spec.symmetry_order, 12}) : -1;
+    const int64_t k = spec.k > 0 ? spec.k : cfg.at("K").get<int64_t>();
+
+    for (int64_t b = 0; b < spec.batch; ++b) {
+        const std::string s = touch_suffix(b, spec.batch);
+        int image = g.input("tactile.image" + s, {spec.image_height, spec.image_width, 3}, ElemType::I32);
+        int x = add_tactile_preprocess(g, cfg, image);
+        g.output(x, "tactile.input" + s);
+        int ft = build_tactile_encoder(g, w, cfg, x);
+        g.output(ft, "tactile.feature" + s);
+        if (gma) {
+            int pd = build_gma(g, w, cfg, ft, fp);
+            g.output(pd, "gma.cloud" + s);
+            g.output(g.add("chamfer", {pd, gma_target}, {}, "gma.chamfer" + s).at(0), "gma.chamfer" + s);
+        }
+        int contact;
+        if (ilu_head) {
+            IluOutputs ilu = build_ilu(g, w, ft, fp, iters, spec.max_iters);
+            g.output(ilu.c, "ilu.c" + s);
+            contact = ilu.contact;
+        } else {
+            contact = build_mcr(g, w, cfg, ft, fp);
+        }
+        g.output(contact, "contact" + s);
+        if (candidates < 0) continue;
+        auto top = g.add("topk", {contact, candidates}, {{"k", double(k)}}, "topk" + s);
+        g.output(top.at(0), "topk.index" + s);
+        g.output(top.at(1), "topk.score" + s);
+        std::vector<int> hin{cloud, candidates, top.at(0)};
+        if (symmetry >= 0) hin.push_back(symmetry);
+        g.output(g.add1("heatmap", hin, {}, "heatmap" + s), "heatmap" + s);
+    }
+    return g;
+}
+
+}  // namespace vtloc

@@ -1,0 +1,45 @@
+#pragma once
+// The whole VTLoc network of SPEC sections 2-3 as one graph, built from the
+// weight file's config: tactile preprocessing + encoder, PointNet++, GMA +
+// Chamfer (optional), ILU or MCR, top-K retrieval and the heat-map. One graph
+// is one command buffer, so a run is one submit.
+//
+// Inputs (names; S = per-touch suffix, "" for batch 1, else "/0", "/1", ...):
+//   tactile.image{S}   I32 [H, W, 3] byte values (ops::tactile_image_tensor)
+//   point.cloud        F32 [N, 6] (or [N, 3] without normals), normalised frame
+//   gma.target         F32 [N, 6] normalised cloud with normals, only when GMA
+//                      runs and the network takes no normals
+//   point.feature      F32 [1, C] instead of point.cloud when the object is cached
+//   candidates         F32 [M, 3] normalised, when retrieval is on
+//   ilu.iters          I32 [1], N for this run (ILU head only)
+//   symmetry           F32 [order, 12] (engine/model/post.h), with a symmetry prior
+// Outputs: the SPEC section 8 names (with the suffix for per-touch ones), plus
+//   point.feature when the object branch runs; ilu.c is [max_iters, 3] of which
+//   the first N rows are c_1..c_N.
+#include <cstdint>
+#include <string>
+
+#include "engine/graph.h"
+#include "engine/weights.h"
+
+namespace vtloc {
+
+struct VtlocGraphSpec {
+    int64_t image_height = 0, image_width = 0;  // 0: no tactile branch (encode an object only)
+    int64_t batch = 1;                          // touches in one graph (all on one object)
+    int64_t n_points = 0;                       // object cloud size
+    bool encode_object = true;                  // false: point.feature is an input
+    int64_t n_candidates = 0;                   // 0: no retrieval
+    int64_t k = 0;                              // top-K size; 0: the config's K
+    bool gma = true;                            // run GMA (if the model has it)
+    int max_iters = 64;                         // ILU: N may be 0..max_iters per run
+    int symmetry_order = 0;                     // > 1: heat-map with the symmetry prior
+};
+
+// Builds the graph; BN folding and W^d chunking add prepared tensors to `w`.
+Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec);
+
+// The per-touch name suffix for touch b of a batch of `batch`.
+std::string touch_suffix(int64_t b, int64_t batch);
+
+}  // namespace vtloc

@@ -1,0 +1,237 @@
+#include "engine/model/vtloc_runner.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/model/gma.h"
+#include "engine/model/heads.h"
+#include "engine/model/post.h"
+#include "runtime/context.h"
+
+namespace vtloc {
+
+namespace {
+
+constexpr int kMaxIters = 64;  // one recorded graph serves every N in 0..64
+
+std::string spec_key(const VtlocGraphSpec& s, bool profile) {
+    return std::to_string(s.image_height) + "x" + std::to_string(s.image_width) + "/b" + std::to_string(s.batch) +
+           "/n" + std::to_string(s.n_points) + "/o" + std::to_string(s.encode_object) + "/m" +
+           std::to_string(s.n_candidates) + "/k" + std::to_string(s.k) + "/g" + std::to_string(s.gma) + "/i" +
+           std::to_string(s.max_iters) + "/s" + std::to_string(s.symmetry_order) + "/p" + std::to_string(profile);
+}
+
+bool has_gma(const nlohmann::json& cfg) { return cfg.contains("gma") && !cfg.at("gma").is_null(); }
+
+}  // namespace
+
+struct VtlocRunner::Compiled {
+    Graph graph;
+    std::unique_ptr<GpuExecutor> gpu;
+};
+
+VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu) : weights_(std::move(weights)), gpu_(gpu) {
+    const nlohmann::json& cfg = weights_.config();
+    for (const char* key : {"C", "K", "head", "tactile", "point"})
+        if (!cfg.contains(key)) throw Error(weights_.source() + ": the model config has no '" + key + "'");
+    if (has_gma(cfg)) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
+}
+
+VtlocRunner::~VtlocRunner() = default;
+
+TensorMap VtlocRunner::run(const VtlocGraphSpec& spec, const TensorMap& inputs) {
+    return run_graph(spec_key(spec, profile_), [&] { return build_vtloc_graph(weights_, spec); }, inputs);
+}
+
+TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs) {
+    auto& c = compiled_[key];
+    if (!c) {
+        auto fresh = std::make_unique<Compiled>();
+        fresh->graph = build();
+        if (gpu_) fresh->gpu = std::make_unique<GpuExecutor>(*gpu_, fresh->graph, weights_, profile_);
+        c = std::move(fresh);
+    }
+    last_ = c.get();
+    return gpu_ ? c->gpu->run(inputs) : run_cpu(c->graph, weights_, inputs);
+}
+
+std::vector<std::pair<std::string, double>> VtlocRunner::last_node_times() const {
+    std::vector<std::pair<std::string, double>> out;
+    if (!last_ || !last_->gpu) return out;
+    for (auto& t : last_->gpu->node_times()) out.push_back({t.label, t.ms});
+    return out;
+}
+
+EncodedObject VtlocRunner::prepare_object(const HostTensor& cloud, const HostTensor* candidates) const {
+    const nlohmann::json& cfg = config();
+    if (cloud.shape.size() != 2 || cloud.shape[1] != 6)
+        throw Error("the object cloud must be [N, 6] (xyz and normals), got " + shape_str(cloud.shape));
+    require_finite(cloud, "the object cloud");
+    const int64_t need = cfg.at("point").at("sa").at(0).at("npoint").get<int64_t>();
+    if (cloud.shape[0] < need)
+        throw Error("the object cloud has " + std::to_string(cloud.shape[0]) + " points; this model samples " +
+                    std::to_string(need) + " in its first stage and needs at least that many");
+    EncodedObject o;
+    o.frame = object_frame(cloud);
+    const bool normals = cfg.at("point").at("use_normals").get<bool>();
+    o.target = to_frame(cloud, o.frame, 6);
+    o.cloud = normals ? o.target : to_frame(cloud, o.frame, 3);
+    if (candidates) {
+        if (candidates->shape.size() != 2 || candidates->shape[1] != 3 || candidates->shape[0] == 0)
+            throw Error("candidates must be a non-empty [M, 3] list, got " + shape_str(candidates->shape));
+        require_finite(*candidates, "the candidates");
+        o.candidates = to_frame(*candidates, o.frame, 3);
+    } else {
+        o.candidates = to_frame(cloud, o.frame, 3);
+    }
+    return o;
+}
+
+EncodedObject VtlocRunner::encode_object(const HostTensor& cloud, const HostTensor* candidates) {
+    EncodedObject o = prepare_object(cloud, candidates);
+    VtlocGraphSpec spec;
+    spec.n_points = o.cloud.shape[0];
+    TensorMap out = run(spec, {{"point.cloud", o.cloud}});
+    o.feature = out.at("point.feature");
+    for (auto& [name, t] : out)
+        if (name != "point.feature") o.indices[name] = t;
+    return o;
+}
+
+namespace {
+
+struct TouchRun {
+    VtlocGraphSpec spec;
+    TensorMap inputs;
+    int iters = 0;
+};
+
+// The graph shape and inputs shared by the cached and one-shot paths.
+TouchRun touch_run(const nlohmann::json& cfg, const EncodedObject& o, const std::vector<HostTensor>& images,
+                   const TouchOptions& opt) {
+    if (images.empty()) throw Error("no tactile images given");
+    TouchRun r;
+    const Shape& s0 = images[0].shape;
+    for (const HostTensor& im : images) {
+        if (im.shape.size() != 3 || im.shape[2] != 3 || im.type != ElemType::I32)
+            throw Error("a tactile image must be an I32 [H, W, 3] tensor of byte values, got " + shape_str(im.shape));
+        if (im.shape != s0)
+            throw Error("all tactile images of a batch must have one size; got " + shape_str(s0) + " and " +
+                        shape_str(im.shape));
+    }
+    const bool ilu = cfg.at("head").get<std::string>() == "ilu";
+    r.iters = !ilu ? 0 : opt.iters >= 0 ? opt.iters : cfg.at("ilu").at("iters").get<int>();
+    r.spec.image_height = s0[0];
+    r.spec.image_width = s0[1];
+    r.spec.batch = int64_t(images.size());
+    r.spec.n_points = o.cloud.shape[0];
+    r.spec.n_candidates = o.candidates.shape[0];
+    r.spec.k = opt.k;
+    r.spec.gma = opt.gma && has_gma(cfg);
+    r.spec.max_iters = kMaxIters;
+    r.inputs["point.cloud"] = o.cloud;
+    r.inputs["candidates"] = o.candidates;
+    if (r.spec.gma && !cfg.at("point").at("use_normals").get<bool>()) r.inputs["gma.target"] = o.target;
+    if (ilu) r.inputs["ilu.iters"] = ilu_iters_input(r.iters, kMaxIters);
+    if (opt.symmetry && opt.symmetry->order > 1) {
+        const Symmetry& sym = *opt.symmetry;
+        HostTensor p({1, 3}, {float(sym.axis_point[0]), float(sym.axis_point[1]), float(sym.axis_point[2])});
+        HostTensor pn = to_frame(p, o.frame, 3);
+        r.spec.symmetry_order = sym.order;
+        r.inputs["symmetry"] = symmetry_transforms({pn.data[0], pn.data[1], pn.data[2]}, sym.axis_dir, sym.order);
+    }
+    for (size_t b = 0; b < images.size(); ++b)
+        r.inputs["tactile.image" + touch_suffix(int64_t(b), r.spec.batch)] = images[b];
+    return r;
+}
+
+TouchResult collect(const TensorMap& out, const std::string& sfx, const EncodedObject& o, int iters) {
+    TouchResult r;
+    for (auto& [name, t] : out) {
+        if (name.size() < sfx.size() || name.compare(name.size() - sfx.size(), sfx.size(), sfx) != 0) continue;
+        std::string base = name.substr(0, name.size() - sfx.size());
+        if (!sfx.empty() && base.find('/') != std::string::npos) continue;
+        if (sfx.empty() && name.find('/') != std::string::npos) continue;
+        r.tensors[base] = t;
+    }
+    if (r.tensors.count("ilu.c")) {  // the graph holds room for 64 iterations; keep the N that ran
+        HostTensor& c = r.tensors["ilu.c"];
+        c.shape = {iters, 3};
+        c.data.resize(size_t(iters) * 3);
+    }
+    const HostTensor& cp = r.tensors.at("contact");
+    r.tensors["contact"].shape = {3};
+    for (int i = 0; i < 3; ++i) r.contact_normalised[size_t(i)] = cp.data[size_t(i)];
+    r.contact = from_frame(cp.data.data(), o.frame);
+    if (r.tensors.count("topk.index")) {
+        r.topk_index = r.tensors["topk.index"].ints();
+        r.topk_score = r.tensors["topk.score"].data;
+        r.heatmap = r.tensors["heatmap"].data;
+    }
+    if (r.tensors.count("gma.chamfer")) r.alignment = r.tensors["gma.chamfer"].data.at(0);
+    return r;
+}
+
+}  // namespace
+
+std::vector<TouchResult> VtlocRunner::localize(const EncodedObject& object, const std::vector<HostTensor>& images,
+                                               const TouchOptions& options) {
+    if (object.feature.data.empty()) throw Error("the object was not encoded (call encode_object first)");
+    TouchRun r = touch_run(config(), object, images, options);
+    r.spec.encode_object = false;
+    r.inputs["point.feature"] = object.feature;
+    TensorMap out = run(r.spec, r.inputs);
+    std::vector<TouchResult> results;
+    for (int64_t b = 0; b < r.spec.batch; ++b) results.push_back(collect(out, touch_suffix(b, r.spec.batch), object, r.iters));
+    return results;
+}
+
+TouchResult VtlocRunner::localize_once(const HostTensor& image, const HostTensor& cloud, const HostTensor* candidates,
+                                       const TouchOptions& options) {
+    EncodedObject o = prepare_object(cloud, candidates);
+    TouchRun r = touch_run(config(), o, {image}, options);
+    r.spec.encode_object = true;
+    TensorMap out = run(r.spec, r.inputs);
+    return collect(out, "", o, r.iters);
+}
+
+SequenceResult VtlocRunner::localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,
+                                              const std::vector<std::array<double, 3>>& motions,
+                                              const TouchOptions& options, const BeliefOptions& belief) {
+    const int64_t T = int64_t(images.size());
+    if (T == 0) throw Error("a touch sequence needs at least one touch");
+    if (int64_t(motions.size()) != T - 1)
+        throw Error("a sequence of " + std::to_string(T) + " touches needs " + std::to_string(T - 1) +
+                    " motions between them, got " + std::to_string(motions.size()));
+    SequenceResult r;
+    r.touches = localize(object, images, options);
+
+    HostTensor contacts({T, 3}), moves({T - 1, 3});
+    for (int64_t t = 0; t < T; ++t)
+        for (int i = 0; i < 3; ++i) contacts.data[size_t(t * 3 + i)] = float(r.touches[size_t(t)].contact_normalised[size_t(i)]);
+    for (int64_t t = 0; t + 1 < T; ++t)
+        for (int i = 0; i < 3; ++i) {
+            double d = motions[size_t(t)][size_t(i)];
+            if (!std::isfinite(d)) throw Error("motion " + std::to_string(t) + " holds NaN or inf");
+            moves.data[size_t(t * 3 + i)] = float(d / object.frame.scale);
+        }
+    const int64_t M = object.candidates.shape[0];
+    const Params params{{"sigma", belief.sigma}, {"sigma_m", belief.sigma_m}, {"window", double(belief.window)}};
+    std::string key = "belief/m" + std::to_string(M) + "/t" + std::to_string(T) + "/" + std::to_string(belief.sigma) +
+                      "/" + std::to_string(belief.sigma_m) + "/" + std::to_string(belief.window);
+    TensorMap out = run_graph(key, [&] {
+        Graph g;
+        int c = g.input("candidates", {M, 3});
+        auto b = g.add("belief", {c, g.input("contacts", {T, 3}), g.input("motions", {T - 1, 3})}, params, "belief");
+        g.output(b.at(0), "belief");
+        return g;
+    }, {{"candidates", object.candidates}, {"contacts", contacts}, {"motions", moves}});
+    r.belief = out.at("belief").data;
+    r.best = int32_t(std::max_element(r.belief.begin(), r.belief.end()) - r.belief.begin());
+    r.best_point = from_frame(&object.candidates.data[size_t(r.best) * 3], object.frame);
+    r.heatmap = belief_heatmap(object.target, object.candidates, r.belief);
+    return r;
+}
+
+}  // namespace vtloc

@@ -1,0 +1,121 @@
+#pragma once
+// Runs VTLoc on the GPU (or on the CPU references): normalises the object,
+// feeds the graphs of engine/model/vtloc_graph.h, and keeps one recorded
+// executor per graph shape, so repeated calls only upload inputs and submit.
+// Not thread-safe: use one runner per thread (each on its own rt::Context).
+#include <array>
+#include <functional>
+#include <map>
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "engine/executor.h"
+#include "engine/model/object_frame.h"
+#include "engine/model/vtloc_graph.h"
+#include "engine/weights.h"
+
+namespace vtloc {
+
+namespace rt {
+class Context;
+}
+
+struct Symmetry {
+    std::array<double, 3> axis_point{0, 0, 0};  // object units
+    std::array<double, 3> axis_dir{0, 0, 1};
+    int order = 1;
+};
+
+struct TouchOptions {
+    int iters = -1;      // ILU iterations 0..64; -1: the config's
+    int64_t k = 0;       // top-K size; 0: the config's K
+    bool gma = true;     // compute the GMA alignment score
+    std::optional<Symmetry> symmetry;
+};
+
+// An object ready for touches: its frame, normalised clouds, candidates and
+// (once encoded) F^p.
+struct EncodedObject {
+    ObjectFrame frame;
+    HostTensor cloud;       // network input, normalised, [N, 6] or [N, 3]
+    HostTensor target;      // normalised [N, 6] (GMA's Chamfer target, heat-map points)
+    HostTensor candidates;  // normalised [M, 3]
+    HostTensor feature;     // F^p [1, C]
+    TensorMap indices;      // point.sa*.fps / point.sa*.ball.* of the encoding run
+};
+
+struct TouchResult {
+    TensorMap tensors;                     // SPEC section 8 names (ilu.c trimmed to N rows)
+    std::array<double, 3> contact{};       // c^p in object units
+    std::array<double, 3> contact_normalised{};
+    std::vector<int32_t> topk_index;
+    std::vector<float> topk_score;
+    std::vector<float> heatmap;            // over the object cloud's points
+    std::optional<float> alignment;        // chamfer(P^d, P) when GMA ran
+};
+
+struct BeliefOptions {
+    double sigma = 0.2;     // likelihood width (normalised frame)
+    double sigma_m = 0.05;  // motion noise (normalised frame)
+    int window = 4;         // touches used: the current one and window-1 before it (0 = all)
+};
+
+// Multi-contact localisation (SPEC section 6) over a sequence of touches.
+struct SequenceResult {
+    std::vector<TouchResult> touches;   // each touch on its own
+    std::vector<float> belief;          // over the candidates, sums to 1
+    int32_t best = -1;                  // argmax of the belief (lowest index on a tie)
+    std::array<double, 3> best_point{}; // that candidate, object units
+    std::vector<float> heatmap;         // belief spread over the cloud, min-max normalised
+};
+
+class VtlocRunner {
+public:
+    // gpu == nullptr runs the CPU reference implementations.
+    VtlocRunner(WeightStore weights, rt::Context* gpu);
+    ~VtlocRunner();
+
+    const nlohmann::json& config() const { return weights_.config(); }
+    const WeightStore& weights() const { return weights_; }
+    bool on_gpu() const { return gpu_ != nullptr; }
+
+    // cloud: [N, 6] object units (xyz, unit normals); candidates: [M, 3] object
+    // units, or none for the cloud's own points. Runs the point branch once.
+    EncodedObject encode_object(const HostTensor& cloud, const HostTensor* candidates = nullptr);
+
+    // Touches on an encoded object: tactile branch + heads + retrieval, all the
+    // images (same size) in one submit. images: I32 [H, W, 3] byte values.
+    std::vector<TouchResult> localize(const EncodedObject& object, const std::vector<HostTensor>& images,
+                                      const TouchOptions& options = {});
+
+    // One touch, everything (object branch included) in one graph and one submit.
+    TouchResult localize_once(const HostTensor& image, const HostTensor& cloud, const HostTensor* candidates,
+                              const TouchOptions& options = {});
+
+    // Touches with known sensor motions between them: motions[t-1] is the
+    // displacement (object units) from touch t-1 to touch t. All touches run in
+    // one submit, then the belief update in another.
+    SequenceResult localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,
+                                     const std::vector<std::array<double, 3>>& motions,
+                                     const TouchOptions& options = {}, const BeliefOptions& belief = {});
+
+    // GPU time per node of the last run (empty on the CPU or without profiling).
+    void set_profiling(bool on) { profile_ = on; }
+    std::vector<std::pair<std::string, double>> last_node_times() const;
+
+private:
+    EncodedObject prepare_object(const HostTensor& cloud, const HostTensor* candidates) const;
+    TensorMap run(const VtlocGraphSpec& spec, const TensorMap& inputs);
+    TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
+
+    WeightStore weights_;
+    rt::Context* gpu_;
+    bool profile_ = false;
+    struct Compiled;
+    std::map<std::string, std::unique_ptr<Compiled>> compiled_;
+    Compiled* last_ = nullptr;
+};
+
+}  // namespace vtloc

@@ -1,0 +1,208 @@
+// The whole model end to end (SPEC sections 2-3): a tactile image and an object
+// cloud in, every SPEC section 8 tensor out, against the PyTorch goldens; and the
+// cached-object, batched, run-time-N and CPU-reference paths against one-shot.
+//
+// Tolerance for features: goldens are float64 rounded to float32 while the engine
+// runs float32 end to end (~20 convolutions, PointNet++ MLPs, GRU iterations), so
+// errors of a few 1e-4 relative accumulate; 2e-3 + 2e-3*|ref| leaves margin.
+// Indices (FPS, ball query, top-K) must match exactly.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/model/vtloc_runner.h"
+#include "engine/ops/tactile_preprocess.h"
+#include "tests/golden.h"
+
+using namespace vtloc;
+
+namespace {
+
+constexpr test::Tolerance kFeature{2e-3, 2e-3};
+
+struct GoldenCase {
+    std::unique_ptr<test::Golden> golden;
+    WeightStore weights;
+    HostTensor image, cloud, candidates;
+};
+
+GoldenCase load_case(const std::string& dir, const std::string& name) {
+    GoldenCase c;
+    c.golden = std::make_unique<test::Golden>(test::require_golden_file(dir, name + ".golden.safetensors"));
+    c.weights = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
+    const TensorInfo& ti = c.golden->file().at("input.tactile");
+    c.image = ops::tactile_image_tensor(c.golden->file().bytes(ti).data(), ti.shape[0], ti.shape[1]);
+    c.cloud = c.golden->f32("input.cloud");
+    c.candidates = c.golden->f32("input.candidates");
+    return c;
+}
+
+void compare_with_golden(const test::Golden& gold, const TouchResult& r) {
+    for (const char* name : {"tactile.input", "tactile.feature", "point.feature", "gma.cloud", "gma.chamfer", "ilu.c",
+                             "contact", "topk.score", "heatmap"}) {
+        if (!gold.has(name)) continue;
+        INFO("tensor " << name);
+        REQUIRE(r.tensors.count(name));
+        HostTensor got = r.tensors.at(name);
+        got.shape = gold.shape(name);  // the engine keeps a batch axis of 1 on some
+        gold.compare(name, got, kFeature);
+    }
+    gold.compare_exact("topk.index", r.tensors.at("topk.index").ints());
+    for (const TensorInfo& t : gold.file().tensors())
+        if (t.name.rfind("point.sa", 0) == 0) {
+            INFO("tensor " << t.name);
+            REQUIRE(r.tensors.count(t.name));
+            gold.compare_exact(t.name, r.tensors.at(t.name).ints());
+        }
+    // Object units: the golden's contact.object came from its own c^p.
+    HostTensor obj = gold.f32("contact.object");
+    for (int i = 0; i < 3; ++i) CHECK(std::abs(r.contact[size_t(i)] - obj.data[size_t(i)]) <= 2e-3 * (1 + std::abs(obj.data[size_t(i)])));
+}
+
+void check_same(const TouchResult& a, const TouchResult& b, const std::string& what) {
+    INFO(what);
+    for (auto& [name, t] : b.tensors) {
+        if (name.rfind("point.", 0) == 0) continue;  // object tensors exist on one path only
+        REQUIRE(a.tensors.count(name));
+        if (t.type == ElemType::I32) CHECK(a.tensors.at(name).ints() == t.ints());
+        else test::require_close(a.tensors.at(name), t, {1e-6, 1e-6}, what + ": " + name);
+    }
+}
+
+}  // namespace
+
+TEST_CASE("vtloc-tiny end to end matches the PyTorch golden", "[model][golden]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
+    test::require_no_validation_messages();
+    compare_with_golden(*c.golden, r);
+    REQUIRE(r.alignment.has_value());
+}
+
+TEST_CASE("vtloc-mcr-tiny end to end matches the PyTorch golden", "[model][golden]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-mcr-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
+    test::require_no_validation_messages();
+    compare_with_golden(*c.golden, r);
+    CHECK_FALSE(r.alignment.has_value());
+}
+
+TEST_CASE("vtloc-r18 (the paper's config) end to end matches the PyTorch golden", "[model][golden][paper]") {
+    GoldenCase c = load_case(test::build_goldens_dir(), "vtloc-r18");
+    VtlocRunner runner(c.weights, &test::gpu());
+    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
+    test::require_no_validation_messages();
+    compare_with_golden(*c.golden, r);
+}
+
+TEST_CASE("vtloc-mcr (paper-size MCR baseline) end to end matches the PyTorch golden", "[model][golden][paper]") {
+    GoldenCase c = load_case(test::build_goldens_dir(), "vtloc-mcr");
+    VtlocRunner runner(c.weights, &test::gpu());
+    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
+    test::require_no_validation_messages();
+    compare_with_golden(*c.golden, r);
+}
+
+TEST_CASE("cached object and batched touches equal the one-shot path", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    // Three touches: the golden frame, its mirror and a darker copy.
+    std::vector<HostTensor> images{c.image, c.image, c.image};
+    const int64_t H = c.image.shape[0], W = c.image.shape[1];
+    for (int64_t y = 0; y < H; ++y)
+        for (int64_t x = 0; x < W; ++x)
+            for (int ch = 0; ch < 3; ++ch) {
+                size_t i = size_t((y * W + x) * 3 + ch);
+                images[1].set_int(i, c.image.int_at(size_t((y * W + (W - 1 - x)) * 3 + ch)));
+                images[2].set_int(i, c.image.int_at(i) / 2);
+            }
+    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
+    c.golden->compare("point.feature", HostTensor({obj.feature.size()}, obj.feature.data), kFeature);
+    std::vector<TouchResult> batch = runner.localize(obj, images);
+    REQUIRE(batch.size() == 3);
+    for (size_t b = 0; b < images.size(); ++b) {
+        TouchResult once = runner.localize_once(images[b], c.cloud, &c.candidates);
+        check_same(batch[b], once, "batch touch " + std::to_string(b) + " vs one-shot");
+        TouchResult single = runner.localize(obj, {images[b]}).at(0);
+        check_same(single, once, "cached touch " + std::to_string(b) + " vs one-shot");
+    }
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("ILU iterations are chosen per run without rebuilding", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
+    TouchOptions o;
+    o.iters = 0;
+    TouchResult r0 = runner.localize(obj, {c.image}, o).at(0);
+    CHECK(r0.tensors.at("ilu.c").shape == Shape{0, 3});
+    for (int i = 0; i < 3; ++i) CHECK(r0.contact_normalised[size_t(i)] == 0.0);  // SPEC: N = 0 gives c^p = 0
+    o.iters = 4;
+    TouchResult r4 = runner.localize(obj, {c.image}, o).at(0);
+    o.iters = 2;
+    TouchResult r2 = runner.localize(obj, {c.image}, o).at(0);
+    REQUIRE(r2.tensors.at("ilu.c").shape == Shape{2, 3});
+    for (size_t i = 0; i < 6; ++i) CHECK(r2.tensors.at("ilu.c").data[i] == r4.tensors.at("ilu.c").data[i]);
+    o.iters = 64;
+    CHECK(runner.localize(obj, {c.image}, o).at(0).tensors.at("ilu.c").shape == Shape{64, 3});
+    o.iters = 65;
+    REQUIRE_THROWS_WITH(runner.localize(obj, {c.image}, o), Catch::Contains("0..64"));
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("the GPU and the CPU reference backends agree on the whole model", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner gpu(c.weights, &test::gpu()), cpu(c.weights, nullptr);
+    TouchOptions o;
+    o.symmetry = Symmetry{{0, 0, 0}, {0, 0, 1}, 3};
+    TouchResult g = gpu.localize_once(c.image, c.cloud, &c.candidates, o);
+    TouchResult h = cpu.localize_once(c.image, c.cloud, &c.candidates, o);
+    for (auto& [name, t] : h.tensors) {
+        INFO(name);
+        if (t.type == ElemType::I32) CHECK(g.tensors.at(name).ints() == t.ints());
+        else test::require_close(g.tensors.at(name), t, kFeature, name);
+    }
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("a touch sequence updates the belief from each touch and the motions", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu()), cpu(c.weights, nullptr);
+    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
+    std::vector<HostTensor> images{c.image, c.image};
+    std::vector<std::array<double, 3>> motions{{5.0, 0.0, 0.0}};
+    SequenceResult s = runner.localize_sequence(obj, images, motions);
+    SequenceResult t = cpu.localize_sequence(cpu.encode_object(c.cloud, &c.candidates), images, motions);
+    REQUIRE(s.belief.size() == size_t(c.candidates.shape[0]));
+    double sum = 0;
+    for (float b : s.belief) sum += b;
+    CHECK(std::abs(sum - 1.0) < 1e-4);
+    test::require_close(HostTensor({int64_t(s.belief.size())}, s.belief), HostTensor({int64_t(t.belief.size())}, t.belief),
+                        {1e-5, 1e-3}, "belief GPU vs CPU");
+    CHECK(s.best == t.best);
+    CHECK(s.heatmap.size() == size_t(c.cloud.shape[0]));
+    CHECK(*std::max_element(s.heatmap.begin(), s.heatmap.end()) == 1.0f);
+    REQUIRE_THROWS_WITH(runner.localize_sequence(obj, images, {}), Catch::Contains("needs 1 motions"));
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("bad inputs to the model are named", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    HostTensor nan_cloud = c.cloud;
+    nan_cloud.data[7 * 6 + 1] = std::nanf("");
+    REQUIRE_THROWS_WITH(runner.encode_object(nan_cloud), Catch::Contains("NaN"));
+    HostTensor few({4, 6});
+    REQUIRE_THROWS_WITH(runner.encode_object(few), Catch::Contains("needs at least"));
+    HostTensor empty({0, 6});
+    REQUIRE_THROWS(runner.encode_object(empty));
+    HostTensor two_cands({2, 3}, {0, 0, 0, 1, 1, 1});
+    REQUIRE_THROWS_WITH(runner.localize_once(c.image, c.cloud, &two_cands), Catch::Contains("exceeds the 2 candidates"));
+    HostTensor tiny_image = ops::tactile_image_tensor(std::vector<uint8_t>(4 * 4 * 3, 9).data(), 4, 4);
+    REQUIRE_THROWS_WITH(runner.localize_once(tiny_image, c.cloud, nullptr), Catch::Contains("8"));
+    REQUIRE_THROWS_WITH(runner.localize(EncodedObject{}, {c.image}), Catch::Contains("not encoded"));
+    test::require_no_validation_messages();
+}
