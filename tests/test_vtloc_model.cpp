@@ -71,38 +71,30 @@ void check_same(const TouchResult& a, const TouchResult& b, const std::string& w
 
 }  // namespace
 
-TEST_CASE("vtloc-tiny end to end matches the PyTorch golden", "[model][golden]") {
-    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+// One touch through the one-shot path, every tensor against the golden.
+TouchResult check_end_to_end(const std::string& dir, const std::string& name) {
+    GoldenCase c = load_case(dir, name);
     VtlocRunner runner(c.weights, &test::gpu());
     TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
     test::require_no_validation_messages();
     compare_with_golden(*c.golden, r);
-    REQUIRE(r.alignment.has_value());
+    return r;
+}
+
+TEST_CASE("vtloc-tiny end to end matches the PyTorch golden", "[model][golden]") {
+    CHECK(check_end_to_end(test::goldens_dir(), "vtloc-tiny").alignment.has_value());
 }
 
 TEST_CASE("vtloc-mcr-tiny end to end matches the PyTorch golden", "[model][golden]") {
-    GoldenCase c = load_case(test::goldens_dir(), "vtloc-mcr-tiny");
-    VtlocRunner runner(c.weights, &test::gpu());
-    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
-    test::require_no_validation_messages();
-    compare_with_golden(*c.golden, r);
-    CHECK_FALSE(r.alignment.has_value());
+    CHECK_FALSE(check_end_to_end(test::goldens_dir(), "vtloc-mcr-tiny").alignment.has_value());
 }
 
 TEST_CASE("vtloc-r18 (the paper's config) end to end matches the PyTorch golden", "[model][golden][paper]") {
-    GoldenCase c = load_case(test::build_goldens_dir(), "vtloc-r18");
-    VtlocRunner runner(c.weights, &test::gpu());
-    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
-    test::require_no_validation_messages();
-    compare_with_golden(*c.golden, r);
+    CHECK(check_end_to_end(test::build_goldens_dir(), "vtloc-r18").alignment.has_value());
 }
 
 TEST_CASE("vtloc-mcr (paper-size MCR baseline) end to end matches the PyTorch golden", "[model][golden][paper]") {
-    GoldenCase c = load_case(test::build_goldens_dir(), "vtloc-mcr");
-    VtlocRunner runner(c.weights, &test::gpu());
-    TouchResult r = runner.localize_once(c.image, c.cloud, &c.candidates);
-    test::require_no_validation_messages();
-    compare_with_golden(*c.golden, r);
+    CHECK_FALSE(check_end_to_end(test::build_goldens_dir(), "vtloc-mcr").alignment.has_value());
 }
 
 TEST_CASE("cached object and batched touches equal the one-shot path", "[model]") {

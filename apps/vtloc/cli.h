@@ -1,0 +1,92 @@
+#pragma once
+// Shared pieces of the vtloc command-line tool: argument parsing, the lazily
+// made Vulkan context, shipped-file lookup, and the commands themselves. The
+// tool uses the public API (<vtloc/vtloc.h>) only.
+#include <filesystem>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <vector>
+
+#include "vtloc/vtloc.h"
+
+namespace vtloc::cli {
+
+// A command-line mistake: exit code 2 with the command's name and a hint.
+class UsageError : public std::runtime_error {
+public:
+    using std::runtime_error::runtime_error;
+};
+
+struct OptionSpec {
+    std::string name;       // "--model"
+    bool value = true;      // takes a value
+    bool repeat = false;    // may be given more than once
+};
+
+class Args {
+public:
+    // Parses argv[first..]; `--help`/`-h` anywhere sets help(). Throws
+    // UsageError for unknown options, missing values, repeats, and more
+    // positional arguments than max_positional.
+    Args(int argc, char** argv, int first, std::vector<OptionSpec> specs, size_t max_positional = 0);
+
+    bool help() const { return help_; }
+    bool flag(const std::string& name) const;
+    std::optional<std::string> get(const std::string& name) const;
+    std::vector<std::string> all(const std::string& name) const;
+    std::string required(const std::string& name) const;
+    int integer(const std::string& name, int fallback, int lo, int hi) const;
+    double number(const std::string& name, double fallback) const;
+    const std::vector<std::string>& positional() const { return positional_; }
+
+private:
+    bool help_ = false;
+    std::vector<std::pair<std::string, std::string>> given_;
+    std::vector<std::string> positional_;
+};
+
+// "1.5,2,3" -> numbers; throws UsageError naming `what` unless there are `count`.
+std::vector<double> parse_numbers(const std::string& text, size_t count, const std::string& what);
+
+// The Vulkan context, made on first use (CPU-backend runs never make one), so
+// that main can report validation messages whatever the command did.
+struct Session {
+    std::optional<api::Context> context;
+    api::Context& gpu() {
+        if (!context) context.emplace();
+        return *context;
+    }
+};
+
+// Shipped files (models/, examples/): $VTLOC_DATA_DIR, an install's
+// share/vtloc beside the executable, the executable's parent folder
+// (build/vtloc -> the repository), or the source tree this binary was built
+// from. Throws api::Error when none holds the default model.
+std::filesystem::path shipped_dir();
+inline constexpr const char* kDefaultModel = "models/vtloc-r18-half-random.safetensors";
+bool is_shipped_random_model(const std::string& path);
+std::string default_model_path();
+
+// Options every touch command shares: --topk --iters --symmetry-axis
+// --symmetry-order --no-gma --backend.
+std::vector<OptionSpec> touch_option_specs();
+api::LocalizeOptions touch_options(const Args& a);
+extern const char* kTouchOptionsHelp;
+
+// Model on the requested backend (no Vulkan for --backend cpu).
+api::Model load_model(Session& s, const std::string& path, api::Backend backend);
+
+// Creates a folder (and its parents); throws api::Error naming it when it cannot.
+void make_folder(const std::string& path);
+
+// Formats a point "(x, y, z)" with `digits` decimals.
+std::string point_str(const std::array<double, 3>& p, int digits = 2);
+
+int cmd_demo(Session& s, int argc, char** argv);
+int cmd_localize(Session& s, int argc, char** argv);
+int cmd_sequence(Session& s, int argc, char** argv);
+int cmd_info(Session& s, int argc, char** argv);
+int cmd_devices(Session& s, int argc, char** argv);
+
+}  // namespace vtloc::cli

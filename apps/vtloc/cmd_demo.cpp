@@ -1,0 +1,99 @@
+// vtloc demo: the shipped model on a shipped example, from any working directory.
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+
+#include "apps/vtloc/report.h"
+
+namespace vtloc::cli {
+
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kHelp =
+    "usage: vtloc demo [--example N] [--out DIR] [--model M]\n"
+    "\n"
+    "Runs the shipped default model (models/, RANDOM weights: no trained model exists\n"
+    "yet) on a shipped example (examples/mug.glb and examples/touch_0N.png with its\n"
+    "ground truth in touch_0N.json), prints the predicted and the true contact, and\n"
+    "writes a heat-map picture (PNG) and point cloud (PLY).\n"
+    "\n"
+    "  --example N   which example touch, 1..3 (default 1)\n"
+    "  --out DIR     where to write heatmap.png and heatmap.ply\n"
+    "                (default: <temp dir>/vtloc-demo)\n"
+    "  --model M     another weight file, e.g. your trained export\n";
+
+struct Example {
+    fs::path object, tactile;
+    std::array<double, 3> contact{};
+    std::string where;
+};
+
+Example read_example(const fs::path& json_path) {
+    std::ifstream in(json_path);
+    if (!in) throw api::Error(json_path.string() + ": cannot open");
+    try {
+        nlohmann::json j = nlohmann::json::parse(in);
+        Example e;
+        e.object = json_path.parent_path() / j.at("object").get<std::string>();
+        e.tactile = json_path.parent_path() / j.at("tactile").get<std::string>();
+        for (size_t i = 0; i < 3; ++i) e.contact[i] = j.at("contact").at(i).get<double>();
+        e.where = j.value("where", "");
+        return e;
+    } catch (const nlohmann::json::exception& x) {
+        throw api::Error(json_path.string() + ": not a VTLoc example (" + std::string(x.what()) + ")");
+    }
+}
+
+double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+}  // namespace
+
+int cmd_demo(Session& s, int argc, char** argv) {
+    Args a(argc, argv, 2, {{"--example"}, {"--out"}, {"--model"}});
+    if (a.help()) {
+        std::fputs(kHelp, stdout);
+        return 0;
+    }
+    const int n = a.integer("--example", 1, 1, 3);
+    const fs::path out = a.get("--out") ? fs::path(*a.get("--out")) : fs::temp_directory_path() / "vtloc-demo";
+    const fs::path root = shipped_dir();
+    const fs::path model_path = a.get("--model") ? fs::path(*a.get("--model")) : root / kDefaultModel;
+    const bool random = is_shipped_random_model(model_path.string());
+    Example ex = read_example(root / "examples" / ("touch_0" + std::to_string(n) + ".json"));
+
+    api::Model model(s.gpu(), model_path.string());
+    print_model(model.info(), random);
+    std::printf("device    %s\n", s.gpu().device().name.c_str());
+    api::TactileImage image = api::load_tactile_image(ex.tactile.string());
+    api::Object object = model.encode_object(ex.object.string());
+    std::printf("object    %s: %zu points sampled (the model's point.n_points)\n", ex.object.string().c_str(),
+                object.cloud().size());
+    std::printf("touch     %s (%dx%d GelSight frame)\n", ex.tactile.string().c_str(), image.width, image.height);
+    api::TouchResult r = model.localize(object, image);
+
+    std::printf("predicted %s mm\n", point_str(r.contact, 1).c_str());
+    std::printf("true      %s mm (%s)\n", point_str(ex.contact, 1).c_str(), ex.where.c_str());
+    std::printf("error     %.1f mm%s\n", distance(r.contact, ex.contact),
+                random ? " (untrained weights: expect nothing better than chance)" : "");
+    if (r.alignment) std::printf("alignment %.4g (GMA chamfer; lower = better)\n", double(*r.alignment));
+
+    make_folder(out.string());
+    const std::string png = (out / "heatmap.png").string(), ply = (out / "heatmap.ply").string();
+    api::RenderOptions ro;
+    ro.contact = r.contact;
+    ro.ground_truth = ex.contact;
+    ro.tactile = &image;
+    ro.caption = model.info().name + (random ? " with RANDOM weights" : "") + ": touch_0" + std::to_string(n) +
+                 ".png on mug.glb";
+    api::render_heatmap_png(png, object, r.heatmap, ro);
+    api::write_heatmap_ply(ply, object, r.heatmap);
+    std::printf("time      %.0f ms for the touch (a first run includes shader compilation)\n", r.timings.wall_ms);
+    std::printf("wrote     %s\n          %s\n", png.c_str(), ply.c_str());
+    return 0;
+}
+
+}  // namespace vtloc::cli

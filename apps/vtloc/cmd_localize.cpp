@@ -1,0 +1,134 @@
+// vtloc localize: one touch on one object.
+#include <chrono>
+#include <cstdio>
+
+#include "apps/vtloc/report.h"
+
+namespace vtloc::cli {
+
+namespace {
+
+const char* kHelp =
+    "usage: vtloc localize [--model M] --tactile IMG --object MESH|PLY [options]\n"
+    "\n"
+    "Localises one touch: where on the object the tactile image was taken, with a\n"
+    "heat-map over the object's points.\n"
+    "\n"
+    "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
+    "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
+    "  --object FILE             glTF mesh (.glb/.gltf; sampled to the model's point count)\n"
+    "                            or a PLY point cloud with normals (x y z nx ny nz)\n"
+    "  --candidates F            candidate contact points (.ply, or x,y,z text rows);\n"
+    "                            default: the object's points\n"
+    "%s"
+    "  --json                    print the result as JSON\n"
+    "  --heatmap OUT.ply         write the heat-map as a PLY (contact_prob + colour)\n"
+    "  --render OUT.png          write a picture of the heat-map\n"
+    "  --dump DIR                write every intermediate tensor (SPEC section 8 names) to\n"
+    "                            DIR/tensors.safetensors and the object cloud to DIR/cloud.ply,\n"
+    "                            and print the weights_tools.golden command that cross-checks them\n"
+    "  --profile                 per-node GPU times (with --json)\n"
+    "\n"
+    "Coordinates are in the object file's units. Exit status: 0 ok, 1 bad input or\n"
+    "runtime error, 2 usage error.\n";
+
+std::string golden_command(const std::string& model, const std::string& tactile, const std::string& cloud,
+                           const Args& a, const std::string& out) {
+    std::string cmd = "/usr/bin/python3 -m weights_tools.golden --weights " + model + " --tactile " + tactile +
+                      " --cloud " + cloud;
+    if (auto c = a.get("--candidates")) cmd += " --candidates " + *c;
+    if (auto n = a.get("--iters")) cmd += " --iters " + *n;
+    if (auto k = a.get("--topk")) cmd += " --K " + *k;
+    if (auto s = a.get("--symmetry-axis")) cmd += " --symmetry " + *s + "," + *a.get("--symmetry-order");
+    return cmd + " -o " + out;
+}
+
+}  // namespace
+
+int cmd_localize(Session& s, int argc, char** argv) {
+    std::vector<OptionSpec> specs{{"--model"},     {"--tactile"}, {"--object"}, {"--candidates"},
+                                  {"--json", false}, {"--heatmap"}, {"--render"}, {"--dump"},
+                                  {"--profile", false}};
+    for (OptionSpec& o : touch_option_specs()) specs.push_back(o);
+    Args a(argc, argv, 2, specs);
+    if (a.help()) {
+        std::printf(kHelp, kTouchOptionsHelp);
+        return 0;
+    }
+    const std::string tactile_path = a.required("--tactile"), object_path = a.required("--object");
+    const std::string candidates = a.get("--candidates").value_or("");
+    api::LocalizeOptions opt = touch_options(a);
+    opt.profile = a.flag("--profile");
+    const auto dump = a.get("--dump");
+    opt.keep_tensors = dump.has_value();
+    const bool json_out = a.flag("--json");
+    const std::string model_path = a.get("--model").value_or("");
+
+    const std::string model_file = model_path.empty() ? default_model_path() : model_path;
+    api::TactileImage image = api::load_tactile_image(tactile_path);  // before Vulkan starts: fail fast
+    api::Model model = load_model(s, model_file, opt.backend);
+    const api::ModelInfo& info = model.info();
+
+    auto t0 = std::chrono::steady_clock::now();
+    api::Object object = model.encode_object(object_path, candidates, opt.backend);
+    double encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    api::TouchResult r = model.localize(object, image, opt);
+
+    nlohmann::json outputs = nlohmann::json::object();
+    if (auto p = a.get("--heatmap")) {
+        api::write_heatmap_ply(*p, object, r.heatmap);
+        outputs["heatmap"] = *p;
+    }
+    if (auto p = a.get("--render")) {
+        api::RenderOptions ro;
+        ro.contact = r.contact;
+        ro.tactile = &image;
+        ro.caption = info.name + (is_shipped_random_model(model_file) ? " (RANDOM weights)" : "") + ": " +
+                     tactile_path + " on " + object_path;
+        api::render_heatmap_png(*p, object, r.heatmap, ro);
+        outputs["render"] = *p;
+    }
+    std::string golden;
+    if (dump) {
+        make_folder(*dump);
+        const std::string tensors = (std::filesystem::path(*dump) / "tensors.safetensors").string();
+        const std::string cloud = (std::filesystem::path(*dump) / "cloud.ply").string();
+        api::save_tensors(tensors, r.tensors, info.config_json);
+        api::write_heatmap_ply(cloud, object, r.heatmap);
+        golden = golden_command(model_file, tactile_path, cloud, a,
+                                (std::filesystem::path(*dump) / "golden.safetensors").string());
+        outputs["dump"] = {{"tensors", tensors}, {"cloud", cloud}, {"golden_command", golden}};
+    }
+
+    const bool random = is_shipped_random_model(model_file);
+    if (json_out) {
+        nlohmann::json j{{"model", model_json(info, random)},
+                         {"backend", opt.backend == api::Backend::Gpu ? "gpu" : "cpu"},
+                         {"object", object_json(object, candidates)},
+                         {"tactile", {{"path", tactile_path}, {"width", image.width}, {"height", image.height}}},
+                         {"outputs", outputs}};
+        if (s.context) j["device"] = s.context->device().name;
+        j.update(touch_json(r));
+        j["timings_ms"]["encode_ms"] = encode_ms;
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    print_model(info, random);
+    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
+    std::printf("object    %s: %zu points, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
+                object.candidate_count(), candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
+    std::printf("tactile   %s (%dx%d)\n", tactile_path.c_str(), image.width, image.height);
+    print_touch(r);
+    std::printf("time      encode object %.1f ms, touch %.1f ms%s\n", encode_ms, r.timings.wall_ms,
+                s.context ? " (a first run of a shape includes shader compilation)" : "");
+    for (auto& [what, path] : outputs.items())
+        if (what != "dump") std::printf("wrote     %s\n", path.get<std::string>().c_str());
+    if (dump) {
+        std::printf("wrote     %s\n          %s\n", outputs["dump"]["tensors"].get<std::string>().c_str(),
+                    outputs["dump"]["cloud"].get<std::string>().c_str());
+        std::printf("cross-check with the PyTorch reference:\n  %s\n", golden.c_str());
+    }
+    return 0;
+}
+
+}  // namespace vtloc::cli

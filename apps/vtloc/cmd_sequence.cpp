@@ -1,0 +1,189 @@
+// vtloc sequence: several touches with known motions -> a belief over the candidates.
+#include <algorithm>
+#include <cstdio>
+#include <fstream>
+#include <numeric>
+
+#include "apps/vtloc/report.h"
+
+namespace vtloc::cli {
+
+namespace {
+
+const char* kHelp =
+    "usage: vtloc sequence [--model M] --object MESH|PLY\n"
+    "                      (--touch IMG[,dx,dy,dz] ... | --touches FILE.json) [options]\n"
+    "\n"
+    "Multi-contact localisation (SPEC section 6): touches on one object, in order, with the\n"
+    "sensor's motion between them, give a belief over the candidate contact points.\n"
+    "\n"
+    "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
+    "  --object FILE             glTF mesh (.glb/.gltf) or PLY point cloud with normals\n"
+    "  --touch IMG[,dx,dy,dz]    one touch (repeat, in order); dx,dy,dz = the sensor's\n"
+    "                            displacement since the previous touch, object units\n"
+    "                            (default 0,0,0; none for the first touch)\n"
+    "  --touches FILE.json       the touches as {\"touches\": [{\"tactile\": \"a.png\"},\n"
+    "                            {\"tactile\": \"b.png\", \"motion\": [dx, dy, dz]}, ...]}\n"
+    "                            (paths relative to the JSON file)\n"
+    "  --candidates F            candidate contact points (default: the object's points)\n"
+    "  --sigma S                 likelihood width, normalised frame (default 0.2)\n"
+    "  --sigma-m S               motion noise, normalised frame (default 0.05)\n"
+    "  --window W                touches used: the current one and W-1 before it (default 4, 0 = all)\n"
+    "%s"
+    "  --json                    print the result as JSON\n"
+    "  --heatmap OUT.ply         write the belief's heat-map as a PLY (contact_prob + colour)\n"
+    "  --render OUT.png          write a picture of the belief's heat-map\n"
+    "\n"
+    "All tactile images must have one size. Exit status: 0 ok, 1 bad input or runtime\n"
+    "error, 2 usage error.\n";
+
+struct Touch {
+    std::string image;
+    std::optional<std::array<double, 3>> motion;
+};
+
+Touch parse_touch(const std::string& arg) {
+    // IMG,dx,dy,dz: the last three comma-separated fields, when there are
+    // three more after the path (paths with commas still work without a motion).
+    size_t c3 = arg.rfind(','), c2 = c3 == std::string::npos || c3 == 0 ? std::string::npos : arg.rfind(',', c3 - 1);
+    size_t c1 = c2 == std::string::npos || c2 == 0 ? std::string::npos : arg.rfind(',', c2 - 1);
+    if (c1 == std::string::npos) return {arg, std::nullopt};
+    std::vector<double> v = parse_numbers(arg.substr(c1 + 1), 3, "--touch " + arg);
+    return {arg.substr(0, c1), std::array<double, 3>{v[0], v[1], v[2]}};
+}
+
+std::vector<Touch> read_touch_file(const std::string& path) {
+    std::ifstream in(path);
+    if (!in) throw api::Error(path + ": cannot open");
+    nlohmann::json j;
+    try {
+        j = nlohmann::json::parse(in);
+    } catch (const nlohmann::json::exception&) {
+        throw api::Error(path + ": not valid JSON");
+    }
+    if (!j.is_object() || !j.contains("touches") || !j["touches"].is_array())
+        throw api::Error(path + ": expected {\"touches\": [...]}");
+    const std::filesystem::path base = std::filesystem::path(path).parent_path();
+    std::vector<Touch> out;
+    for (size_t i = 0; i < j["touches"].size(); ++i) {
+        const nlohmann::json& t = j["touches"][i];
+        const std::string where = path + ": touch " + std::to_string(i + 1);
+        if (!t.is_object() || !t.contains("tactile") || !t["tactile"].is_string())
+            throw api::Error(where + " needs a \"tactile\" image path");
+        Touch touch{(base / t["tactile"].get<std::string>()).lexically_normal().string(), std::nullopt};
+        if (t.contains("motion")) {
+            const nlohmann::json& m = t["motion"];
+            if (!m.is_array() || m.size() != 3 || !m[0].is_number() || !m[1].is_number() || !m[2].is_number())
+                throw api::Error(where + ": \"motion\" must be [dx, dy, dz]");
+            touch.motion = std::array<double, 3>{m[0].get<double>(), m[1].get<double>(), m[2].get<double>()};
+        }
+        out.push_back(touch);
+    }
+    return out;
+}
+
+}  // namespace
+
+int cmd_sequence(Session& s, int argc, char** argv) {
+    std::vector<OptionSpec> specs{{"--model"},   {"--object"},  {"--touch", true, true}, {"--touches"},
+                                  {"--candidates"}, {"--sigma"}, {"--sigma-m"},         {"--window"},
+                                  {"--json", false}, {"--heatmap"}, {"--render"}};
+    for (OptionSpec& o : touch_option_specs()) specs.push_back(o);
+    Args a(argc, argv, 2, specs);
+    if (a.help()) {
+        std::printf(kHelp, kTouchOptionsHelp);
+        return 0;
+    }
+    const std::string object_path = a.required("--object");
+    const std::string candidates = a.get("--candidates").value_or("");
+    std::vector<Touch> touches;
+    if (a.get("--touches") && a.flag("--touch")) throw UsageError("give --touch or --touches, not both");
+    if (auto file = a.get("--touches")) touches = read_touch_file(*file);
+    for (const std::string& t : a.all("--touch")) touches.push_back(parse_touch(t));
+    if (touches.empty()) throw UsageError("no touches: give --touch IMG[,dx,dy,dz] or --touches FILE.json");
+    if (touches[0].motion) throw api::Error("the first touch has no previous one to move from; drop its motion");
+    api::LocalizeOptions opt = touch_options(a);
+    api::BeliefOptions belief;
+    belief.sigma = a.number("--sigma", belief.sigma);
+    belief.sigma_m = a.number("--sigma-m", belief.sigma_m);
+    belief.window = a.integer("--window", belief.window, 0, 1 << 20);
+
+    std::vector<api::TactileImage> images;
+    std::vector<std::array<double, 3>> motions;
+    for (size_t i = 0; i < touches.size(); ++i) {
+        images.push_back(api::load_tactile_image(touches[i].image));
+        if (i > 0) motions.push_back(touches[i].motion.value_or(std::array<double, 3>{0, 0, 0}));
+    }
+    const auto model_arg = a.get("--model");
+    const std::string model_file = model_arg ? *model_arg : default_model_path();
+    api::Model model = load_model(s, model_file, opt.backend);
+    api::Object object = model.encode_object(object_path, candidates, opt.backend);
+    api::SequenceResult r = model.localize_sequence(object, images, motions, opt, belief);
+
+    // The most believed candidates, best first (argmax included).
+    std::vector<size_t> order(r.belief.size());
+    std::iota(order.begin(), order.end(), size_t(0));
+    const size_t shown = std::min<size_t>(5, order.size());
+    std::partial_sort(order.begin(), order.begin() + long(shown), order.end(),
+                      [&](size_t x, size_t y) { return r.belief[x] > r.belief[y] || (r.belief[x] == r.belief[y] && x < y); });
+    auto candidate = [&](size_t i) {
+        const std::vector<float>& c = object.candidates();
+        return std::array<double, 3>{c[i * 3], c[i * 3 + 1], c[i * 3 + 2]};
+    };
+
+    nlohmann::json outputs = nlohmann::json::object();
+    if (auto p = a.get("--heatmap")) {
+        api::write_heatmap_ply(*p, object, r.heatmap);
+        outputs["heatmap"] = *p;
+    }
+    const bool random = is_shipped_random_model(model_file);
+    if (auto p = a.get("--render")) {
+        api::RenderOptions ro;
+        ro.contact = r.best_point;
+        ro.caption = model.info().name + (random ? " (RANDOM weights)" : "") + ": belief after " +
+                     std::to_string(touches.size()) + " touches on " + object_path;
+        api::render_heatmap_png(*p, object, r.heatmap, ro);
+        outputs["render"] = *p;
+    }
+
+    if (a.flag("--json")) {
+        nlohmann::json jt = nlohmann::json::array();
+        for (size_t i = 0; i < touches.size(); ++i) {
+            nlohmann::json t = touch_json(r.touches[i]);
+            t["tactile"] = touches[i].image;
+            t["motion"] = i == 0 ? nlohmann::json(nullptr) : point_json(motions[i - 1]);
+            jt.push_back(t);
+        }
+        nlohmann::json top = nlohmann::json::array();
+        for (size_t k = 0; k < shown; ++k)
+            top.push_back({{"index", order[k]}, {"belief", r.belief[order[k]]}, {"point", point_json(candidate(order[k]))}});
+        nlohmann::json j{{"model", model_json(model.info(), random)},
+                         {"object", object_json(object, candidates)},
+                         {"touches", jt},
+                         {"belief", {{"best", r.best}, {"best_point", point_json(r.best_point)}, {"top", top},
+                                     {"values", r.belief}}},
+                         {"timings_ms", timings_json(r.timings)},
+                         {"outputs", outputs}};
+        if (s.context) j["device"] = s.context->device().name;
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    print_model(model.info(), random);
+    std::printf("object    %s: %zu points, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
+                object.candidate_count(), candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
+    for (size_t i = 0; i < touches.size(); ++i) {
+        std::printf("touch %zu   %s", i + 1, touches[i].image.c_str());
+        if (i > 0) std::printf(", moved %s", point_str(motions[i - 1]).c_str());
+        std::printf("\n          contact %s\n", point_str(r.touches[i].contact).c_str());
+    }
+    std::printf("belief    argmax: candidate %d at %s (belief %.3g)\n", r.best, point_str(r.best_point).c_str(),
+                double(r.belief[size_t(r.best)]));
+    for (size_t k = 1; k < shown; ++k)
+        std::printf("          then candidate %zu at %s (%.3g)\n", order[k], point_str(candidate(order[k])).c_str(),
+                    double(r.belief[order[k]]));
+    std::printf("time      %.1f ms for the %zu touches and the belief\n", r.timings.wall_ms, touches.size());
+    for (auto& [what, path] : outputs.items()) std::printf("wrote     %s\n", path.get<std::string>().c_str());
+    return 0;
+}
+
+}  // namespace vtloc::cli

@@ -1,0 +1,64 @@
+#pragma once
+// What the public API's pimpl classes hold, and the one place where engine
+// exceptions become vtloc::api::Error. Private to engine/api/*.cpp.
+#include <memory>
+#include <new>
+#include <string>
+
+#include "engine/api/vtloc/vtloc.h"
+#include "engine/model/vtloc_runner.h"
+#include "runtime/context.h"
+
+namespace vtloc::api {
+
+struct Context::Impl {
+    rt::Context ctx;
+    DeviceInfo device;
+    explicit Impl(const rt::ContextOptions& o) : ctx(o) {}
+};
+
+struct Object::Impl {
+    std::string source;
+    std::string model_key;  // Model::Impl::key of the model that encoded it
+    PointCloud cloud;
+    std::vector<float> candidates;
+    bool own_candidates = false;  // candidates are the cloud's points
+    HostTensor raw_cloud;         // [N, 6] object units, checked
+    EncodedObject encoded;
+};
+
+struct Model::Impl {
+    ModelInfo info;
+    std::string key;                      // identifies the weights an Object was encoded with
+    rt::Context* gpu = nullptr;           // null: CPU-only model
+    std::unique_ptr<VtlocRunner> gpu_runner, cpu_runner;
+
+    VtlocRunner& runner(Backend b);
+};
+
+// Loads a weight file and checks it fully (config schema, every tensor the
+// network needs); `info` is filled from it.
+WeightStore load_checked_weights(const std::string& path, ModelInfo& info);
+
+DeviceInfo to_api(const rt::DeviceInfo& d);
+
+// Collapses a message to one line (multi-line engine messages, e.g. device lists).
+std::string one_line(std::string s);
+
+// Runs f, turning every exception into vtloc::api::Error.
+template <class F>
+auto guarded(F&& f) -> decltype(f()) {
+    try {
+        return f();
+    } catch (const Error&) {
+        throw;
+    } catch (const std::bad_alloc&) {
+        throw Error("out of memory");
+    } catch (const std::exception& e) {
+        throw Error(one_line(e.what()));
+    } catch (...) {
+        throw Error("unknown internal error");
+    }
+}
+
+}  // namespace vtloc::api

@@ -1,0 +1,142 @@
+// Inputs of the public API: point clouds, candidates, tactile images, and
+// encoding an object with a model's point branch.
+#include <cmath>
+
+#include "engine/api/api_internal.h"
+#include "engine/io/candidates.h"
+#include "engine/io/image.h"
+#include "engine/io/object.h"
+
+namespace vtloc::api {
+
+namespace {
+
+PointCloud to_point_cloud(const HostTensor& t) {
+    PointCloud c;
+    const size_t n = size_t(t.shape[0]);
+    c.xyz.resize(n * 3);
+    c.normals.resize(n * 3);
+    for (size_t i = 0; i < n; ++i)
+        for (size_t k = 0; k < 3; ++k) {
+            c.xyz[i * 3 + k] = t.data[i * 6 + k];
+            c.normals[i * 3 + k] = t.data[i * 6 + 3 + k];
+        }
+    return c;
+}
+
+std::string where(const std::string& source) { return source.empty() ? "the object" : source; }
+
+Object::Impl make_object(const std::string& source, HostTensor cloud, const HostTensor* candidates) {
+    Object::Impl o;
+    o.source = source;
+    io::check_cloud(cloud, where(source));  // finite, no zero normal; normals made unit
+    o.raw_cloud = std::move(cloud);
+    o.cloud = to_point_cloud(o.raw_cloud);
+    if (candidates) {
+        o.candidates = candidates->data;
+    } else {
+        o.candidates = o.cloud.xyz;
+        o.own_candidates = true;
+    }
+    return o;
+}
+
+HostTensor candidate_tensor(const std::vector<float>& c, const std::string& what) {
+    if (c.size() % 3 != 0) throw Error(what + ": candidates need 3 floats each, got " + std::to_string(c.size()));
+    for (size_t i = 0; i < c.size(); ++i)
+        if (!std::isfinite(c[i])) throw Error(what + ": candidate " + std::to_string(i / 3) + " holds NaN or inf");
+    return HostTensor({int64_t(c.size() / 3), 3}, c);
+}
+
+}  // namespace
+
+PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed) {
+    return guarded([&] {
+        if (n_points < 1) throw Error("load_point_cloud: n_points must be >= 1");
+        HostTensor t = io::load_object(path, n_points, seed);
+        io::check_cloud(t, path);
+        return to_point_cloud(t);
+    });
+}
+
+std::vector<float> load_candidates(const std::string& path) {
+    return guarded([&] { return io::load_candidates(path).data; });
+}
+
+TactileImage load_tactile_image(const std::string& path) {
+    return guarded([&] {
+        io::RgbImage im = io::load_tactile_image(path);
+        return TactileImage{im.height, im.width, std::move(im.pixels)};
+    });
+}
+
+namespace {
+
+std::shared_ptr<const Object::Impl> encode(Model::Impl& m, Object::Impl o, Backend backend) {
+    io::require_points(o.raw_cloud, m.info.min_points, where(o.source));
+    if (!o.own_candidates && o.candidates.empty())
+        throw Error(where(o.source) + ": the candidate set is empty");
+    HostTensor cand = candidate_tensor(o.candidates, where(o.source));
+    o.encoded = m.runner(backend).encode_object(o.raw_cloud, o.own_candidates ? nullptr : &cand);
+    o.model_key = m.key;
+    return std::make_shared<const Object::Impl>(std::move(o));
+}
+
+}  // namespace
+
+Object Model::encode_object(const std::string& object_path, const std::string& candidates_path, Backend backend) {
+    return guarded([&] {
+        HostTensor cloud = io::load_object(object_path, impl_->info.sample_points);
+        HostTensor cand;
+        if (!candidates_path.empty()) cand = io::load_candidates(candidates_path);
+        Object out;
+        out.impl_ = encode(*impl_, make_object(object_path, std::move(cloud), candidates_path.empty() ? nullptr : &cand),
+                           backend);
+        return out;
+    });
+}
+
+Object Model::encode_object(const PointCloud& cloud, const std::vector<float>& candidates, Backend backend) {
+    return guarded([&] {
+        const size_t n = cloud.size();
+        if (cloud.xyz.size() % 3 != 0) throw Error("the object cloud: xyz needs 3 floats per point");
+        if (cloud.normals.size() != cloud.xyz.size())
+            throw Error("the object cloud has " + std::to_string(n) + " points but " +
+                        std::to_string(cloud.normals.size() / 3) + " normals");
+        if (n == 0) throw Error("the object cloud is empty");
+        HostTensor t({int64_t(n), 6});
+        for (size_t i = 0; i < n; ++i)
+            for (size_t k = 0; k < 3; ++k) {
+                t.data[i * 6 + k] = cloud.xyz[i * 3 + k];
+                t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
+            }
+        HostTensor cand;
+        if (!candidates.empty()) cand = candidate_tensor(candidates, "the candidates");
+        Object out;
+        out.impl_ = encode(*impl_, make_object("", std::move(t), candidates.empty() ? nullptr : &cand), backend);
+        return out;
+    });
+}
+
+Object::Object() = default;
+Object::~Object() = default;
+Object::Object(const Object&) = default;
+Object& Object::operator=(const Object&) = default;
+
+namespace {
+const Object::Impl& need(const std::shared_ptr<const Object::Impl>& p) {
+    if (!p) throw Error("empty Object (make one with Model::encode_object)");
+    return *p;
+}
+}  // namespace
+
+const std::string& Object::source() const { return guarded([&]() -> const std::string& { return need(impl_).source; }); }
+const PointCloud& Object::cloud() const { return guarded([&]() -> const PointCloud& { return need(impl_).cloud; }); }
+const std::vector<float>& Object::candidates() const {
+    return guarded([&]() -> const std::vector<float>& { return need(impl_).candidates; });
+}
+size_t Object::candidate_count() const { return candidates().size() / 3; }
+std::array<double, 3> Object::centre() const { return guarded([&] { return need(impl_).encoded.frame.centre; }); }
+double Object::scale() const { return guarded([&] { return need(impl_).encoded.frame.scale; }); }
+
+}  // namespace vtloc::api

@@ -1,0 +1,313 @@
+#pragma once
+// VTLoc: visual-tactile contact localisation on the GPU (Vulkan compute).
+// The public C++ API, installed as <vtloc/vtloc.h>; link vtloc::vtloc
+// (find_package(vtloc)). Standard library only: no Vulkan, JSON or engine
+// headers leak through it.
+//
+// A minimal program:
+//
+//   vtloc::api::Context ctx;                                  // best device
+//   vtloc::api::Model model(ctx, "model.safetensors");
+//   vtloc::api::Object mug = model.encode_object("mug.glb");  // point branch, once
+//   vtloc::api::TouchResult r = model.localize(mug, vtloc::api::load_tactile_image("touch.png"));
+//   // r.contact: where the touch was, in the mesh's units; r.heatmap: per point of mug.cloud()
+//
+// Errors: every failure (bad file, bad input, out of memory, Vulkan error)
+// throws vtloc::api::Error, whose what() is one line naming the problem (and
+// the file, where there is one). No other exception type escapes the API.
+// A moved-from Context or Model may only be destroyed or assigned to.
+//
+// Thread-safety:
+// - No global state: every resource hangs off a Context (its own Vulkan
+//   instance, device and queue) or a Model.
+// - A Context and the Models made on it are NOT thread-safe: use them from one
+//   thread at a time. For parallel work make one Context (and Model) per
+//   thread; contexts share nothing, and concurrent contexts on one device give
+//   bit-identical results to a single one.
+// - An Object is immutable once made: it may be read from any thread and used
+//   by any Model loaded from the same weight file (another file's Model
+//   refuses it).
+// - The free functions (list_devices, inspect_model, load_*, write_*, render_*,
+//   save_tensors) touch no shared state and may run concurrently.
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <stdexcept>
+#include <string>
+#include <utility>
+#include <vector>
+
+namespace vtloc::api {
+
+// Library version (the CMake project version).
+const char* version();
+
+// The one exception type of the API.
+class Error : public std::runtime_error {
+public:
+    explicit Error(const std::string& message) : std::runtime_error(message) {}
+};
+
+// ---- Devices and contexts -------------------------------------------------
+
+struct DeviceInfo {
+    int index = 0;                // Vulkan enumeration order
+    std::string name;
+    std::string type;             // "discrete GPU", "integrated GPU", "CPU", ...
+    int api_major = 0, api_minor = 0;
+    uint32_t subgroup_size = 0;
+    uint32_t shared_memory_bytes = 0;       // per workgroup
+    uint32_t max_workgroup_invocations = 0;
+    std::array<uint32_t, 3> max_workgroup_size{};
+    std::array<uint32_t, 3> max_workgroup_count{};
+    uint64_t max_storage_buffer_bytes = 0;  // one binding
+    uint32_t max_storage_buffers = 0;       // per shader stage
+    uint32_t max_push_constant_bytes = 0;
+    uint32_t max_texel_buffer_elements = 0;
+    bool timestamps = false;                // per-node GPU timing possible
+    uint64_t device_local_bytes = 0;
+};
+
+// Every Vulkan device with a compute queue.
+std::vector<DeviceInfo> list_devices();
+
+enum class Validation {
+    Environment,  // on when VTLOC_VALIDATION is 1/on/true/yes
+    Off,
+    On,           // Khronos validation layer; throws if it is not installed
+};
+
+struct ContextOptions {
+    // "" = the VTLOC_DEVICE environment variable if set, else the best device
+    // (discrete > integrated > CPU); digits = a device index; anything else =
+    // a case-insensitive substring of the device name.
+    std::string device;
+    Validation validation = Validation::Environment;
+};
+
+class Context {
+public:
+    explicit Context(const ContextOptions& options = {});
+    ~Context();
+    Context(Context&&) noexcept;
+    Context& operator=(Context&&) noexcept;
+
+    const DeviceInfo& device() const;
+    bool validation_enabled() const;
+    // Validation-layer warnings and errors since the last call (one string each).
+    std::vector<std::string> take_validation_messages();
+
+    struct Impl;
+
+private:
+    friend class Model;
+    std::unique_ptr<Impl> impl_;
+};
+
+// ---- Models -----------------------------------------------------------------
+
+struct TensorSummary {
+    std::string name;
+    std::string dtype;            // as stored: "F32", "F16", "I64", ...
+    std::vector<int64_t> shape;
+};
+
+struct ModelInfo {
+    std::string path;
+    std::string name;             // config name, e.g. "vtloc-r18"
+    std::string config_json;      // the whole config (SPEC section 7), pretty-printed
+    std::string head;             // "ilu" or "mcr"
+    int64_t feature_size = 0;     // C
+    int64_t default_k = 0;        // K
+    int default_iters = 0;        // ILU iterations N (0 for the MCR head)
+    bool use_normals = false;
+    bool has_gma = false;
+    int64_t crop = 0, input_size = 0;  // tactile preprocessing
+    int64_t sample_points = 0;    // points sampled from a mesh (point.n_points)
+    int64_t min_points = 0;       // fewest cloud points the model accepts
+    uint64_t parameter_count = 0; // float elements: weights and BatchNorm statistics
+    double size_mib = 0;          // parameter_count as fp32, in MiB
+    uint64_t file_bytes = 0;
+    std::vector<TensorSummary> tensors;  // in file order
+};
+
+// Reads and checks a weight file without any GPU: the config is complete and
+// every tensor the network needs is present with its shape.
+ModelInfo inspect_model(const std::string& path);
+
+enum class Backend { Gpu, Cpu };  // Cpu: the plain C++ reference ops (slow; for checking)
+
+// Objects: the object point cloud P in object units. xyz and normals hold 3
+// floats per point; normals are scaled to unit length (a zero normal is an
+// error).
+struct PointCloud {
+    std::vector<float> xyz;
+    std::vector<float> normals;
+    size_t size() const { return xyz.size() / 3; }
+};
+
+// .glb/.gltf: area-weighted surface samples (n_points, fixed seed); .ply: the
+// file's points with normals (nx ny nz), whatever their number.
+PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed = 0);
+// Candidate contact points (3 floats each): a .ply's vertices or a text file
+// of x,y,z rows (see engine/io/candidates.h).
+std::vector<float> load_candidates(const std::string& path);
+
+// An object ready for touches: its cloud, candidates, normalised frame and the
+// point branch's feature. Cheap to copy (shared, immutable).
+class Object {
+public:
+    Object();
+    ~Object();
+    Object(const Object&);
+    Object& operator=(const Object&);
+
+    const std::string& source() const;         // file it came from ("" for arrays)
+    const PointCloud& cloud() const;           // object units
+    const std::vector<float>& candidates() const;  // object units, 3 per candidate
+    size_t candidate_count() const;
+    std::array<double, 3> centre() const;      // normalised frame: (p - centre) / scale
+    double scale() const;
+
+    struct Impl;
+
+private:
+    friend class Model;
+    std::shared_ptr<const Impl> impl_;
+};
+
+// Tactile images: 8-bit RGB, row-major, height x width x 3.
+struct TactileImage {
+    int height = 0, width = 0;
+    std::vector<uint8_t> rgb;
+};
+TactileImage load_tactile_image(const std::string& path);
+
+struct Symmetry {
+    std::array<double, 3> axis_point{0, 0, 0};  // object units
+    std::array<double, 3> axis_dir{0, 0, 1};
+    int order = 1;                               // M rotations of 360/M degrees
+};
+
+struct LocalizeOptions {
+    int iters = -1;      // ILU iterations 0..64; -1 = the model's default
+    int top_k = 0;       // 1..min(256, candidates); 0 = the model's K
+    bool gma = true;     // run GMA for the alignment score (skip for speed)
+    std::optional<Symmetry> symmetry;
+    Backend backend = Backend::Gpu;
+    bool keep_tensors = false;  // fill TouchResult::tensors (every intermediate)
+    bool profile = false;       // per-node GPU times (GPU with timestamps only)
+};
+
+struct Timings {
+    double wall_ms = 0;  // the call on the host; a batch's touches share one run.
+                         // The first call of a shape also compiles its pipelines.
+    double gpu_ms = 0;   // sum of the node times (profile only)
+    std::vector<std::pair<std::string, double>> nodes;  // per graph node (profile only)
+};
+
+// A tensor under its SPEC section 8 name (shapes as weights_tools.golden
+// writes them; index tensors are I32, the rest F32).
+struct Tensor {
+    std::string name;
+    std::vector<int64_t> shape;
+    std::vector<float> f32;       // float tensors
+    std::vector<int32_t> i32;     // index tensors
+    std::vector<uint8_t> u8;      // input.tactile
+};
+
+struct TouchResult {
+    std::array<double, 3> contact{};             // c^p, object units
+    std::array<double, 3> contact_normalised{};  // c^p, normalised frame
+    std::vector<std::array<double, 3>> iterates;            // c_1..c_N, object units (ILU)
+    std::vector<std::array<double, 3>> iterates_normalised;
+    std::vector<int32_t> topk_index;             // into Object::candidates(), best first
+    std::vector<float> topk_score;               // ||c^p - c_i||^2, normalised frame
+    std::vector<std::array<double, 3>> topk_point;          // those candidates, object units
+    std::vector<float> heatmap;                  // per Object::cloud() point, in [0, 1]
+    std::optional<float> alignment;              // chamfer(P^d, P) when GMA ran (lower = better)
+    Timings timings;
+    std::vector<Tensor> tensors;                 // with keep_tensors
+};
+
+struct BeliefOptions {
+    double sigma = 0.2;     // likelihood width, normalised frame
+    double sigma_m = 0.05;  // motion noise, normalised frame
+    int window = 4;         // touches used: the current one and window-1 before (0 = all)
+};
+
+struct SequenceResult {
+    std::vector<TouchResult> touches;    // each touch on its own
+    std::vector<float> belief;           // over the candidates, sums to 1
+    int32_t best = -1;                   // argmax of the belief
+    std::array<double, 3> best_point{};  // that candidate, object units
+    std::vector<float> heatmap;          // belief over Object::cloud(), in [0, 1]
+    Timings timings;
+};
+
+class Model {
+public:
+    // Loads and checks the weight file (inspect_model's checks). The Context
+    // must outlive the Model.
+    Model(Context& context, const std::string& path);
+    // CPU-only model (Backend::Gpu calls throw): no Vulkan needed.
+    explicit Model(const std::string& path);
+    ~Model();
+    Model(Model&&) noexcept;
+    Model& operator=(Model&&) noexcept;
+
+    const ModelInfo& info() const;
+
+    // Runs the point branch once. A mesh is sampled to info().sample_points;
+    // candidates "" = the cloud's own points.
+    Object encode_object(const std::string& object_path, const std::string& candidates_path = "",
+                         Backend backend = Backend::Gpu);
+    // candidates: 3 floats each, object units; empty = the cloud's own points.
+    Object encode_object(const PointCloud& cloud, const std::vector<float>& candidates = {},
+                         Backend backend = Backend::Gpu);
+
+    TouchResult localize(const Object& object, const TactileImage& image, const LocalizeOptions& options = {});
+    // A batch: images of one size run in one submit (sizes may differ; each
+    // size is one run).
+    std::vector<TouchResult> localize(const Object& object, const std::vector<TactileImage>& images,
+                                      const LocalizeOptions& options = {});
+    // Multi-contact belief (SPEC section 6): motions[t-1] is the sensor's
+    // displacement from touch t-1 to touch t (object units); images of one size.
+    SequenceResult localize_sequence(const Object& object, const std::vector<TactileImage>& images,
+                                     const std::vector<std::array<double, 3>>& motions,
+                                     const LocalizeOptions& options = {}, const BeliefOptions& belief = {});
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+// ---- Outputs ----------------------------------------------------------------
+
+// PLY point cloud of the object with `contact_prob` and an RGB colour per point
+// (MeshLab, CloudCompare, Open3D show it). heat: one value per cloud point.
+void write_heatmap_ply(const std::string& path, const Object& object, const std::vector<float>& heat);
+
+struct RenderOptions {
+    int width = 1280, height = 720;          // at least 640 x 400
+    std::optional<std::array<double, 3>> contact;       // predicted, object units
+    std::optional<std::array<double, 3>> ground_truth;  // object units
+    std::array<float, 3> up{0, 1, 0};        // object axis drawn upwards (glTF: +y)
+    std::string caption;
+    const TactileImage* tactile = nullptr;   // shown beside the views
+    int display_points = 30000;              // denser sample of a mesh for the picture
+};
+
+// PNG picture of a heat-map over the object, from two sides. A mesh object is
+// drawn from a denser sample of its surface, each sample taking the heat of
+// its nearest cloud point.
+void render_heatmap_png(const std::string& path, const Object& object, const std::vector<float>& heat,
+                        const RenderOptions& options = {});
+
+// Every tensor of a result (keep_tensors) as one safetensors file, comparable
+// name by name with `python3 -m weights_tools.golden`.
+void save_tensors(const std::string& path, const std::vector<Tensor>& tensors, const std::string& config_json = "");
+
+}  // namespace vtloc::api

@@ -1,0 +1,215 @@
+// The public API (<vtloc/vtloc.h>): results against the engine's runner,
+// batches and sequences, outputs, and contexts on concurrent threads.
+#include <catch2/catch.hpp>
+#include <cmath>
+#include <exception>
+#include <thread>
+
+#include "engine/io/candidates.h"
+#include "engine/io/image.h"
+#include "engine/io/object.h"
+#include "engine/io/ply.h"
+#include "engine/model/vtloc_runner.h"
+#include "engine/ops/tactile_preprocess.h"
+#include "engine/safetensors.h"
+#include "tests/api_test_util.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+namespace {
+
+const char* kSpec8[] = {"tactile.input", "tactile.feature", "point.cloud", "point.sa1.fps", "point.sa2.fps",
+                        "point.sa1.ball.0", "point.feature", "gma.cloud", "gma.chamfer", "ilu.c", "contact",
+                        "topk.index", "topk.score", "heatmap"};
+
+api::TactileImage example_image(int n) {
+    return api::load_tactile_image(test::source_path("examples/touch_0" + std::to_string(n) + ".png"));
+}
+
+// Top-left crop: a tactile image of another size.
+api::TactileImage crop(const api::TactileImage& im, int h, int w) {
+    api::TactileImage out{h, w, std::vector<uint8_t>(size_t(h) * size_t(w) * 3)};
+    for (int y = 0; y < h; ++y)
+        std::copy_n(&im.rgb[size_t(y) * size_t(im.width) * 3], size_t(w) * 3, &out.rgb[size_t(y) * size_t(w) * 3]);
+    return out;
+}
+
+void check_same(const api::TouchResult& a, const api::TouchResult& b, double tol) {
+    for (int i = 0; i < 3; ++i) CHECK(std::abs(a.contact[size_t(i)] - b.contact[size_t(i)]) <= tol * (1 + std::abs(b.contact[size_t(i)])));
+    CHECK(a.topk_index == b.topk_index);
+    REQUIRE(a.heatmap.size() == b.heatmap.size());
+    for (size_t i = 0; i < a.heatmap.size(); ++i) CHECK(std::abs(a.heatmap[i] - b.heatmap[i]) <= tol);
+}
+
+}  // namespace
+
+TEST_CASE("api: a touch through the public API equals the engine's runner", "[api]") {
+    api::Context ctx(test::validated());
+    api::Model model(ctx, test::tiny_model());
+    const std::string mug = test::source_path("examples/mug.glb"), cands = test::source_path("examples/mug_candidates.csv");
+    api::Object obj = model.encode_object(mug, cands);
+    api::TactileImage image = example_image(1);
+    api::LocalizeOptions opt;
+    opt.keep_tensors = true;
+    api::TouchResult r = model.localize(obj, image, opt);
+    test::require_no_validation(ctx);
+
+    // A context of the test's own, not the harness's process-wide one: that one
+    // is destroyed during static destruction, and after the API's instance had
+    // come and gone it crashed there, inside the validation layer (Debian 12).
+    rt::ContextOptions ro;
+    ro.validation = 1;
+    rt::Context gpu(ro);
+    VtlocRunner runner(WeightStore::load(test::tiny_model()), &gpu);
+    HostTensor cloud = io::load_object(mug, model.info().sample_points), cand = io::load_candidates(cands);
+    TouchResult want = runner.localize_once(ops::tactile_image_tensor(image.rgb.data(), image.height, image.width),
+                                            cloud, &cand);
+    CHECK(gpu.take_validation_messages().empty());
+
+    REQUIRE(obj.cloud().size() == size_t(cloud.shape[0]));
+    REQUIRE(obj.candidate_count() == size_t(cand.shape[0]));
+    for (int i = 0; i < 3; ++i) CHECK(std::abs(r.contact[size_t(i)] - want.contact[size_t(i)]) < 1e-4);
+    CHECK(r.topk_index == want.topk_index);
+    REQUIRE(r.topk_point.size() == r.topk_index.size());
+    for (size_t k = 0; k < r.topk_index.size(); ++k)
+        for (size_t i = 0; i < 3; ++i) CHECK(r.topk_point[k][i] == cand.data[size_t(r.topk_index[k]) * 3 + i]);
+    REQUIRE(r.iterates.size() == size_t(model.info().default_iters));
+    for (size_t i = 0; i < 3; ++i) CHECK(std::abs(r.iterates.back()[i] - r.contact[i]) < 1e-9);
+    REQUIRE(r.alignment.has_value());
+    CHECK(r.heatmap.size() == obj.cloud().size());
+    for (const char* name : kSpec8) {
+        INFO(name);
+        CHECK(std::any_of(r.tensors.begin(), r.tensors.end(), [&](const api::Tensor& t) { return t.name == name; }));
+    }
+}
+
+TEST_CASE("api: two threads with a context each give the results of one", "[api][threads]") {
+    const std::string mug = test::source_path("examples/mug.glb");
+    std::vector<api::TactileImage> images{example_image(1), example_image(2)};
+    std::vector<api::TouchResult> want;
+    {
+        api::Context ctx(test::validated());
+        api::Model model(ctx, test::tiny_model());
+        api::Object obj = model.encode_object(mug);
+        for (auto& im : images) want.push_back(model.localize(obj, im));
+        test::require_no_validation(ctx);
+    }
+    // Each thread: its own context and model, every image a few times.
+    struct Outcome {
+        std::vector<api::TouchResult> results;
+        std::vector<std::string> validation;
+        std::exception_ptr error;
+    };
+    std::vector<Outcome> outcomes(2);
+    auto work = [&](Outcome& out) {
+        try {
+            api::Context ctx(test::validated());
+            api::Model model(ctx, test::tiny_model());
+            api::Object obj = model.encode_object(mug);
+            for (int round = 0; round < 3; ++round)
+                for (auto& im : images) out.results.push_back(model.localize(obj, im));
+            out.validation = ctx.take_validation_messages();
+        } catch (...) {
+            out.error = std::current_exception();
+        }
+    };
+    std::thread a(work, std::ref(outcomes[0])), b(work, std::ref(outcomes[1]));
+    a.join();
+    b.join();
+    for (Outcome& o : outcomes) {
+        if (o.error) std::rethrow_exception(o.error);
+        CHECK(o.validation.empty());
+        REQUIRE(o.results.size() == 6);
+        for (size_t i = 0; i < o.results.size(); ++i) {
+            const api::TouchResult& got = o.results[i];
+            const api::TouchResult& ref = want[i % 2];
+            CHECK(got.contact == ref.contact);  // same device, same pipelines: bit for bit
+            CHECK(got.topk_index == ref.topk_index);
+            CHECK(got.heatmap == ref.heatmap);
+            CHECK(got.alignment == ref.alignment);
+        }
+    }
+}
+
+TEST_CASE("api: batches of mixed sizes, sequences and the CPU backend", "[api]") {
+    api::Context ctx(test::validated());
+    api::Model model(ctx, test::tiny_model());
+    api::Object obj = model.encode_object(test::source_path("examples/mug.glb"),
+                                          test::source_path("examples/mug_candidates.csv"));
+    std::vector<api::TactileImage> images{example_image(1), crop(example_image(2), 90, 100), example_image(3)};
+    std::vector<api::TouchResult> batch = model.localize(obj, images);
+    REQUIRE(batch.size() == 3);
+    for (size_t i = 0; i < images.size(); ++i) check_same(batch[i], model.localize(obj, images[i]), 1e-6);
+
+    api::LocalizeOptions cpu;
+    cpu.backend = api::Backend::Cpu;
+    check_same(model.localize(obj, images[0], cpu), batch[0], 2e-3);
+
+    std::vector<api::TactileImage> same{images[0], images[2], images[0]};
+    api::SequenceResult s = model.localize_sequence(obj, same, {{90, 0, 0}, {-90, 0, 0}});
+    REQUIRE(s.belief.size() == obj.candidate_count());
+    double sum = 0;
+    for (float b : s.belief) sum += b;
+    CHECK(std::abs(sum - 1.0) < 1e-4);
+    REQUIRE(s.best >= 0);
+    CHECK(s.best_point[0] == obj.candidates()[size_t(s.best) * 3]);
+    CHECK(s.heatmap.size() == obj.cloud().size());
+    CHECK(s.touches.size() == 3);
+    CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, same, {}); }), Catch::Contains("needs 2 motions"));
+    CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, images, {{0, 0, 0}, {0, 0, 0}}); }),
+               Catch::Contains("one size"));
+    test::require_no_validation(ctx);
+}
+
+TEST_CASE("api: inspect_model describes the shipped model", "[api]") {
+    api::ModelInfo m = api::inspect_model(test::shipped_model());
+    CHECK(m.name == "vtloc-r18-half");
+    CHECK(m.head == "ilu");
+    CHECK(m.has_gma);
+    CHECK(m.use_normals);
+    CHECK(m.sample_points == 1024);
+    CHECK(m.min_points == 512);
+    CHECK(m.parameter_count > 3000000);
+    CHECK(m.file_bytes < 8u * 1024 * 1024);  // the repository stays small
+    CHECK(m.config_json.find("\"vtloc-r18-half\"") != std::string::npos);
+    bool f16 = false;
+    for (auto& t : m.tensors) f16 |= t.name == "gma.weight" && t.dtype == "F16";
+    CHECK(f16);
+}
+
+TEST_CASE("api: heat-map PLY, PNG render and tensor dump", "[api]") {
+    api::Context ctx(test::validated());
+    api::Model model(ctx, test::tiny_model());
+    api::Object obj = model.encode_object(test::source_path("examples/mug.glb"));
+    api::TactileImage image = example_image(2);
+    api::LocalizeOptions opt;
+    opt.keep_tensors = true;
+    api::TouchResult r = model.localize(obj, image, opt);
+
+    const std::string ply = test::temp_path("api_heatmap.ply"), png = test::temp_path("api_render.png"),
+                      dump = test::temp_path("api_dump.safetensors");
+    api::write_heatmap_ply(ply, obj, r.heatmap);
+    io::PlyVertices v = io::read_ply_vertices(ply);
+    CHECK(v.count == int64_t(obj.cloud().size()));
+    CHECK(v.column("contact_prob") >= 0);
+    CHECK(v.column("red") >= 0);
+
+    api::RenderOptions ro;
+    ro.contact = r.contact;
+    ro.tactile = &image;
+    api::render_heatmap_png(png, obj, r.heatmap, ro);
+    io::RgbImage pic = io::load_tactile_image(png);
+    CHECK(pic.width == 1280);
+    CHECK(pic.height == 720);
+
+    api::save_tensors(dump, r.tensors, model.info().config_json);
+    SafetensorsFile f = SafetensorsFile::load(dump);
+    for (const char* name : kSpec8) CHECK(f.find(name) != nullptr);
+    CHECK(f.at("gma.chamfer").shape.empty());  // 0-d, as weights_tools.golden writes it
+    CHECK(f.at("point.sa1.fps").dtype == DType::I32);
+    CHECK(f.at("input.tactile").dtype == DType::U8);
+    CHECK(f.metadata().count("vtloc.config"));
+    CHECK_THAT(test::api_error([&] { api::write_heatmap_ply(ply, obj, {0.5f}); }), Catch::Contains("1 values"));
+    test::require_no_validation(ctx);
+}
