@@ -14,6 +14,7 @@
 #include <random>
 
 #include "bench/probe.h"
+#include "bench/random_weights.h"
 #include "engine/error.h"
 #include "engine/executor.h"
 #include "engine/model/point_encoder.h"
@@ -31,34 +32,18 @@ const char* kR18Point = R"({"C": 128, "point": {"n_points": 1024, "use_normals":
 WeightStore random_weights(const nlohmann::json& cfg) {
     WeightStore w;
     w.set_config(cfg);
-    std::mt19937 rng(11);
-    auto add = [&](const std::string& name, Shape s, double stddev, double mean = 0) {
-        std::normal_distribution<float> d{float(mean), float(stddev)};
-        HostTensor t(s);
-        for (float& v : t.data) v = d(rng);
-        w.add(name, std::move(t));
-    };
-    auto conv_bn = [&](const std::string& conv, const std::string& bn, int64_t out, int64_t in) {
-        add(conv + ".weight", {out, in, 1, 1}, std::sqrt(2.0 / double(in)));
-        add(conv + ".bias", {out}, 0.1);
-        add(bn + ".weight", {out}, 0.1, 1.0);
-        add(bn + ".bias", {out}, 0.1);
-        add(bn + ".running_mean", {out}, 0.1);
-        add(bn + ".running_var", {out}, 0.1, 1.0);
-    };
+    bench::RandomWeights r(w, 11);
     const nlohmann::json& p = cfg["point"];
     int64_t ch = 3;
     for (size_t i = 0; i < p["sa"].size(); ++i) {
+        const std::string sa = "point.sa" + std::to_string(i + 1);
         int64_t next = 0;
         for (size_t s = 0; s < p["sa"][i]["mlps"].size(); ++s) {
             int64_t in = ch + 3;
             for (size_t l = 0; l < p["sa"][i]["mlps"][s].size(); ++l) {
-                const std::string k = "point.sa" + std::to_string(i + 1) + ".%s." + std::to_string(s) + "." + std::to_string(l);
+                const std::string at = "." + std::to_string(s) + "." + std::to_string(l);
                 int64_t out = p["sa"][i]["mlps"][s][l].get<int64_t>();
-                std::string conv = k, bn = k;
-                conv.replace(conv.find("%s"), 2, "conv_blocks");
-                bn.replace(bn.find("%s"), 2, "bn_blocks");
-                conv_bn(conv, bn, out, in);
+                r.conv_bn(sa + ".conv_blocks" + at, sa + ".bn_blocks" + at, {out, in, 1, 1}, true);
                 in = out;
             }
             next += in;
@@ -69,16 +54,13 @@ WeightStore random_weights(const nlohmann::json& cfg) {
     const std::string ga = "point.sa" + std::to_string(p["sa"].size() + 1);
     for (size_t l = 0; l < p["group_all_mlp"].size(); ++l) {
         int64_t out = p["group_all_mlp"][l].get<int64_t>();
-        conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), out, in);
+        r.conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), {out, in, 1, 1}, true);
         in = out;
     }
     std::vector<int64_t> sizes{in};
     for (auto& h : p["mlp"]) sizes.push_back(h.get<int64_t>());
     sizes.push_back(cfg["C"].get<int64_t>());
-    for (size_t i = 0; i + 1 < sizes.size(); ++i) {
-        add("point.mlp." + std::to_string(2 * i) + ".weight", {sizes[i + 1], sizes[i]}, 1.0 / std::sqrt(double(sizes[i])));
-        add("point.mlp." + std::to_string(2 * i) + ".bias", {sizes[i + 1]}, 0.1);
-    }
+    r.mlp("point.mlp", sizes);
     return w;
 }
 

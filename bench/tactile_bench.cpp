@@ -12,6 +12,7 @@
 #include <random>
 
 #include "bench/probe.h"
+#include "bench/random_weights.h"
 #include "engine/error.h"
 #include "engine/executor.h"
 #include "engine/model/tactile_encoder.h"
@@ -31,41 +32,23 @@ WeightStore random_weights(const nlohmann::json& cfg) {
     TactileConfig c = tactile_config(cfg);
     WeightStore w;
     w.set_config(cfg);
-    std::mt19937 rng(7);
-    auto add = [&](const std::string& name, Shape s, double stddev, double mean = 0) {
-        std::normal_distribution<float> d{float(mean), float(stddev)};
-        HostTensor t(s);
-        for (float& v : t.data) v = d(rng);
-        w.add(name, std::move(t));
-    };
-    auto conv_bn = [&](const std::string& conv, const std::string& bn, int64_t cout, int64_t cin, int64_t k) {
-        add(conv + ".weight", {cout, cin, k, k}, std::sqrt(2.0 / double(cin * k * k)));
-        add(bn + ".weight", {cout}, 0.1, 1.0);
-        add(bn + ".bias", {cout}, 0.1);
-        add(bn + ".running_mean", {cout}, 0.1);
-        HostTensor var({cout});
-        std::fill(var.data.begin(), var.data.end(), 1.0f);
-        w.add(bn + ".running_var", var);
-    };
+    bench::RandomWeights r(w, 7);
     const std::string p = "tactile.backbone.";
-    conv_bn(p + "conv1", p + "bn1", c.widths[0], 3, 7);
+    r.conv_bn(p + "conv1", p + "bn1", {c.widths[0], 3, 7, 7}, false);
     int64_t in = c.widths[0];
     for (size_t s = 0; s < 4; ++s)
         for (int64_t b = 0; b < c.blocks[s]; ++b) {
             const std::string m = p + "layer" + std::to_string(s + 1) + "." + std::to_string(b) + ".";
             if ((s > 0 && b == 0) || in != c.widths[s])
-                conv_bn(m + "downsample.0", m + "downsample.1", c.widths[s], in, 1);
-            conv_bn(m + "conv1", m + "bn1", c.widths[s], in, 3);
-            conv_bn(m + "conv2", m + "bn2", c.widths[s], c.widths[s], 3);
+                r.conv_bn(m + "downsample.0", m + "downsample.1", {c.widths[s], in, 1, 1}, false);
+            r.conv_bn(m + "conv1", m + "bn1", {c.widths[s], in, 3, 3}, false);
+            r.conv_bn(m + "conv2", m + "bn2", {c.widths[s], c.widths[s], 3, 3}, false);
             in = c.widths[s];
         }
     std::vector<int64_t> sizes{in};
     sizes.insert(sizes.end(), c.mlp.begin(), c.mlp.end());
     sizes.push_back(c.C);
-    for (size_t i = 0; i + 1 < sizes.size(); ++i) {
-        add("tactile.mlp." + std::to_string(2 * i) + ".weight", {sizes[i + 1], sizes[i]}, 1.0 / std::sqrt(double(sizes[i])));
-        add("tactile.mlp." + std::to_string(2 * i) + ".bias", {sizes[i + 1]}, 0.1);
-    }
+    r.mlp("tactile.mlp", sizes);
     return w;
 }
 

@@ -1,0 +1,35 @@
+#include "bench/random_weights.h"
+
+#include <cmath>
+
+namespace vtloc::bench {
+
+void RandomWeights::normal(const std::string& name, const Shape& s, double stddev, double mean) {
+    std::normal_distribution<float> d{float(mean), float(stddev)};
+    HostTensor t(s);
+    for (float& v : t.data) v = d(rng_);
+    w_.add(name, std::move(t));
+}
+
+void RandomWeights::conv_bn(const std::string& conv, const std::string& bn, const Shape& weight_shape, bool bias) {
+    const int64_t out = weight_shape.at(0);
+    normal(conv + ".weight", weight_shape, std::sqrt(2.0 / double(numel(weight_shape) / out)));
+    if (bias) normal(conv + ".bias", {out}, 0.1);
+    normal(bn + ".weight", {out}, 0.1, 1.0);
+    normal(bn + ".bias", {out}, 0.1);
+    normal(bn + ".running_mean", {out}, 0.1);
+    std::uniform_real_distribution<float> var(0.5f, 1.5f);
+    HostTensor v({out});
+    for (float& x : v.data) x = var(rng_);
+    w_.add(bn + ".running_var", std::move(v));
+}
+
+void RandomWeights::mlp(const std::string& prefix, const std::vector<int64_t>& sizes) {
+    for (size_t i = 0; i + 1 < sizes.size(); ++i) {
+        const std::string l = prefix + "." + std::to_string(2 * i);
+        normal(l + ".weight", {sizes[i + 1], sizes[i]}, 1.0 / std::sqrt(double(sizes[i])));
+        normal(l + ".bias", {sizes[i + 1]}, 0.1);
+    }
+}
+
+}  // namespace vtloc::bench
