@@ -17,6 +17,7 @@
 
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
+#include "engine/model/object_frame.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
 
@@ -35,22 +36,9 @@ void print_error(const std::string& what, const HostTensor& got, const HostTenso
     std::printf("  %-28s max |err| %.3g  max rel %.3g\n", what.c_str(), worst, worst_rel);
 }
 
-// Candidates in the normalised frame, as weights_tools/post.py does it: centre
-// and scale of the cloud's xyz in double, (x - centre) / scale in double, rounded once.
+// Candidates in the normalised frame, as weights_tools/post.py does it (in double, rounded once).
 HostTensor normalise_candidates(const HostTensor& cloud, const HostTensor& cand) {
-    const int64_t N = cloud.shape[0], D = cloud.shape[1];
-    double centre[3] = {0, 0, 0}, scale = 0;
-    for (int64_t i = 0; i < N; ++i)
-        for (int c = 0; c < 3; ++c) centre[c] += cloud.data[size_t(i * D + c)];
-    for (double& c : centre) c /= double(N);
-    for (int64_t i = 0; i < N; ++i) {
-        double s = 0;
-        for (int c = 0; c < 3; ++c) s += std::pow(cloud.data[size_t(i * D + c)] - centre[c], 2);
-        scale = std::max(scale, std::sqrt(s));
-    }
-    HostTensor out(cand.shape);
-    for (size_t i = 0; i < cand.data.size(); ++i) out.data[i] = float((cand.data[i] - centre[i % 3]) / scale);
-    return out;
+    return to_frame(cand, object_frame(cloud), 3);
 }
 
 HostTensor reshaped(HostTensor t, Shape s) {

@@ -12,6 +12,7 @@
 
 #include "engine/error.h"
 #include "engine/ops/common.h"
+#include "engine/model/object_frame.h"
 #include "engine/ops/ops.h"
 #include "engine/ops/point_common.h"
 
@@ -31,23 +32,11 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
     const HostTensor& x = *in[0];
     require_finite_xyz(x, "cloud_normalize");
-    const int64_t N = x.shape[0], D = x.shape[1];
-    double c[3] = {0, 0, 0}, max2 = 0;
-    for (int64_t i = 0; i < N; ++i)
-        for (int k = 0; k < 3; ++k) c[k] += x.data[size_t(i * D + k)];
-    for (double& v : c) v /= double(N);
-    for (int64_t i = 0; i < N; ++i) {
-        double s = 0;
-        for (int k = 0; k < 3; ++k) s += (x.data[size_t(i * D + k)] - c[k]) * (x.data[size_t(i * D + k)] - c[k]);
-        max2 = std::max(max2, s);
-    }
-    const double scale = std::sqrt(max2);
-    if (!(scale > 0)) throw Error("cloud_normalize: all points are identical, so the cloud has no size");
-    for (int64_t i = 0; i < N; ++i)
-        for (int64_t k = 0; k < D; ++k) {
-            const float v = x.data[size_t(i * D + k)];
-            out[0]->data[size_t(i * D + k)] = k < 3 ? float((v - c[k]) / scale) : v;
-        }
+    // The oracle is the host normalisation the model itself uses (double, one rounding).
+    const ObjectFrame f = object_frame(x, "cloud_normalize");
+    *out[0] = to_frame(x, f, x.shape[1]);
+    const double* c = f.centre.data();
+    const double scale = f.scale;
     for (int k = 0; k < 3; ++k) out[1]->data[size_t(k)] = float(c[k]);
     out[1]->data[3] = float(scale);
 }
