@@ -1,6 +1,7 @@
 #include "engine/executor.h"
 
 #include <algorithm>
+#include <chrono>
 #include <climits>
 #include <cstring>
 
@@ -34,7 +35,8 @@ void check_inputs(const Graph& g, const TensorMap& inputs) {
         }
 }
 
-TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs) {
+TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs, std::vector<NodeMs>* node_ms) {
+    if (node_ms) node_ms->clear();
     check_inputs(g, inputs);
     std::vector<HostTensor> vals(g.values().size());
     std::vector<const HostTensor*> ptr(g.values().size(), nullptr);
@@ -53,7 +55,11 @@ TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& i
             ptr[size_t(id)] = &vals[size_t(id)];
             out.push_back(&vals[size_t(id)]);
         }
+        const auto t0 = std::chrono::steady_clock::now();
         find_op(n.op).cpu(in, out, n.params);
+        if (node_ms)
+            node_ms->push_back(
+                {n.name, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()});
     }
     TensorMap result;
     for (auto& [name, id] : g.outputs()) result[name] = *ptr[size_t(id)];

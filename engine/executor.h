@@ -23,7 +23,14 @@ using TensorMap = std::map<std::string, HostTensor>;
 // Checks that `inputs` holds exactly the graph's inputs with their shapes.
 void check_inputs(const Graph& g, const TensorMap& inputs);
 
-TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs);
+// With `node_ms`, also the wall time of each node's reference run, in
+// schedule order (the CPU backend's equivalent of GPU timestamps).
+struct NodeMs {
+    std::string label;
+    double ms = 0.0;
+};
+TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                  std::vector<NodeMs>* node_ms = nullptr);
 
 // Where each input/intermediate value lives in the activation arena. Values
 // whose lifetimes (first write .. last read, in schedule order) do not overlap

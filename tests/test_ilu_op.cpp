@@ -118,3 +118,52 @@ TEST_CASE("ilu rejects bad shapes and iteration counts", "[op][ilu]") {
     ig.inputs["iters"] = HostTensor::from_ints({1}, {5});
     REQUIRE_THROWS_WITH(run_cpu(ig.g, w, ig.inputs), Catch::Contains("outside 0..4"));
 }
+
+namespace {
+
+IluGraph stepped_graph(const WeightStore& w, int64_t C, int max_iters, uint32_t seed) {
+    IluGraph r;
+    IluOutputs o = build_ilu_stepped(r.g, w, r.g.input("ft", {1, C}), r.g.input("fp", {1, C}),
+                                     r.g.input("iters", {1}, ElemType::I32), max_iters);
+    r.g.output(o.contact, "contact");
+    r.g.output(o.c, "c");
+    r.inputs = {{"ft", random_tensor({1, C}, seed, -2.0f, 2.0f)}, {"fp", random_tensor({1, C}, seed + 1, -2.0f, 2.0f)},
+                {"iters", ilu_iters_input(max_iters, max_iters)}};
+    return r;
+}
+
+}  // namespace
+
+TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and the fused ilu", "[op][ilu]") {
+    // Stepped and fused differ only in where fp32 rounding happens (the CPU
+    // stepped reference rounds h, gx and c to fp32 between steps like the
+    // shader), so they are compared with the default tolerance too.
+    struct Case { int64_t C, H; int nmax; };
+    for (Case c : {Case{1, 1, 1}, Case{37, 19, 7}, Case{128, 64, 16}}) {
+        INFO("C " << c.C << " H " << c.H << " max_iters " << c.nmax);
+        WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C) + 3);
+        IluGraph st = stepped_graph(w, c.C, c.nmax, 7), fu = ilu_graph(w, c.C, c.nmax, 7);
+        GpuExecutor exec(test::gpu(), st.g, w);
+        for (int n : {c.nmax, c.nmax / 2, 0}) {
+            INFO("N = " << n);
+            st.inputs["iters"] = fu.inputs["iters"] = ilu_iters_input(n, c.nmax);
+            TensorMap want = run_cpu(st.g, w, st.inputs), got = exec.run(st.inputs), fused = run_cpu(fu.g, w, fu.inputs);
+            test::require_no_validation_messages();
+            for (const char* name : {"c", "contact"}) {
+                test::require_close(got.at(name), want.at(name), {}, name);
+                test::require_close(want.at(name), fused.at(name), {}, name);
+            }
+            for (size_t i = size_t(3 * n); i < got.at("c").data.size(); ++i) CHECK(got.at("c").data[i] == 0.0f);
+        }
+    }
+}
+
+TEST_CASE("ilu_step rejects a missing state and steps out of range", "[op][ilu]") {
+    WeightStore w = random_ilu(8, 4, 1);
+    IluGraph ig = stepped_graph(w, 8, 3, 2);
+    std::vector<int> in = ig.g.nodes().back().inputs;
+    REQUIRE_THROWS_WITH(ig.g.add("ilu_step", in, {{"max_iters", 3}, {"step", 3}}), Catch::Contains("step must be"));
+    in.back() = in[0];  // F^t where step 1 needs the state of step 0
+    REQUIRE_THROWS_WITH(ig.g.add("ilu_step", in, {{"max_iters", 3}, {"step", 1}}), Catch::Contains("state of step 0"));
+    REQUIRE_THROWS_WITH(build_ilu_stepped(ig.g, w, in[0], in[1], in[2], 0), Catch::Contains("max_iters >= 1"));
+}

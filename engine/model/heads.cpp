@@ -6,7 +6,9 @@
 
 namespace vtloc {
 
-IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
+namespace {
+
+std::vector<int> ilu_inputs(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
     if (max_iters < 0 || max_iters > 64)
         throw Error("ILU iterations must be in 0..64, got " + std::to_string(max_iters));
     std::vector<int> in{ft, fp, iters};
@@ -17,8 +19,28 @@ IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, 
         }
     for (const char* n : {"ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
         in.push_back(g.weight(n, w.get(n).shape));
+    return in;
+}
+
+}  // namespace
+
+IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
+    std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);
     std::vector<int> out = g.add("ilu", in, {{"max_iters", double(max_iters)}}, "ilu");
     return {out[0], out[1]};
+}
+
+IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
+    std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);
+    if (max_iters < 1) throw Error("a stepped ILU needs max_iters >= 1");
+    in.push_back(ft);  // step 0 reads no state; F^t fills the slot
+    std::vector<int> out;
+    for (int k = 0; k < max_iters; ++k) {
+        out = g.add("ilu_step", in, {{"max_iters", double(max_iters)}, {"step", double(k)}},
+                    "ilu.step" + std::to_string(k));
+        in.back() = out[0];
+    }
+    return {out[1], out[2]};
 }
 
 HostTensor ilu_iters_input(int n, int max_iters) {

@@ -18,6 +18,11 @@ struct IluOutputs {
 };
 IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters);
 
+// The same head recorded as one ilu_step dispatch per iteration (1..64
+// max_iters), nodes "ilu.step0", "ilu.step1", ...: slower, but a profiled run
+// has a timestamp between iterations. Same outputs as build_ilu.
+IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters);
+
 // The run-time input for `iters`; throws unless 0 <= n <= max_iters.
 HostTensor ilu_iters_input(int n, int max_iters);
 

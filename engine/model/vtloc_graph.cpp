@@ -58,7 +58,8 @@ Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec) {
         }
         int contact;
         if (ilu_head) {
-            IluOutputs ilu = build_ilu(g, w, ft, fp, iters, spec.max_iters);
+            IluOutputs ilu = spec.ilu_stepped ? build_ilu_stepped(g, w, ft, fp, iters, spec.max_iters)
+                                               : build_ilu(g, w, ft, fp, iters, spec.max_iters);
             g.output(ilu.c, "ilu.c" + s);
             contact = ilu.contact;
         } else {

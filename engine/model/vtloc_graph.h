@@ -34,6 +34,7 @@ struct VtlocGraphSpec {
     bool gma = true;                            // run GMA (if the model has it)
     int max_iters = 64;                         // ILU: N may be 0..max_iters per run
     int symmetry_order = 0;                     // > 1: heat-map with the symmetry prior
+    bool ilu_stepped = false;                   // bench: one dispatch per ILU iteration (build_ilu_stepped)
 };
 
 // Builds the graph; BN folding and W^d chunking add prepared tensors to `w`.

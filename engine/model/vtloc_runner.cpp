@@ -29,6 +29,7 @@ bool has_gma(const nlohmann::json& cfg) { return cfg.contains("gma") && !cfg.at(
 struct VtlocRunner::Compiled {
     Graph graph;
     std::unique_ptr<GpuExecutor> gpu;
+    std::vector<NodeMs> cpu_times;
 };
 
 VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu) : weights_(std::move(weights)), gpu_(gpu) {
@@ -40,8 +41,11 @@ VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu) : weights_(std::
 
 VtlocRunner::~VtlocRunner() = default;
 
-TensorMap VtlocRunner::run(const VtlocGraphSpec& spec, const TensorMap& inputs) {
-    return run_graph(spec_key(spec, profile_), [&] { return build_vtloc_graph(weights_, spec); }, inputs);
+TensorMap VtlocRunner::run(const VtlocGraphSpec& spec_in, const TensorMap& inputs) {
+    VtlocGraphSpec spec = spec_in;
+    spec.ilu_stepped = ilu_stepped_ && spec.image_height > 0 && spec.max_iters > 0;
+    return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : ""),
+                     [&] { return build_vtloc_graph(weights_, spec); }, inputs);
 }
 
 TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs) {
@@ -53,14 +57,30 @@ TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Gra
         c = std::move(fresh);
     }
     last_ = c.get();
-    return gpu_ ? c->gpu->run(inputs) : run_cpu(c->graph, weights_, inputs);
+    if (gpu_) return c->gpu->run(inputs);
+    return run_cpu(c->graph, weights_, inputs, profile_ ? &c->cpu_times : nullptr);
 }
 
 std::vector<std::pair<std::string, double>> VtlocRunner::last_node_times() const {
     std::vector<std::pair<std::string, double>> out;
-    if (!last_ || !last_->gpu) return out;
+    if (!last_ || !profile_) return out;
+    if (!last_->gpu) {
+        for (auto& t : last_->cpu_times) out.push_back({t.label, t.ms});
+        return out;
+    }
     for (auto& t : last_->gpu->node_times()) out.push_back({t.label, t.ms});
     return out;
+}
+
+const Graph* VtlocRunner::last_graph() const { return last_ ? &last_->graph : nullptr; }
+
+VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
+    MemoryUse m;
+    if (!last_ || !last_->gpu) return m;
+    m.weight_bytes = last_->gpu->weight_bytes();
+    m.arena_bytes = last_->gpu->memory_plan().arena_bytes;
+    m.unplanned_bytes = last_->gpu->memory_plan().total_bytes;
+    return m;
 }
 
 EncodedObject VtlocRunner::prepare_object(const HostTensor& cloud, const HostTensor* candidates) const {

@@ -101,9 +101,24 @@ public:
                                      const std::vector<std::array<double, 3>>& motions,
                                      const TouchOptions& options = {}, const BeliefOptions& belief = {});
 
-    // GPU time per node of the last run (empty on the CPU or without profiling).
+    // Time per node of the last run, in schedule order: GPU timestamps, or the
+    // wall time of each CPU reference node on the CPU backend. Empty without
+    // profiling (or where the GPU queue has no timestamps).
     void set_profiling(bool on) { profile_ = on; }
     std::vector<std::pair<std::string, double>> last_node_times() const;
+
+    // Bench diagnostics: record the ILU head one dispatch per iteration
+    // (engine/model/heads.h build_ilu_stepped), so profiling times each iteration.
+    void set_ilu_stepped(bool on) { ilu_stepped_ = on; }
+
+    // The graph of the last run, and on the GPU the device memory it holds.
+    struct MemoryUse {
+        uint64_t weight_bytes = 0;  // weights uploaded for this graph
+        uint64_t arena_bytes = 0;   // activation arena (lifetime-planned peak)
+        uint64_t unplanned_bytes = 0;  // what one buffer per activation would take
+    };
+    const Graph* last_graph() const;
+    MemoryUse last_memory() const;
 
 private:
     EncodedObject prepare_object(const HostTensor& cloud, const HostTensor* candidates) const;
@@ -113,6 +128,7 @@ private:
     WeightStore weights_;
     rt::Context* gpu_;
     bool profile_ = false;
+    bool ilu_stepped_ = false;
     struct Compiled;
     std::map<std::string, std::unique_ptr<Compiled>> compiled_;
     Compiled* last_ = nullptr;

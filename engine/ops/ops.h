@@ -21,6 +21,7 @@ extern const OpDef op_disentangle;  // disentangle.cpp (GMA)
 extern const OpDef op_gma_decode;   // gma_decode.cpp
 extern const OpDef op_chamfer;      // chamfer.cpp
 extern const OpDef op_ilu;          // ilu.cpp
+extern const OpDef op_ilu_step;     // ilu_step.cpp
 extern const OpDef op_topk;         // topk.cpp
 extern const OpDef op_heatmap;      // heatmap.cpp
 extern const OpDef op_belief;       // belief.cpp

@@ -23,6 +23,7 @@ const OpDef* const kOps[] = {
     &ops::op_gma_decode,
     &ops::op_chamfer,
     &ops::op_ilu,
+    &ops::op_ilu_step,
     &ops::op_topk,
     &ops::op_heatmap,
     &ops::op_belief,

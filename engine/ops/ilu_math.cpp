@@ -1,0 +1,105 @@
+#include "engine/ops/ilu_math.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/ops/common.h"
+
+namespace vtloc::ops::ilu_math {
+namespace {
+
+void expect_shape(const TensorDesc& d, const Shape& want, const char* what) {
+    if (d.shape != want) throw Error(std::string(what) + " is " + shape_str(d.shape) + ", expected " + shape_str(want));
+}
+
+// y[r] = b[r] + sum_k W[r, col0 + k] v[k], W row-major with `stride` columns.
+std::vector<double> matvec(const HostTensor& W, const HostTensor* b, int64_t stride, int64_t col0,
+                           const std::vector<double>& v) {
+    std::vector<double> y(static_cast<size_t>(W.shape[0]));
+    for (size_t r = 0; r < y.size(); ++r) {
+        double s = b ? b->data[r] : 0.0;
+        for (size_t k = 0; k < v.size(); ++k) s += double(W.data[r * size_t(stride) + size_t(col0) + k]) * v[k];
+        y[r] = s;
+    }
+    return y;
+}
+
+double sigmoid(double v) { return 1.0 / (1.0 + std::exp(-v)); }
+
+}  // namespace
+
+int64_t check_inputs(const std::vector<TensorDesc>& in) {
+    if (in[2].type != ElemType::I32 || in[2].shape != Shape{1})
+        throw Error("iteration count must be an I32 [1] tensor, got " + std::string(elem_type_name(in[2].type)) +
+                    " " + shape_str(in[2].shape));
+    for (size_t i = 0; i < 13; ++i)
+        if (i != 2 && in[i].type != ElemType::F32) throw Error("input " + std::to_string(i) + " must be F32");
+    if (in[0].shape.empty()) throw Error("F^t must be [1, C]");
+    const int64_t C = in[0].shape.back();
+    if (numel(in[0].shape) != C || C == 0) throw Error("F^t must be one non-empty row [1, C], got " + shape_str(in[0].shape));
+    expect_shape(in[1], in[0].shape, "F^p");
+    for (int g = 0; g < 3; ++g) {
+        expect_shape(in[size_t(3 + 2 * g)], {C, 3 * C}, "gate weight");
+        expect_shape(in[size_t(4 + 2 * g)], {C}, "gate bias");
+    }
+    if (in[9].shape.size() != 2 || in[9].shape[1] != C || in[9].shape[0] == 0)
+        throw Error("head.0.weight must be [H, " + std::to_string(C) + "], got " + shape_str(in[9].shape));
+    const int64_t H = in[9].shape[0];
+    expect_shape(in[10], {H}, "head.0.bias");
+    expect_shape(in[11], {3, H}, "head.2.weight");
+    expect_shape(in[12], {3}, "head.2.bias");
+    return C;
+}
+
+State init(const std::vector<const HostTensor*>& in) {
+    const int64_t C = in[0]->shape.back();
+    State s;
+    s.h.resize(size_t(C));
+    std::vector<double> x(size_t(2 * C));
+    for (int64_t i = 0; i < C; ++i) {
+        double ft = in[0]->data[size_t(i)];
+        s.h[size_t(i)] = std::tanh(ft);
+        x[size_t(i)] = in[1]->data[size_t(i)];
+        x[size_t(C + i)] = std::max(ft, 0.0);
+    }
+    for (int g = 0; g < 3; ++g) {
+        std::vector<double> part = matvec(*in[size_t(3 + 2 * g)], in[size_t(4 + 2 * g)], 3 * C, C, x);
+        s.gx.insert(s.gx.end(), part.begin(), part.end());
+    }
+    return s;
+}
+
+void iterate(const std::vector<const HostTensor*>& in, State& s) {
+    const int64_t C = int64_t(s.h.size());
+    std::vector<double> z = matvec(*in[3], nullptr, 3 * C, 0, s.h), r = matvec(*in[5], nullptr, 3 * C, 0, s.h);
+    std::vector<double> rh(s.h.size());
+    for (int64_t i = 0; i < C; ++i) rh[size_t(i)] = sigmoid(r[size_t(i)] + s.gx[size_t(C + i)]) * s.h[size_t(i)];
+    std::vector<double> q = matvec(*in[7], nullptr, 3 * C, 0, rh);
+    for (int64_t i = 0; i < C; ++i) {
+        double zi = sigmoid(z[size_t(i)] + s.gx[size_t(i)]);
+        s.h[size_t(i)] = (1.0 - zi) * s.h[size_t(i)] + zi * std::tanh(q[size_t(i)] + s.gx[size_t(2 * C + i)]);
+    }
+    std::vector<double> hid = matvec(*in[9], in[10], C, 0, s.h);
+    for (double& v : hid) v = std::max(v, 0.0);
+    std::vector<double> delta = matvec(*in[11], in[12], int64_t(hid.size()), 0, hid);
+    for (int j = 0; j < 3; ++j) s.c[j] += delta[size_t(j)];
+}
+
+Launch launch(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    Launch l;
+    l.C = to_u32(a.in[0].shape.back(), "ILU hidden size");
+    l.H = to_u32(a.in[9].shape[0], "ILU head size");
+    to_u32(int64_t(l.C) * l.C * 3, "ILU gate weight size");
+    l.L = elementwise_local_size(d);
+    l.G = uint32_t(a.params.get("lanes", 8));  // a power of two dividing L
+    while (l.G > 1 && l.L % l.G) l.G /= 2;
+    const uint64_t shared = (9ull * l.C + l.H + l.L + 3) * 4;
+    if (shared > d.max_shared_memory)
+        throw Error("ILU with C = " + std::to_string(l.C) + " needs " + std::to_string(shared) +
+                    " bytes of shared memory; the device has " + std::to_string(d.max_shared_memory));
+    return l;
+}
+
+}  // namespace vtloc::ops::ilu_math

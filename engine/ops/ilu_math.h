@@ -1,0 +1,36 @@
+#pragma once
+// The ILU head's math in double, shared by the CPU references of ilu (fused)
+// and ilu_step (one iteration per dispatch). Inputs in the ops' order:
+// 0 F^t [1, C], 1 F^p [1, C], 2 N (I32 [1]), 3..8 convz/convr/convq weight
+// [C, 3C] and bias [C], 9 head.0.weight [H, C], 10 head.0.bias, 11
+// head.2.weight [3, H], 12 head.2.bias.
+#include <vector>
+
+#include "engine/op.h"
+#include "engine/tensor.h"
+
+namespace vtloc::ops::ilu_math {
+
+// Checks inputs 0..12 (types and shapes) and returns their 13 descriptors' C.
+int64_t check_inputs(const std::vector<TensorDesc>& in);
+
+struct State {
+    std::vector<double> h;   // [C]
+    std::vector<double> gx;  // [3C]: x half of the z, r, q gates plus their biases
+    double c[3] = {0, 0, 0};
+};
+
+// h_0 = tanh(F^t), c = 0, gx from x = [F^p, ReLU(F^t)].
+State init(const std::vector<const HostTensor*>& in);
+// One GRU update of h, then c += head(h).
+void iterate(const std::vector<const HostTensor*>& in, State& s);
+
+// The shaders' spec constants (workgroup size L, C, H, lanes per row G); throws
+// when h and the gates do not fit the device's shared memory. Param "lanes"
+// overrides the default of 8 lanes per row (tests cover both shader paths).
+struct Launch {
+    uint32_t L, C, H, G;
+};
+Launch launch(const GpuOpArgs& a);
+
+}  // namespace vtloc::ops::ilu_math
