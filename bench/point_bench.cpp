@@ -13,6 +13,7 @@
 #include <map>
 #include <random>
 
+#include "bench/flops.h"
 #include "bench/probe.h"
 #include "bench/random_weights.h"
 #include "engine/error.h"
@@ -78,28 +79,6 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
     return c;
 }
 
-// FLOPs of the MLP nodes: 2 per multiply-add of group_linear (rows before the
-// max; weight [K, N]) and linear (weight [N, K]).
-std::map<std::string, double> mlp_flops(const Graph& g) {
-    std::map<std::string, double> f;
-    for (const Node& n : g.nodes()) {
-        double rows = 0, wsize = 0;
-        if (n.op == "group_linear") {
-            const int mode = int(n.params.get("in", 0));
-            wsize = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
-            rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
-                             : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
-        } else if (n.op == "linear") {
-            wsize = double(numel(g.value(n.inputs[1]).shape));
-            rows = double(numel(g.value(n.inputs[0]).shape) / g.value(n.inputs[0]).shape.back());
-        } else {
-            continue;
-        }
-        f[n.name] = 2.0 * rows * wsize;
-    }
-    return f;
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -135,7 +114,7 @@ int main(int argc, char** argv) {
             std::map<std::string, std::string> op_of;
             for (const Node& nd : g.nodes()) op_of[nd.name] = nd.op;
             double total = 0, fps = 0, ball = 0, mlp_ms = 0, mlp_f = 0;
-            const std::map<std::string, double> flops = mlp_flops(g);
+            const std::map<std::string, double> flops = bench::node_flops(g);  // group_linear and linear
             for (auto& [label, ms] : node_ms) {
                 total += ms;
                 const std::string& op = op_of[label];

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <random>
 
+#include "bench/flops.h"
 #include "bench/probe.h"
 #include "bench/random_weights.h"
 #include "engine/error.h"
@@ -52,21 +53,6 @@ WeightStore random_weights(const nlohmann::json& cfg) {
     return w;
 }
 
-// FLOPs of the graph's convolutions and linear layers (2 per multiply-add).
-double conv_linear_flops(const Graph& g) {
-    double f = 0;
-    for (const Node& n : g.nodes()) {
-        if (n.op != "conv2d" && n.op != "linear") continue;
-        const Shape& out = g.value(n.outputs[0]).shape;
-        const Shape& w = g.value(n.inputs[1]).shape;
-        if (n.op == "conv2d")  // out [N, Cout, OH, OW]; w holds Cout * Cin * KH * KW in either layout
-            f += 2.0 * double(out[0] * out[2] * out[3]) * double(numel(w));
-        else
-            f += 2.0 * double(numel(out)) * double(w[1]);
-    }
-    return f;
-}
-
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -84,7 +70,8 @@ int main(int argc, char** argv) {
         Graph g;
         int x = g.input("tactile.input", {1, 3, S, S});
         g.output(build_tactile_encoder(g, w, cfg, x), "tactile.feature");
-        const double flops = conv_linear_flops(g);
+        double flops = 0;  // conv2d and linear
+        for (auto& [name, f] : bench::node_flops(g)) flops += f;
         TensorMap in{{"tactile.input", HostTensor({1, 3, S, S}, std::vector<float>(size_t(3 * S * S), 0.5f))}};
 
         auto t0 = std::chrono::steady_clock::now();

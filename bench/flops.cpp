@@ -1,0 +1,29 @@
+#include "bench/flops.h"
+
+namespace vtloc::bench {
+
+std::map<std::string, double> node_flops(const Graph& g) {
+    std::map<std::string, double> f;
+    for (const Node& n : g.nodes()) {
+        double flops = 0;
+        if (n.op == "conv2d") {  // out [N, Cout, OH, OW]; the weight holds Cout * Cin * KH * KW in either layout
+            const Shape& out = g.value(n.outputs[0]).shape;
+            flops = 2.0 * double(out[0] * out[2] * out[3]) * double(numel(g.value(n.inputs[1]).shape));
+        } else if (n.op == "linear") {  // weight [N, K] on rows [..., K]
+            const Shape& x = g.value(n.inputs[0]).shape;
+            flops = 2.0 * double(numel(x) / x.back()) * double(numel(g.value(n.inputs[1]).shape));
+        } else if (n.op == "group_linear") {  // rows before the max; weight [K, N]
+            const int mode = int(n.params.get("in", 0));
+            const double w = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
+            const double rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
+                                          : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
+            flops = 2.0 * rows * w;
+        } else {
+            continue;
+        }
+        f[n.name] += flops;
+    }
+    return f;
+}
+
+}  // namespace vtloc::bench

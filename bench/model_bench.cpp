@@ -1,0 +1,249 @@
+#include "bench/model_bench.h"
+
+#include <algorithm>
+#include <chrono>
+#include <map>
+
+#include "bench/flops.h"
+#include "bench/stages.h"
+#include "engine/error.h"
+#include "engine/io/object.h"
+
+namespace vtloc::bench {
+
+using nlohmann::json;
+
+namespace {
+
+using NodeRun = std::map<std::string, double>;  // label -> ms of one profiled run
+
+struct Profile {
+    std::vector<std::string> order;  // labels in schedule order
+    std::vector<NodeRun> runs;
+    std::map<std::string, std::string> op;  // label -> op
+    std::map<std::string, double> flops;    // label -> FLOPs
+};
+
+// `reps` profiled runs of f after one to build the profiled recording.
+template <class F>
+Profile profile(VtlocRunner& r, int reps, F&& f) {
+    Profile p;
+    r.set_profiling(true);
+    try {
+        f();
+        for (int i = 0; i < reps; ++i) {
+            f();
+            NodeRun run;
+            for (auto& [label, ms] : r.last_node_times()) {
+                if (!run.count(label) && p.runs.empty()) p.order.push_back(label);
+                run[label] += ms;
+            }
+            p.runs.push_back(std::move(run));
+        }
+    } catch (...) {
+        r.set_profiling(false);
+        throw;
+    }
+    r.set_profiling(false);
+    if (const Graph* g = r.last_graph()) {
+        for (const Node& n : g->nodes())
+            if (!p.op.count(n.name)) p.op[n.name] = n.op;
+        p.flops = node_flops(*g);
+    }
+    return p;
+}
+
+double median_of(std::vector<double> v) { return v.empty() ? 0.0 : summarize(std::move(v)).median; }
+
+// Per run, the sum of the nodes `pick` accepts.
+template <class Pick>
+std::vector<double> sums(const Profile& p, Pick&& pick) {
+    std::vector<double> out;
+    for (const NodeRun& run : p.runs) {
+        double s = 0;
+        for (auto& [label, ms] : run)
+            if (pick(label)) s += ms;
+        out.push_back(s);
+    }
+    return out;
+}
+
+std::string stage(const Profile& p, const std::string& label) {
+    auto it = p.op.find(label);
+    return stage_of(it == p.op.end() ? "" : it->second, label);
+}
+
+// GFLOP/s of the GEMM-like nodes of one stage, and the fraction of the probe.
+json efficiency(const Profile& p, const std::string& st, double probe) {
+    double flops = 0;
+    for (auto& [label, f] : p.flops)
+        if (stage(p, label) == st) flops += f;
+    const double ms = median_of(sums(p, [&](const std::string& l) { return p.flops.count(l) && stage(p, l) == st; }));
+    json j{{"gflop", flops * 1e-9}, {"ms", ms}};
+    j["gflops"] = ms > 0 ? flops / (ms * 1e-3) * 1e-9 : 0.0;
+    j["fraction_of_peak"] = probe > 0 ? json(j["gflops"].get<double>() / probe) : json(nullptr);
+    return j;
+}
+
+json nodes_json(const Profile& p) {
+    json out = json::array();
+    for (const std::string& label : p.order) {
+        std::vector<double> ms;
+        for (const NodeRun& run : p.runs) ms.push_back(run.count(label) ? run.at(label) : 0.0);
+        const double med = median_of(ms);
+        json n{{"name", label}, {"op", p.op.count(label) ? p.op.at(label) : ""}, {"stage", stage(p, label)}, {"ms", med}};
+        if (p.flops.count(label) && med > 0) n["gflops"] = p.flops.at(label) / (med * 1e-3) * 1e-9;
+        out.push_back(n);
+    }
+    return out;
+}
+
+// Least-squares slope of y over x.
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+    const double n = double(x.size());
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
+    const double d = n * sxx - sx * sx;
+    return d != 0 ? (n * sxy - sx * sy) / d : 0.0;
+}
+
+bool has_ilu(const VtlocRunner& r) { return r.config().at("head").get<std::string>() == "ilu"; }
+
+json ilu_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
+    json rows = json::array();
+    std::vector<double> xs, e2e, head;
+    double e2e0 = -1;
+    for (int n : opt.iters) {
+        TouchOptions o;
+        o.iters = n;
+        const std::vector<double> t = time_ms([&] { r.localize_once(in.image, in.cloud, nullptr, o); }, 1, opt.reps);
+        Profile p = profile(r, opt.profile_reps, [&] { r.localize_once(in.image, in.cloud, nullptr, o); });
+        const double ilu_ms = median_of(sums(p, [&](const std::string& l) { return stage(p, l) == "head"; }));
+        const double med = median_of(t);
+        if (n == 0) e2e0 = med;
+        json row{{"n", n}, {"end_to_end_ms", stats_json(t)}, {"ilu_gpu_ms", ilu_ms}};
+        row["ms_per_iter"] = (n > 0 && e2e0 >= 0) ? json((med - e2e0) / n) : json(nullptr);
+        rows.push_back(row);
+        xs.push_back(n), e2e.push_back(med), head.push_back(ilu_ms);
+    }
+    json out{{"table", rows}};
+    if (xs.size() >= 2)
+        out["slope_ms_per_iter"] = {{"end_to_end", slope(xs, e2e)}, {"ilu_node", slope(xs, head)}};
+    return out;
+}
+
+// The head recorded one dispatch per iteration: the time of each iteration
+// from the timestamps between them.
+json ilu_stepped(VtlocRunner& r, const EncodedObject& obj, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
+    const int n = opt.stepped_iters;
+    TouchOptions o;
+    o.iters = n;
+    r.set_ilu_stepped(true);
+    Profile p;
+    try {
+        p = profile(r, opt.profile_reps, [&] { r.localize(obj, {in.image}, o); });
+    } catch (...) {
+        r.set_ilu_stepped(false);
+        throw;
+    }
+    r.set_ilu_stepped(false);
+    std::vector<double> first, iter, pass;
+    for (const NodeRun& run : p.runs)
+        for (auto& [label, ms] : run) {
+            if (label.rfind("ilu.step", 0) != 0) continue;
+            const int k = std::stoi(label.substr(8));
+            (k == 0 ? first : k < n ? iter : pass).push_back(ms);
+        }
+    json out{{"n", n}, {"first_step_ms", stats_json(first)}, {"per_iteration_ms", stats_json(iter)},
+             {"pass_through_step_ms", stats_json(pass)}};
+    // Per step, the median over runs: the iteration-by-iteration timeline.
+    json steps = json::array();
+    for (int k = 0; k < n; ++k) {
+        std::vector<double> v;
+        for (const NodeRun& run : p.runs)
+            if (run.count("ilu.step" + std::to_string(k))) v.push_back(run.at("ilu.step" + std::to_string(k)));
+        steps.push_back(median_of(v));
+    }
+    out["step_ms"] = steps;
+    return out;
+}
+
+json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
+    json rows = json::array();
+    for (int64_t n : opt.points) {
+        HostTensor cloud = io::load_object(in.object, n);
+        const std::vector<double> t = time_ms([&] { r.encode_object(cloud); }, 1, opt.reps);
+        Profile p = profile(r, opt.profile_reps, [&] { r.encode_object(cloud); });
+        auto of_op = [&](const char* op) {
+            return median_of(sums(p, [&](const std::string& l) { return p.op.count(l) && p.op.at(l) == op; }));
+        };
+        const double total = median_of(sums(p, [](const std::string&) { return true; }));
+        json row{{"points", n}, {"encode_ms", stats_json(t)}, {"node_sum_ms", total},
+                 {"fps_ms", of_op("fps")}, {"ball_query_ms", of_op("ball_query")},
+                 {"mlp", efficiency(p, "point", in.probe_gflops)}};
+        rows.push_back(row);
+    }
+    return rows;
+}
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+json stats_json(const std::vector<double>& samples) {
+    if (samples.empty()) return nullptr;
+    Stats s = summarize(samples);
+    return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"n", samples.size()}};
+}
+
+json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
+    json out;
+    const TouchOptions defaults;
+    auto once = [&] { r.localize_once(in.image, in.cloud, nullptr, defaults); };
+
+    auto t0 = std::chrono::steady_clock::now();
+    once();  // builds and records the graph; lavapipe also compiles shaders here
+    out["first_run_ms"] = ms_since(t0);
+    out["end_to_end_ms"] = stats_json(time_ms(once, opt.warmup, opt.reps));
+    const VtlocRunner::MemoryUse mem = r.last_memory();
+    out["memory"] = {{"weights_bytes", mem.weight_bytes}, {"activations_peak_bytes", mem.arena_bytes},
+                     {"activations_unplanned_bytes", mem.unplanned_bytes},
+                     {"total_bytes", mem.weight_bytes + mem.arena_bytes}};
+
+    Profile p = profile(r, opt.profile_reps, once);
+    json stages = json::object();
+    for (const std::string& st : stage_names()) {
+        std::vector<double> v = sums(p, [&](const std::string& l) { return stage(p, l) == st; });
+        if (std::any_of(v.begin(), v.end(), [](double x) { return x > 0; })) stages[st] = stats_json(v);
+    }
+    std::vector<double> other = sums(p, [&](const std::string& l) { return stage(p, l) == "other"; });
+    if (std::any_of(other.begin(), other.end(), [](double x) { return x > 0; })) stages["other"] = stats_json(other);
+    stages["total"] = stats_json(sums(p, [](const std::string&) { return true; }));
+    out["stages_ms"] = stages;
+    out["nodes"] = nodes_json(p);
+    out["efficiency"] = {{"conv", efficiency(p, "tactile", in.probe_gflops)},
+                         {"mlp", efficiency(p, "point", in.probe_gflops)}};
+
+    EncodedObject obj = r.encode_object(in.cloud);
+    out["cached_touch_ms"] = stats_json(time_ms([&] { r.localize(obj, {in.image}, defaults); }, opt.warmup, opt.reps));
+    json batches = json::array();
+    for (int b : opt.batches) {
+        if (b < 1) throw Error("batch sizes must be >= 1, got " + std::to_string(b));
+        std::vector<HostTensor> images(size_t(b), in.image);
+        std::vector<double> t = time_ms([&] { r.localize(obj, images, defaults); }, 1, opt.reps);
+        const double med = median_of(t);
+        batches.push_back({{"batch", b}, {"ms", stats_json(t)}, {"touches_per_s", med > 0 ? 1e3 * b / med : 0.0}});
+    }
+    out["batch"] = batches;
+
+    if (has_ilu(r)) {
+        out["ilu"] = ilu_sweep(r, in, opt);
+        if (opt.stepped_iters > 0) out["ilu"]["stepped"] = ilu_stepped(r, obj, in, opt);
+    }
+    if (!opt.points.empty()) out["points"] = point_sweep(r, in, opt);
+    return out;
+}
+
+}  // namespace vtloc::bench

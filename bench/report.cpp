@@ -1,0 +1,114 @@
+#include "bench/report.h"
+
+#include "bench/stages.h"
+
+namespace vtloc::bench {
+
+using nlohmann::json;
+
+namespace {
+
+double med(const json& stats) { return stats.is_object() ? stats.at("median").get<double>() : 0.0; }
+
+void stats_line(std::FILE* f, const char* what, const json& s) {
+    if (!s.is_object()) return;
+    std::fprintf(f, "  %-34s %9.2f ms  (p10 %.2f, p90 %.2f, n %d)\n", what, s["median"].get<double>(),
+                 s["p10"].get<double>(), s["p90"].get<double>(), s["n"].get<int>());
+}
+
+double mib(const json& bytes) { return bytes.get<double>() / (1024.0 * 1024.0); }
+
+void backend(std::FILE* f, const std::string& name, const json& b) {
+    std::fprintf(f, "\n== %s ==\n", name.c_str());
+    std::fprintf(f, "  first run (graph build, upload%s): %.0f ms\n", name == "gpu" ? ", shader compile" : "",
+                 b["first_run_ms"].get<double>());
+    stats_line(f, "end to end (wall, one touch)", b["end_to_end_ms"]);
+    stats_line(f, "touch on a cached object (wall)", b["cached_touch_ms"]);
+    if (name == "gpu") {
+        const json& m = b["memory"];
+        std::fprintf(f, "  device memory: weights %.2f MiB + activations peak %.2f MiB = %.2f MiB"
+                        " (one buffer per activation would take %.2f MiB)\n",
+                     mib(m["weights_bytes"]), mib(m["activations_peak_bytes"]), mib(m["total_bytes"]),
+                     mib(m["activations_unplanned_bytes"]));
+    }
+    std::fprintf(f, "\n  per stage (%s, median of profiled runs)\n", name == "gpu" ? "GPU timestamps" : "CPU wall per node");
+    const json& st = b["stages_ms"];
+    const double total = med(st["total"]);
+    std::vector<std::string> names = stage_names();
+    names.push_back("other");
+    names.push_back("total");
+    for (const std::string& s : names)
+        if (st.contains(s))
+            std::fprintf(f, "    %-12s %9.2f ms  %5.1f%%   (p10 %.2f, p90 %.2f)\n", s.c_str(), med(st[s]),
+                         total > 0 ? 100 * med(st[s]) / total : 0.0, st[s]["p10"].get<double>(), st[s]["p90"].get<double>());
+    for (const char* k : {"conv", "mlp"}) {
+        const json& e = b["efficiency"][k];
+        if (e["gflop"].get<double>() <= 0) continue;
+        std::fprintf(f, "  %-4s %.2f GFLOP in %.2f ms = %.1f GFLOP/s", k, e["gflop"].get<double>(), e["ms"].get<double>(),
+                     e["gflops"].get<double>());
+        if (!e["fraction_of_peak"].is_null()) std::fprintf(f, " = %.0f%% of the probe", 100 * e["fraction_of_peak"].get<double>());
+        std::fprintf(f, "\n");
+    }
+
+    std::fprintf(f, "\n  batch    median ms   touches/s\n");
+    for (const json& r : b["batch"])
+        std::fprintf(f, "  %5d %12.2f %11.1f\n", r["batch"].get<int>(), med(r["ms"]), r["touches_per_s"].get<double>());
+
+    if (b.contains("ilu")) {
+        const json& ilu = b["ilu"];
+        std::fprintf(f, "\n  ILU sweep (paper style)\n      N   end-to-end ms   ms/iter vs N=0   ILU node ms\n");
+        for (const json& r : ilu["table"]) {
+            std::fprintf(f, "  %5d %15.2f", r["n"].get<int>(), med(r["end_to_end_ms"]));
+            if (r["ms_per_iter"].is_null()) std::fprintf(f, " %16s", "-");
+            else std::fprintf(f, " %16.3f", r["ms_per_iter"].get<double>());
+            std::fprintf(f, " %13.3f\n", r["ilu_gpu_ms"].get<double>());
+        }
+        if (ilu.contains("slope_ms_per_iter"))
+            std::fprintf(f, "  slope over N: %.4f ms/iter end to end, %.4f ms/iter in the ILU node\n",
+                         ilu["slope_ms_per_iter"]["end_to_end"].get<double>(),
+                         ilu["slope_ms_per_iter"]["ilu_node"].get<double>());
+        if (ilu.contains("stepped") && ilu["stepped"]["per_iteration_ms"].is_object()) {
+            const json& s = ilu["stepped"];
+            std::fprintf(f, "  one dispatch per iteration (N = %d, timestamps between iterations): %.4f ms/iter"
+                            " (p10 %.4f, p90 %.4f); first step with setup %.4f ms; a step past N %.4f ms\n",
+                         s["n"].get<int>(), med(s["per_iteration_ms"]), s["per_iteration_ms"]["p10"].get<double>(),
+                         s["per_iteration_ms"]["p90"].get<double>(), med(s["first_step_ms"]), med(s["pass_through_step_ms"]));
+        }
+    }
+    if (b.contains("points")) {
+        std::fprintf(f, "\n  point branch   encode ms (wall)   node sum ms   FPS ms   ball ms   MLP GFLOP/s\n");
+        for (const json& r : b["points"])
+            std::fprintf(f, "  %12lld %18.2f %13.2f %8.2f %9.2f %13.1f\n", r["points"].get<long long>(),
+                         med(r["encode_ms"]), r["node_sum_ms"].get<double>(), r["fps_ms"].get<double>(),
+                         r["ball_query_ms"].get<double>(), r["mlp"]["gflops"].get<double>());
+    }
+}
+
+}  // namespace
+
+void print_report(const json& r, std::FILE* f) {
+    const json& d = r["device"];
+    std::fprintf(f, "vtloc-bench  %s\n", r["date"].get<std::string>().c_str());
+    std::fprintf(f, "device: %s (%s, driver %s, subgroup %d)\n", d["name"].get<std::string>().c_str(),
+                 d["type"].get<std::string>().c_str(), d["driver_version"].get<std::string>().c_str(),
+                 d["subgroup_size"].get<int>());
+    const json& m = r["model"];
+    std::fprintf(f, "model: %s (%s): %lld parameters = %.2f MiB fp32\n", m["source"].get<std::string>().c_str(),
+                 m["config_name"].get<std::string>().c_str(), m["parameters"].get<long long>(), m["mib_fp32"].get<double>());
+    const json& in = r["inputs"];
+    std::fprintf(f, "inputs: %s (%dx%d), %s (%lld points)\n", in["image"].get<std::string>().c_str(),
+                 in["image_size"][0].get<int>(), in["image_size"][1].get<int>(), in["object"].get<std::string>().c_str(),
+                 in["points"].get<long long>());
+    if (r.contains("probe"))
+        std::fprintf(f, "fma probe: %.1f GFLOP/s (higher of %.1f before and %.1f after); empty dispatch %.1f us\n",
+                     r["probe"]["gflops"].get<double>(), r["probe"]["before"].get<double>(), r["probe"]["after"].get<double>(),
+                     r["probe"]["dispatch_overhead_us"].get<double>());
+    for (const char* b : {"gpu", "cpu"})
+        if (r.contains(b)) backend(f, b, r[b]);
+    if (r.contains("cpu_over_gpu")) {
+        std::fprintf(f, "\n== CPU reference / GPU (times, higher = GPU faster) ==\n");
+        for (auto& [k, v] : r["cpu_over_gpu"].items()) std::fprintf(f, "  %-20s %10.3gx\n", k.c_str(), v.get<double>());
+    }
+}
+
+}  // namespace vtloc::bench

@@ -1,0 +1,305 @@
+// vtloc-bench: the whole model on one device - end to end, per stage, per
+// node, per ILU iteration, cached objects, batches, memory, the point branch
+// over cloud sizes - against the device's own fma peak, optionally on the CPU
+// reference too. Prints a table; --json and --plot write the report.
+// Run with --help for the options; bench/README.md describes the JSON.
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
+#include <ctime>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "bench/model_bench.h"
+#include "bench/probe.h"
+#include "bench/report.h"
+#include "engine/error.h"
+#include "engine/io/image.h"
+#include "engine/io/object.h"
+#include "engine/ops/tactile_preprocess.h"
+#include "runtime/context.h"
+
+#ifndef VTLOC_SOURCE_DIR
+#define VTLOC_SOURCE_DIR ""
+#endif
+
+using namespace vtloc;
+using nlohmann::json;
+namespace fs = std::filesystem;
+
+namespace {
+
+const char* kUsage = R"(usage: vtloc-bench [options]
+  --weights FILE       weight file (default: the shipped models/vtloc-r18-half-random.safetensors)
+  --config NAME        instead: random weights of a named config (vtloc-r18, vtloc-mcr, vtloc-tiny,
+                       vtloc-mcr-tiny), exported once by weights_tools (python3 + torch) into
+                       <bench dir>/bench-weights/NAME.safetensors
+  --image FILE         tactile image (default: examples/touch_01.png)
+  --object FILE        object mesh (.glb/.gltf) or PLY cloud (default: examples/mug.glb)
+  --backend B          gpu (default), cpu (the CPU reference) or both (adds CPU/GPU ratios)
+  --reps R             timed repetitions per measurement (default 20)
+  --warmup W           untimed runs first (default 3)
+  --profile-reps R     profiled runs for per-stage/per-node times (default 5)
+  --cpu-reps R         repetitions on the CPU reference (default 2)
+  --iters LIST         ILU N sweep (default 0,4,8,16,32,64)
+  --stepped N          N of the one-dispatch-per-iteration ILU run (default 16; 0 skips)
+  --batch LIST         batch sizes for throughput (default 1,4,16)
+  --points LIST        point-branch sweep over cloud sizes (default 1024,4096,16384; needs a mesh)
+  --no-probe           skip the fma peak probe
+  --json FILE          write the report as JSON
+  --plot FILE.png      draw latency over N and the per-stage breakdown
+The GPU is the default Vulkan device (VTLOC_DEVICE picks another: index or name).
+)";
+
+struct Args {
+    std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
+    bench::ModelBenchOptions opt;
+    int cpu_reps = 2;
+    bool probe = true;
+};
+
+std::vector<int64_t> int_list(const std::string& flag, const std::string& s) {
+    std::vector<int64_t> out;
+    std::stringstream ss(s);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        char* end = nullptr;
+        long long v = std::strtoll(item.c_str(), &end, 10);
+        if (item.empty() || *end || v < 0) throw Error(flag + " takes a comma-separated list of non-negative integers, got '" + s + "'");
+        out.push_back(v);
+    }
+    return out;
+}
+
+int one_int(const std::string& flag, const std::string& s, int lo) {
+    std::vector<int64_t> v = int_list(flag, s);
+    if (v.size() != 1 || v[0] < lo || v[0] > 1000000) throw Error(flag + " takes one integer >= " + std::to_string(lo) + ", got '" + s + "'");
+    return int(v[0]);
+}
+
+Args parse(int argc, char** argv) {
+    Args a;
+    for (int i = 1; i < argc; ++i) {
+        std::string f = argv[i];
+        if (f == "--help" || f == "-h") {
+            std::fputs(kUsage, stdout);
+            std::exit(0);
+        }
+        if (f == "--no-probe") {
+            a.probe = false;
+            continue;
+        }
+        if (i + 1 >= argc) throw Error("unknown option or missing value: " + f + " (see --help)");
+        std::string v = argv[++i];
+        if (f == "--weights") a.weights = v;
+        else if (f == "--config") a.config = v;
+        else if (f == "--image") a.image = v;
+        else if (f == "--object") a.object = v;
+        else if (f == "--backend") a.backend = v;
+        else if (f == "--reps") a.opt.reps = one_int(f, v, 1);
+        else if (f == "--warmup") a.opt.warmup = one_int(f, v, 0);
+        else if (f == "--profile-reps") a.opt.profile_reps = one_int(f, v, 1);
+        else if (f == "--cpu-reps") a.cpu_reps = one_int(f, v, 1);
+        else if (f == "--stepped") a.opt.stepped_iters = one_int(f, v, 0);
+        else if (f == "--json") a.json_path = v;
+        else if (f == "--plot") a.plot_path = v;
+        else if (f == "--iters" || f == "--batch") {
+            std::vector<int> l;
+            for (int64_t x : int_list(f, v)) l.push_back(int(x));
+            (f == "--iters" ? a.opt.iters : a.opt.batches) = l;
+        } else if (f == "--points") a.opt.points = int_list(f, v);
+        else throw Error("unknown option " + f + " (see --help)");
+    }
+    if (a.backend != "gpu" && a.backend != "cpu" && a.backend != "both")
+        throw Error("--backend takes gpu, cpu or both, got '" + a.backend + "'");
+    if (!a.weights.empty() && !a.config.empty()) throw Error("give --weights or --config, not both");
+    for (int n : a.opt.iters)
+        if (n > 64) throw Error("--iters: N must be in 0..64, got " + std::to_string(n));
+    if (a.opt.stepped_iters > 64) throw Error("--stepped: N must be in 0..64");
+    return a;
+}
+
+fs::path exe_dir() {
+    std::error_code ec;
+    fs::path p = fs::read_symlink("/proc/self/exe", ec);
+    return ec ? fs::path(".") : p.parent_path();
+}
+
+// The repository (or installed data) holding models/ and examples/.
+fs::path data_dir() {
+    std::vector<fs::path> dirs;
+    if (const char* e = std::getenv("VTLOC_DATA_DIR"); e && *e) dirs.push_back(e);
+    dirs.push_back(exe_dir().parent_path());
+    dirs.push_back(VTLOC_SOURCE_DIR);
+    for (const fs::path& d : dirs)
+        if (!d.empty() && fs::exists(d / "examples" / "mug.glb")) return d;
+    throw Error("cannot find the shipped examples/ and models/; set VTLOC_DATA_DIR or pass --weights, --image, --object");
+}
+
+// Random weights of a named config, exported by weights_tools once and cached.
+std::string random_export(const std::string& name) {
+    for (char c : name)
+        if (!(std::isalnum(static_cast<unsigned char>(c)) || c == '-' || c == '_'))
+            throw Error("--config: '" + name + "' is not a config name");
+    fs::path out = exe_dir() / "bench-weights" / (name + ".safetensors");
+    if (fs::exists(out)) return out.string();
+    fs::create_directories(out.parent_path());
+    const fs::path tmp = out.string() + ".tmp";
+    const std::string cmd = "cd '" + data_dir().string() + "' && python3 -m weights_tools.export --config '" + name +
+                            "' --seed 0 -o '" + tmp.string() + "' >&2";
+    std::fprintf(stderr, "exporting random %s weights: %s\n", name.c_str(), cmd.c_str());
+    if (std::system(cmd.c_str()) != 0 || !fs::exists(tmp))
+        throw Error("could not export random weights for config '" + name +
+                    "' (weights_tools needs python3 with torch); pass --weights FILE instead");
+    fs::rename(tmp, out);
+    return out.string();
+}
+
+std::string today() {
+    std::time_t t = std::time(nullptr);
+    char b[32];
+    std::strftime(b, sizeof b, "%Y-%m-%d", std::localtime(&t));
+    return b;
+}
+
+std::string driver_version(const rt::DeviceInfo& d) {
+    const uint32_t v = d.driver_version;
+    char b[48];
+    if (d.vendor_id == 0x10DE)  // NVIDIA packs 10.8.8.6 bits
+        std::snprintf(b, sizeof b, "%u.%u.%u", v >> 22, (v >> 14) & 0xFF, (v >> 6) & 0xFF);
+    else
+        std::snprintf(b, sizeof b, "%u.%u.%u", VK_API_VERSION_MAJOR(v), VK_API_VERSION_MINOR(v), VK_API_VERSION_PATCH(v));
+    return b;
+}
+
+json device_json(const rt::DeviceInfo& d) {
+    return {{"name", d.name}, {"type", rt::device_type_name(d.type)}, {"vendor_id", d.vendor_id},
+            {"driver_version", driver_version(d)},
+            {"api_version", std::to_string(VK_API_VERSION_MAJOR(d.api_version)) + "." +
+                                std::to_string(VK_API_VERSION_MINOR(d.api_version)) + "." +
+                                std::to_string(VK_API_VERSION_PATCH(d.api_version))},
+            {"subgroup_size", d.subgroup_size}, {"max_shared_memory", d.max_shared_memory},
+            {"max_invocations", d.max_invocations}, {"device_local_bytes", d.device_local_bytes}};
+}
+
+double med(const json& s) { return s.is_object() ? s["median"].get<double>() : 0.0; }
+
+json ratios(const json& gpu, const json& cpu) {
+    json r = json::object();
+    auto put = [&](const std::string& k, double c, double g) {
+        if (c > 0 && g > 0) r[k] = c / g;
+    };
+    put("end_to_end", med(cpu["end_to_end_ms"]), med(gpu["end_to_end_ms"]));
+    put("cached_touch", med(cpu["cached_touch_ms"]), med(gpu["cached_touch_ms"]));
+    for (auto& [k, v] : gpu["stages_ms"].items())
+        if (cpu["stages_ms"].contains(k)) put("stage " + k, med(cpu["stages_ms"][k]), med(v));
+    return r;
+}
+
+int run(int argc, char** argv) {
+    Args a = parse(argc, argv);
+    std::string weights_path = !a.weights.empty() ? a.weights
+                               : !a.config.empty() ? random_export(a.config)
+                                                   : (data_dir() / "models" / "vtloc-r18-half-random.safetensors").string();
+    const std::string image_path = !a.image.empty() ? a.image : (data_dir() / "examples" / "touch_01.png").string();
+    const std::string object_path = !a.object.empty() ? a.object : (data_dir() / "examples" / "mug.glb").string();
+
+    WeightStore weights = WeightStore::load(weights_path);
+    const nlohmann::json cfg = weights.config();
+    const int64_t n_points = cfg.at("point").at("n_points").get<int64_t>();
+    io::RgbImage img = io::load_tactile_image(image_path);
+    HostTensor cloud = io::load_object(object_path, n_points);
+    io::require_points(cloud, n_points, object_path);
+    const std::string ext = fs::path(object_path).extension().string();
+    if (ext != ".glb" && ext != ".gltf" && !a.opt.points.empty()) {
+        std::fprintf(stderr, "note: --points needs a mesh to sample; %s is a point file, skipping the point sweep\n",
+                     object_path.c_str());
+        a.opt.points.clear();
+    }
+
+    json report;
+    report["schema"] = "vtloc-bench/1";
+    report["date"] = today();
+    const size_t params = weights.parameter_count();
+    report["model"] = {{"source", weights_path}, {"config_name", cfg.value("name", a.config.empty() ? "?" : a.config)},
+                       {"parameters", params}, {"mib_fp32", double(params) * 4 / (1024.0 * 1024.0)},
+                       {"file_bytes", fs::file_size(weights_path)}};
+    report["inputs"] = {{"image", image_path}, {"image_size", {img.height, img.width}}, {"object", object_path},
+                        {"points", cloud.shape[0]}, {"candidates", "the object cloud's points"}};
+    report["settings"] = {{"reps", a.opt.reps}, {"warmup", a.opt.warmup}, {"profile_reps", a.opt.profile_reps},
+                          {"cpu_reps", a.cpu_reps}, {"iters", a.opt.iters}, {"stepped", a.opt.stepped_iters},
+                          {"batch", a.opt.batches}, {"points", a.opt.points}, {"backend", a.backend}};
+
+    bench::ModelBenchInputs in;
+    in.image = ops::tactile_image_tensor(img.pixels.data(), img.height, img.width);
+    in.cloud = cloud;
+    in.object = object_path;
+
+    report["device"] = {{"name", "CPU reference (one thread)"}, {"type", "cpu"}, {"driver_version", "-"},
+                        {"subgroup_size", 0}};
+    std::unique_ptr<rt::Context> ctx;
+    if (a.backend != "cpu") {
+        ctx = std::make_unique<rt::Context>();
+        report["device"] = device_json(ctx->info());
+        if (a.probe) {
+            const double before = bench::peak_gflops(*ctx);
+            report["probe"] = {{"before", before}, {"dispatch_overhead_us", bench::dispatch_overhead_us(*ctx)}};
+        }
+        VtlocRunner runner(weights, ctx.get());
+        in.probe_gflops = a.probe ? report["probe"]["before"].get<double>() : 0.0;
+        report["gpu"] = bench::measure_model(runner, in, a.opt);
+        if (a.probe) {  // the higher of before/after: a busy machine cannot flatter the fractions
+            const double after = bench::peak_gflops(*ctx);
+            report["probe"]["after"] = after;
+            const double peak = std::max(in.probe_gflops, after);
+            report["probe"]["gflops"] = peak;
+            auto refresh = [&](json& e) {
+                e["fraction_of_peak"] = e["gflops"].get<double>() / peak;
+            };
+            refresh(report["gpu"]["efficiency"]["conv"]);
+            refresh(report["gpu"]["efficiency"]["mlp"]);
+            if (report["gpu"].contains("points"))
+                for (json& row : report["gpu"]["points"]) refresh(row["mlp"]);
+        }
+    }
+    if (a.backend != "gpu") {
+        bench::ModelBenchOptions c = a.opt;
+        c.reps = a.cpu_reps;
+        c.warmup = 0;  // nothing to compile or upload
+        c.profile_reps = 1;
+        c.stepped_iters = 0;  // per-iteration node times come from the sweep's ILU node
+        VtlocRunner runner(weights, nullptr);
+        in.probe_gflops = 0;  // the probe measures the GPU, not this
+        report["cpu"] = bench::measure_model(runner, in, c);
+        if (report.contains("gpu")) report["cpu_over_gpu"] = ratios(report["gpu"], report["cpu"]);
+    }
+
+    if (ctx) {  // with VTLOC_VALIDATION=1 (the smoke test), a validation message fails the run
+        std::vector<rt::ValidationMessage> msgs = ctx->take_validation_messages();
+        for (const auto& m : msgs) std::fprintf(stderr, "vtloc-bench: validation layer: %s: %s\n", m.severity.c_str(), m.text.c_str());
+        if (!msgs.empty()) throw Error(std::to_string(msgs.size()) + " validation message(s); the numbers are not trusted");
+    }
+    bench::print_report(report, stdout);
+    if (!a.json_path.empty()) {
+        std::ofstream f(a.json_path);
+        if (!(f << report.dump(2) << "\n")) throw Error("cannot write " + a.json_path);
+        std::printf("\nJSON: %s\n", a.json_path.c_str());
+    }
+    if (!a.plot_path.empty()) {
+        bench::draw_plot(report, a.plot_path);
+        std::printf("plot: %s\n", a.plot_path.c_str());
+    }
+    return 0;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    try {
+        return run(argc, argv);
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "vtloc-bench: %s\n", e.what());
+        return 1;
+    }
+}

@@ -1,0 +1,129 @@
+"""Checks a vtloc-bench JSON report's schema (bench/README.md) and plot.
+
+  python3 check_bench_json.py REPORT.json PLOT.png REPS ITERS BATCHES POINTS
+
+Asserts structure, types and internal consistency (counts, which N / batch /
+point sizes were measured, positive times and sizes), never speed.
+"""
+
+import json
+import math
+import sys
+
+STAGES = {"preprocess", "tactile", "point", "gma", "head", "retrieval", "other", "total"}
+
+
+def fail(msg):
+    sys.exit(f"check_bench_json: {msg}")
+
+
+def need(cond, msg):
+    if not cond:
+        fail(msg)
+
+
+def positive(x, what):
+    need(isinstance(x, (int, float)) and math.isfinite(x) and x > 0, f"{what} must be a positive number, got {x!r}")
+
+
+def stats(s, what, n):
+    need(isinstance(s, dict), f"{what} must be a stats object, got {s!r}")
+    need(set(s) == {"median", "p10", "p90", "min", "n"}, f"{what} keys {sorted(s)}")
+    need(s["n"] == n, f"{what}: n = {s['n']}, expected {n}")
+    for k in ("median", "p10", "p90", "min"):
+        positive(s[k], f"{what}.{k}")
+    need(s["min"] <= s["p10"] <= s["median"] <= s["p90"] + 1e-12, f"{what}: quantiles out of order {s}")
+
+
+def backend(b, name, reps, profile_reps, iters, batches, points, ilu):
+    stats(b["end_to_end_ms"], f"{name}.end_to_end_ms", reps)
+    stats(b["cached_touch_ms"], f"{name}.cached_touch_ms", reps)
+    positive(b["first_run_ms"], f"{name}.first_run_ms")
+    st = b["stages_ms"]
+    need(set(st) <= STAGES and {"tactile", "point", "head", "total"} <= set(st), f"{name} stages {sorted(st)}")
+    for k, v in st.items():
+        stats(v, f"{name}.stages_ms.{k}", profile_reps)
+    parts = sum(v["median"] for k, v in st.items() if k != "total")
+    need(parts >= st["total"]["p10"] * 0.5, f"{name}: stage medians {parts} vs total {st['total']}")
+    need(len(b["nodes"]) > 10, f"{name}: only {len(b['nodes'])} nodes")
+    for n in b["nodes"]:
+        need(n["stage"] in STAGES and n["name"] and n["op"], f"{name}: bad node {n}")
+        need(n["ms"] >= 0, f"{name}: negative node time {n}")
+    for k in ("conv", "mlp"):
+        e = b["efficiency"][k]
+        for f in ("gflop", "ms", "gflops"):
+            positive(e[f], f"{name}.efficiency.{k}.{f}")
+    need([r["batch"] for r in b["batch"]] == batches, f"{name}: batches {b['batch']}")
+    for r in b["batch"]:
+        stats(r["ms"], f"{name}.batch{r['batch']}", reps)
+        need(abs(r["touches_per_s"] - 1e3 * r["batch"] / r["ms"]["median"]) < 1e-6 * r["touches_per_s"],
+             f"{name}: touches/s inconsistent {r}")
+    if ilu:
+        t = b["ilu"]["table"]
+        need([r["n"] for r in t] == iters, f"{name}: ILU sweep N {[r['n'] for r in t]}")
+        for r in t:
+            stats(r["end_to_end_ms"], f"{name}.ilu N={r['n']}", reps)
+            positive(r["ilu_gpu_ms"], f"{name}.ilu N={r['n']} node")
+            need((r["ms_per_iter"] is None) == (r["n"] == 0), f"{name}: ms_per_iter {r}")
+        for k in ("end_to_end", "ilu_node"):
+            need(math.isfinite(b["ilu"]["slope_ms_per_iter"][k]), f"{name}: slope {k}")
+    need([r["points"] for r in b.get("points", [])] == points, f"{name}: point sweep {b.get('points')}")
+    for r in b.get("points", []):
+        stats(r["encode_ms"], f"{name}.points {r['points']}", reps)
+        for k in ("node_sum_ms", "fps_ms", "ball_query_ms"):
+            positive(r[k], f"{name}.points {r['points']}.{k}")
+        need(r["fps_ms"] + r["ball_query_ms"] <= r["node_sum_ms"] * 1.0001, f"{name}: point shares {r}")
+
+
+def main(path, plot, reps, iters, batches, points):
+    r = json.load(open(path))
+    need(r["schema"] == "vtloc-bench/1", f"schema {r.get('schema')}")
+    need(len(r["date"]) == 10, "date")
+    for k in ("name", "type", "driver_version", "subgroup_size"):
+        need(k in r["device"], f"device.{k}")
+    positive(r["model"]["parameters"], "model.parameters")
+    need(abs(r["model"]["mib_fp32"] - r["model"]["parameters"] * 4 / 2**20) < 1e-9, "model.mib_fp32")
+    positive(r["inputs"]["points"], "inputs.points")
+    s = r["settings"]
+    need(s["reps"] == reps and s["iters"] == iters and s["batch"] == batches and s["points"] == points,
+         f"settings {s}")
+    p = r["probe"]
+    for k in ("gflops", "before", "after", "dispatch_overhead_us"):
+        positive(p[k], f"probe.{k}")
+    need(p["gflops"] == max(p["before"], p["after"]), "probe.gflops is the higher of before/after")
+    g = r["gpu"]
+    ilu = "ilu" in g
+    backend(g, "gpu", reps, s["profile_reps"], iters, batches, points, ilu)
+    m = g["memory"]
+    for k in ("weights_bytes", "activations_peak_bytes", "total_bytes"):
+        positive(m[k], f"memory.{k}")
+    need(m["total_bytes"] == m["weights_bytes"] + m["activations_peak_bytes"], "memory.total_bytes")
+    need(m["activations_peak_bytes"] <= m["activations_unplanned_bytes"], "arena above one-buffer-per-tensor")
+    for k in ("conv", "mlp"):
+        f = g["efficiency"][k]["fraction_of_peak"]
+        need(abs(f - g["efficiency"][k]["gflops"] / p["gflops"]) < 1e-9, f"fraction_of_peak {k}")
+    if ilu:
+        st = g["ilu"]["stepped"]
+        need(st["n"] == s["stepped"] and len(st["step_ms"]) == st["n"], f"stepped {st}")
+        stats(st["per_iteration_ms"], "stepped.per_iteration_ms", s["profile_reps"] * (st["n"] - 1))
+    if "cpu" in r:
+        backend(r["cpu"], "cpu", s["cpu_reps"], 1, iters, batches, points, ilu)
+        need("efficiency" in r["cpu"] and r["cpu"]["efficiency"]["conv"]["fraction_of_peak"] is None,
+             "a CPU fraction of the GPU probe")
+        for k, v in r["cpu_over_gpu"].items():
+            positive(v, f"cpu_over_gpu.{k}")
+        need({"end_to_end", "cached_touch", "stage total"} <= set(r["cpu_over_gpu"]), "cpu_over_gpu keys")
+    with open(plot, "rb") as f:
+        head = f.read(24)
+    need(head[:8] == b"\x89PNG\r\n\x1a\n", "the plot is not a PNG")
+    w, h = int.from_bytes(head[16:20], "big"), int.from_bytes(head[20:24], "big")
+    need(w >= 600 and h >= 400, f"plot size {w}x{h}")
+    print(f"check_bench_json: {path} ok ({len(g['nodes'])} GPU nodes)")
+
+
+if __name__ == "__main__":
+    a = sys.argv[1:]
+    if len(a) != 6:
+        fail(__doc__)
+    ints = lambda s: [int(x) for x in s.split(",")] if s else []
+    main(a[0], a[1], int(a[2]), ints(a[3]), ints(a[4]), ints(a[5]))
