@@ -2,7 +2,9 @@
 
 #include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <map>
+#include <unistd.h>
 
 #include "bench/flops.h"
 #include "bench/stages.h"
@@ -186,6 +188,12 @@ json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOpt
     return rows;
 }
 
+// Progress on stderr for people watching a long run; silent when stderr is
+// not a terminal (scripts and the smoke test see no stray lines).
+void progress(const std::string& what) {
+    if (isatty(2)) std::fprintf(stderr, "vtloc-bench: %s...\n", what.c_str());
+}
+
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -203,6 +211,7 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     const TouchOptions defaults;
     auto once = [&] { r.localize_once(in.image, in.cloud, nullptr, defaults); };
 
+    progress(std::string(r.on_gpu() ? "GPU" : "CPU reference") + ": first run and end to end");
     auto t0 = std::chrono::steady_clock::now();
     once();  // builds and records the graph; lavapipe also compiles shaders here
     out["first_run_ms"] = ms_since(t0);
@@ -212,6 +221,7 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
                      {"activations_unplanned_bytes", mem.unplanned_bytes},
                      {"total_bytes", mem.weight_bytes + mem.arena_bytes}};
 
+    progress("per stage and per node");
     Profile p = profile(r, opt.profile_reps, once);
     json stages = json::object();
     for (const std::string& st : stage_names()) {
@@ -226,6 +236,7 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     out["efficiency"] = {{"conv", efficiency(p, "tactile", in.probe_gflops)},
                          {"mlp", efficiency(p, "point", in.probe_gflops)}};
 
+    progress("cached object and batches");
     EncodedObject obj = r.encode_object(in.cloud);
     out["cached_touch_ms"] = stats_json(time_ms([&] { r.localize(obj, {in.image}, defaults); }, opt.warmup, opt.reps));
     json batches = json::array();
@@ -239,9 +250,11 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     out["batch"] = batches;
 
     if (has_ilu(r)) {
+        progress("ILU sweep over N");
         out["ilu"] = ilu_sweep(r, in, opt);
         if (opt.stepped_iters > 0) out["ilu"]["stepped"] = ilu_stepped(r, obj, in, opt);
     }
+    if (!opt.points.empty()) progress("point sweep");
     if (!opt.points.empty()) out["points"] = point_sweep(r, in, opt);
     return out;
 }

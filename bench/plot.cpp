@@ -26,6 +26,7 @@ void text(cv::Mat& m, const std::string& s, cv::Point at, double scale = 0.45, c
 
 std::string fmt(double v) {
     char b[32];
+    if (v == 0) return "0";
     std::snprintf(b, sizeof b, v >= 100 ? "%.0f" : v >= 10 ? "%.1f" : v >= 1 ? "%.2f" : "%.3f", v);
     return b;
 }

@@ -23,6 +23,9 @@
 #ifndef VTLOC_SOURCE_DIR
 #define VTLOC_SOURCE_DIR ""
 #endif
+#ifndef VTLOC_PYTHON
+#define VTLOC_PYTHON "python3"
+#endif
 
 using namespace vtloc;
 using nlohmann::json;
@@ -33,7 +36,7 @@ namespace {
 const char* kUsage = R"(usage: vtloc-bench [options]
   --weights FILE       weight file (default: the shipped models/vtloc-r18-half-random.safetensors)
   --config NAME        instead: random weights of a named config (vtloc-r18, vtloc-mcr, vtloc-tiny,
-                       vtloc-mcr-tiny), exported once by weights_tools (python3 + torch) into
+                       vtloc-mcr-tiny), exported once by weights_tools (python3 + torch; VTLOC_PYTHON picks the interpreter) into
                        <bench dir>/bench-weights/NAME.safetensors
   --image FILE         tactile image (default: examples/touch_01.png)
   --object FILE        object mesh (.glb/.gltf) or PLY cloud (default: examples/mug.glb)
@@ -146,7 +149,9 @@ std::string random_export(const std::string& name) {
     if (fs::exists(out)) return out.string();
     fs::create_directories(out.parent_path());
     const fs::path tmp = out.string() + ".tmp";
-    const std::string cmd = "cd '" + data_dir().string() + "' && python3 -m weights_tools.export --config '" + name +
+    const char* env = std::getenv("VTLOC_PYTHON");  // a Python with torch; default: the one CMake found
+    const std::string python = env && *env ? env : VTLOC_PYTHON;
+    const std::string cmd = "cd '" + data_dir().string() + "' && '" + python + "' -m weights_tools.export --config '" + name +
                             "' --seed 0 -o '" + tmp.string() + "' >&2";
     std::fprintf(stderr, "exporting random %s weights: %s\n", name.c_str(), cmd.c_str());
     if (std::system(cmd.c_str()) != 0 || !fs::exists(tmp))
