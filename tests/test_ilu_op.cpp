@@ -33,10 +33,12 @@ struct IluGraph {
     TensorMap inputs;
 };
 
-IluGraph ilu_graph(const WeightStore& w, int64_t C, int max_iters, uint32_t seed) {
+// The fused head, or (stepped) one ilu_step dispatch per iteration.
+IluGraph ilu_graph(const WeightStore& w, int64_t C, int max_iters, uint32_t seed, bool stepped = false) {
     IluGraph r;
-    IluOutputs o = build_ilu(r.g, w, r.g.input("ft", {1, C}), r.g.input("fp", {1, C}),
-                             r.g.input("iters", {1}, ElemType::I32), max_iters);
+    auto build = stepped ? build_ilu_stepped : build_ilu;
+    IluOutputs o = build(r.g, w, r.g.input("ft", {1, C}), r.g.input("fp", {1, C}),
+                         r.g.input("iters", {1}, ElemType::I32), max_iters);
     r.g.output(o.contact, "contact");
     if (max_iters > 0) r.g.output(o.c, "c");
     r.inputs = {{"ft", random_tensor({1, C}, seed, -2.0f, 2.0f)}, {"fp", random_tensor({1, C}, seed + 1, -2.0f, 2.0f)},
@@ -119,21 +121,6 @@ TEST_CASE("ilu rejects bad shapes and iteration counts", "[op][ilu]") {
     REQUIRE_THROWS_WITH(run_cpu(ig.g, w, ig.inputs), Catch::Contains("outside 0..4"));
 }
 
-namespace {
-
-IluGraph stepped_graph(const WeightStore& w, int64_t C, int max_iters, uint32_t seed) {
-    IluGraph r;
-    IluOutputs o = build_ilu_stepped(r.g, w, r.g.input("ft", {1, C}), r.g.input("fp", {1, C}),
-                                     r.g.input("iters", {1}, ElemType::I32), max_iters);
-    r.g.output(o.contact, "contact");
-    r.g.output(o.c, "c");
-    r.inputs = {{"ft", random_tensor({1, C}, seed, -2.0f, 2.0f)}, {"fp", random_tensor({1, C}, seed + 1, -2.0f, 2.0f)},
-                {"iters", ilu_iters_input(max_iters, max_iters)}};
-    return r;
-}
-
-}  // namespace
-
 TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and the fused ilu", "[op][ilu]") {
     // Stepped and fused differ only in where fp32 rounding happens (the CPU
     // stepped reference rounds h, gx and c to fp32 between steps like the
@@ -142,7 +129,7 @@ TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and t
     for (Case c : {Case{1, 1, 1}, Case{37, 19, 7}, Case{128, 64, 16}}) {
         INFO("C " << c.C << " H " << c.H << " max_iters " << c.nmax);
         WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C) + 3);
-        IluGraph st = stepped_graph(w, c.C, c.nmax, 7), fu = ilu_graph(w, c.C, c.nmax, 7);
+        IluGraph st = ilu_graph(w, c.C, c.nmax, 7, true), fu = ilu_graph(w, c.C, c.nmax, 7);
         GpuExecutor exec(test::gpu(), st.g, w);
         for (int n : {c.nmax, c.nmax / 2, 0}) {
             INFO("N = " << n);
@@ -160,7 +147,7 @@ TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and t
 
 TEST_CASE("ilu_step rejects a missing state and steps out of range", "[op][ilu]") {
     WeightStore w = random_ilu(8, 4, 1);
-    IluGraph ig = stepped_graph(w, 8, 3, 2);
+    IluGraph ig = ilu_graph(w, 8, 3, 2, true);
     std::vector<int> in = ig.g.nodes().back().inputs;
     REQUIRE_THROWS_WITH(ig.g.add("ilu_step", in, {{"max_iters", 3}, {"step", 3}}), Catch::Contains("step must be"));
     in.back() = in[0];  // F^t where step 1 needs the state of step 0

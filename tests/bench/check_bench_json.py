@@ -126,4 +126,7 @@ if __name__ == "__main__":
     if len(a) != 6:
         fail(__doc__)
     ints = lambda s: [int(x) for x in s.split(",")] if s else []
-    main(a[0], a[1], int(a[2]), ints(a[3]), ints(a[4]), ints(a[5]))
+    try:
+        main(a[0], a[1], int(a[2]), ints(a[3]), ints(a[4]), ints(a[5]))
+    except (KeyError, TypeError, IndexError) as e:
+        fail(f"the report lacks or mistypes a field: {type(e).__name__} {e}")

@@ -1,4 +1,4 @@
-# Runs one command of the vtloc CLI and checks what it did:
+# Runs one command of the vtloc CLI (or another shipped tool, e.g. vtloc-bench) and checks what it did:
 #   cmake -DEXPECT_RC=<n> [-DEXPECT_STDOUT=<regex>] [-DEXPECT_STDERR=<regex>]
 #         [-DEXPECT_FILES=<a|b|...>] [-DALLOW_LINES=1] -P run_cli.cmake -- <program> <args...>
 # - the exit status must be EXPECT_RC;
@@ -29,7 +29,7 @@ execute_process(COMMAND ${cmd} RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARI
 string(JOIN " " shown ${cmd})
 set(report "command: ${shown}\nexit status: ${rc}\n--- stdout ---\n${out}--- stderr ---\n${err}")
 
-if(err MATCHES "vtloc: validation layer:")
+if(err MATCHES "vtloc[-a-z]*: validation layer:")
   message(FATAL_ERROR "the validation layer reported problems\n${report}")
 endif()
 if(NOT rc STREQUAL "${EXPECT_RC}")
