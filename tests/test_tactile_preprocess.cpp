@@ -6,15 +6,15 @@
 // test_tactile_encoder.cpp.
 //
 // GelSight frames: ObjectFolder 2.0 (R. Gao et al., "ObjectFolder 2.0: A Multisensory
-// Object Dataset for Sim2Real Transfer", CVPR 2022), CC BY 4.0; converted copy in
-// ../shared/data/gelsight (see its README).
+// Object Dataset for Sim2Real Transfer", CVPR 2022), CC BY 4.0: the three shipped
+// in examples/ (see examples/README.md), so a clone needs no ../shared beside it.
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
 
 #include "engine/error.h"
 #include "engine/ops/tactile_preprocess.h"
-#include "engine/safetensors.h"
+#include "engine/io/image.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -91,15 +91,12 @@ TEST_CASE("tactile_preprocess matches the CPU reference at odd shapes", "[op][pr
 }
 
 TEST_CASE("tactile_preprocess on real GelSight frames and 480x640 / 240x320 frames", "[op][preprocess]") {
-    const std::string path = VTLOC_SOURCE_DIR "/../shared/data/gelsight/objectfolder_gelsight_calib.safetensors";
-    SafetensorsFile f = SafetensorsFile::load(path);
-    const TensorInfo& t = f.at("press_imgs");
-    REQUIRE(t.dtype == DType::U8);
-    REQUIRE(t.shape == Shape{49, 120, 160, 3});
-    auto bytes = f.bytes(t);
-    const size_t frame = 120 * 160 * 3;
     std::vector<std::vector<uint8_t>> frames;
-    for (size_t i : {0, 24, 48}) frames.emplace_back(bytes.begin() + i * frame, bytes.begin() + (i + 1) * frame);
+    for (const char* name : {"touch_01.png", "touch_02.png", "touch_03.png"}) {
+        io::RgbImage im = io::load_tactile_image(VTLOC_SOURCE_DIR "/examples/" + std::string(name));
+        REQUIRE((im.height == 120 && im.width == 160));
+        frames.push_back(im.pixels);
+    }
     check_frames(frames, 120, 160, 320, 224);  // paper config: crop larger than the frame
     check_frames(frames, 120, 160, 128, 40);   // tiny config
     check_frames({synthetic_frame(480, 640)}, 480, 640, 320, 224);
