@@ -55,11 +55,13 @@ TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& i
             ptr[size_t(id)] = &vals[size_t(id)];
             out.push_back(&vals[size_t(id)]);
         }
+        if (!node_ms) {
+            find_op(n.op).cpu(in, out, n.params);
+            continue;
+        }
         const auto t0 = std::chrono::steady_clock::now();
         find_op(n.op).cpu(in, out, n.params);
-        if (node_ms)
-            node_ms->push_back(
-                {n.name, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()});
+        node_ms->push_back({n.name, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()});
     }
     TensorMap result;
     for (auto& [name, id] : g.outputs()) result[name] = *ptr[size_t(id)];

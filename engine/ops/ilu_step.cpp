@@ -43,14 +43,15 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const size_t C = size_t(in[0]->shape.back()), at = 4 * C + 3;
     std::vector<float>& state = out[0]->data;
     std::fill(state.begin(), state.end(), 0.0f);
-    ilu_math::State st = ilu_math::init(in);
+    ilu_math::State st;
     if (step > 0) {  // continue from the previous step's fp32 state, as the shader does
         const std::vector<float>& prev = in[13]->data;
-        for (size_t i = 0; i < C; ++i) st.h[i] = prev[i];
-        for (size_t i = 0; i < 3 * C; ++i) st.gx[i] = prev[C + i];
+        st.h.assign(prev.begin(), prev.begin() + long(C));
+        st.gx.assign(prev.begin() + long(C), prev.begin() + long(4 * C));
         for (size_t j = 0; j < 3; ++j) st.c[j] = prev[4 * C + j];
         std::copy(prev.begin() + long(at), prev.begin() + long(at) + 3 * step, state.begin() + long(at));
     } else {
+        st = ilu_math::init(in);
         for (size_t i = 0; i < 3 * C; ++i) st.gx[i] = float(st.gx[i]);  // the shader keeps gx in fp32
     }
     if (step < n) {
