@@ -1,0 +1,46 @@
+#pragma once
+// The gel's side of a touch: Taxim-style deformation of the pressed height
+// field, the polynomial shading of the real sensor, and the appearance
+// (gain, brightness, blur, noise). Internal to the renderer.
+#include <cstdint>
+#include <vector>
+
+#include "engine/sim/calibration.h"
+#include "engine/sim/touch_renderer.h"
+
+namespace vtloc::sim::detail {
+
+// Gaussian blur widths (sigma, mm), applied in order; after each blur the
+// contact region is restored (the gel never sinks below the undeformed
+// intersection with the object), so the gel drapes smoothly from the contact
+// edge outwards while the contact keeps the object's shape. Tuned against the
+// 49 real frames (reality_check.h): mean |dRGB| inside the contacts 14.1
+// (14.5 undeformed), outside 3.9 (5.0); narrower schedules miss the real
+// halo, wider ones blur the contact edge.
+inline const std::vector<double>& default_drape_sigmas_mm() {
+    static const std::vector<double> s = {1.2, 0.8, 0.5, 0.3, 0.15};
+    return s;
+}
+
+// In place on a rows x cols indentation map (mm, >= 0): the map as given is
+// the undeformed intersection (the contact region where > 0).
+void drape_gel(std::vector<float>& ind, int rows, int cols, double mm_per_px, const std::vector<double>& sigmas_mm);
+
+// The polynomial table applied to a height map (pixels, H x W): writes
+// H * W * 3 shading values (stored order) without the background.
+class GelShader {
+public:
+    explicit GelShader(const Calibration& calib);
+    void shade(const std::vector<float>& height_px, std::vector<float>& out) const;
+
+private:
+    int H_, W_, bins_;
+    std::vector<double> poly_;  // [mag][dir][channel][6]
+};
+
+// shading + background -> gain, brightness, blur, noise, clip, round.
+// `background` is H*W*3 (real_bg or the user's own).
+std::vector<uint8_t> finish_frame(const std::vector<float>& shading, const std::vector<float>& background, int H,
+                                  int W, const Appearance& look, uint64_t seed, bool noise);
+
+}  // namespace vtloc::sim::detail

@@ -1,0 +1,69 @@
+#pragma once
+// How close the simulated touches are to the real sensor: each of the
+// calibration's 49 real ball-press frames is rendered (a ball pressed so that
+// its contact circle has the annotated radius at the annotated centre) and
+// both frames go through one image-based contact detector.
+#include <string>
+#include <vector>
+
+#include "engine/sim/calibration.h"
+
+namespace vtloc::sim {
+
+// The contact as an image shows it: diff = sum over channels of |frame -
+// empty| (the frame's own empty frame), Gaussian-smoothed (sigma 1.5 px);
+// pixels above kContactFraction of the smoothed maximum; the largest
+// 8-connected component's centroid and equivalent-area radius sqrt(A/pi).
+struct DetectedContact {
+    bool found = false;
+    double cx = 0, cy = 0;  // column, row (pixels)
+    double radius = 0;      // pixels
+};
+inline constexpr double kContactFraction = 0.25;
+DetectedContact detect_contact(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, int height,
+                               int width);
+
+struct RealityFrame {
+    int index = 0;
+    double annotated_cx = 0, annotated_cy = 0, annotated_r = 0;  // from the calibration file
+    double press_mm = 0, ball_radius_mm = 0;
+    DetectedContact real, sim;
+    double radius_ratio = 0;    // sim.radius / real.radius
+    double centre_dist = 0;     // |sim centre - real centre|, pixels
+    double drgb_inside = 0;     // mean |rendered - real| over channels and pixels inside the annotated circle
+    double drgb_outside = 0;    // ... and outside it
+};
+
+struct RealityReport {
+    std::vector<RealityFrame> frames;
+    double median_radius_err = 0, max_radius_err = 0;  // |ratio - 1|
+    double median_centre_dist = 0, max_centre_dist = 0;
+    double mean_drgb_inside = 0, mean_drgb_outside = 0;  // means over the frames
+    double max_drgb_inside = 0, max_drgb_outside = 0;
+};
+
+struct RealityOptions {
+    double ball_radius_mm = 2.0;  // the real presses used a 4 mm diameter ball
+    int sphere_subdivisions = 5;  // 20480 triangles: faceting well below a pixel
+    std::vector<double> drape_sigmas_mm;  // empty: the renderer's default
+    // Side by side: rows of real | rendered | |difference| x diff_gain for
+    // these frames (indices out of range are skipped).
+    std::string png_path;         // empty: no picture
+    std::vector<int> png_frames = {0, 1, 2, 3, 5, 6, 24, 48};
+    double diff_gain = 4;
+};
+
+// With the default drape, over the 49 frames: |radius ratio - 1| median 0.039,
+// max 0.123; centre distance median 3.1 px, max 7.2 px: the 3 px every-frame
+// goal is not met, because the real halo loses far more blue light towards
+// the upper right than the local polynomial shading can produce (a non-local
+// optical effect; what was ruled out is in tests/test_sim_reality.cpp); mean |dRGB| 14.1 inside the
+// annotated circles (14.5 undeformed), 3.9 outside (5.0 undeformed).
+//
+// Renders without noise: the real frames carry their own, and independent
+// noise on the rendered side would only add to |dRGB| (by ~sigma * 1.13).
+// Throws vtloc::Error when the calibration has no press frames or the PNG
+// cannot be written (naming the path).
+RealityReport reality_check(const Calibration& calib, const RealityOptions& options = {});
+
+}  // namespace vtloc::sim
