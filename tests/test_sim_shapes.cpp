@@ -1,0 +1,117 @@
+// Procedural training objects: valid closed meshes at their design size, the
+// simple solids uniform and the toothed set non-uniform by SPEC section 5.
+#include <catch2/catch.hpp>
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <map>
+#include <set>
+#include <utility>
+
+#include "engine/io/mesh.h"
+#include "engine/sim/mesh_builder.h"
+#include "engine/sim/shapes.h"
+#include "engine/sim/uniformity.h"
+#include "tests/io_test_util.h"
+
+using namespace vtloc;
+
+namespace {
+
+const std::set<std::string> kUniformSolids = {"box", "cylinder", "sphere", "cone", "torus", "capsule"};
+// Designed to be non-uniform (each measured at <= 0.65 over seeds 0-4).
+const std::set<std::string> kToothed = {"comb_fine",  "comb_coarse", "hair_pick",        "saw_blade",
+                                        "gear_cassette", "pin_heatsink", "rasp",         "file",
+                                        "corrugated_plate", "brush",  "studded_plate",   "bolt",
+                                        "knurled_cylinder", "ridged_cylinder"};
+
+}  // namespace
+
+TEST_CASE("shapes: every name builds a closed outward mesh at its design size", "[sim]") {
+    const auto names = sim::shape_names();
+    REQUIRE(names.size() >= kUniformSolids.size() + kToothed.size());
+    for (const auto& n : kUniformSolids) CHECK(std::count(names.begin(), names.end(), n) == 1);
+    for (const auto& n : kToothed) CHECK(std::count(names.begin(), names.end(), n) == 1);
+    for (const std::string& name : names) {
+        INFO("shape " << name);
+        io::TriangleMesh m = sim::make_shape(name);
+        REQUIRE(m.triangle_count() > 0);
+        CHECK(m.triangle_count() <= 100000);
+        CHECK(m.normals.empty());  // face normals keep the teeth sharp
+        float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+        for (size_t i = 0; i < m.positions.size(); ++i) {
+            REQUIRE(std::isfinite(m.positions[i]));
+            lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
+            hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
+        }
+        double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+        CHECK(extent == Approx(sim::shape_scale_mm(name)).epsilon(0.01));
+        CHECK(sim::shape_scale_mm(name) >= 50);
+        CHECK(sim::shape_scale_mm(name) <= 250);
+
+        // No degenerate triangle, and closed with consistent winding: every
+        // directed edge appears once and its reverse once.
+        std::map<std::pair<uint32_t, uint32_t>, int> edges;
+        size_t degenerate = 0;
+        for (size_t t = 0; t < m.triangle_count(); ++t) {
+            const uint32_t* v = &m.triangles[3 * t];
+            for (int k = 0; k < 3; ++k) REQUIRE(v[k] < m.vertex_count());
+            double e[2][3], c[3];
+            for (int a = 0; a < 3; ++a) {
+                e[0][a] = double(m.positions[3 * v[1] + a]) - m.positions[3 * v[0] + a];
+                e[1][a] = double(m.positions[3 * v[2] + a]) - m.positions[3 * v[0] + a];
+            }
+            c[0] = e[0][1] * e[1][2] - e[0][2] * e[1][1];
+            c[1] = e[0][2] * e[1][0] - e[0][0] * e[1][2];
+            c[2] = e[0][0] * e[1][1] - e[0][1] * e[1][0];
+            if (!(0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]) > 1e-6)) ++degenerate;  // mm^2
+            for (int k = 0; k < 3; ++k) ++edges[{v[k], v[(k + 1) % 3]}];
+        }
+        CHECK(degenerate == 0);
+        size_t unpaired = 0;
+        for (const auto& [e, count] : edges)
+            if (count != 1 || !edges.count({e.second, e.first})) ++unpaired;
+        CHECK(unpaired == 0);
+        CHECK(sim::mesh::signed_volume(m) > 0);
+    }
+}
+
+TEST_CASE("shapes: simple solids are uniform, at least 10 toothed ones are not", "[sim]") {
+    std::string table = "shape              tris    share(dn<30)  label\n";
+    int non_uniform = 0;
+    for (const std::string& name : sim::shape_names()) {
+        io::TriangleMesh m = sim::make_shape(name);
+        sim::Uniformity u = sim::measure_uniformity(io::sample_surface(m, 1024, io::kDefaultSampleSeed, name));
+        char line[128];
+        std::snprintf(line, sizeof line, "%-18s %6zu  %.3f         %s\n", name.c_str(), m.triangle_count(),
+                      u.share_below, u.uniform ? "uniform" : "non-uniform");
+        table += line;
+        INFO("shape " << name << " share " << u.share_below);
+        if (kUniformSolids.count(name)) CHECK(u.uniform);
+        if (kToothed.count(name) && !u.uniform) ++non_uniform;
+    }
+    WARN(table);
+    CHECK(non_uniform >= 10);
+}
+
+TEST_CASE("shapes: an unknown name lists the known ones", "[sim]") {
+    test::require_error([] { sim::make_shape("teapot"); }, {"teapot", "box", "comb_fine", "rasp"});
+    test::require_error([] { sim::shape_scale_mm("teapot"); }, {"teapot", "sphere"});
+}
+
+TEST_CASE("mesh builder: polygon triangulation covers a non-convex outline", "[sim]") {
+    // A U shape, given clockwise: area 3 * 3 - 1 * 2 = 7.
+    std::vector<sim::mesh::P2> u = {{0, 0}, {0, 3}, {1, 3}, {1, 1}, {2, 1}, {2, 3}, {3, 3}, {3, 0}};
+    std::vector<uint32_t> tri = sim::mesh::triangulate_polygon(u);
+    REQUIRE(tri.size() == 3 * (u.size() - 2));
+    double area = 0;
+    for (size_t t = 0; t < tri.size(); t += 3) {
+        auto a = u[tri[t]], b = u[tri[t + 1]], c = u[tri[t + 2]];
+        double s = 0.5 * ((b.x - a.x) * (c.y - a.y) - (b.y - a.y) * (c.x - a.x));
+        CHECK(s > 0);  // counter-clockwise whatever the input direction
+        area += s;
+    }
+    CHECK(area == Approx(7.0));
+    io::TriangleMesh prism = sim::mesh::extrude(u, 0, 2);
+    CHECK(sim::mesh::signed_volume(prism) == Approx(14.0));
+}
