@@ -88,5 +88,7 @@ int cmd_localize(Session& s, int argc, char** argv);
 int cmd_sequence(Session& s, int argc, char** argv);
 int cmd_info(Session& s, int argc, char** argv);
 int cmd_devices(Session& s, int argc, char** argv);
+int cmd_synth(Session& s, int argc, char** argv);
+int cmd_eval(Session& s, int argc, char** argv);
 
 }  // namespace vtloc::cli

@@ -1,0 +1,55 @@
+#pragma once
+// `vtloc synth`: meshes in, a `vtloc-synth/1` dataset (docs/dataset.md) out.
+// Deterministic from the seed: each object draws from its own generator
+// (seed, object index), so objects can be built in any order, in parallel,
+// and an interrupted build resumes object by object.
+#include <cstdint>
+#include <functional>
+#include <optional>
+#include <string>
+#include <vector>
+
+namespace vtloc::sim {
+
+struct ObjectSource {
+    std::string source;               // "shape:<name>" or a mesh file path
+    std::optional<double> scale_mm;   // largest bounding-box side; drawn when absent
+};
+
+// One object per line: `<source> [scale_mm]`, `#` starts a comment. Relative
+// mesh paths resolve against mesh_dir (default: the list's folder). Throws
+// vtloc::Error naming the file and line.
+std::vector<ObjectSource> read_object_list(const std::string& path, const std::string& mesh_dir = "");
+
+struct BuildOptions {
+    std::string out;
+    uint64_t seed = 1;
+    int contacts = 40;                // train + test contacts per object
+    double test_fraction = 0.3;       // the 7:3 contact split
+    int extra = 0;                    // extra training touches per object (>= 2 mm from every test contact)
+    int n_points = 1024;
+    double max_tilt_deg = 5;          // tilt of the sensor axis, uniform in [0, max]
+    double press_min_mm = 0.3, press_max_mm = 1.5;
+    double min_separation_mm = 3;     // between any two train/test contacts of an object
+    double unseen_fraction = 0.3;     // the 7:3 object split, stratified by subset
+    bool randomize_train_look = true; // train/extra: background brightness, colour, blur, noise
+    std::string calibration;          // "" = the shipped calibration
+    std::string background;           // a user's empty sensor frame (PNG) replacing the calibration's
+    std::optional<double> mm_per_px;  // a user's pixel size
+    int threads = 0;                  // 0 = hardware concurrency
+    // Called after each object: (objects done, objects total, touches rendered so far).
+    std::function<void(int, int, long)> progress;
+};
+
+struct BuildReport {
+    int objects = 0, resumed = 0;
+    long touches = 0, rejected = 0;   // rendered / rejected (unreachable, missed) contact draws
+    double seconds = 0;
+    std::vector<std::string> notes;   // objects that got fewer contacts than asked, ...
+};
+
+// Throws vtloc::Error for bad sources (naming the file), an output folder
+// built with other options, or an object on which no contact is reachable.
+BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildOptions& options);
+
+}  // namespace vtloc::sim

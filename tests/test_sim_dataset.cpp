@@ -1,0 +1,200 @@
+// The dataset layout (docs/dataset.md): writer/reader round trip, reader
+// errors, and the builder's determinism, resume and split rules.
+#include <catch2/catch.hpp>
+#include <filesystem>
+#include <fstream>
+#include <sstream>
+
+#include "engine/error.h"
+#include "engine/sim/dataset.h"
+#include "engine/sim/dataset_builder.h"
+#include "tests/harness.h"
+#include "tests/io_test_util.h"
+
+namespace fs = std::filesystem;
+using namespace vtloc;
+using namespace vtloc::sim;
+using vtloc::test::require_error;
+
+namespace {
+
+std::string slurp(const fs::path& p) {
+    std::ifstream f(p, std::ios::binary);
+    std::ostringstream s;
+    s << f.rdbuf();
+    return s.str();
+}
+
+fs::path fresh_dir(const std::string& name) {
+    fs::path d = vtloc::test::temp_path(name);
+    fs::remove_all(d);
+    fs::create_directories(d);
+    return d;
+}
+
+// A hand-made one-object dataset with three touches.
+fs::path write_small_dataset(const std::string& name) {
+    fs::path root = fresh_dir(name);
+    fs::create_directories(root / "objects" / "cube");
+    ObjectRecord o;
+    o.name = "cube";
+    o.subset = "uniform";
+    o.dn_share = 0.9;
+    o.object_split = "seen";
+    o.n_points = 4;
+    o.points = HostTensor({4, 6}, {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, 1, 0, 1, 0, 0, 0, 1, 1, 1, 0, 0, 0, 1});
+    write_object_json((root / "objects/cube/object.json").string(), o);
+    write_points_csv((root / "objects/cube/points.csv").string(), o.points);
+    std::vector<TouchRecord> t(3);
+    const char* splits[] = {"test", "train", "test"};
+    for (int i = 0; i < 3; ++i) {
+        t[size_t(i)].id = i;
+        t[size_t(i)].split = splits[i];
+        t[size_t(i)].order = 2 - i;
+        t[size_t(i)].image = "touches/000" + std::to_string(i) + ".png";
+        t[size_t(i)].contact = {double(i), 0.5, 0.25};
+        t[size_t(i)].motion = {0.1 * i, 0, 0};
+    }
+    write_touches_csv((root / "objects/cube/touches.csv").string(), t);
+    Dataset d;
+    d.seed = 7;
+    d.n_points = 4;
+    d.objects.push_back(o);
+    write_dataset_json((root / "dataset.json").string(), d);
+    return root;
+}
+
+}  // namespace
+
+TEST_CASE("dataset: written files read back", "[sim]") {
+    fs::path root = write_small_dataset("ds_roundtrip");
+    Dataset d = read_dataset(root.string());
+    REQUIRE(d.objects.size() == 1);
+    CHECK(d.seed == 7);
+    CHECK(d.sensor.width == 160);
+    const ObjectRecord& o = d.objects[0];
+    CHECK(o.subset == "uniform");
+    CHECK(o.object_split == "seen");
+    REQUIRE(o.points.shape == Shape{4, 6});
+    CHECK(o.points.data[6] == 1.0f);
+    REQUIRE(o.touches.size() == 3);
+    CHECK(o.touches[2].order == 0);
+    CHECK(o.touches[1].motion[0] == Approx(0.1));
+    CHECK(o.touches[0].rel_R[4] == 1.0);
+    HostTensor c = o.candidates();
+    REQUIRE(c.shape == Shape{2, 3});  // the two test touches, in id order
+    CHECK(c.data[3] == 2.0f);
+    CHECK_FALSE(o.has_mesh);
+    // No temporary file is left behind.
+    for (auto& e : fs::recursive_directory_iterator(root)) CHECK(e.path().extension() != ".tmp");
+}
+
+TEST_CASE("dataset: reader errors name the file", "[sim]") {
+    fs::path empty = fresh_dir("ds_empty");
+    require_error([&] { read_dataset(empty.string()); }, {"ds_empty", "not a dataset"});
+    require_error([&] { read_dataset((empty / "nope").string()); }, {"not a folder"});
+
+    fs::path root = write_small_dataset("ds_bad_format");
+    std::string j = slurp(root / "dataset.json");
+    j.replace(j.find("vtloc-synth/1"), 13, "vtloc-synth/9");
+    write_file_atomic((root / "dataset.json").string(), j);
+    require_error([&] { read_dataset(root.string()); }, {"dataset.json", "vtloc-synth/9"});
+
+    root = write_small_dataset("ds_bad_number");
+    fs::path tc = root / "objects/cube/touches.csv";
+    std::string t = slurp(tc);
+    t.replace(t.find(",0.5,"), 5, ",abc,");
+    write_file_atomic(tc.string(), t);
+    require_error([&] { read_dataset(root.string()); }, {"touches.csv:2", "cy", "abc"});
+
+    root = write_small_dataset("ds_missing_points");
+    fs::remove(root / "objects/cube/points.csv");
+    require_error([&] { read_dataset(root.string()); }, {"points.csv", "cannot read"});
+
+    root = write_small_dataset("ds_missing_column");
+    fs::path pc = root / "objects/cube/points.csv";
+    std::string p = slurp(pc);
+    p.replace(0, p.find('\n'), "x,y,z,nx,ny,nw");
+    write_file_atomic(pc.string(), p);
+    require_error([&] { read_dataset(root.string()); }, {"points.csv", "missing column 'nz'"});
+}
+
+TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[sim]") {
+    BuildOptions o;
+    o.contacts = 10;
+    o.extra = 3;
+    o.n_points = 128;
+    o.seed = 5;
+    o.threads = 1;
+    std::vector<ObjectSource> objs = {{"shape:sphere", 60.0}, {"shape:box", 80.0}, {"shape:comb_fine", {}}};
+    o.out = fresh_dir("ds_build_a").string();
+    BuildReport ra = build_dataset(objs, o);
+    CHECK(ra.objects == 3);
+    CHECK(ra.resumed == 0);
+    o.out = fresh_dir("ds_build_b").string();
+    o.threads = 2;  // another thread count must not change a byte
+    build_dataset(objs, o);
+
+    Dataset a = read_dataset((fs::path(vtloc::test::temp_path("ds_build_a"))).string());
+    REQUIRE(a.objects.size() == 3);
+    for (const ObjectRecord& ob : a.objects) {
+        INFO(ob.name);
+        fs::path fa = ob.folder, fb = fs::path(vtloc::test::temp_path("ds_build_b")) / "objects" / ob.name;
+        CHECK(slurp(fa / "touches.csv") == slurp(fb / "touches.csv"));
+        CHECK(slurp(fa / "points.csv") == slurp(fb / "points.csv"));
+        CHECK(slurp(fa / "touches/0003.png") == slurp(fb / "touches/0003.png"));
+        // 7:3 split of 10 contacts, 3 extra touches, ids in order.
+        CHECK(ob.touches_of("test").size() == 3);
+        CHECK(ob.touches_of("train").size() == 7);
+        CHECK(ob.touches_of("extra").size() == 3);
+        // Collection order is a permutation of the train + test touches.
+        std::vector<int> orders;
+        for (const auto& t : ob.touches)
+            if (t.split != "extra") orders.push_back(t.order);
+        std::sort(orders.begin(), orders.end());
+        for (size_t i = 0; i < orders.size(); ++i) CHECK(orders[i] == int(i));
+        // Extra touches keep 2 mm from every test contact.
+        for (const auto* e : ob.touches_of("extra"))
+            for (const auto* t : ob.touches_of("test")) {
+                double d2 = 0;
+                for (int k = 0; k < 3; ++k) d2 += (e->contact[size_t(k)] - t->contact[size_t(k)]) * (e->contact[size_t(k)] - t->contact[size_t(k)]);
+                CHECK(d2 >= 4.0);
+            }
+        CHECK(ob.has_mesh);
+        CHECK(ob.has_background);
+    }
+    // The comb is non-uniform, the sphere uniform (SPEC section 5), and the
+    // object split puts one of the two uniform objects among the unseen.
+    for (const ObjectRecord& ob : a.objects) {
+        if (ob.name == "sphere") CHECK(ob.subset == "uniform");
+        if (ob.name == "comb_fine") CHECK(ob.subset == "non-uniform");
+    }
+
+    // Resume: a deleted object is rebuilt identically, the others are kept.
+    fs::path comb = fs::path(vtloc::test::temp_path("ds_build_a")) / "objects" / "comb_fine";
+    std::string before = slurp(comb / "touches.csv");
+    fs::remove_all(comb);
+    o.out = vtloc::test::temp_path("ds_build_a");
+    o.threads = 1;
+    BuildReport rr = build_dataset(objs, o);
+    CHECK(rr.resumed == 2);
+    CHECK(slurp(comb / "touches.csv") == before);
+
+    // Other options into the same folder are refused.
+    o.seed = 6;
+    require_error([&] { build_dataset(objs, o); }, {"ds_build_a", "other options"});
+}
+
+TEST_CASE("dataset builder: object list errors", "[sim]") {
+    fs::path d = fresh_dir("ds_list");
+    std::ofstream(d / "list.txt") << "# comment\nshape:sphere 50\nfoo.off abc\n";
+    require_error([&] { read_object_list((d / "list.txt").string()); }, {"list.txt:3", "abc"});
+    std::ofstream(d / "list2.txt") << "# nothing\n";
+    require_error([&] { read_object_list((d / "list2.txt").string()); }, {"list2.txt", "no objects"});
+    std::ofstream(d / "list3.txt") << "shape:sphere 50\nmeshes/a.off\n";
+    auto l = read_object_list((d / "list3.txt").string(), "/data");
+    REQUIRE(l.size() == 2);
+    CHECK(*l[0].scale_mm == 50.0);
+    CHECK(l[1].source == "/data/meshes/a.off");
+    CHECK_FALSE(l[1].scale_mm);
+}
