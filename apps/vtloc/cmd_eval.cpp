@@ -1,0 +1,275 @@
+// vtloc eval: the paper's metrics for a weight file on a dataset (docs/eval.md).
+#include <algorithm>
+#include <cstdio>
+#include <filesystem>
+#include <set>
+
+#include "apps/vtloc/eval.h"
+#include "apps/vtloc/report.h"
+#include "engine/error.h"
+
+namespace vtloc::cli {
+
+namespace {
+
+namespace fs = std::filesystem;
+
+const char* kHelp =
+    "usage: vtloc eval [--model M] --data DIR [options]\n"
+    "\n"
+    "The paper's metrics (mm Error, ND, Top-1, Top-5, MPE; docs/eval.md) of a weight file on a\n"
+    "dataset in the layout of docs/dataset.md, per subset (non-uniform / uniform / all),\n"
+    "averaged per object and then over objects, with the Chance and Point Filtering baselines.\n"
+    "Each object is encoded once with its candidates (its test contacts); its touches run in\n"
+    "batches.\n"
+    "\n"
+    "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
+    "  --data DIR                dataset folder (dataset.json, objects/...)\n"
+    "  --split test|train|all    which touches (default test)\n"
+    "  --objects all|known|unknown\n"
+    "                            all objects (default), the trained-on ones (object_split seen)\n"
+    "                            or the never-trained ones (unseen)\n"
+    "  --iters N                 ILU iterations, 0..64 (default: the model's)\n"
+    "  --topk K                  K of the heat-map that MPE scores, capped at the candidate count\n"
+    "                            (default 5)\n"
+    "  --sequence S              multi-contact: each touch with the S-1 touches before it in\n"
+    "                            collection order and their motions, through the belief filter\n"
+    "                            (SPEC section 6); default 1 = single touches\n"
+    "  --json FILE               the report as JSON (vtloc-eval/1)\n"
+    "  --markdown FILE           the table as markdown\n"
+    "  --per-touch FILE.csv      object, touch, subset, error_mm, nd, rank, mpe per touch\n"
+    "  --render DIR              heat-map pictures of the k worst and k best touches\n"
+    "  --render-count k          k for --render (default 3)\n"
+    "  --skip-bad                evaluate the touches that can be read; report the others\n"
+    "  --no-baselines            leave out the Chance and Point Filtering rows\n"
+    "  --backend gpu|cpu         Vulkan (default) or the plain C++ reference ops\n"
+    "\n"
+    "Chance is exact (every candidate taken as the prediction once). Point Filtering needs\n"
+    "mesh.ply in every object folder and is skipped with a note otherwise. Exit status: 0 ok,\n"
+    "1 bad input or runtime error, 2 usage error.\n";
+
+// Sim-library errors as the CLI's one-line errors.
+template <class F>
+auto sim_call(F&& f) {
+    try {
+        return f();
+    } catch (const vtloc::Error& e) {
+        throw api::Error(e.what());
+    }
+}
+
+std::string one_of(const Args& a, const std::string& name, const std::string& fallback,
+                   std::initializer_list<const char*> allowed) {
+    std::string v = a.get(name).value_or(fallback), list;
+    for (const char* x : allowed) {
+        if (v == x) return v;
+        list += std::string(list.empty() ? "" : ", ") + x;
+    }
+    throw UsageError(name + " must be one of " + list + ", got '" + v + "'");
+}
+
+eval::Options parse(const Args& a) {
+    eval::Options o;
+    o.data = a.required("--data");
+    o.model = a.get("--model").value_or("");
+    o.split = one_of(a, "--split", "test", {"test", "train", "all"});
+    o.objects = one_of(a, "--objects", "all", {"all", "known", "unknown"});
+    o.iters = a.integer("--iters", -1, 0, 64);
+    o.topk = a.integer("--topk", 5, 1, 256);
+    o.sequence = a.integer("--sequence", 1, 1, 64);
+    o.json = a.get("--json");
+    o.markdown = a.get("--markdown");
+    o.per_touch = a.get("--per-touch");
+    o.render_dir = a.get("--render");
+    if (a.flag("--render-count") && !o.render_dir) throw UsageError("--render-count needs --render DIR");
+    o.render_count = a.integer("--render-count", 3, 1, 1000);
+    o.skip_bad = a.flag("--skip-bad");
+    o.baselines = !a.flag("--no-baselines");
+    const std::string backend = one_of(a, "--backend", "gpu", {"gpu", "cpu"});
+    o.backend = backend == "gpu" ? api::Backend::Gpu : api::Backend::Cpu;
+    return o;
+}
+
+bool wanted(const sim::TouchRecord& t, const std::string& split) {
+    return split == "all" ? (t.split == "train" || t.split == "test") : t.split == split;
+}
+
+// The objects and touches the options select; missing images are found here,
+// before any engine work (skipped with --skip-bad, else an error).
+std::vector<eval::Job> select(const sim::Dataset& d, const eval::Options& opt, const api::ModelInfo& info,
+                              std::vector<eval::Skip>& skips) {
+    const std::string index = (fs::path(d.root) / "dataset.json").string();
+    std::vector<eval::Job> jobs;
+    for (const sim::ObjectRecord& o : d.objects) {
+        if (opt.objects == "known" && o.object_split != "seen") continue;
+        if (opt.objects == "unknown" && o.object_split != "unseen") continue;
+        eval::Job job;
+        job.rec = &o;
+        const std::string points = (fs::path(o.folder) / "points.csv").string();
+        if (o.points.shape.size() != 2 || o.points.shape[0] != info.sample_points)
+            throw api::Error(points + ": " + std::to_string(o.points.shape.empty() ? 0 : o.points.shape[0]) +
+                             " points, the model takes " + std::to_string(info.sample_points));
+        try {
+            job.geom = sim::MetricObject::make(o.points, o.candidates());
+        } catch (const vtloc::Error& e) {
+            throw api::Error(points + ": " + e.what());
+        }
+        job.topk = std::min<int>(opt.topk, int(job.geom.candidates.size()));
+        for (const sim::TouchRecord& t : o.touches) {
+            if (!wanted(t, opt.split)) continue;
+            const std::string path = eval::image_path(o, t);
+            std::error_code ec;
+            if (!fs::is_regular_file(path, ec)) {
+                const std::string why = fs::exists(path, ec) ? "not a file" : "no such file";
+                if (!opt.skip_bad)
+                    throw api::Error(path + ": " + why + " (touch " + std::to_string(t.id) + " of '" + o.name +
+                                     "'; --skip-bad evaluates the rest)");
+                skips.push_back({o.name, t.id, path, why});
+                continue;
+            }
+            job.touches.push_back(&t);
+        }
+        jobs.push_back(std::move(job));
+    }
+    if (jobs.empty())
+        throw api::Error(index + ": no object with object_split '" + std::string(opt.objects == "known" ? "seen" : "unseen") +
+                         "' (--objects " + opt.objects + ")");
+    return jobs;
+}
+
+// "skipped 2 of 40 touches (--skip-bad): 2 no such file (e.g. .../0003.png)".
+std::string skip_summary(const std::vector<eval::Skip>& skips, size_t total) {
+    std::vector<std::pair<std::string, std::pair<int, std::string>>> by_reason;
+    for (const eval::Skip& s : skips) {
+        auto it = std::find_if(by_reason.begin(), by_reason.end(), [&](auto& r) { return r.first == s.reason; });
+        if (it == by_reason.end()) by_reason.push_back({s.reason, {1, s.file}});
+        else ++it->second.first;
+    }
+    std::string out = "skipped " + std::to_string(skips.size()) + " of " + std::to_string(total) + " touches (--skip-bad):";
+    for (size_t i = 0; i < by_reason.size(); ++i)
+        out += std::string(i ? ";" : "") + " " + std::to_string(by_reason[i].second.first) + " " + by_reason[i].first +
+               " (e.g. " + by_reason[i].second.second + ")";
+    return out;
+}
+
+void render_extremes(const eval::Options& opt, const eval::MethodResult& model, const std::vector<eval::Job>& jobs,
+                     const std::string& config, std::vector<std::string>& written) {
+    make_folder(*opt.render_dir);
+    std::vector<size_t> order(model.rows.size());
+    for (size_t i = 0; i < order.size(); ++i) order[i] = i;
+    std::stable_sort(order.begin(), order.end(),
+                     [&](size_t a, size_t b) { return model.rows[a].m.error_mm < model.rows[b].m.error_mm; });
+    const size_t n_best = std::min<size_t>(size_t(opt.render_count), order.size());
+    const size_t n_worst = std::min<size_t>(size_t(opt.render_count), order.size() - n_best);
+    auto render = [&](size_t row_index, const std::string& kind, size_t k) {
+        const eval::TouchRow& r = model.rows[row_index];
+        const sim::ObjectRecord& o = *jobs[r.job].rec;
+        const api::TactileImage image = api::load_tactile_image(eval::image_path(o, *r.touch));
+        api::RenderOptions ro;
+        ro.contact = r.contact;
+        ro.ground_truth = r.touch->contact;
+        ro.tactile = &image;
+        char caption[256];
+        std::snprintf(caption, sizeof caption, "%s: %s touch %d, error %.2f mm, rank %d%s", config.c_str(),
+                      o.name.c_str(), r.touch->id, r.m.error_mm, r.m.rank, opt.sequence > 1 ? " (belief)" : "");
+        ro.caption = caption;
+        char name[64];
+        std::snprintf(name, sizeof name, "%s_%02zu_", kind.c_str(), k + 1);
+        const std::string path =
+            (fs::path(*opt.render_dir) / (name + o.name + "_" + std::to_string(r.touch->id) + ".png")).string();
+        api::render_heatmap_png(path, model.encoded[r.job], r.heat, ro);
+        written.push_back(path);
+    };
+    for (size_t k = 0; k < n_worst; ++k) render(order[order.size() - 1 - k], "worst", k);
+    for (size_t k = 0; k < n_best; ++k) render(order[k], "best", k);
+}
+
+}  // namespace
+
+namespace eval {
+std::string image_path(const sim::ObjectRecord& o, const sim::TouchRecord& t) {
+    return (fs::path(o.folder) / t.image).string();
+}
+}  // namespace eval
+
+int cmd_eval(Session& s, int argc, char** argv) {
+    std::vector<OptionSpec> specs{{"--model"},     {"--data"},     {"--split"},      {"--objects"},
+                                  {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
+                                  {"--markdown"},  {"--per-touch"}, {"--render"},    {"--render-count"},
+                                  {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"}};
+    Args a(argc, argv, 2, specs);
+    if (a.help()) {
+        std::fputs(kHelp, stdout);
+        return 0;
+    }
+    eval::Options opt = parse(a);
+    if (opt.model.empty()) opt.model = default_model_path();
+
+    const sim::Dataset d = sim_call([&] { return sim::read_dataset(opt.data); });
+    const api::ModelInfo info = api::inspect_model(opt.model);
+    const std::string index = (fs::path(d.root) / "dataset.json").string();
+    if (info.sample_points != d.n_points)
+        throw api::Error(opt.model + ": the model takes " + std::to_string(info.sample_points) +
+                         " points per object (point.n_points), " + index + " has n_points " + std::to_string(d.n_points));
+
+    eval::Report rep;
+    rep.opt = opt;
+    rep.config = info.name;
+    rep.head = info.head;
+    rep.iters = opt.iters >= 0 ? opt.iters : info.default_iters;
+    std::vector<eval::Job> jobs = select(d, opt, info, rep.skips);
+    size_t selected = rep.skips.size();
+    for (const eval::Job& j : jobs) selected += j.touches.size();
+
+    // Objects this run calls unknown that the weight file says it was trained on.
+    std::vector<std::string>& warnings = rep.warnings;
+    if (auto trained = eval::trained_objects(opt.model)) {
+        const std::set<std::string> names(trained->begin(), trained->end());
+        for (const eval::Job& j : jobs)
+            if (j.rec->object_split == "unseen" && names.count(j.rec->name))
+                warnings.push_back("warning: '" + j.rec->name + "' is an unknown object (object_split unseen) of " +
+                                   index + " but " + opt.model + " was trained on it (vtloc.provenance)");
+    }
+
+    const bool random = is_shipped_random_model(opt.model);
+    print_model(info, random);
+    for (const std::string& w : warnings) std::printf("%s\n", w.c_str());
+    std::fflush(stdout);
+
+    api::Model model = load_model(s, opt.model, opt.backend);
+    double engine_ms = 0;
+    eval::MethodResult result = eval::run_model(model, jobs, opt, rep.skips, engine_ms);
+    if (result.rows.empty()) throw api::Error(opt.data + ": no touch left to evaluate");
+    rep.touches_run = int(result.rows.size());
+    rep.time_per_touch_ms = engine_ms / double(result.rows.size());
+
+    std::vector<eval::MethodResult> methods{result};
+    if (opt.baselines) {
+        methods.push_back(eval::run_chance(jobs));
+        methods.push_back(eval::run_point_filtering(d, jobs));
+    }
+    for (const eval::MethodResult& m : methods) {
+        for (eval::Row& r : eval::make_rows(m, jobs)) rep.rows.push_back(r);
+        if (m.skipped) rep.notes.push_back(m.method + " " + m.note);
+        else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (README)");
+    }
+
+    std::printf("data      %s: %zu objects, %d %s touches%s\n", opt.data.c_str(), jobs.size(), rep.touches_run,
+                opt.split.c_str(), opt.objects == "all" ? "" : (" (" + opt.objects + " objects)").c_str());
+    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
+    if (opt.sequence > 1)
+        std::printf("sequence  %d touches per belief window (SPEC section 6, sigma 0.2, sigma_m 0.05)\n", opt.sequence);
+    if (!rep.skips.empty()) rep.notes.insert(rep.notes.begin(), skip_summary(rep.skips, selected));
+    std::printf("\n");
+    eval::print_table(rep);
+
+    std::vector<std::string> written;
+    if (opt.json) eval::write_json(*opt.json, rep, result, jobs), written.push_back(*opt.json);
+    if (opt.markdown) eval::write_markdown(*opt.markdown, rep), written.push_back(*opt.markdown);
+    if (opt.per_touch) eval::write_per_touch_csv(*opt.per_touch, result, jobs), written.push_back(*opt.per_touch);
+    if (opt.render_dir) render_extremes(opt, result, jobs, info.name, written);
+    for (const std::string& w : written) std::printf("wrote     %s\n", w.c_str());
+    return 0;
+}
+
+}  // namespace vtloc::cli

@@ -1,0 +1,201 @@
+// vtloc eval: the model's touches, in batches per object or as belief windows.
+#include <algorithm>
+#include <chrono>
+#include <cstdio>
+#include <filesystem>
+#include <numeric>
+#include <set>
+
+#include "apps/vtloc/eval.h"
+
+namespace vtloc::cli::eval {
+
+namespace {
+
+constexpr size_t kBatch = 16;  // touches per localize call: one submit, bounded memory
+
+using Clock = std::chrono::steady_clock;
+
+double ms_since(Clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+}
+
+// What makes the engine build new pipelines: call kind, touch count, candidate count, image size.
+std::string shape_key(char kind, const std::vector<api::TactileImage>& images, size_t candidates) {
+    char key[96];
+    std::snprintf(key, sizeof key, "%c%zu/m%zu/%dx%d", kind, images.size(), candidates, images[0].height,
+                  images[0].width);
+    return key;
+}
+
+// The reason without the leading "path: " the API puts in front.
+std::string reason_of(const std::string& message, const std::string& path) {
+    const std::string prefix = path + ": ";
+    return message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
+}
+
+api::Object encode(api::Model& model, const Job& job, api::Backend backend) {
+    const HostTensor& p = job.rec->points;
+    api::PointCloud cloud;
+    const size_t n = size_t(p.shape[0]), w = size_t(p.shape[1]);
+    for (size_t i = 0; i < n; ++i)
+        for (size_t k = 0; k < 3; ++k) {
+            cloud.xyz.push_back(p.data[i * w + k]);
+            cloud.normals.push_back(w >= 6 ? p.data[i * w + 3 + k] : 0.0f);
+        }
+    const HostTensor c = job.rec->candidates();
+    try {
+        return model.encode_object(cloud, c.data, backend);
+    } catch (const api::Error& e) {
+        throw api::Error((std::filesystem::path(job.rec->folder) / "points.csv").string() + ": " + e.what());
+    }
+}
+
+// Loads touch images by id, once each; a failure is remembered.
+class ImageCache {
+public:
+    ImageCache(const sim::ObjectRecord& o, const Options& opt, std::vector<Skip>& skips)
+        : o_(o), opt_(opt), skips_(skips) {}
+
+    // nullptr when the image cannot be read and --skip-bad is on (recorded
+    // once in `skips` when `count` is set), else throws.
+    const api::TactileImage* get(const sim::TouchRecord& t, bool count) {
+        auto it = images_.find(t.id);
+        if (it == images_.end()) {
+            const std::string path = image_path(o_, t);
+            Entry e;
+            try {
+                e.image = api::load_tactile_image(path);
+                e.ok = true;
+            } catch (const api::Error& err) {
+                if (!opt_.skip_bad) throw;
+                e.reason = reason_of(err.what(), path);
+                e.path = path;
+            }
+            it = images_.emplace(t.id, std::move(e)).first;
+        }
+        Entry& e = it->second;
+        if (!e.ok && count && !e.counted) {
+            skips_.push_back({o_.name, t.id, e.path, e.reason});
+            e.counted = true;
+        }
+        return e.ok ? &e.image : nullptr;
+    }
+
+private:
+    struct Entry {
+        bool ok = false, counted = false;
+        api::TactileImage image;
+        std::string path, reason;
+    };
+    const sim::ObjectRecord& o_;
+    const Options& opt_;
+    std::vector<Skip>& skips_;
+    std::map<int, Entry> images_;
+};
+
+}  // namespace
+
+MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options& opt, std::vector<Skip>& skips,
+                       double& engine_ms) {
+    MethodResult res;
+    res.method = model.info().name;
+    res.scores.resize(jobs.size());
+    size_t total = 0;
+    for (const Job& j : jobs) total += j.touches.size();
+    Progress progress("eval " + model.info().name, total);
+    engine_ms = 0;
+    // The first run of a shape compiles its pipelines: run each new shape once
+    // untimed, so that the engine time is the steady-state one.
+    std::set<std::string> warm;
+    auto timed = [&](const std::string& shape, auto&& call) {
+        if (warm.insert(shape).second) call();
+        const auto t0 = Clock::now();
+        auto r = call();
+        engine_ms += ms_since(t0);
+        return r;
+    };
+
+    for (size_t ji = 0; ji < jobs.size(); ++ji) {
+        Job& job = jobs[ji];
+        const sim::ObjectRecord& o = *job.rec;
+        api::LocalizeOptions lo;
+        lo.iters = opt.iters;
+        lo.top_k = job.topk;
+        lo.gma = false;  // the alignment score is not a metric
+        lo.backend = opt.backend;
+        ImageCache cache(o, opt, skips);
+        api::Object object = encode(model, job, opt.backend);
+        res.encoded.push_back(object);
+        std::vector<const sim::TouchRecord*> kept;
+
+        auto record = [&](const sim::TouchRecord* t, const sim::Point3& pred, std::vector<int> ranking,
+                          std::vector<float> heat) {
+            TouchRow row;
+            row.job = ji;
+            row.touch = t;
+            row.contact = pred;
+            row.m = sim::touch_metrics(job.geom, pred, t->contact, std::move(ranking), heat, job.topk);
+            row.heat = std::move(heat);
+            res.scores[ji].push_back(sim::score(row.m));
+            res.rows.push_back(std::move(row));
+            kept.push_back(t);
+        };
+
+        if (opt.sequence <= 1) {
+            for (size_t b = 0; b < job.touches.size(); b += kBatch) {
+                std::vector<const sim::TouchRecord*> batch;
+                std::vector<api::TactileImage> images;
+                for (size_t i = b; i < std::min(job.touches.size(), b + kBatch); ++i)
+                    if (const api::TactileImage* im = cache.get(*job.touches[i], true)) {
+                        batch.push_back(job.touches[i]);
+                        images.push_back(*im);
+                    }
+                if (!batch.empty()) {
+                    const std::string shape = shape_key('b', images, job.geom.candidates.size());
+                    std::vector<api::TouchResult> r = timed(shape, [&] { return model.localize(object, images, lo); });
+                    for (size_t i = 0; i < batch.size(); ++i)
+                        record(batch[i], r[i].contact, {}, std::move(r[i].heatmap));
+                }
+                progress.advance(std::min(job.touches.size(), b + kBatch) - b);
+            }
+        } else {
+            // The collection path: train and test touches by `order`. The belief
+            // window is a touch and the (sequence - 1) touches before it there.
+            std::vector<const sim::TouchRecord*> path;
+            for (const sim::TouchRecord& t : o.touches)
+                if (t.order >= 0 && t.split != "extra") path.push_back(&t);
+            std::stable_sort(path.begin(), path.end(), [](auto* x, auto* y) { return x->order < y->order; });
+            for (const sim::TouchRecord* t : job.touches) {
+                progress.advance();
+                if (!cache.get(*t, true)) continue;
+                std::vector<const sim::TouchRecord*> window{t};
+                const auto at = std::find(path.begin(), path.end(), t);
+                for (auto it = at; it != path.end() && it != path.begin() && int(window.size()) < opt.sequence;) {
+                    --it;
+                    if (!cache.get(**it, false)) break;  // an unreadable predecessor ends the window
+                    window.insert(window.begin(), *it);
+                }
+                std::vector<api::TactileImage> images;
+                std::vector<std::array<double, 3>> motions;
+                for (size_t i = 0; i < window.size(); ++i) {
+                    images.push_back(*cache.get(*window[i], false));
+                    if (i > 0) motions.push_back(window[i]->motion);
+                }
+                api::BeliefOptions belief;
+                belief.window = opt.sequence;
+                const std::string shape = shape_key('s', images, job.geom.candidates.size());
+                api::SequenceResult r =
+                    timed(shape, [&] { return model.localize_sequence(object, images, motions, lo, belief); });
+                // The prediction is the argmax candidate itself (exact, not the float round trip);
+                // rank as for single touches: candidates by distance to it.
+                record(t, job.geom.candidates[size_t(r.best)], {}, std::move(r.heatmap));
+            }
+        }
+        job.touches = kept;
+    }
+    progress.finish();
+    return res;
+}
+
+}  // namespace vtloc::cli::eval
