@@ -73,7 +73,39 @@ _MCR_TINY["point"].update(use_normals=False, sa=[  # MSG: two scales per stage
     {"npoint": 8, "radii": [0.4, 0.8], "nsample": [8, 16], "mlps": [[16, 32], [16, 32]]},
 ])
 
-NAMED = {c["name"]: c for c in (_R18, _MCR, _TINY, _MCR_TINY)}
+# Lite configs: trainable on a 2-core CPU in about 90 minutes (see README "Training").
+# Frames are 120 x 160, so crop 120 keeps the whole height and drops 20 columns a side.
+_LITE = {
+    "name": "vtloc-lite",
+    "C": 64,
+    "K": 5,
+    "tactile": {"crop": 120, "in_size": 112, "widths": [16, 32, 64, 128],
+                "blocks": [2, 2, 2, 2], "mlp": [128]},
+    "point": {
+        "n_points": 1024,
+        "use_normals": True,
+        "sa": [
+            {"npoint": 256, "radii": [0.2], "nsample": [32], "mlps": [[32, 32, 64]]},
+            {"npoint": 64, "radii": [0.4], "nsample": [32], "mlps": [[64, 64, 128]]},
+        ],
+        "group_all_mlp": [128, 256, 512],
+        "mlp": [256],
+    },
+    "gma": {"n_points": 256, "channels": 16, "decoder": [32, 16, 8]},
+    "ilu": {"iters": 16, "head_hidden": 32},
+    "head": "ilu",
+    "mcr": None,
+}
+
+_LITE_XYZ = copy.deepcopy(_LITE)
+_LITE_XYZ["name"] = "vtloc-lite-xyz"
+_LITE_XYZ["point"]["use_normals"] = False
+
+_MCR_LITE = copy.deepcopy(_LITE)
+_MCR_LITE.update(name="mcr-lite", gma=None, ilu=None, head="mcr", mcr={"hidden": [128, 32]})
+_MCR_LITE["point"]["use_normals"] = False
+
+NAMED = {c["name"]: c for c in (_R18, _MCR, _TINY, _MCR_TINY, _LITE, _LITE_XYZ, _MCR_LITE)}
 
 
 def named(name):

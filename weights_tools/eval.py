@@ -1,0 +1,177 @@
+"""Evaluate a weight file on a vtloc-synth/1 dataset (docs/eval.md), the PyTorch
+reference of ``vtloc eval``.
+
+  python3 -m weights_tools.eval --model M.safetensors --data DIR [--split test|train|all]
+      [--objects all|known|unknown] [--iters N] [--topk K] [--sequence S] [--json FILE]
+
+Each object's cloud is encoded once (normalised frame of SPEC 1); its touches run in
+batches.  ``--sequence S`` (S > 1) scores the SPEC 6 belief instead of the single
+touch: each selected touch together with the S - 1 touches before it in the object's
+collection order (``order`` column; those may be train touches, and fewer exist at the
+start of the path), motions = their ``dx,dy,dz`` columns divided by the object's
+scale.  The prediction is then the belief's argmax candidate (lowest index on a tie):
+error, ND and rank are measured from that candidate's point, and MPE scores the
+belief heat-map (each cloud point takes the belief of its nearest candidate,
+min-max normalised: ``post.belief_heatmap``) instead of the top-K heat-map.
+"""
+
+import argparse
+import json
+import os
+import sys
+import time
+
+import numpy as np
+import torch
+
+from . import metrics, post
+from . import model as model_mod
+from .dataset import DatasetError, read_dataset
+from .tactile import preprocess
+
+SPLIT_TOUCHES = {"test": ("test",), "train": ("train",), "all": ("train", "test")}
+OBJECT_FILTER = {"all": ("seen", "unseen"), "known": ("seen",), "unknown": ("unseen",)}
+
+
+def network_cloud(model, points):
+    """Object cloud (N x 6, mm) -> (network input 1 x N x 6|3, centre, scale)."""
+    cloud, centre, scale = post.normalise_cloud(torch.as_tensor(points))
+    if not model.cfg["point"]["use_normals"]:
+        cloud = cloud[:, :3]
+    return cloud[None].contiguous(), centre, scale
+
+
+@torch.no_grad()
+def predict(model, obj, touches, iters=None, batch=32, images=None):
+    """c^p in object units (len(touches) x 3, float64) for touches of one object.
+    ``images``: optional touch id -> uint8 frame (else read from disk)."""
+    cfg = model.cfg["tactile"]
+    cloud, centre, scale = network_cloud(model, obj.points)
+    fp = model.point(cloud)
+    out = []
+    for i in range(0, len(touches), batch):
+        chunk = touches[i:i + batch]
+        x = torch.cat([preprocess(images[t.id] if images is not None else obj.image(t),
+                                  cfg["crop"], cfg["in_size"]) for t in chunk])
+        ft = model.tactile(x)
+        cp, _ = model.contact(ft, fp.expand(len(chunk), -1), iters)
+        out.append(cp.double() * scale + centre)
+    return torch.cat(out).numpy() if out else np.zeros((0, 3))
+
+
+def collection_path(obj):
+    """Train and test touches in collection order (``order`` >= 0)."""
+    return sorted((t for t in obj.touches if t.order >= 0), key=lambda t: t.order)
+
+
+def evaluate(model, ds, split="test", objects="all", iters=None, topk=5, sequence=1,
+             batch=32, sigma=0.2, sigma_m=0.05, progress=None):
+    """Returns (rows, per_touch, seconds of network time, touches run)."""
+    per_touch, net_s, net_n = [], 0.0, 0
+    subsets = {}
+    for obj in ds.objects:
+        if obj.object_split not in OBJECT_FILTER[objects]:
+            continue
+        chosen = obj.touches_of(*SPLIT_TOUCHES[split])
+        if not chosen:
+            continue
+        if obj.candidates.shape[0] == 0:
+            raise DatasetError(f"{obj.folder}/touches.csv: no test touches, so no candidates")
+        subsets[obj.name] = obj.subset
+        frame = metrics.ObjectFrame(obj.points, obj.candidates)
+        path = collection_path(obj)
+        pos = {t.id: i for i, t in enumerate(path)}
+        windows = {}
+        run = {t.id: t for t in chosen}
+        if sequence > 1:
+            for t in chosen:
+                if t.id in pos:
+                    windows[t.id] = path[max(0, pos[t.id] - sequence + 1):pos[t.id] + 1]
+                    run.update((w.id, w) for w in windows[t.id])
+        run = sorted(run.values(), key=lambda t: t.id)
+        t0 = time.perf_counter()
+        preds = predict(model, obj, run, iters, batch)
+        net_s += time.perf_counter() - t0
+        net_n += len(run)
+        pred = {t.id: p for t, p in zip(run, preds)}
+        for t in chosen:
+            if t.id in windows:
+                w = windows[t.id]
+                best, _, heat = metrics.belief_prediction(
+                    frame, np.stack([pred[u.id] for u in w]),
+                    np.stack([u.motion for u in w[1:]]) if len(w) > 1 else np.zeros((0, 3)),
+                    sigma, sigma_m, window=sequence)
+                c = frame.cand[best].numpy()
+                m = metrics.touch_metrics(frame, c, t.contact, topk, heat=heat)
+            else:
+                c = pred[t.id]
+                m = metrics.touch_metrics(frame, c, t.contact, topk)
+            per_touch.append({"object": obj.name, "touch": t.id, "subset": obj.subset, **m,
+                              "contact": [float(v) for v in c]})
+        if progress is not None:
+            progress(obj.name, len(chosen))
+    rows = metrics.aggregate(per_touch, subsets, model.cfg["name"])
+    return rows, per_touch, net_s, net_n
+
+
+def format_table(rows):
+    def f(v, fmt):
+        return "-" if v is None else format(v, fmt)
+    lines = [f"{'method':<16} {'subset':<12} {'objects':>7} {'touches':>7} {'mm':>7} "
+             f"{'ND %':>6} {'Top-1':>6} {'Top-5':>6} {'MPE':>6}"]
+    for r in rows:
+        lines.append(f"{r['method']:<16} {r['subset']:<12} {r['objects']:>7} {r['touches']:>7} "
+                     f"{f(r['mm'], '7.2f')} {f(r['nd'], '6.2f')} {f(r['top1'], '6.1f')} "
+                     f"{f(r['top5'], '6.1f')} {f(r['mpe'], '6.3f')}")
+    return "\n".join(lines)
+
+
+def main(argv=None):
+    ap = argparse.ArgumentParser(prog="python3 -m weights_tools.eval", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--model", required=True, help="weight file (.safetensors)")
+    ap.add_argument("--data", required=True, help="dataset folder (docs/dataset.md)")
+    ap.add_argument("--split", choices=tuple(SPLIT_TOUCHES), default="test")
+    ap.add_argument("--objects", choices=tuple(OBJECT_FILTER), default="all")
+    ap.add_argument("--iters", type=int, help="ILU iterations (default: the config's)")
+    ap.add_argument("--topk", type=int, default=5)
+    ap.add_argument("--sequence", type=int, default=1, help="touches per belief (SPEC 6)")
+    ap.add_argument("--sigma", type=float, default=0.2)
+    ap.add_argument("--sigma-m", type=float, default=0.05)
+    ap.add_argument("--batch", type=int, default=32)
+    ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
+    ap.add_argument("--json", help="write the vtloc-eval/1 report here")
+    args = ap.parse_args(argv)
+    if args.topk < 1 or args.sequence < 1 or args.batch < 1:
+        ap.error("--topk, --sequence and --batch must be >= 1")
+    torch.set_num_threads(args.threads or os.cpu_count() or 1)
+    try:
+        model = model_mod.load(args.model).eval()
+        ds = read_dataset(args.data)
+        rows, per_touch, net_s, net_n = evaluate(
+            model, ds, args.split, args.objects, args.iters, args.topk, args.sequence,
+            args.batch, args.sigma, args.sigma_m)
+    except (DatasetError, ValueError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    iters = None
+    if model.cfg["head"] == "ilu":
+        iters = model.cfg["ilu"]["iters"] if args.iters is None else args.iters
+    report = {
+        "format": "vtloc-eval/1", "model": args.model, "config": model.cfg["name"],
+        "data": args.data, "split": args.split, "objects": args.objects, "iters": iters,
+        "topk": args.topk, "sequence": args.sequence, "rows": rows, "per_touch": per_touch,
+        "time_per_touch_ms": 1000.0 * net_s / net_n if net_n else None,
+    }
+    print(format_table(rows))
+    if report["time_per_touch_ms"] is not None:
+        print(f"{net_n} touches through the network, {report['time_per_touch_ms']:.2f} ms each")
+    if args.json:
+        with open(args.json, "w") as f:
+            json.dump(report, f, indent=1)
+            f.write("\n")
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

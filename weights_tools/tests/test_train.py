@@ -1,0 +1,134 @@
+"""train.py on a tiny fake dataset: pieces match the reference, the loss goes down,
+resume continues exactly, the exported file loads back; the lite configs' sizes."""
+
+import copy
+import csv
+import json
+import os
+
+import numpy as np
+import pytest
+import torch
+
+from fake_dataset import make_dataset
+from weights_tools import config, export, model, post, safetensors_io, train
+from weights_tools.dataset import read_dataset
+from weights_tools.tactile import preprocess
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    return make_dataset(str(tmp_path_factory.mktemp("ds") / "data"), n_train=10, n_extra=3)
+
+
+@pytest.fixture(scope="module")
+def tiny(data_dir):
+    m = train.make_model(config.named("vtloc-tiny"), 0)
+    return m, train.load_objects(m, read_dataset(data_dir))
+
+
+def _args(data_dir, out, *extra):
+    return ["--config", "vtloc-tiny", "--data", data_dir, "--out", str(out), "--batch", "4",
+            "--threads", "1", *extra]
+
+
+def test_split_by_contact(data_dir, tiny):
+    _, objs = tiny
+    ds = read_dataset(data_dir)
+    assert [o.name for o in objs] == ["shape00", "shape01"]  # seen objects only
+    for o in objs:
+        split = {t.id: t.split for t in ds.object(o.name).touches}
+        val = [o.ids[i] for i in o.val_index]
+        assert len(val) == 1 and all(split[i] == "train" for i in val)
+        assert all(split[i] in ("train", "extra") for i in o.ids)  # never a test touch
+        assert not set(val) & set(o.ids[:o.n_train])
+    # fixed by the object's name, not by the run's seed
+    assert train.split_contacts(ds.objects[0]) == train.split_contacts(ds.objects[0])
+
+
+def test_pieces_match_reference(tiny):
+    m, objs = tiny
+    o = objs[0]
+    m.eval()
+    with torch.no_grad():
+        assert torch.equal(train.point_features(m.point, o.cloud, o.plan), m.point(o.cloud))
+    want = torch.cat([preprocess(o.images[i].numpy(), 128, 40) for i in range(3)])
+    assert torch.allclose(train.images_to_input(o.images[:3], m.cfg), want, atol=1e-6)
+    # the augmented path samples crop + resize in one grid_sample: the same at angle 0
+    x = o.images[:3].permute(0, 3, 1, 2).float() / 255
+    for crop, size in ((128, 40), (120, 112), (117, 50)):
+        ref = torch.cat([preprocess(o.images[i].numpy(), crop, size) for i in range(3)])
+        got = train._normalise(train.rotated_crops(x, crop, size, torch.zeros(3)))
+        assert torch.allclose(got, ref, atol=3e-5)
+    aug = train.images_to_input(o.images[:3], m.cfg, torch.Generator().manual_seed(0))
+    assert aug.shape == want.shape and not torch.allclose(aug, want)
+    a, b = torch.randn(2, 20, 6, dtype=torch.float64), torch.randn(30, 6, dtype=torch.float64)
+    got = train.chamfer_batch(a, b)
+    assert torch.allclose(got, torch.stack([post.chamfer(a[i], b) for i in range(2)]))
+    m.train()
+
+
+def _batch_loss(m, o):
+    """Training-mode loss on a fixed batch (on a copy: it updates BatchNorm statistics)."""
+    with torch.no_grad():
+        return float(train.losses(copy.deepcopy(m).train(), o, list(range(4)))[0])
+
+
+def test_training_lowers_loss_and_resumes(data_dir, tiny, tmp_path):
+    m0, objs = tiny
+    before = _batch_loss(train.make_model(config.named("vtloc-tiny"), 0), objs[0])
+    # uninterrupted: 24 steps
+    full, step, _ = train.run(train.parse_args(_args(data_dir, tmp_path / "a", "--steps", "24")))
+    assert step == 24
+    assert _batch_loss(full, objs[0]) < before
+    # interrupted after 10 steps, then resumed to the same budget: the same weights
+    b = tmp_path / "b"
+    train.run(train.parse_args(_args(data_dir, b, "--steps", "24", "--stop-after", "10")))
+    assert torch.load(b / "checkpoint.pt")["step"] == 10 and not (b / "model.safetensors").exists()
+    with pytest.raises(ValueError, match="--resume"):
+        train.run(train.parse_args(_args(data_dir, b, "--steps", "24")))
+    resumed, step, _ = train.run(train.parse_args(["--data", data_dir, "--out", str(b), "--resume",
+                                                   "--threads", "1"]))
+    assert step == 24
+    sa, sb = full.state_dict(), resumed.state_dict()
+    assert all(torch.allclose(sa[k].double(), sb[k].double(), atol=1e-6) for k in sa)
+    with open(b / "log.csv") as f:
+        steps = [int(r["step"]) for r in csv.DictReader(f)]
+    assert steps == sorted(steps) and steps[-1] == 24 and 10 in steps
+    with open(b / "log.csv") as f:
+        last = list(csv.DictReader(f))[-1]
+    assert float(last["val_nd"]) > 0
+
+    # the exported file: loads into the reference, same tensors, provenance metadata
+    path = str(b / "model.safetensors")
+    back = model.load(path)
+    ref = resumed.eval().state_dict()
+    assert all(torch.equal(back.state_dict()[k], ref[k]) for k in ref)
+    _, meta = safetensors_io.load(path)
+    prov = json.loads(meta["vtloc.provenance"])
+    assert prov["steps"] == 24 and prov["data_seed"] == 0 and prov["config"] == "vtloc-tiny"
+    assert [(o["name"], o["object_split"]) for o in prov["objects"]] == [
+        ("shape00", "seen"), ("shape01", "seen"), ("shape02", "unseen")]
+    assert prov["sensor"]["height"] == 120 and len(prov["git_commit"]) in (7, 40) or \
+        prov["git_commit"] == "unknown"
+    assert json.loads(meta["vtloc.config"]) == config.named("vtloc-tiny")
+    # the checkpoint is also a valid export.py --checkpoint input
+    assert export.main(["--config", "vtloc-tiny", "--checkpoint", str(b / "checkpoint.pt"),
+                        "-o", str(tmp_path / "w.safetensors")]) == 0
+
+
+def test_mcr_head_trains(data_dir, tmp_path):
+    m, step, _ = train.run(train.parse_args(
+        ["--config", "vtloc-mcr-tiny", "--data", data_dir, "--out", str(tmp_path), "--steps", "3",
+         "--batch", "4", "--threads", "1"]))
+    assert step == 3 and model.load(str(tmp_path / "model.safetensors")).cfg["head"] == "mcr"
+
+
+@pytest.mark.parametrize("name", ["vtloc-lite", "vtloc-lite-xyz", "mcr-lite"])
+def test_lite_configs(name):
+    cfg = config.named(name)
+    n = sum(v.numel() for k, v in model.VTLoc(cfg).state_dict().items()
+            if not k.endswith("num_batches_tracked"))
+    assert n * 4 <= 16 * 2**20  # F32 weight file of at most 16 MiB
+    assert cfg["tactile"]["crop"] == 120 and cfg["point"]["use_normals"] == (name == "vtloc-lite")
+    assert (cfg["head"] == "mcr") == (name == "mcr-lite")

@@ -1,0 +1,540 @@
+"""Train a VTLoc config on a vtloc-synth/1 dataset and export the weight file.
+
+  python3 -m weights_tools.train --config vtloc-lite --data DIR --out RUN_DIR
+      [--minutes M] [--steps S] [--seed 0] [--batch 16] [--lambda 1.0] [--resume]
+      [--export-only]
+
+Trains on the ``train`` and ``extra`` touches of the ``seen`` objects; a fixed share of
+each seen object's ``train`` contacts is held out for validation (test touches are never
+read).  A batch holds touches of one object, so the point encoder runs once per batch.
+Writes RUN_DIR/checkpoint.pt (atomically, every few minutes), RUN_DIR/log.csv and at the
+end RUN_DIR/model.safetensors with ``vtloc.provenance`` metadata.  See README "Training".
+"""
+
+import argparse
+import csv
+import json
+import math
+import os
+import subprocess
+import sys
+import time
+import zlib
+
+import numpy as np
+import torch
+import torch.nn.functional as F
+
+from . import config as config_mod
+from . import model as model_mod
+from . import post, safetensors_io
+from .dataset import DatasetError, read_dataset
+from .pointnet2 import gather, run_stack
+from .tactile import IMAGENET_MEAN, IMAGENET_STD, center_crop, crop_start
+
+VAL_FRACTION = 0.1      # share of each seen object's train contacts held out
+EXTRA_CLEARANCE_MM = 2.0  # extra renders this close to a held-out contact are dropped too
+GAMMA = 0.9             # SPEC 4 sequence-loss decay
+LOG_COLUMNS = ("step", "elapsed_s", "lr", "loss", "loss_seq", "loss_recon", "val_loss", "val_nd")
+ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
+
+
+# ---------------------------------------------------------------- data
+
+class TrainObject:
+    """One seen object in memory: network cloud, Chamfer target, frames as uint8."""
+
+    def __init__(self, model, obj, train_ids, val_ids):
+        self.name, self.subset = obj.name, obj.subset
+        cloud, self.centre, self.scale = post.normalise_cloud(torch.from_numpy(obj.points))
+        self.target = cloud.clone()                 # normalised xyz + normals (SPEC 4 recon)
+        self.cloud = (cloud if model.cfg["point"]["use_normals"] else cloud[:, :3])[None].contiguous()
+        self.D = float(np.sqrt(((obj.points[:, None, :3] - obj.points[None, :, :3]) ** 2).sum(-1).max()))
+        self.plan = sampling_plan(model, self.cloud)
+        by_id = {t.id: t for t in obj.touches}
+        self.ids = list(train_ids) + list(val_ids)
+        self.n_train = len(train_ids)
+        frames = [obj.image(by_id[i]) for i in self.ids]
+        if len({f.shape for f in frames}) > 1:
+            raise DatasetError(f"{obj.folder}: frames of different sizes")
+        self.images = torch.from_numpy(np.stack(frames)) if frames else torch.zeros(0, 1, 1, 3, dtype=torch.uint8)
+        self.contacts = post.normalise_points(
+            np.stack([by_id[i].contact for i in self.ids]), self.centre, self.scale) \
+            if self.ids else torch.zeros(0, 3)
+
+    @property
+    def train_index(self):
+        return list(range(self.n_train))
+
+    @property
+    def val_index(self):
+        return list(range(self.n_train, len(self.ids)))
+
+
+def split_contacts(obj, fraction=VAL_FRACTION):
+    """(training ids, validation ids) of a seen object: a fixed share of its train
+    touches (chosen by the object's name, not by --seed, so every run validates on the
+    same contacts) plus its extra touches not within EXTRA_CLEARANCE_MM of those."""
+    train = [t for t in obj.touches if t.split == "train"]
+    n_val = int(round(fraction * len(train)))
+    rng = np.random.default_rng(zlib.crc32(obj.name.encode()))
+    val = sorted(rng.choice(len(train), size=n_val, replace=False).tolist()) if n_val else []
+    val_ids = [train[i].id for i in val]
+    held = np.array([train[i].contact for i in val]).reshape(-1, 3)
+    ids = [t.id for t in train if t.id not in set(val_ids)]
+    for t in obj.touches:
+        if t.split == "extra" and (not len(held) or np.linalg.norm(held - t.contact, axis=1).min()
+                                    > EXTRA_CLEARANCE_MM):
+            ids.append(t.id)
+    return ids, val_ids
+
+
+def load_objects(model, ds, fraction=VAL_FRACTION):
+    out = []
+    for obj in ds.objects:
+        if obj.object_split != "seen":
+            continue
+        tr, va = split_contacts(obj, fraction)
+        if tr:
+            out.append(TrainObject(model, obj, tr, va))
+    if not out:
+        raise DatasetError(f"{ds.root}/dataset.json: no seen object with training touches")
+    return out
+
+
+# ---------------------------------------------------------------- network pieces
+
+@torch.no_grad()
+def sampling_plan(model, cloud):
+    """FPS and ball-query indices of every SA stage.  They depend only on the cloud
+    (never on weights), and the cloud is not augmented, so they are computed once."""
+    trace = {}
+    was = model.training
+    model.point.eval()(cloud, trace=trace)
+    model.point.train(was)
+    n = model.point.n_stages
+    return [(trace[f"point.sa{i}.fps"],
+             [trace[f"point.sa{i}.ball.{s}"] for s in range(len(getattr(model.point, f"sa{i}").radii))])
+            for i in range(1, n + 1)]
+
+
+def point_features(pe, cloud, plan):
+    """PointEncoder.forward with precomputed sampling (same graph, same modules)."""
+    xyz = cloud[..., :3]
+    feats = cloud[..., 3:6] if pe.use_normals else None
+    for i, (fps, balls) in enumerate(plan, start=1):
+        sa = getattr(pe, f"sa{i}")
+        new_xyz = gather(xyz, fps)
+        outs = []
+        for s, idx in enumerate(balls):
+            rel = gather(xyz, idx) - new_xyz[:, :, None, :]
+            grouped = rel if feats is None else torch.cat([gather(feats, idx), rel], dim=-1)
+            x = run_stack(grouped.permute(0, 3, 2, 1), sa.conv_blocks[s], sa.bn_blocks[s])
+            outs.append(x.max(dim=2).values)
+        xyz, feats = new_xyz, torch.cat(outs, dim=1).transpose(1, 2)
+    return pe.mlp(getattr(pe, f"sa{len(plan) + 1}")(xyz, feats))
+
+
+def _normalise(x):
+    mean = torch.tensor(IMAGENET_MEAN).view(1, 3, 1, 1)
+    std = torch.tensor(IMAGENET_STD).view(1, 3, 1, 1)
+    return (x - mean) / std
+
+
+def rotated_crops(x, crop, size, angles):
+    """Centre crop + bilinear resize of B x 3 x H x W images as tactile.preprocess does,
+    but with each crop rotated by ``angles`` (radians) about the image centre, all in one
+    grid_sample.  Rotated corners read reflected pixels; where the crop itself lies
+    outside the image (crop > H or W) the result is zero, as in preprocess."""
+    B, _, H, W = x.shape
+    pos = (torch.arange(size, dtype=torch.float32) + 0.5) * (crop / size) - 0.5  # crop pixels
+    ys = crop_start(H, crop) + pos - (H - 1) / 2   # relative to the image centre
+    xs = crop_start(W, crop) + pos - (W - 1) / 2
+    yy, xx = torch.meshgrid(ys, xs, indexing="ij")
+    c, s = torch.cos(angles).view(B, 1, 1), torch.sin(angles).view(B, 1, 1)
+    X = c * xx - s * yy + (W - 1) / 2
+    Y = s * xx + c * yy + (H - 1) / 2
+    grid = torch.stack([(2 * X + 1) / W - 1, (2 * Y + 1) / H - 1], dim=-1)
+    out = F.grid_sample(x, grid, mode="bilinear", padding_mode="reflection", align_corners=False)
+    inside = ((yy > -(H + 1) / 2) & (yy < (H + 1) / 2) & (xx > -(W + 1) / 2) & (xx < (W + 1) / 2))
+    return out * inside.to(out.dtype)
+
+
+def images_to_input(u8, cfg, gen=None):
+    """B x H x W x 3 uint8 -> B x 3 x S x S network input: tactile.preprocess batched,
+    with augmentation when ``gen`` is given.  The augmentations keep the label valid:
+    a rotation about the image centre is a sensor spin (the contact is the centre's
+    projection), and photometric jitter (gain, colour gain, offset, noise) changes no
+    geometry.  No mirroring (that would be the imprint of a mirrored surface)."""
+    x = u8.permute(0, 3, 1, 2).float() / 255.0
+    t = cfg["tactile"]
+    if gen is None:
+        x = center_crop(x, t["crop"])
+        if t["crop"] != t["in_size"]:
+            x = F.interpolate(x, size=(t["in_size"], t["in_size"]), mode="bilinear",
+                              align_corners=False, antialias=False)
+        return _normalise(x)
+    B = x.shape[0]
+    x = rotated_crops(x, t["crop"], t["in_size"], torch.rand(B, generator=gen) * (2 * math.pi))
+    gain = (0.8 + 0.4 * torch.rand(B, 1, 1, 1, generator=gen)) * \
+           (0.9 + 0.2 * torch.rand(B, 3, 1, 1, generator=gen))
+    offset = 0.1 * torch.rand(B, 1, 1, 1, generator=gen) - 0.05
+    noise = 0.02 * torch.rand(B, 1, 1, 1, generator=gen) * torch.randn(x.shape, generator=gen)
+    return _normalise((x * gain + offset + noise).clamp(0, 1))
+
+
+def chamfer_batch(a, b):
+    """SPEC 3 Chamfer of each a[i] (M x 6) against b (N x 6) -> B.  The nearest pairs
+    are found without autograd and only they are differentiated: same value and
+    gradient as differentiating the min over the whole B x M x N matrix, at a
+    fraction of its cost."""
+    with torch.no_grad():
+        # ||a - b||^2 = |a|^2 + |b|^2 - 2 a.b; the norm constant along a search drops out,
+        # and each search runs along contiguous rows (much faster than a strided argmin)
+        B = a.shape[0]
+        bt = b.t().expand(B, -1, -1)
+        ja = torch.baddbmm((b * b).sum(-1).expand(B, 1, -1), a, bt, alpha=-2).argmin(dim=2)
+        ib = torch.baddbmm((a * a).sum(-1)[:, None, :], b.expand(B, -1, -1), a.transpose(1, 2),
+                           alpha=-2).argmin(dim=2)
+    da = ((a - b[ja]) ** 2).sum(-1).mean(1)
+    db = ((torch.gather(a, 1, ib[..., None].expand(-1, -1, a.shape[-1])) - b[None]) ** 2).sum(-1).mean(1)
+    return da + db
+
+
+def losses(model, tobj, index, lam=1.0, gen=None):
+    """Loss parts on touches ``index`` of one object: (total, seq, recon, c^p B x 3)."""
+    x = images_to_input(tobj.images[index], model.cfg, gen)
+    gt = tobj.contacts[index]
+    B = len(index)
+    fp = point_features(model.point, tobj.cloud, tobj.plan).expand(B, -1)
+    ft = model.tactile(x)
+    zero = ft.new_zeros(())
+    if model.cfg["head"] == "mcr":
+        cp = model.mcr(torch.cat([ft, fp], dim=-1))
+        seq = F.smooth_l1_loss(cp, gt)
+    else:
+        cs = model.ilu(ft, fp)
+        n = cs.shape[1]
+        if n == 0:
+            cp, seq = ft.new_zeros(B, 3), zero
+        else:
+            w = GAMMA ** torch.arange(n - 1, -1, -1, dtype=cs.dtype)  # 0.9^(N-i), i = 1..N
+            seq = (torch.linalg.vector_norm(cs - gt[:, None, :], dim=-1) * w).sum(1).mean()
+            cp = cs[:, -1]
+    recon = zero
+    if model.has("gma"):
+        recon = chamfer_batch(model.gma(torch.cat([ft, fp], dim=-1)), tobj.target).mean()
+    return seq + lam * recon, seq, recon, cp
+
+
+@torch.no_grad()
+def validate(model, objects, lam=1.0, batch=64):
+    """(mean loss over validation touches, ND % averaged per object then over objects)."""
+    was = model.training
+    model.eval()
+    tot, n, nds = 0.0, 0, []
+    for o in objects:
+        idx = o.val_index
+        if not idx:
+            continue
+        errs = []
+        for i in range(0, len(idx), batch):
+            chunk = idx[i:i + batch]
+            loss, _, _, cp = losses(model, o, chunk, lam)
+            tot += float(loss) * len(chunk)
+            n += len(chunk)
+            errs.append(torch.linalg.vector_norm(cp - o.contacts[chunk], dim=-1).double() * float(o.scale))
+        nds.append(100.0 * float(torch.cat(errs).mean()) / o.D)
+    model.train(was)
+    if not n:
+        return None, None
+    return tot / n, float(np.mean(nds))
+
+
+# ---------------------------------------------------------------- sampling, schedule
+
+class Sampler:
+    """Epochs of one-object batches: each object's training touches shuffled and cut
+    into batches, all batches shuffled.  Epoch e's order depends only on (seed, e), so
+    the position (epoch, index) is all a checkpoint needs to continue identically."""
+
+    def __init__(self, objects, batch, seed):
+        self.objects, self.batch, self.seed = objects, batch, seed
+        self.epoch, self.pos, self._batches = 0, 0, None
+
+    def _make(self):
+        g = np.random.default_rng([self.seed, self.epoch])
+        out = []
+        for k, o in enumerate(self.objects):
+            perm = g.permutation(o.n_train)
+            for i in range(0, len(perm), self.batch):
+                chunk = perm[i:i + self.batch]
+                # a short remainder is a poor BatchNorm batch; its touches come back next epoch
+                if len(chunk) >= max(2, self.batch // 2) or len(perm) < 2 * self.batch:
+                    out.append((k, chunk.tolist()))
+        return [out[i] for i in g.permutation(len(out))]
+
+    def next(self):
+        if self._batches is None:
+            self._batches = self._make()
+        if self.pos >= len(self._batches):
+            self.epoch, self.pos = self.epoch + 1, 0
+            self._batches = self._make()
+        b = self._batches[self.pos]
+        self.pos += 1
+        return b
+
+    def state(self):
+        return {"epoch": self.epoch, "pos": self.pos}
+
+    def load(self, st):
+        self.epoch, self.pos, self._batches = st["epoch"], st["pos"], None
+
+
+def learning_rate(base, step, progress, warmup=100, floor=0.02):
+    """Linear warm-up, then cosine from ``base`` to ``floor * base`` over the budget."""
+    w = min(1.0, (step + 1) / warmup)
+    return base * w * (floor + (1 - floor) * 0.5 * (1 + math.cos(math.pi * min(progress, 1.0))))
+
+
+# ---------------------------------------------------------------- files
+
+def save_atomic(obj, path):
+    tmp = path + ".tmp"
+    torch.save(obj, tmp)
+    os.replace(tmp, path)
+
+
+def git_commit():
+    try:
+        head = subprocess.run(["git", "rev-parse", "HEAD"], cwd=ROOT, capture_output=True,
+                              text=True, timeout=10)
+        dirty = subprocess.run(["git", "status", "--porcelain", "--untracked-files=no"], cwd=ROOT,
+                               capture_output=True, text=True, timeout=10)
+        if head.returncode == 0:
+            return head.stdout.strip(), bool(dirty.stdout.strip())
+    except (OSError, subprocess.SubprocessError):
+        pass
+    return "unknown", None
+
+
+def export_weights(model, path, provenance):
+    """The reference's weight file (BatchNorm running statistics, eval semantics)
+    plus ``vtloc.provenance`` metadata; written to a temporary name and renamed."""
+    model = model.eval()
+    sd = {k: (v.detach().float() if v.is_floating_point() else v) for k, v in model.state_dict().items()}
+    meta = dict(model_mod.config_metadata(model.cfg))
+    meta["vtloc.provenance"] = json.dumps(provenance, separators=(",", ":"))
+    tmp = path + ".tmp"
+    with open(tmp, "wb") as f:
+        f.write(safetensors_io.dumps(sd, meta))
+    os.replace(tmp, path)
+
+
+class Log:
+    def __init__(self, path, resume_step=None):
+        self.path = path
+        rows = []
+        if resume_step is not None and os.path.exists(path):
+            with open(path, newline="") as f:
+                rows = [r for r in csv.DictReader(f) if int(r["step"]) <= resume_step]
+        with open(path, "w", newline="") as f:  # drop rows written after the checkpoint
+            w = csv.DictWriter(f, LOG_COLUMNS)
+            w.writeheader()
+            w.writerows(rows)
+
+    def write(self, **row):
+        with open(self.path, "a", newline="") as f:
+            csv.DictWriter(f, LOG_COLUMNS).writerow(
+                {k: ("" if row.get(k) is None else (f"{row[k]:.6g}" if isinstance(row[k], float) else row[k]))
+                 for k in LOG_COLUMNS})
+
+
+# ---------------------------------------------------------------- main loop
+
+def make_model(cfg, seed):
+    torch.manual_seed(seed)
+    model = model_mod.VTLoc(cfg).train()
+    if model.has("ilu"):
+        with torch.no_grad():  # small first steps: c_N starts near 0, inside the unit ball
+            model.ilu.head[2].weight.mul_(0.1)
+            model.ilu.head[2].bias.zero_()
+    return model
+
+
+def provenance(args, ds, objects, step, elapsed, val):
+    commit, dirty = git_commit()
+    used = {o.name: o for o in objects}
+    return {
+        "tool": "weights_tools.train", "config": args.config, "data": os.path.abspath(args.data),
+        "data_format": "vtloc-synth/1", "data_seed": ds.seed, "sensor": ds.sensor,
+        "objects": [{"name": o.name, "object_split": o.object_split, "subset": o.subset,
+                     "train_touches": used[o.name].n_train if o.name in used else 0,
+                     "val_touches": len(used[o.name].val_index) if o.name in used else 0}
+                    for o in ds.objects],
+        "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
+        "lambda": args.lam, "lr": args.lr, "val_fraction": args.val_fraction,
+        "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
+        "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
+        "torch": torch.__version__,
+    }
+
+
+def run(args):
+    os.makedirs(args.out, exist_ok=True)
+    ckpt_path = os.path.join(args.out, "checkpoint.pt")
+    ckpt = None
+    if os.path.exists(ckpt_path):
+        if not (args.resume or args.export_only):
+            raise ValueError(f"{ckpt_path}: exists; pass --resume to continue it or use another --out")
+        ckpt = torch.load(ckpt_path, map_location="cpu")
+        saved = ckpt["args"]
+        if saved["config"] != args.config and args.config is not None:
+            raise ValueError(f"{ckpt_path}: trained config {saved['config']}, not {args.config}")
+        for k in ("config", "seed", "batch", "lam", "lr", "minutes", "steps", "val_fraction"):
+            setattr(args, k, saved[k])  # same run, same budget
+    elif args.export_only:
+        raise ValueError(f"{ckpt_path}: missing (nothing to export)")
+    if args.config is None:
+        raise ValueError("--config is required")
+    cfg = config_mod.named(args.config)
+    torch.set_num_threads(args.threads or os.cpu_count() or 1)
+    ds = read_dataset(args.data)
+    model = make_model(cfg, args.seed)
+    objects = load_objects(model, ds, args.val_fraction)
+    params = [p for p in model.parameters() if p.requires_grad]
+    opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
+    sampler = Sampler(objects, args.batch, args.seed)
+    gen = torch.Generator().manual_seed(args.seed)
+    step, elapsed = 0, 0.0
+    if ckpt is not None:
+        model.load_state_dict(ckpt["state_dict"])
+        opt.load_state_dict(ckpt["optimizer"])
+        step, elapsed = ckpt["step"], ckpt["elapsed_s"]
+        sampler.load(ckpt["sampler"])
+        gen.set_state(ckpt["aug_rng"])
+        torch.set_rng_state(ckpt["torch_rng"])
+    budget_s = None if args.minutes is None else 60.0 * args.minutes
+    n_img = sum(o.images.numel() for o in objects)
+    print(f"{cfg['name']}: {sum(p.numel() for p in params)} parameters; {len(objects)} objects, "
+          f"{sum(o.n_train for o in objects)} training / {sum(len(o.val_index) for o in objects)} "
+          f"validation touches ({n_img / 2**20:.0f} MiB of frames); {torch.get_num_threads()} threads",
+          file=sys.stderr)
+
+    def progress():
+        p = 0.0
+        if args.steps:
+            p = max(p, step / args.steps)
+        if budget_s:
+            p = max(p, elapsed / budget_s)
+        return p
+
+    def checkpoint():
+        save_atomic({"state_dict": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
+                     "elapsed_s": elapsed, "sampler": sampler.state(), "aug_rng": gen.get_state(),
+                     "torch_rng": torch.get_rng_state(), "config": cfg, "args": {
+                         k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
+                                                       "steps", "val_fraction")}}, ckpt_path)
+
+    warmup = min(100, max(1, args.steps // 10)) if args.steps else 100
+    val = (None, None)
+    if not args.export_only:
+        log = Log(os.path.join(args.out, "log.csv"), step if ckpt is not None else None)
+        bar = None
+        if sys.stderr.isatty():
+            from tqdm import tqdm
+            bar = tqdm(total=args.steps or int(budget_s), initial=step if args.steps else int(elapsed),
+                       unit="step" if args.steps else "s", dynamic_ncols=True)
+        acc, acc_n, last_ckpt, last_log = np.zeros(3), 0, elapsed, step
+        t_prev = time.perf_counter()
+        model.train()
+        start_step = step
+        while progress() < 1.0:
+            k, index = sampler.next()
+            for g in opt.param_groups:
+                g["lr"] = learning_rate(args.lr, step, progress(), warmup)
+            loss, seq, rec, _ = losses(model, objects[k], index, args.lam, gen)
+            opt.zero_grad(set_to_none=True)
+            loss.backward()
+            torch.nn.utils.clip_grad_norm_(params, 5.0)
+            opt.step()
+            step += 1
+            acc += [float(loss), float(seq), float(rec)]
+            acc_n += 1
+            now = time.perf_counter()
+            elapsed += now - t_prev
+            t_prev = now
+            if bar is not None:
+                bar.update(1 if args.steps else int(elapsed) - bar.n)
+                bar.set_postfix(loss=f"{float(loss):.3f}")
+            stop = args.stop_after is not None and step - start_step >= args.stop_after
+            done = progress() >= 1.0 or stop
+            if step - last_log >= args.log_every or done:
+                m = acc / max(acc_n, 1)
+                log.write(step=step, elapsed_s=elapsed, lr=opt.param_groups[0]["lr"], loss=m[0],
+                          loss_seq=m[1], loss_recon=m[2])
+                acc, acc_n, last_log = np.zeros(3), 0, step
+            if elapsed - last_ckpt >= 60.0 * args.ckpt_minutes or done:
+                val = validate(model, objects, args.lam)
+                log.write(step=step, elapsed_s=elapsed, val_loss=val[0], val_nd=val[1])
+                checkpoint()
+                last_ckpt = elapsed
+                t_prev = time.perf_counter()  # validation and saving are not training time
+            if stop:
+                break
+        if bar is not None:
+            bar.close()
+        if progress() < 1.0:
+            print(f"stopped at step {step}; --resume continues", file=sys.stderr)
+            return model, step, elapsed
+    if val[0] is None:
+        val = validate(model, objects, args.lam)
+    out = os.path.join(args.out, "model.safetensors")
+    export_weights(model, out, provenance(args, ds, objects, step, elapsed, val))
+    print(f"{step} steps in {elapsed / 60:.1f} min ({step * args.batch / max(elapsed, 1e-9):.0f} "
+          f"touches/s); validation ND {val[1] if val[1] is None else round(val[1], 2)} %; "
+          f"wrote {out}", file=sys.stderr)
+    return model, step, elapsed
+
+
+def parse_args(argv=None):
+    argv = list(sys.argv[1:] if argv is None else argv)
+    ap = argparse.ArgumentParser(prog="python3 -m weights_tools.train", description=__doc__,
+                                 formatter_class=argparse.RawDescriptionHelpFormatter)
+    ap.add_argument("--config", help=f"named config: {', '.join(sorted(config_mod.NAMED))}")
+    ap.add_argument("--data", required=True, help="dataset folder (docs/dataset.md)")
+    ap.add_argument("--out", required=True, help="run folder")
+    ap.add_argument("--minutes", type=float, help="training time budget (default 85 without --steps)")
+    ap.add_argument("--steps", type=int, help="step budget")
+    ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--batch", type=int, default=16, help="touches per step (all of one object)")
+    ap.add_argument("--lambda", dest="lam", type=float, default=1.0, help="weight of L_recon")
+    ap.add_argument("--lr", type=float, default=1e-3)
+    ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
+    ap.add_argument("--ckpt-minutes", type=float, default=5.0)
+    ap.add_argument("--log-every", type=int, default=25)
+    ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
+    ap.add_argument("--resume", action="store_true", help="continue RUN_DIR/checkpoint.pt to its budget")
+    ap.add_argument("--export-only", action="store_true", help="export RUN_DIR/checkpoint.pt and stop")
+    ap.add_argument("--stop-after", type=int, help=argparse.SUPPRESS)  # tests: an interrupted run
+    args = ap.parse_args(argv)
+    if args.minutes is None and args.steps is None:
+        args.minutes = 85.0
+    if args.batch < 1:
+        ap.error("--batch must be >= 1")
+    args.argv = argv
+    return args
+
+
+def main(argv=None):
+    args = parse_args(argv)
+    try:
+        run(args)
+    except (DatasetError, ValueError, KeyError, OSError) as e:
+        print(f"error: {e}", file=sys.stderr)
+        return 2
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())
