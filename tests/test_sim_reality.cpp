@@ -40,6 +40,17 @@ TEST_CASE("sim: rendered ball presses match the real frames", "[sim]") {
         // beyond the contact (light-guide shadowing, not in the local
         // polynomial model) brings the max to ~4.8 px but raises |dRGB|
         // inside above 14.5, so it is not in the renderer.
+        // Rim-based detectors do not meet 3 px either (tried, not kept):
+        // a circle fitted to the steepest outward drop of the change
+        // magnitude along 72 rays (robust, iterated) gives real vs
+        // rendered median 2.4-3.3 px, max 7.9-9.1 px (18-28 frames over
+        // 3 px). The rim is soft (~6 px), and weak where the disc's colour
+        // is close to the background's. cv::HoughCircles is worse (median
+        // 3.2 px+, outliers). The pole (minimum of the change inside the
+        // contact) finds the rendered centre within 1.4 px of the
+        // annotation, but real vs rendered still has a max of 5.2 px. On
+        // the real frames, rim and pole agree with each other and sit up to
+        // 4.5 px above the annotation (frames 20, 22, 30, 36, 45).
         CHECK(f.centre_dist < 8.5);
     }
     CHECK(rep.median_radius_err < 0.08);
