@@ -135,6 +135,27 @@ def point_features(pe, cloud, plan):
     return pe.mlp(getattr(pe, f"sa{len(plan) + 1}")(xyz, feats))
 
 
+@torch.no_grad()
+def calibrate_point_bn(model, objects):
+    """Point-branch BatchNorm statistics over every training object at once.
+
+    A step sees one object, so train-mode BatchNorm would normalise each cloud by its
+    own statistics: the features that tell objects apart are removed in training and
+    come back (through the running averages) at inference. Instead the point branch
+    runs with frozen statistics, recomputed over all objects every few steps."""
+    bns = [m for m in model.point.modules() if isinstance(m, torch.nn.BatchNorm2d)
+           or isinstance(m, torch.nn.BatchNorm1d)]
+    for m in bns:
+        m.reset_running_stats()
+        m.momentum = None  # cumulative average over the calibration forwards
+        m.train()
+    for o in objects:
+        point_features(model.point, o.cloud, o.plan)
+    for m in bns:
+        m.momentum = 0.1
+    model.point.eval()
+
+
 def _normalise(x):
     mean = torch.tensor(IMAGENET_MEAN).view(1, 3, 1, 1)
     std = torch.tensor(IMAGENET_STD).view(1, 3, 1, 1)
@@ -249,6 +270,19 @@ def validate(model, objects, lam=1.0, batch=64):
     if not n:
         return None, None
     return tot / n, float(np.mean(nds))
+
+
+def validate_calibrated(model, objects, lam=1.0):
+    """validate() with point-branch statistics of the current weights, leaving the
+    training state (its statistics included) as it was, so that validating or
+    checkpointing never changes what the run computes next."""
+    saved = {k: v.clone() for k, v in model.point.state_dict().items()
+             if k.endswith(("running_mean", "running_var", "num_batches_tracked"))}
+    calibrate_point_bn(model, objects)
+    val = validate(model, objects, lam)
+    model.point.load_state_dict(saved, strict=False)
+    model.point.eval()  # validate() restores train mode; the point branch trains with frozen statistics
+    return val
 
 
 # ---------------------------------------------------------------- sampling, schedule
@@ -448,8 +482,12 @@ def run(args):
         acc, acc_n, last_ckpt, last_log = np.zeros(3), 0, elapsed, step
         t_prev = time.perf_counter()
         model.train()
+        model.point.eval()
         start_step = step
         while progress() < 1.0:
+            # At fixed steps, so a resumed run recalibrates exactly where an uninterrupted one does.
+            if step % args.bn_every == 0 if args.bn_every else step == 0:
+                calibrate_point_bn(model, objects)
             k, index = sampler.next()
             for g in opt.param_groups:
                 g["lr"] = learning_rate(args.lr, step, progress(), warmup)
@@ -475,7 +513,7 @@ def run(args):
                           loss_seq=m[1], loss_recon=m[2])
                 acc, acc_n, last_log = np.zeros(3), 0, step
             if elapsed - last_ckpt >= 60.0 * args.ckpt_minutes or done:
-                val = validate(model, objects, args.lam)
+                val = validate_calibrated(model, objects, args.lam)
                 log.write(step=step, elapsed_s=elapsed, val_loss=val[0], val_nd=val[1])
                 checkpoint()
                 last_ckpt = elapsed
@@ -487,6 +525,7 @@ def run(args):
         if progress() < 1.0:
             print(f"stopped at step {step}; --resume continues", file=sys.stderr)
             return model, step, elapsed
+    calibrate_point_bn(model, objects)  # the exported statistics match the final weights
     if val[0] is None:
         val = validate(model, objects, args.lam)
     out = os.path.join(args.out, "model.safetensors")
@@ -511,6 +550,8 @@ def parse_args(argv=None):
     ap.add_argument("--lambda", dest="lam", type=float, default=1.0, help="weight of L_recon")
     ap.add_argument("--lr", type=float, default=1e-3)
     ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
+    ap.add_argument("--bn-every", type=int, default=50,
+                    help="recompute the point branch's BatchNorm statistics every N steps (0: once)")
     ap.add_argument("--ckpt-minutes", type=float, default=5.0)
     ap.add_argument("--log-every", type=int, default=25)
     ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
