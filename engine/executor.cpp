@@ -68,7 +68,7 @@ TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& i
     return result;
 }
 
-MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment) {
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share) {
     const size_t nv = g.values().size();
     std::vector<int> first(nv, INT_MAX), last(nv, -2);
     for (size_t i = 0; i < nv; ++i)
@@ -98,7 +98,7 @@ MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t a
     for (size_t v : todo) {
         std::vector<std::pair<uint64_t, uint64_t>> busy;
         for (size_t u : placed)
-            if (first[u] <= last[v] && first[v] <= last[u])
+            if (!share || (first[u] <= last[v] && first[v] <= last[u]))
                 busy.push_back({uint64_t(plan.offset[u]), uint64_t(plan.offset[u]) + bytes[u]});
         std::sort(busy.begin(), busy.end());
         uint64_t at = 0;
@@ -113,7 +113,8 @@ MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t a
     return plan;
 }
 
-GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile)
+GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile,
+                         bool keep_all)
     : ctx_(ctx),
       graph_(g),
       order_(graph_.topo_order()),
@@ -149,7 +150,7 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
     }
 
     // Activations: one arena, reused across values with disjoint lifetimes.
-    plan_ = plan_memory(graph_, order_, align);
+    plan_ = plan_memory(graph_, order_, align, !keep_all);
     arena_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Device);
 
     uint64_t in_bytes = 0, out_bytes = 0;
@@ -164,6 +165,7 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
     }
     staging_in_ = rt::Buffer(ctx_, in_bytes, rt::MemoryKind::Staging);
     staging_out_ = rt::Buffer(ctx_, out_bytes, rt::MemoryKind::Staging);
+    if (keep_all) staging_all_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Staging);
 
     // The whole graph: one command buffer, recorded once.
     seq_->begin();
@@ -191,6 +193,7 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
         uint64_t n = uint64_t(numel(graph_.value(id).shape)) * 4;
         seq_->copy({src.buffer, src.offset, n}, {staging_out_.handle(), out_offsets_[name], n});
     }
+    if (keep_all) seq_->copy({arena_.handle(), 0, plan_.arena_bytes}, {staging_all_.handle(), 0, plan_.arena_bytes});
     seq_->end();
 }
 
@@ -201,6 +204,16 @@ rt::BufferView GpuExecutor::view_of(int value) const {
     if (v.kind == ValueKind::Weight) return weights_.view(weight_slots_.at(value));
     return {arena_.handle(), uint64_t(plan_.offset[size_t(value)]),
             std::max<uint64_t>(4, uint64_t(numel(v.shape)) * 4)};
+}
+
+HostTensor GpuExecutor::value(int id) const {
+    const Value& v = graph_.value(id);
+    if (!staging_all_.mapped()) throw Error("GpuExecutor::value needs an executor made with keep_all");
+    if (v.kind == ValueKind::Weight) throw Error("GpuExecutor::value: '" + v.name + "' is a weight");
+    HostTensor t(v.shape, v.type);
+    std::memcpy(t.data.data(), static_cast<const char*>(staging_all_.mapped()) + plan_.offset[size_t(id)],
+                t.data.size() * 4);
+    return t;
 }
 
 TensorMap GpuExecutor::run(const TensorMap& inputs) {

@@ -40,15 +40,22 @@ struct MemoryPlan {
     uint64_t arena_bytes = 0;     // size of the arena
     uint64_t total_bytes = 0;     // what one buffer per tensor would take
 };
-MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment);
+// share = false gives every value bytes of its own (GpuExecutor's keep_all).
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share = true);
 
 class GpuExecutor {
 public:
     // Uploads the weights the graph uses, plans memory and records the graph.
-    GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile = false);
+    // keep_all (a debug mode, for `vtloc check`): every value gets bytes of its
+    // own and the whole arena is read back after a run, so value() can return
+    // any intermediate as the GPU computed it.
+    GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile = false,
+                bool keep_all = false);
     ~GpuExecutor();
 
     TensorMap run(const TensorMap& inputs);
+    // After run() with keep_all: input or intermediate value `id` as on the GPU.
+    HostTensor value(int id) const;
 
     const MemoryPlan& memory_plan() const { return plan_; }
     uint64_t weight_bytes() const { return weights_.total_bytes(); }
@@ -66,6 +73,7 @@ private:
     std::map<int, rt::ChunkedBuffers::Slot> weight_slots_;
     rt::Buffer arena_;
     rt::Buffer staging_in_, staging_out_;
+    rt::Buffer staging_all_;  // keep_all: a copy of the whole arena
     std::map<std::string, uint64_t> in_offsets_, out_offsets_;
     std::unique_ptr<rt::Sequence> seq_;
 };

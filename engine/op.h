@@ -37,6 +37,9 @@ struct OpDef {
     void (*cpu)(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out,
                 const Params& p);
     void (*gpu)(const GpuOpArgs& a);
+    // Bit i set: output i is a workspace whose contents are unspecified (the
+    // GPU's scratch), so checks of a node's outputs skip it (engine/check/).
+    uint32_t workspace_outputs = 0;
 };
 
 const OpDef& find_op(std::string_view name);

@@ -64,6 +64,8 @@ void Sequence::begin() {
     queries_used_ = 0;
     node_labels_.clear();
     in_node_ = false;
+    current_node_.clear();
+    dispatch_log_.clear();
 }
 
 void Sequence::barrier(VkPipelineStageFlags dst_stage, VkAccessFlags dst_access) {
@@ -227,6 +229,8 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
         vkCmdPushConstants(cmd_, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
     vkCmdDispatch(cmd_, gx, gy, gz);
     ++dispatches_;
+    dispatch_log_.push_back({in_node_ ? current_node_ : std::string(), p.desc.shader, p.desc.spec,
+                             p.desc.texel_bindings, {gx, gy, gz}});
 }
 
 void Sequence::timestamp() {
@@ -249,6 +253,7 @@ void Sequence::begin_node(const std::string& label) {
     check_recording("begin_node");
     if (in_node_) throw Error("Sequence::begin_node: nodes do not nest");
     in_node_ = true;
+    current_node_ = label;
     if (!profile_) return;
     node_labels_.push_back(label);
     timestamp();

@@ -54,6 +54,18 @@ public:
     // GPU time per node of the last submit (empty unless profiling).
     std::vector<NodeTime> node_times() const;
 
+    // Every dispatch recorded since begin(), in order, with the node it belongs
+    // to (its begin_node label, "" outside a node): the shader, its
+    // specialization constants and workgroup counts (what `vtloc check` reports).
+    struct DispatchRecord {
+        std::string node;
+        std::string shader;
+        std::vector<uint32_t> spec;
+        uint32_t texel_bindings = 0;
+        uint32_t groups[3] = {1, 1, 1};
+    };
+    const std::vector<DispatchRecord>& dispatch_log() const { return dispatch_log_; }
+
 private:
     struct Range {
         VkBuffer buffer;
@@ -94,6 +106,8 @@ private:
     uint32_t queries_used_ = 0;
     std::vector<std::string> node_labels_;
     bool in_node_ = false;
+    std::string current_node_;
+    std::vector<DispatchRecord> dispatch_log_;
 };
 
 }  // namespace vtloc::rt

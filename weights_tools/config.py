@@ -3,14 +3,16 @@
 
 import copy
 import json
+import math
 
-_TOP_KEYS = ("name", "C", "K", "tactile", "point", "gma", "ilu", "head", "mcr")
+_TOP_KEYS = ("name", "C", "K", "tactile", "point", "gma", "ilu", "head", "mcr", "sensor")
 _TACTILE_KEYS = ("crop", "in_size", "widths", "blocks", "mlp")
 _POINT_KEYS = ("n_points", "use_normals", "sa", "group_all_mlp", "mlp")
 _SA_KEYS = ("npoint", "radii", "nsample", "mlps")
 _GMA_KEYS = ("n_points", "channels", "decoder")
 _ILU_KEYS = ("iters", "head_hidden")
 _MCR_KEYS = ("hidden",)
+_SENSOR_KEYS = ("mm_per_px", "height", "width")
 
 MAX_ITERS = 64  # SPEC 2: ILU iterations 0..64 at run time
 
@@ -97,6 +99,10 @@ _LITE = {
     "mcr": None,
 }
 
+# The synthetic dataset's sensor (`vtloc synth`): frames of 160 x 120 pixels of 0.1245 mm.
+SYNTH_SENSOR = {"mm_per_px": 0.1245, "height": 120, "width": 160}
+_LITE["sensor"] = dict(SYNTH_SENSOR)
+
 _LITE_XYZ = copy.deepcopy(_LITE)
 _LITE_XYZ["name"] = "vtloc-lite-xyz"
 _LITE_XYZ["point"]["use_normals"] = False
@@ -105,7 +111,11 @@ _MCR_LITE = copy.deepcopy(_LITE)
 _MCR_LITE.update(name="mcr-lite", gma=None, ilu=None, head="mcr", mcr={"hidden": [128, 32]})
 _MCR_LITE["point"]["use_normals"] = False
 
-NAMED = {c["name"]: c for c in (_R18, _MCR, _TINY, _MCR_TINY, _LITE, _LITE_XYZ, _MCR_LITE)}
+# vtloc-tiny with a sensor: the same tensors (a test fixture of the rescale).
+_TINY_SENSOR = copy.deepcopy(_TINY)
+_TINY_SENSOR.update(name="vtloc-tiny-sensor", sensor=dict(SYNTH_SENSOR))
+
+NAMED = {c["name"]: c for c in (_R18, _MCR, _TINY, _MCR_TINY, _LITE, _LITE_XYZ, _MCR_LITE, _TINY_SENSOR)}
 
 
 def named(name):
@@ -139,7 +149,7 @@ def _pos_int(v, where):
 def canonical(cfg):
     """Validate ``cfg`` and return a fresh dict with keys in schema order
     (so its JSON text is the same however it was built)."""
-    _keys(cfg, _TOP_KEYS, "config", optional=("mcr",))
+    _keys(cfg, _TOP_KEYS, "config", optional=("mcr", "sensor"))
     t, p = cfg["tactile"], cfg["point"]
     _keys(t, _TACTILE_KEYS, "tactile")
     if len(t["widths"]) != 4 or len(t["blocks"]) != 4:
@@ -208,7 +218,21 @@ def canonical(cfg):
         _keys(m, _MCR_KEYS, "mcr")
         m = {"hidden": _ints(m["hidden"], "mcr.hidden", 0)}
     out["mcr"] = m
+    sensor = cfg.get("sensor")
+    if sensor is not None:  # absent (or null): no sensor recorded, the key stays out
+        out["sensor"] = canonical_sensor(sensor)
     return out
+
+
+def canonical_sensor(s):
+    """The optional ``sensor`` section: the pixel size (mm) and frame size the
+    model was trained on.  A frame with another pixel size is rescaled to it."""
+    _keys(s, _SENSOR_KEYS, "sensor")
+    mm = s["mm_per_px"]
+    if isinstance(mm, bool) or not isinstance(mm, (int, float)) or not math.isfinite(mm) or mm <= 0:
+        raise ValueError("sensor.mm_per_px: expected a finite number > 0")
+    return {"mm_per_px": float(mm), "height": _pos_int(s["height"], "sensor.height"),
+            "width": _pos_int(s["width"], "sensor.width")}
 
 
 def to_json(cfg):

@@ -3,6 +3,11 @@ reference of ``vtloc eval``.
 
   python3 -m weights_tools.eval --model M.safetensors --data DIR [--split test|train|all]
       [--objects all|known|unknown] [--iters N] [--topk K] [--sequence S] [--json FILE]
+      [--mm-per-px MM]
+
+Frames are rescaled to the model's sensor pixel size (``tactile.rescale``) when the
+model's config and the dataset's index.json both record one and they differ, or to
+``--mm-per-px`` (the frames' pixel size) when given.
 
 Each object's cloud is encoded once (normalised frame of SPEC 1); its touches run in
 batches.  ``--sequence S`` (S > 1) scores the SPEC 6 belief instead of the single
@@ -27,7 +32,7 @@ import torch
 from . import metrics, post
 from . import model as model_mod
 from .dataset import DatasetError, read_dataset
-from .tactile import preprocess
+from .tactile import check_mm_per_px, preprocess, sensor_rescale
 
 SPLIT_TOUCHES = {"test": ("test",), "train": ("train",), "all": ("train", "test")}
 OBJECT_FILTER = {"all": ("seen", "unseen"), "known": ("seen",), "unknown": ("unseen",)}
@@ -42,16 +47,18 @@ def network_cloud(model, points):
 
 
 @torch.no_grad()
-def predict(model, obj, touches, iters=None, batch=32, images=None):
+def predict(model, obj, touches, iters=None, batch=32, images=None, mm_per_px=None):
     """c^p in object units (len(touches) x 3, float64) for touches of one object.
-    ``images``: optional touch id -> uint8 frame (else read from disk)."""
+    ``images``: optional touch id -> uint8 frame (else read from disk);
+    ``mm_per_px``: the frames' pixel size, rescaled to the model's sensor."""
     cfg = model.cfg["tactile"]
     cloud, centre, scale = network_cloud(model, obj.points)
     fp = model.point(cloud)
     out = []
     for i in range(0, len(touches), batch):
         chunk = touches[i:i + batch]
-        x = torch.cat([preprocess(images[t.id] if images is not None else obj.image(t),
+        x = torch.cat([preprocess(sensor_rescale(images[t.id] if images is not None else obj.image(t),
+                                                 model.cfg, mm_per_px),
                                   cfg["crop"], cfg["in_size"]) for t in chunk])
         ft = model.tactile(x)
         cp, _ = model.contact(ft, fp.expand(len(chunk), -1), iters)
@@ -64,8 +71,22 @@ def collection_path(obj):
     return sorted((t for t in obj.touches if t.order >= 0), key=lambda t: t.order)
 
 
+def frame_mm_per_px(model_cfg, ds_sensor, override=None):
+    """The pixel size to rescale a dataset's frames from, or None (no rescale):
+    ``override`` when given, else the dataset's sensor.mm_per_px when the model's
+    config records a different one."""
+    model_sensor = model_cfg.get("sensor")
+    if override is not None:
+        override = check_mm_per_px(override, "--mm-per-px")
+        return None if model_sensor is not None and override == model_sensor["mm_per_px"] else override
+    data_mm = (ds_sensor or {}).get("mm_per_px")
+    if model_sensor is None or data_mm is None or float(data_mm) == model_sensor["mm_per_px"]:
+        return None
+    return check_mm_per_px(float(data_mm), "the dataset's sensor.mm_per_px")
+
+
 def evaluate(model, ds, split="test", objects="all", iters=None, topk=5, sequence=1,
-             batch=32, sigma=0.2, sigma_m=0.05, progress=None):
+             batch=32, sigma=0.2, sigma_m=0.05, progress=None, mm_per_px=None):
     """Returns (rows, per_touch, seconds of network time, touches run)."""
     per_touch, net_s, net_n = [], 0.0, 0
     subsets = {}
@@ -90,7 +111,7 @@ def evaluate(model, ds, split="test", objects="all", iters=None, topk=5, sequenc
                     run.update((w.id, w) for w in windows[t.id])
         run = sorted(run.values(), key=lambda t: t.id)
         t0 = time.perf_counter()
-        preds = predict(model, obj, run, iters, batch)
+        preds = predict(model, obj, run, iters, batch, mm_per_px=mm_per_px)
         net_s += time.perf_counter() - t0
         net_n += len(run)
         pred = {t.id: p for t, p in zip(run, preds)}
@@ -141,6 +162,8 @@ def main(argv=None):
     ap.add_argument("--batch", type=int, default=32)
     ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
     ap.add_argument("--json", help="write the vtloc-eval/1 report here")
+    ap.add_argument("--mm-per-px", type=float, metavar="MM",
+                    help="the frames' pixel size (default: the dataset's, when the model's differs)")
     args = ap.parse_args(argv)
     if args.topk < 1 or args.sequence < 1 or args.batch < 1:
         ap.error("--topk, --sequence and --batch must be >= 1")
@@ -148,9 +171,15 @@ def main(argv=None):
     try:
         model = model_mod.load(args.model).eval()
         ds = read_dataset(args.data)
+        mm_per_px = frame_mm_per_px(model.cfg, ds.sensor, args.mm_per_px)
+        if args.mm_per_px is not None and model.cfg.get("sensor") is None:
+            raise ValueError(f"{args.model} has no sensor pixel size in its config; cannot rescale")
+        if mm_per_px is not None:
+            print(f"rescaling frames from {mm_per_px:g} to {model.cfg['sensor']['mm_per_px']:g} mm per pixel",
+                  file=sys.stderr)
         rows, per_touch, net_s, net_n = evaluate(
             model, ds, args.split, args.objects, args.iters, args.topk, args.sequence,
-            args.batch, args.sigma, args.sigma_m)
+            args.batch, args.sigma, args.sigma_m, mm_per_px=mm_per_px)
     except (DatasetError, ValueError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -160,7 +189,8 @@ def main(argv=None):
     report = {
         "format": "vtloc-eval/1", "model": args.model, "config": model.cfg["name"],
         "data": args.data, "split": args.split, "objects": args.objects, "iters": iters,
-        "topk": args.topk, "sequence": args.sequence, "rows": rows, "per_touch": per_touch,
+        "topk": args.topk, "sequence": args.sequence, "mm_per_px": mm_per_px,
+        "rows": rows, "per_touch": per_touch,
         "time_per_touch_ms": 1000.0 * net_s / net_n if net_n else None,
     }
     print(format_table(rows))

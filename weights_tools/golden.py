@@ -4,7 +4,11 @@
       (--tactile img.png | --synthetic-tactile SEED) \
       (--cloud cloud.ply | --synthetic-cloud SEED) \
       [--candidates pts.txt] [--iters N] [--K K] [--symmetry px,py,pz,dx,dy,dz,M] \
-      -o golden.safetensors
+      [--mm-per-px MM] -o golden.safetensors
+
+--mm-per-px: the frame's pixel size; it is rescaled to the config's
+sensor.mm_per_px before the crop (``tactile.rescale``); the rescaled frame
+is written as ``tactile.rescaled``.
 
 The network runs in float64 (``--dtype``) on float32-rounded stage inputs and
 every float result is rounded to float32: the golden is then (nearly) the exact
@@ -23,14 +27,15 @@ import torch
 from . import model as model_mod
 from . import post, safetensors_io, synthetic
 from .inputs import read_candidates, read_cloud, read_tactile
-from .tactile import preprocess
+from .tactile import preprocess, sensor_rescale
 
 
 def run(model, image_u8, cloud, candidates=None, iters=None, k=None, symmetry=None,
-        dtype=torch.float64):
+        dtype=torch.float64, mm_per_px=None):
     """One object, one touch.  image_u8: H x W x 3 uint8; cloud: N x 6 object
     units; candidates: M x 3 object units (default: the cloud's points);
     symmetry: (axis point xyz, axis direction xyz, order M) in object units.
+    mm_per_px: the frame's pixel size (rescaled to the config's sensor).
     Returns {name: tensor} with SPEC 8 names plus the raw inputs."""
     cfg = model.cfg
     net = copy.deepcopy(model).to(dtype).eval()
@@ -43,7 +48,10 @@ def run(model, image_u8, cloud, candidates=None, iters=None, k=None, symmetry=No
     out = {"input.tactile": image_u8, "input.cloud": cloud, "input.candidates": cands}
 
     t = cfg["tactile"]
-    x = preprocess(image_u8, t["crop"], t["in_size"], torch.float64).float()
+    frame = sensor_rescale(image_u8, cfg, mm_per_px)
+    if mm_per_px is not None:
+        out["tactile.rescaled"] = frame
+    x = preprocess(frame, t["crop"], t["in_size"], torch.float64).float()
     cloud_n, centre, scale = post.normalise_cloud(cloud)
     net_cloud = cloud_n if cfg["point"]["use_normals"] else cloud_n[:, :3].contiguous()
     out.update({"tactile.input": x, "point.cloud": net_cloud,
@@ -98,9 +106,12 @@ def write(path, tensors, cfg, extra_meta):
 
 
 def make(weights, tactile=None, synthetic_tactile=None, cloud=None, synthetic_cloud=None,
-         candidates=None, iters=None, k=None, symmetry=None, dtype=torch.float64):
+         candidates=None, iters=None, k=None, symmetry=None, dtype=torch.float64,
+         mm_per_px=None):
     """Load inputs, run, return (tensors, metadata extras, config)."""
     model = model_mod.load(weights)
+    if mm_per_px is not None and model.cfg.get("sensor") is None:
+        raise ValueError(f"{weights} has no sensor pixel size in its config; cannot rescale")
     cfg = model.cfg
     if (tactile is None) == (synthetic_tactile is None):
         raise ValueError("give exactly one of --tactile and --synthetic-tactile")
@@ -118,7 +129,7 @@ def make(weights, tactile=None, synthetic_tactile=None, cloud=None, synthetic_cl
                                                               cfg["point"]["n_points"]))
         cloud_src = f"synthetic:{synthetic_cloud}"
     cands = None if candidates is None else read_candidates(candidates)
-    tensors = run(model, image, pts, cands, iters, k, symmetry, dtype)
+    tensors = run(model, image, pts, cands, iters, k, symmetry, dtype, mm_per_px)
     with open(weights, "rb") as f:
         digest = hashlib.sha256(f.read()).hexdigest()
     n_iters = tensors["ilu.c"].shape[0] if "ilu.c" in tensors else 0
@@ -127,6 +138,8 @@ def make(weights, tactile=None, synthetic_tactile=None, cloud=None, synthetic_cl
             "iters": str(n_iters), "K": str(tensors["topk.index"].numel()),
             "symmetry": json.dumps(symmetry) if symmetry else "",
             "compute_dtype": str(dtype).replace("torch.", "")}
+    if mm_per_px is not None:
+        meta["mm_per_px"] = repr(float(mm_per_px))
     return tensors, meta, cfg
 
 
@@ -143,6 +156,8 @@ def main(argv=None):
     ap.add_argument("--K", type=int, dest="k", help="top-K size (default: the config's)")
     ap.add_argument("--symmetry", type=_symmetry, metavar="px,py,pz,dx,dy,dz,M",
                     help="rotational symmetry prior (axis point in object units)")
+    ap.add_argument("--mm-per-px", type=float, metavar="MM",
+                    help="the frame's pixel size in mm; rescaled to the config's sensor.mm_per_px")
     ap.add_argument("--dtype", choices=("float64", "float32"), default="float64",
                     help="precision the network runs in")
     ap.add_argument("-o", "--output", required=True)
@@ -150,7 +165,7 @@ def main(argv=None):
     try:
         tensors, meta, cfg = make(a.weights, a.tactile, a.synthetic_tactile, a.cloud,
                                   a.synthetic_cloud, a.candidates, a.iters, a.k, a.symmetry,
-                                  getattr(torch, a.dtype))
+                                  getattr(torch, a.dtype), a.mm_per_px)
     except (ValueError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2

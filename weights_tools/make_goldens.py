@@ -11,6 +11,12 @@ For each small config: random weights (seed 0) -> NAME.safetensors, and a
 golden run on synthetic tactile seed 0 / synthetic cloud seed 0 with the
 config's defaults (ILU iterations, K, candidates = the cloud) ->
 NAME.golden.safetensors.
+
+The sensor fixture vtloc-tiny-sensor (vtloc-tiny plus a sensor of 0.1245 mm
+pixels, the same tensors) gets its weights and one golden per frame pixel size
+in SENSOR_GOLDENS: the synthetic frame taken as coarser pixels (enlarged before
+the crop, bilinear) and as finer ones (shrunk, area average) ->
+vtloc-tiny-sensor.{coarse,fine}.golden.safetensors.
 """
 
 import argparse
@@ -24,10 +30,12 @@ from .export import random_model
 
 CONFIGS = ("vtloc-tiny", "vtloc-mcr-tiny")
 PAPER_CONFIGS = ("vtloc-r18", "vtloc-mcr")
+SENSOR_CONFIG = "vtloc-tiny-sensor"
+SENSOR_GOLDENS = (("coarse", 0.166), ("fine", 0.083))  # frame mm per pixel (the model's: 0.1245)
 DEFAULT_OUT = os.path.join(os.path.dirname(os.path.abspath(__file__)), "goldens")
 
 
-def make_all(out_dir, names=CONFIGS):
+def make_all(out_dir, names=CONFIGS, sensor=True):
     threads = torch.get_num_threads()
     torch.set_num_threads(1)  # one fixed reduction order
     try:
@@ -40,6 +48,15 @@ def make_all(out_dir, names=CONFIGS):
             tensors, meta, cfg = golden.make(w, synthetic_tactile=0, synthetic_cloud=0)
             golden.write(g, tensors, cfg, meta)
             written += [w, g]
+        if sensor:
+            w = os.path.join(out_dir, f"{SENSOR_CONFIG}.safetensors")
+            model.save(random_model(config.named(SENSOR_CONFIG), seed=0), w)
+            written.append(w)
+            for label, mm in SENSOR_GOLDENS:
+                g = os.path.join(out_dir, f"{SENSOR_CONFIG}.{label}.golden.safetensors")
+                tensors, meta, cfg = golden.make(w, synthetic_tactile=0, synthetic_cloud=0, mm_per_px=mm)
+                golden.write(g, tensors, cfg, meta)
+                written.append(g)
         return written
     finally:
         torch.set_num_threads(threads)
@@ -66,7 +83,7 @@ def main(argv=None):
     if a.paper and up_to_date(outputs(a.out, names)):
         print(f"paper goldens in {a.out} are up to date")
         return 0
-    for path in make_all(a.out, names):
+    for path in make_all(a.out, names, sensor=not a.paper):
         print(f"{os.path.getsize(path):8d}  {path}")
     return 0
 

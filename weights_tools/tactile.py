@@ -4,6 +4,8 @@ Module names mirror torchvision's resnet18 (conv1, bn1, layer{1..4}.{b}.conv1/bn
 conv2/bn2/downsample.{0,1}) so a torchvision state_dict loads as is (minus fc).
 """
 
+import math
+
 import torch
 from torch import nn
 import torch.nn.functional as F
@@ -35,6 +37,102 @@ def center_crop(x, crop):
     x0, x1 = max(left, 0), min(left + crop, w)
     out[..., y0 - top:y1 - top, x0 - left:x1 - left] = x[..., y0:y1, x0:x1]
     return out
+
+
+def check_mm_per_px(value, what="mm_per_px"):
+    """A pixel size must be a finite number > 0 (mm)."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)) or not math.isfinite(value) \
+            or value <= 0:
+        raise ValueError(f"{what} must be a finite number > 0, got {value!r}")
+    return float(value)
+
+
+def rescaled_size(n, image_mm, model_mm):
+    """Side of a rescaled frame: round(n * image_mm / model_mm), halves up, at least 1."""
+    return max(1, int(math.floor(n * image_mm / model_mm + 0.5)))
+
+
+def _axis_taps(n_in, n_out, f):
+    """Source pixels and weights of each output pixel along one axis; ``f`` =
+    source pixels per output pixel (model_mm / image_mm).  Centres line up
+    (the frame's centre stays the centre) and one output pixel spans exactly f
+    source pixels, so millimetres are kept even where n_out * f != n_in.
+
+    f > 1 (shrinking): area average of the source interval the output pixel
+    covers, clipped to the image and renormalised there.  f < 1 (enlarging):
+    bilinear between the two nearest source pixel centres, clamped at the
+    edges.  The arithmetic is op for op the engine's (engine/api/rescale.cpp)."""
+    taps = []
+    for o in range(n_out):
+        if f > 1:
+            lo = n_in / 2 + (o - n_out / 2) * f
+            hi = n_in / 2 + (o + 1 - n_out / 2) * f
+            a, b = max(lo, 0.0), min(hi, float(n_in))
+            if not b > a:  # cannot happen for n_out = round(n_in / f); nearest pixel
+                i = min(max(int(math.floor(lo)), 0), n_in - 1)
+                taps.append([(i, 1.0)])
+                continue
+            span = b - a
+            row = []
+            for i in range(int(math.floor(a)), int(math.ceil(b))):
+                w = min(i + 1.0, b) - max(float(i), a)
+                if w > 0:
+                    row.append((i, w / span))
+            taps.append(row)
+        else:
+            src = n_in / 2 + (o + 0.5 - n_out / 2) * f - 0.5
+            src = min(max(src, 0.0), n_in - 1.0)
+            i0 = int(math.floor(src))
+            i1 = min(i0 + 1, n_in - 1)
+            w1 = src - i0
+            taps.append([(i0, 1.0 - w1), (i1, w1)])
+    width = max(len(t) for t in taps)
+    index = torch.zeros(n_out, width, dtype=torch.long)
+    weight = torch.zeros(n_out, width, dtype=torch.float64)
+    for o, row in enumerate(taps):
+        for j, (i, w) in enumerate(row):
+            index[o, j], weight[o, j] = i, w
+    return index, weight
+
+
+def rescale(image_u8, image_mm, model_mm):
+    """Resample a uint8 H x W x 3 frame taken with pixels of ``image_mm`` to
+    pixels of ``model_mm`` (SPEC 2, sensor rescale; before the crop).  Output
+    size round(H * s) x round(W * s), s = image_mm / model_mm; rows are
+    resampled first, then columns, in float64 summing the taps in order, and
+    the result is rounded (halves up) to uint8.  Equal pixel sizes return the
+    frame unchanged."""
+    image_mm, model_mm = check_mm_per_px(image_mm), check_mm_per_px(model_mm)
+    t = torch.as_tensor(image_u8)
+    if t.dtype != torch.uint8 or t.dim() != 3 or t.shape[2] != 3:
+        raise ValueError(f"expected uint8 H x W x 3, got {tuple(t.shape)} {t.dtype}")
+    if image_mm == model_mm:
+        return t
+    h, w = t.shape[:2]
+    f = model_mm / image_mm
+    oh, ow = rescaled_size(h, image_mm, model_mm), rescaled_size(w, image_mm, model_mm)
+    x = t.to(torch.float64)
+    ix, wx = _axis_taps(w, ow, f)
+    row = torch.zeros(h, ow, 3, dtype=torch.float64)
+    for j in range(ix.shape[1]):  # along each row (x) first
+        row = row + wx[:, j].view(1, ow, 1) * x[:, ix[:, j], :]
+    iy, wy = _axis_taps(h, oh, f)
+    out = torch.zeros(oh, ow, 3, dtype=torch.float64)
+    for j in range(iy.shape[1]):  # then along each column (y)
+        out = out + wy[:, j].view(oh, 1, 1) * row[iy[:, j], :, :]
+    return torch.floor(out + 0.5).clamp(0, 255).to(torch.uint8)
+
+
+def sensor_rescale(image_u8, cfg, mm_per_px, source="the model"):
+    """The frame as the model sees it: rescaled from ``mm_per_px`` to the
+    config's ``sensor.mm_per_px``; unchanged when ``mm_per_px`` is None."""
+    if mm_per_px is None:
+        return torch.as_tensor(image_u8)
+    mm_per_px = check_mm_per_px(mm_per_px)
+    sensor = cfg.get("sensor")
+    if sensor is None:
+        raise ValueError(f"{source} has no sensor pixel size in its config; cannot rescale")
+    return rescale(image_u8, mm_per_px, sensor["mm_per_px"])
 
 
 def preprocess(image_u8, crop, in_size, dtype=torch.float32):

@@ -114,10 +114,13 @@ const char* kTouchOptionsHelp =
     "                            axis of a rotational symmetry (point and direction, object units)\n"
     "  --symmetry-order M        M-fold symmetry prior on the heat-map (needs --symmetry-axis)\n"
     "  --no-gma                  skip GMA (no alignment score; faster)\n"
-    "  --backend gpu|cpu         Vulkan (default) or the plain C++ reference ops\n";
+    "  --backend gpu|cpu         Vulkan (default) or the plain C++ reference ops\n"
+    "  --mm-per-px MM            the frames' pixel size in mm: rescale them to the model's sensor\n"
+    "                            pixel size before the crop (the model must record a sensor)\n";
 
 std::vector<OptionSpec> touch_option_specs() {
-    return {{"--topk"}, {"--iters"}, {"--symmetry-axis"}, {"--symmetry-order"}, {"--no-gma", false}, {"--backend"}};
+    return {{"--topk"}, {"--iters"},   {"--symmetry-axis"}, {"--symmetry-order"}, {"--no-gma", false},
+            {"--backend"}, {"--mm-per-px"}};
 }
 
 api::LocalizeOptions touch_options(const Args& a) {
@@ -136,7 +139,18 @@ api::LocalizeOptions touch_options(const Args& a) {
         if (v[3] == 0 && v[4] == 0 && v[5] == 0) throw UsageError("--symmetry-axis: the direction is zero");
         o.symmetry = api::Symmetry{{v[0], v[1], v[2]}, {v[3], v[4], v[5]}, a.integer("--symmetry-order", 1, 1, 360)};
     }
+    o.mm_per_px = mm_per_px_option(a);
     return o;
+}
+
+std::optional<double> mm_per_px_option(const Args& a, const std::string& name) {
+    auto v = a.get(name);
+    if (!v) return std::nullopt;
+    char* end = nullptr;
+    double x = std::strtod(v->c_str(), &end);
+    if (v->empty() || *end != '\0' || !std::isfinite(x) || !(x > 0))
+        throw UsageError(name + " must be a finite number > 0 (mm per pixel), got '" + *v + "'");
+    return x;
 }
 
 api::Model load_model(Session& s, const std::string& path, api::Backend backend) {

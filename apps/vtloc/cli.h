@@ -69,9 +69,11 @@ bool is_shipped_random_model(const std::string& path);
 std::string default_model_path();
 
 // Options every touch command shares: --topk --iters --symmetry-axis
-// --symmetry-order --no-gma --backend.
+// --symmetry-order --no-gma --backend --mm-per-px.
 std::vector<OptionSpec> touch_option_specs();
 api::LocalizeOptions touch_options(const Args& a);
+// A pixel size option (--mm-per-px): unset, or a finite number > 0 (else UsageError).
+std::optional<double> mm_per_px_option(const Args& a, const std::string& name = "--mm-per-px");
 extern const char* kTouchOptionsHelp;
 
 // Model on the requested backend (no Vulkan for --backend cpu).
@@ -90,5 +92,6 @@ int cmd_info(Session& s, int argc, char** argv);
 int cmd_devices(Session& s, int argc, char** argv);
 int cmd_synth(Session& s, int argc, char** argv);
 int cmd_eval(Session& s, int argc, char** argv);
+int cmd_check(Session& s, int argc, char** argv);
 
 }  // namespace vtloc::cli

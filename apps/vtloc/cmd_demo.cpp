@@ -12,7 +12,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kHelp =
-    "usage: vtloc demo [--example N] [--out DIR] [--model M]\n"
+    "usage: vtloc demo [--example N] [--out DIR] [--model M] [--mm-per-px MM]\n"
     "\n"
     "Runs the shipped default model (models/, RANDOM weights: no trained model exists\n"
     "yet) on a shipped example (examples/mug.glb and examples/touch_0N.png with its\n"
@@ -22,7 +22,9 @@ const char* kHelp =
     "  --example N   which example touch, 1..3 (default 1)\n"
     "  --out DIR     where to write heatmap.png and heatmap.ply\n"
     "                (default: <temp dir>/vtloc-demo)\n"
-    "  --model M     another weight file, e.g. your trained export\n";
+    "  --model M     another weight file, e.g. your trained export\n"
+    "  --mm-per-px MM  the frame's pixel size in mm: rescale it to the model's sensor\n"
+    "                pixel size before the crop (the model must record a sensor)\n";
 
 struct Example {
     fs::path object, tactile;
@@ -53,12 +55,14 @@ double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) 
 }  // namespace
 
 int cmd_demo(Session& s, int argc, char** argv) {
-    Args a(argc, argv, 2, {{"--example"}, {"--out"}, {"--model"}});
+    Args a(argc, argv, 2, {{"--example"}, {"--out"}, {"--model"}, {"--mm-per-px"}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
     }
     const int n = a.integer("--example", 1, 1, 3);
+    api::LocalizeOptions opt;
+    opt.mm_per_px = mm_per_px_option(a);
     const fs::path out = a.get("--out") ? fs::path(*a.get("--out")) : fs::temp_directory_path() / "vtloc-demo";
     const fs::path root = shipped_dir();
     const fs::path model_path = a.get("--model") ? fs::path(*a.get("--model")) : root / kDefaultModel;
@@ -73,7 +77,7 @@ int cmd_demo(Session& s, int argc, char** argv) {
     std::printf("object    %s: %zu points sampled (the model's point.n_points)\n", ex.object.string().c_str(),
                 object.cloud().size());
     std::printf("touch     %s (%dx%d GelSight frame)\n", ex.tactile.string().c_str(), image.width, image.height);
-    api::TouchResult r = model.localize(object, image);
+    api::TouchResult r = model.localize(object, image, opt);
 
     std::printf("predicted %s mm\n", point_str(r.contact, 1).c_str());
     std::printf("true      %s mm (%s)\n", point_str(ex.contact, 1).c_str(), ex.where.c_str());

@@ -43,6 +43,9 @@ const char* kHelp =
     "  --skip-bad                evaluate the touches that can be read; report the others\n"
     "  --no-baselines            leave out the Chance and Point Filtering rows\n"
     "  --backend gpu|cpu         Vulkan (default) or the plain C++ reference ops\n"
+    "  --mm-per-px MM            the frames' pixel size in mm (default: the dataset's sensor.mm_per_px);\n"
+    "                            frames are rescaled to the model's sensor pixel size before the crop\n"
+    "                            when it differs (models that record no sensor: never, unless given)\n"
     "\n"
     "Chance is exact (every candidate taken as the prediction once). Point Filtering needs\n"
     "mesh.ply in every object folder and is skipped with a note otherwise. Exit status: 0 ok,\n"
@@ -87,6 +90,7 @@ eval::Options parse(const Args& a) {
     o.baselines = !a.flag("--no-baselines");
     const std::string backend = one_of(a, "--backend", "gpu", {"gpu", "cpu"});
     o.backend = backend == "gpu" ? api::Backend::Gpu : api::Backend::Cpu;
+    o.mm_per_px = mm_per_px_option(a);
     return o;
 }
 
@@ -196,7 +200,8 @@ int cmd_eval(Session& s, int argc, char** argv) {
     std::vector<OptionSpec> specs{{"--model"},     {"--data"},     {"--split"},      {"--objects"},
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
                                   {"--markdown"},  {"--per-touch"}, {"--render"},    {"--render-count"},
-                                  {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"}};
+                                  {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
+                                  {"--mm-per-px"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -211,6 +216,15 @@ int cmd_eval(Session& s, int argc, char** argv) {
     if (info.sample_points != d.n_points)
         throw api::Error(opt.model + ": the model takes " + std::to_string(info.sample_points) +
                          " points per object (point.n_points), " + index + " has n_points " + std::to_string(d.n_points));
+
+    // The frames' pixel size: --mm-per-px, else the dataset's when the model records another.
+    if (opt.mm_per_px) {
+        if (!info.sensor)
+            throw api::Error(opt.model + " has no sensor pixel size in its config; cannot rescale (--mm-per-px)");
+        if (*opt.mm_per_px != info.sensor->mm_per_px) opt.frames_mm_per_px = opt.mm_per_px;
+    } else if (info.sensor && d.sensor.mm_per_px != info.sensor->mm_per_px) {
+        opt.frames_mm_per_px = d.sensor.mm_per_px;
+    }
 
     eval::Report rep;
     rep.opt = opt;
@@ -257,6 +271,10 @@ int cmd_eval(Session& s, int argc, char** argv) {
     std::printf("data      %s: %zu objects, %d %s touches%s\n", opt.data.c_str(), jobs.size(), rep.touches_run,
                 opt.split.c_str(), opt.objects == "all" ? "" : (" (" + opt.objects + " objects)").c_str());
     std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
+    if (opt.frames_mm_per_px)
+        std::printf("rescale   frames of %g mm per pixel (%s) to the model's %g before the crop\n",
+                    *opt.frames_mm_per_px, opt.mm_per_px ? "--mm-per-px" : "the dataset's sensor",
+                    info.sensor->mm_per_px);
     if (opt.sequence > 1)
         std::printf("sequence  %d touches per belief window (SPEC section 6, sigma 0.2, sigma_m 0.05)\n", opt.sequence);
     if (!rep.skips.empty()) rep.notes.insert(rep.notes.begin(), skip_summary(rep.skips, selected));

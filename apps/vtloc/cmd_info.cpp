@@ -52,6 +52,11 @@ int cmd_info(Session&, int argc, char** argv) {
                 (long long)m.input_size);
     std::printf("points      %lld sampled from a mesh; at least %lld needed\n", (long long)m.sample_points,
                 (long long)m.min_points);
+    if (m.sensor)
+        std::printf("sensor      %g mm per pixel, %d x %d frames (other pixel sizes: --mm-per-px)\n",
+                    m.sensor->mm_per_px, m.sensor->width, m.sensor->height);
+    else
+        std::printf("sensor      not recorded (frames are used as given)\n");
     std::printf("parameters  %s (weights and BatchNorm statistics) = %.2f MiB as fp32\n",
                 count_str(m.parameter_count).c_str(), m.size_mib);
     std::printf("            (the paper reports %.2f MiB for its VTLoc model)\n", kPaperMiB);

@@ -40,6 +40,7 @@ std::string golden_command(const std::string& model, const std::string& tactile,
     if (auto n = a.get("--iters")) cmd += " --iters " + *n;
     if (auto k = a.get("--topk")) cmd += " --K " + *k;
     if (auto s = a.get("--symmetry-axis")) cmd += " --symmetry " + *s + "," + *a.get("--symmetry-order");
+    if (auto m = a.get("--mm-per-px")) cmd += " --mm-per-px " + *m;
     return cmd + " -o " + out;
 }
 

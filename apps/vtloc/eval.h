@@ -23,6 +23,8 @@ struct Options {
     int render_count = 3;
     bool skip_bad = false, baselines = true;
     api::Backend backend = api::Backend::Gpu;
+    std::optional<double> mm_per_px;         // --mm-per-px: the frames' pixel size
+    std::optional<double> frames_mm_per_px;  // what the frames are rescaled from (unset: no rescale)
 };
 
 // A touch that was left out (--skip-bad), and why.

@@ -112,6 +112,8 @@ void write_json(const std::string& path, const Report& rep, const MethodResult& 
                      {"iters", rep.head == "mcr" ? nlohmann::json(nullptr) : nlohmann::json(rep.iters)},
                      {"topk", rep.opt.topk},
                      {"sequence", rep.opt.sequence},
+                     {"mm_per_px", rep.opt.frames_mm_per_px ? nlohmann::json(*rep.opt.frames_mm_per_px)
+                                                            : nlohmann::json(nullptr)},
                      {"backend", rep.opt.backend == api::Backend::Gpu ? "gpu" : "cpu"},
                      {"rows", rows},
                      {"per_touch", per_touch},

@@ -124,6 +124,7 @@ MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options&
         lo.top_k = job.topk;
         lo.gma = false;  // the alignment score is not a metric
         lo.backend = opt.backend;
+        lo.mm_per_px = opt.frames_mm_per_px;
         ImageCache cache(o, opt, skips);
         api::Object object = encode(model, job, opt.backend);
         res.encoded.push_back(object);

@@ -21,6 +21,7 @@ const char* kUsage =
     "  sequence   several touches with known motions: a belief over the contact candidates\n"
     "  info       a weight file's config, parameter count, size and tensors\n"
     "  devices    Vulkan devices and the limits the engine uses\n"
+    "  check      cross-check the device against the CPU reference (model, or --ops: every op)\n"
     "  synth      build a synthetic GelSight dataset from meshes (docs/dataset.md)\n"
     "  eval       the paper's metrics for a model on a dataset (docs/eval.md)\n"
     "\n"
@@ -40,6 +41,7 @@ Command find_command(const std::string& name) {
     if (name == "sequence") return cli::cmd_sequence;
     if (name == "info") return cli::cmd_info;
     if (name == "devices") return cli::cmd_devices;
+    if (name == "check") return cli::cmd_check;
     if (name == "synth") return cli::cmd_synth;
     if (name == "eval") return cli::cmd_eval;
     return nullptr;

@@ -42,6 +42,11 @@ WeightStore load_checked_weights(const std::string& path, ModelInfo& info);
 
 DeviceInfo to_api(const rt::DeviceInfo& d);
 
+// Throws Error("<what> must be a finite number > 0, got <v>") unless it is.
+void check_mm_per_px(double v, const std::string& what);
+// rescale_tactile_image without the exception guard (engine/api/rescale.cpp).
+TactileImage rescale_frame(const TactileImage& image, double image_mm, double model_mm);
+
 // Collapses a message to one line (multi-line engine messages, e.g. device lists).
 std::string one_line(std::string s);
 

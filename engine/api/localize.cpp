@@ -49,6 +49,19 @@ TouchOptions touch_options(const ModelInfo& info, const Object::Impl& o, const L
     return t;
 }
 
+// The frames as the model sees them: each rescaled to the model's sensor pixel
+// size when options.mm_per_px is set; empty when it is not (use them as given).
+std::vector<TactileImage> model_frames(const ModelInfo& info, const std::vector<TactileImage>& images,
+                                       const LocalizeOptions& opt) {
+    std::vector<TactileImage> out;
+    if (!opt.mm_per_px) return out;
+    check_mm_per_px(*opt.mm_per_px, "mm_per_px");
+    if (!info.sensor) throw Error(info.path + " has no sensor pixel size in its config; cannot rescale");
+    out.reserve(images.size());
+    for (const TactileImage& im : images) out.push_back(rescale_frame(im, *opt.mm_per_px, info.sensor->mm_per_px));
+    return out;
+}
+
 std::array<double, 3> to_object(const float* p, const ObjectFrame& f) { return from_frame(p, f); }
 
 // Shapes as weights_tools.golden writes them (no batch axis of 1, 0-d Chamfer).
@@ -81,13 +94,22 @@ Tensor f32_tensor(const std::string& name, std::vector<int64_t> shape, std::vect
 
 // Every tensor of one touch: the inputs and the normalisation (as the golden
 // file has them), the object's branch, then the touch's.
-std::vector<Tensor> all_tensors(const Object::Impl& o, const TactileImage& image, const vtloc::TouchResult& r) {
+// `rescaled`: the frame after the sensor rescale, when there was one.
+std::vector<Tensor> all_tensors(const Object::Impl& o, const TactileImage& image, const vtloc::TouchResult& r,
+                                const TactileImage* rescaled) {
     std::vector<Tensor> out;
     Tensor img;
     img.name = "input.tactile";
     img.shape = {image.height, image.width, 3};
     img.u8 = image.rgb;
     out.push_back(std::move(img));
+    if (rescaled) {
+        Tensor rs;
+        rs.name = "tactile.rescaled";
+        rs.shape = {rescaled->height, rescaled->width, 3};
+        rs.u8 = rescaled->rgb;
+        out.push_back(std::move(rs));
+    }
     out.push_back(to_tensor("input.cloud", o.raw_cloud));
     out.push_back(f32_tensor("input.candidates", {int64_t(o.candidates.size() / 3), 3}, o.candidates));
     const ObjectFrame& f = o.encoded.frame;
@@ -148,20 +170,22 @@ std::vector<TouchResult> Model::localize(const Object& object, const std::vector
         const Object::Impl& o = object_for(object.impl_, *impl_);
         if (images.empty()) throw Error("no tactile images given");
         TouchOptions topt = touch_options(impl_->info, o, options);
+        const std::vector<TactileImage> scaled = model_frames(impl_->info, images, options);
+        const std::vector<TactileImage>& frames = scaled.empty() ? images : scaled;
         VtlocRunner& runner = impl_->runner(options.backend);
         runner.set_profiling(options.profile);
         // One run per image size (a graph has one input shape), in first-seen order.
         std::map<std::pair<int, int>, std::vector<size_t>> groups;
         std::vector<std::pair<int, int>> order;
-        for (size_t i = 0; i < images.size(); ++i) {
-            auto key = std::make_pair(images[i].height, images[i].width);
+        for (size_t i = 0; i < frames.size(); ++i) {
+            auto key = std::make_pair(frames[i].height, frames[i].width);
             if (!groups.count(key)) order.push_back(key);
             groups[key].push_back(i);
         }
         std::vector<TouchResult> results(images.size());
         for (auto& key : order) {
             std::vector<HostTensor> batch;
-            for (size_t i : groups[key]) batch.push_back(image_tensor(images[i]));
+            for (size_t i : groups[key]) batch.push_back(image_tensor(frames[i]));
             auto t0 = std::chrono::steady_clock::now();
             std::vector<vtloc::TouchResult> rs = runner.localize(o.encoded, batch, topt);
             Timings t = timings(runner, ms_since(t0));
@@ -169,7 +193,8 @@ std::vector<TouchResult> Model::localize(const Object& object, const std::vector
                 size_t i = groups[key][j];
                 results[i] = convert(rs[j], o);
                 results[i].timings = t;
-                if (options.keep_tensors) results[i].tensors = all_tensors(o, images[i], rs[j]);
+                if (options.keep_tensors)
+                    results[i].tensors = all_tensors(o, images[i], rs[j], scaled.empty() ? nullptr : &scaled[i]);
             }
         }
         return results;
@@ -190,8 +215,9 @@ SequenceResult Model::localize_sequence(const Object& object, const std::vector<
             throw Error("the belief's sigma and sigma_m must be positive");
         if (belief.window < 0) throw Error("the belief window must be >= 0 (0 = every touch)");
         TouchOptions topt = touch_options(impl_->info, o, options);
+        const std::vector<TactileImage> scaled = model_frames(impl_->info, images, options);
         std::vector<HostTensor> batch;
-        for (const TactileImage& im : images) batch.push_back(image_tensor(im));
+        for (const TactileImage& im : scaled.empty() ? images : scaled) batch.push_back(image_tensor(im));
         VtlocRunner& runner = impl_->runner(options.backend);
         runner.set_profiling(options.profile);
         auto t0 = std::chrono::steady_clock::now();
@@ -202,7 +228,9 @@ SequenceResult Model::localize_sequence(const Object& object, const std::vector<
         for (size_t i = 0; i < s.touches.size(); ++i) {
             out.touches.push_back(convert(s.touches[i], o));
             out.touches.back().timings.wall_ms = out.timings.wall_ms;
-            if (options.keep_tensors) out.touches.back().tensors = all_tensors(o, images[i], s.touches[i]);
+            if (options.keep_tensors)
+                out.touches.back().tensors =
+                    all_tensors(o, images[i], s.touches[i], scaled.empty() ? nullptr : &scaled[i]);
         }
         out.belief = s.belief;
         out.best = s.best;

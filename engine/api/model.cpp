@@ -1,6 +1,7 @@
 // Loading a weight file for the public API: the config schema (SPEC section 7)
 // and every tensor the network needs are checked up front, so a wrong file
 // fails at load with one message instead of at the first touch.
+#include <cmath>
 #include <filesystem>
 #include <optional>
 
@@ -105,6 +106,15 @@ void check_config(const json& cfg, const std::string& source) {
     } else {
         r.int_list(r.object(cfg, "", "mcr"), "mcr.", "hidden");
     }
+    // Optional: the sensor the model was trained on (absent or null: none).
+    if (cfg.contains("sensor") && !cfg.at("sensor").is_null()) {
+        const json& s = r.object(cfg, "", "sensor");
+        const json& mm = r.at(s, "sensor.", "mm_per_px");
+        if (!mm.is_number() || !std::isfinite(mm.get<double>()) || !(mm.get<double>() > 0))
+            r.fail("sensor.mm_per_px", "must be a finite number > 0");
+        r.field_int(s, "sensor.", "height", 1);
+        r.field_int(s, "sensor.", "width", 1);
+    }
 }
 
 // Builds the whole network once (on a copy: building adds folded tensors)
@@ -162,6 +172,10 @@ WeightStore load_checked_weights(const std::string& path, ModelInfo& info) {
     info.input_size = cfg.at("tactile").at("in_size").get<int64_t>();
     info.sample_points = cfg.at("point").at("n_points").get<int64_t>();
     info.min_points = cfg.at("point").at("sa").at(0).at("npoint").get<int64_t>();
+    if (cfg.contains("sensor") && !cfg.at("sensor").is_null()) {
+        const json& s = cfg.at("sensor");
+        info.sensor = SensorInfo{s.at("mm_per_px").get<double>(), s.at("height").get<int>(), s.at("width").get<int>()};
+    }
     for (const TensorInfo& t : file.tensors()) {
         info.tensors.push_back({t.name, dtype_name(t.dtype), t.shape});
         if (t.dtype == DType::F32 || t.dtype == DType::F16 || t.dtype == DType::BF16)

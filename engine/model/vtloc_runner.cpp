@@ -216,6 +216,14 @@ TouchResult VtlocRunner::localize_once(const HostTensor& image, const HostTensor
     return collect(out, "", o, r.iters);
 }
 
+VtlocRunner::Prepared VtlocRunner::prepare_once(const HostTensor& image, const HostTensor& cloud,
+                                                const HostTensor* candidates, const TouchOptions& options) {
+    EncodedObject o = prepare_object(cloud, candidates);
+    TouchRun r = touch_run(config(), o, {image}, options);
+    r.spec.encode_object = true;
+    return {build_vtloc_graph(weights_, r.spec), std::move(r.inputs)};
+}
+
 SequenceResult VtlocRunner::localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,
                                               const std::vector<std::array<double, 3>>& motions,
                                               const TouchOptions& options, const BeliefOptions& belief) {

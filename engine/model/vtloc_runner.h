@@ -94,6 +94,15 @@ public:
     TouchResult localize_once(const HostTensor& image, const HostTensor& cloud, const HostTensor* candidates,
                               const TouchOptions& options = {});
 
+    // localize_once's graph and inputs, built but not run (`vtloc check`
+    // cross-checks it node by node; run it with weights()).
+    struct Prepared {
+        Graph graph;
+        TensorMap inputs;
+    };
+    Prepared prepare_once(const HostTensor& image, const HostTensor& cloud, const HostTensor* candidates,
+                          const TouchOptions& options = {});
+
     // Touches with known sensor motions between them: motions[t-1] is the
     // displacement (object units) from touch t-1 to touch t. All touches run in
     // one submit, then the belief update in another.

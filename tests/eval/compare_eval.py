@@ -70,7 +70,7 @@ def main():
     with open(a.reference) as f:
         R = json.load(f)
     problems = []
-    for key in ("format", "config", "split", "objects", "topk", "sequence"):
+    for key in ("format", "config", "split", "objects", "topk", "sequence", "mm_per_px"):
         if E.get(key) != R.get(key):
             problems.append(f"'{key}' differs: {E.get(key)!r} vs {R.get(key)!r}")
     topk = E.get("topk", 5)

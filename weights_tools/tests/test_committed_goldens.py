@@ -11,7 +11,7 @@ GOLDENS = make_goldens.DEFAULT_OUT
 
 def test_regenerated_bytes_match(tmp_path):
     written = make_goldens.make_all(str(tmp_path))
-    assert len(written) == 2 * len(make_goldens.CONFIGS)
+    assert len(written) == 2 * len(make_goldens.CONFIGS) + 1 + len(make_goldens.SENSOR_GOLDENS)
     for path in written:
         name = os.path.basename(path)
         with open(path, "rb") as a, open(os.path.join(GOLDENS, name), "rb") as b:
@@ -20,8 +20,12 @@ def test_regenerated_bytes_match(tmp_path):
 
 def test_committed_goldens_are_small_and_valid():
     names = sorted(os.listdir(GOLDENS))
-    assert names == sorted(f"{c}{s}" for c in make_goldens.CONFIGS
-                           for s in (".safetensors", ".golden.safetensors"))
+    sensor = make_goldens.SENSOR_CONFIG
+    assert names == sorted([f"{c}{s}" for c in make_goldens.CONFIGS
+                            for s in (".safetensors", ".golden.safetensors")]
+                           + [f"{sensor}.safetensors"]
+                           + [f"{sensor}.{label}.golden.safetensors"
+                              for label, _ in make_goldens.SENSOR_GOLDENS])
     assert sum(os.path.getsize(os.path.join(GOLDENS, n)) for n in names) <= 2 * 1024 * 1024
     for n in names:
         _, meta = safetensors_io.load(os.path.join(GOLDENS, n))
@@ -35,3 +39,17 @@ def test_golden_refers_to_its_weights(name):
         digest = hashlib.sha256(f.read()).hexdigest()
     _, meta = safetensors_io.load(os.path.join(GOLDENS, f"{name}.golden.safetensors"))
     assert meta["vtloc.golden.weights_sha256"] == digest
+
+
+@pytest.mark.parametrize("label,mm", make_goldens.SENSOR_GOLDENS)
+def test_sensor_goldens_rescale_the_frame(label, mm):
+    import json
+    from weights_tools import synthetic
+    from weights_tools.tactile import rescaled_size
+    t, meta = safetensors_io.load(os.path.join(GOLDENS, f"{make_goldens.SENSOR_CONFIG}.{label}.golden.safetensors"))
+    cfg = json.loads(meta["vtloc.config"])
+    assert cfg["sensor"] == {"mm_per_px": 0.1245, "height": 120, "width": 160}
+    assert meta["vtloc.golden.mm_per_px"] == repr(mm)
+    h, w = synthetic.tactile_image(0).shape[:2]
+    assert tuple(t["input.tactile"].shape) == (h, w, 3)
+    assert tuple(t["tactile.rescaled"].shape) == (rescaled_size(h, mm, 0.1245), rescaled_size(w, mm, 0.1245), 3)

@@ -195,7 +195,8 @@ def test_eval_end_to_end(data_dir, tiny_weights, tmp_path):
     assert "uniform" in r.stdout and "Top-1" in r.stdout
     rep = json.loads(out.read_text())
     assert set(rep) == {"format", "model", "config", "data", "split", "objects", "iters", "topk",
-                        "sequence", "rows", "per_touch", "time_per_touch_ms"}
+                        "sequence", "mm_per_px", "rows", "per_touch", "time_per_touch_ms"}
+    assert rep["mm_per_px"] is None  # the tiny model records no sensor
     assert rep["format"] == "vtloc-eval/1" and rep["config"] == "vtloc-tiny" and rep["iters"] == 4
     assert [r["subset"] for r in rep["rows"]] == ["non-uniform", "uniform", "all"]
     assert all(set(r) == {"method", "subset", "objects", "touches", "mm", "nd", "top1", "top5", "mpe"}

@@ -31,6 +31,7 @@
 //   save_tensors) touch no shared state and may run concurrently.
 #include <array>
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <stdexcept>
@@ -102,6 +103,7 @@ public:
 
 private:
     friend class Model;
+    friend struct ContextAccess;  // engine/api internals (check, check_ops)
     std::unique_ptr<Impl> impl_;
 };
 
@@ -111,6 +113,12 @@ struct TensorSummary {
     std::string name;
     std::string dtype;            // as stored: "F32", "F16", "I64", ...
     std::vector<int64_t> shape;
+};
+
+// The sensor a model was trained on (the config's optional "sensor" section).
+struct SensorInfo {
+    double mm_per_px = 0;         // pixel size, mm
+    int height = 0, width = 0;    // frame size, pixels
 };
 
 struct ModelInfo {
@@ -126,6 +134,7 @@ struct ModelInfo {
     int64_t crop = 0, input_size = 0;  // tactile preprocessing
     int64_t sample_points = 0;    // points sampled from a mesh (point.n_points)
     int64_t min_points = 0;       // fewest cloud points the model accepts
+    std::optional<SensorInfo> sensor;  // absent: the config records none (no rescaling)
     uint64_t parameter_count = 0; // float elements: weights and BatchNorm statistics
     double size_mib = 0;          // parameter_count as fp32, in MiB
     uint64_t file_bytes = 0;
@@ -184,6 +193,17 @@ struct TactileImage {
 };
 TactileImage load_tactile_image(const std::string& path);
 
+// A frame taken with pixels of image_mm_per_px resampled to pixels of
+// model_mm_per_px, so that one pixel covers the same millimetres: the size is
+// round(H * s) x round(W * s) (halves up), s = image_mm_per_px / model_mm_per_px,
+// the centres line up and one output pixel spans exactly 1/s input pixels.
+// Shrinking (s < 1) averages the area each output pixel covers (clipped to the
+// frame); enlarging (s > 1) is bilinear between pixel centres, clamped at the
+// edges. Rows, then columns, in double; rounded to uint8 (halves up). Equal
+// sizes return the frame unchanged. Op for op weights_tools.tactile.rescale.
+// Both sizes must be finite and > 0; the result must be at least 8 x 8.
+TactileImage rescale_tactile_image(const TactileImage& image, double image_mm_per_px, double model_mm_per_px);
+
 struct Symmetry {
     std::array<double, 3> axis_point{0, 0, 0};  // object units
     std::array<double, 3> axis_dir{0, 0, 1};
@@ -198,6 +218,10 @@ struct LocalizeOptions {
     Backend backend = Backend::Gpu;
     bool keep_tensors = false;  // fill TouchResult::tensors (every intermediate)
     bool profile = false;       // per-node GPU times (GPU with timestamps only)
+    // The frames' pixel size in mm: each frame is first rescaled to the model's
+    // sensor.mm_per_px (rescale_tactile_image), before the centre crop. Needs a
+    // model whose config records a sensor; finite and > 0. Unset: no rescale.
+    std::optional<double> mm_per_px;
 };
 
 struct Timings {
@@ -214,7 +238,7 @@ struct Tensor {
     std::vector<int64_t> shape;
     std::vector<float> f32;       // float tensors
     std::vector<int32_t> i32;     // index tensors
-    std::vector<uint8_t> u8;      // input.tactile
+    std::vector<uint8_t> u8;      // input.tactile, tactile.rescaled
 };
 
 struct TouchResult {
@@ -309,5 +333,91 @@ void render_heatmap_png(const std::string& path, const Object& object, const std
 // Every tensor of a result (keep_tensors) as one safetensors file, comparable
 // name by name with `python3 -m weights_tools.golden`.
 void save_tensors(const std::string& path, const std::vector<Tensor>& tensors, const std::string& config_json = "");
+
+// ---- Checking a device against the CPU reference (`vtloc check`) ------------
+
+struct CheckTolerance {
+    double abs = 0, rel = 0;  // |gpu - cpu| <= abs + rel * |cpu|; index tensors compare exactly
+};
+
+// The errors of one comparison (a node's outputs, one op case, or one output).
+struct CheckError {
+    double max_abs = 0;          // max |gpu - cpu|
+    double max_rel = 0;          // max |gpu - cpu| / |cpu| where |cpu| > the absolute tolerance
+    double tolerance_used = 0;   // max |gpu - cpu| / (abs + rel * |cpu|); above 1 fails
+    bool has_indices = false;    // some output is an I32 index tensor
+    bool indices_equal = true;   // ... and all of them equal the reference
+    int64_t mismatches = 0;      // elements out of tolerance
+    std::string first_mismatch;  // "element i: GPU x, CPU y", when there is one
+};
+
+struct NodeCheck {
+    std::string node, op;
+    std::string stage;           // the node name's first part ("tactile", "point.sa1", "ilu", ...)
+    std::vector<std::vector<int64_t>> input_shapes, output_shapes;
+    std::vector<std::string> dispatches;  // "shader spec=[local size, constants...] groups=XxYxZ"
+    CheckError error;
+    std::string failure;         // the CPU reference threw on the GPU's inputs
+    bool ok = true;
+};
+
+struct OutputCheck {
+    std::string name;
+    CheckError error;
+    bool ok = true;
+};
+
+struct CheckDevice {
+    std::string name, type, vulkan, driver;
+    std::vector<std::pair<std::string, std::string>> limits;  // those that choose shader variants
+};
+
+struct CheckOptions {
+    std::string model;    // weight file
+    std::string tactile;  // tactile image
+    std::string object;   // mesh (.glb/.gltf) or PLY point cloud
+};
+
+struct CheckResult {
+    bool ok = false;
+    CheckDevice device;
+    std::string model_name;
+    CheckTolerance node_tolerance{1e-4, 1e-4}, end_to_end_tolerance{2e-3, 2e-3};
+    std::vector<NodeCheck> nodes;       // schedule order; each CPU node ran on the GPU's inputs
+    std::vector<OutputCheck> outputs;   // the model's outputs against a full CPU run
+    int first_failure = -1;             // index into nodes, -1 if none
+    double gpu_ms = 0, cpu_ms = 0, wall_ms = 0;
+};
+
+// Runs the model once on the context's device (every intermediate kept) and
+// compares every node with its CPU reference fed the GPU's own inputs, and the
+// outputs with a full CPU reference run. Bad files throw Error; a mismatch
+// does not throw (ok = false).
+CheckResult check(Context& context, const CheckOptions& options);
+
+struct OpCheck {
+    std::string op, variant;
+    std::vector<std::string> dispatches;
+    CheckError error;
+    CheckTolerance tolerance;
+    std::string failure;  // recording or the reference threw
+    bool ok = true;
+    double ms = 0;
+};
+
+struct OpsCheckResult {
+    bool ok = false;
+    CheckDevice device;
+    std::vector<OpCheck> cases;
+    std::vector<std::string> uncovered_ops;  // registered ops with no self-test case (a failure)
+    double wall_ms = 0;
+};
+
+// The built-in self-test: every registered op on the device against its CPU
+// reference, at odd shapes and on each variant (texel / storage-buffer paths,
+// the tile shapes this device's limits choose). filter: only ops whose name
+// contains it. progress(i, n, case) after each case, when given.
+OpsCheckResult check_ops(Context& context, const std::string& filter = "",
+                         const std::function<void(size_t, size_t, const OpCheck&)>& progress = {});
 
 }  // namespace vtloc::api

@@ -1,0 +1,79 @@
+// `vtloc check` results as JSON. Infinite errors (a wrong index, a NaN on one
+// side) are written as null.
+#include "apps/vtloc/check_json.h"
+
+#include <cmath>
+
+namespace vtloc::cli {
+
+namespace {
+
+nlohmann::json number(double v) { return std::isfinite(v) ? nlohmann::json(v) : nlohmann::json(); }
+
+nlohmann::json error_json(const api::CheckError& e) {
+    nlohmann::json j{{"max_abs", number(e.max_abs)},
+                     {"max_rel", number(e.max_rel)},
+                     {"tolerance_used", number(e.tolerance_used)},
+                     {"mismatches", e.mismatches}};
+    if (e.has_indices) j["indices_equal"] = e.indices_equal;
+    if (!e.first_mismatch.empty()) j["first_mismatch"] = e.first_mismatch;
+    return j;
+}
+
+nlohmann::json device_json(const api::CheckDevice& d) {
+    nlohmann::json limits = nlohmann::json::object();
+    for (auto& [k, v] : d.limits) limits[k] = v;
+    return {{"name", d.name}, {"type", d.type}, {"vulkan", d.vulkan}, {"driver", d.driver}, {"limits", limits}};
+}
+
+nlohmann::json tol_json(const api::CheckTolerance& t) { return {{"abs", t.abs}, {"rel", t.rel}}; }
+
+}  // namespace
+
+nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o) {
+    nlohmann::json nodes = nlohmann::json::array(), outputs = nlohmann::json::array();
+    for (const api::NodeCheck& n : r.nodes) {
+        nlohmann::json j{{"node", n.node},          {"op", n.op},
+                         {"stage", n.stage},        {"ok", n.ok},
+                         {"inputs", n.input_shapes}, {"outputs", n.output_shapes},
+                         {"dispatches", n.dispatches}, {"error", error_json(n.error)}};
+        if (!n.failure.empty()) j["failure"] = n.failure;
+        nodes.push_back(std::move(j));
+    }
+    for (const api::OutputCheck& out : r.outputs)
+        outputs.push_back({{"name", out.name}, {"ok", out.ok}, {"error", error_json(out.error)}});
+    nlohmann::json j{{"ok", r.ok},
+                     {"model", o.model},
+                     {"model_name", r.model_name},
+                     {"tactile", o.tactile},
+                     {"object", o.object},
+                     {"device", device_json(r.device)},
+                     {"tolerance", {{"node", tol_json(r.node_tolerance)}, {"end_to_end", tol_json(r.end_to_end_tolerance)}}},
+                     {"nodes", nodes},
+                     {"outputs", outputs},
+                     {"ms", {{"gpu", r.gpu_ms}, {"cpu", r.cpu_ms}, {"wall", r.wall_ms}}}};
+    j["first_failure"] = r.first_failure >= 0 ? nlohmann::json(r.nodes[size_t(r.first_failure)].node) : nlohmann::json();
+    return j;
+}
+
+nlohmann::json ops_check_json(const api::OpsCheckResult& r) {
+    nlohmann::json cases = nlohmann::json::array();
+    for (const api::OpCheck& c : r.cases) {
+        nlohmann::json j{{"op", c.op},
+                         {"variant", c.variant},
+                         {"ok", c.ok},
+                         {"tolerance", tol_json(c.tolerance)},
+                         {"error", error_json(c.error)},
+                         {"dispatches", c.dispatches},
+                         {"ms", c.ms}};
+        if (!c.failure.empty()) j["failure"] = c.failure;
+        cases.push_back(std::move(j));
+    }
+    return {{"ok", r.ok},
+            {"device", device_json(r.device)},
+            {"cases", cases},
+            {"uncovered_ops", r.uncovered_ops},
+            {"ms", r.wall_ms}};
+}
+
+}  // namespace vtloc::cli

@@ -1,0 +1,12 @@
+#pragma once
+// `vtloc check` results as JSON (the --json file).
+#include <nlohmann/json.hpp>
+
+#include "vtloc/vtloc.h"
+
+namespace vtloc::cli {
+
+nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o);
+nlohmann::json ops_check_json(const api::OpsCheckResult& r);
+
+}  // namespace vtloc::cli

@@ -1,0 +1,68 @@
+// Self-test cases: linear, the binary and activation ops, concat, flatten
+// (the shapes of tests/test_ops.cpp).
+#include <cmath>
+
+#include "engine/check/op_selftest.h"
+#include "engine/ops/common.h"
+
+namespace vtloc::check {
+
+namespace {
+
+OpCase linear_case(const Shape& x, int64_t out, bool bias, uint32_t act, uint32_t seed, const std::string& why) {
+    OpCase c("linear", why + ": x" + shape_str(x) + " -> " + std::to_string(out) + (bias ? "" : ", no bias") +
+                           (act ? ", act " + std::to_string(act) : ""));
+    const int64_t in = x.back();
+    const float bound = 1.0f / std::sqrt(float(std::max<int64_t>(1, in)));
+    std::vector<int> ins{c.input("x", random_tensor(x, seed, -2.0f, 2.0f)),
+                         c.weight("w", random_tensor({out, in}, seed + 1, -bound, bound))};
+    if (bias) ins.push_back(c.weight("b", random_tensor({out}, seed + 2, -bound, bound)));
+    c.output(c.g.add1("linear", ins, {{"act", double(act)}, {"slope", 0.2}}), "y");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> dense_cases(const rt::DeviceInfo&) {
+    std::vector<OpCase> v;
+    v.push_back(linear_case({1, 513}, 300, true, ops::kActNone, 3, "one row (short-M tile)"));
+    v.push_back(linear_case({5, 127, 33}, 65, true, ops::kActNone, 2, "odd shape"));
+    v.push_back(linear_case({7, 1}, 3, true, ops::kActNone, 4, "K = 1"));
+    v.push_back(linear_case({130, 70}, 129, false, ops::kActLeaky, 6, "several tiles, ragged edges"));
+    v.push_back(linear_case({9, 31}, 17, true, ops::kActSigmoid, 14, "fused activation"));
+
+    for (const char* op : {"add", "sub", "mul"})
+        for (const Shape& b : {Shape{5, 127, 33}, Shape{33}}) {
+            OpCase c(op, "[5, 127, 33] with " + shape_str(b) + (b.size() < 3 ? " (broadcast)" : ""));
+            int x = c.input("a", random_tensor({5, 127, 33}, 30)), y = c.input("b", random_tensor(b, 31));
+            c.output(c.g.add1(op, {x, y}), "y");
+            v.push_back(std::move(c));
+        }
+    for (const char* op : {"relu", "leaky_relu", "tanh", "sigmoid"})
+        for (float range : {3.0f, 60.0f}) {
+            const Shape s = range < 10 ? Shape{5, 127, 33} : Shape{1000};
+            OpCase c(op, shape_str(s) + " in +-" + std::to_string(int(range)) + (range > 10 ? " (saturation)" : ""));
+            c.output(c.g.add1(op, {c.input("x", random_tensor(s, 20, -range, range))}, {{"slope", 0.05}}), "y");
+            v.push_back(std::move(c));
+        }
+
+    OpCase cat("concat", "[127, 33] [127, 64] [127, 5] [127, 2] along the last axis");
+    std::vector<int> parts;
+    int64_t widths[] = {33, 64, 5, 2};
+    for (int i = 0; i < 4; ++i)
+        parts.push_back(cat.input(std::string("x").append(std::to_string(i)), random_tensor({127, widths[i]}, 40 + uint32_t(i))));
+    cat.output(cat.g.add1("concat", parts), "y");
+    v.push_back(std::move(cat));
+    OpCase cat3("concat", "[5, 7, 3] [5, 7, 1] (3-d, one column)");
+    cat3.output(cat3.g.add1("concat", {cat3.input("a", random_tensor({5, 7, 3}, 44)),
+                                       cat3.input("b", random_tensor({5, 7, 1}, 45))}),
+                "y");
+    v.push_back(std::move(cat3));
+
+    OpCase flat("flatten", "[3, 5, 7, 9] -> [3, 315] (a copy, no shader)");
+    flat.output(flat.g.add1("flatten", {flat.input("x", random_tensor({3, 5, 7, 9}, 50))}), "y");
+    v.push_back(std::move(flat));
+    return v;
+}
+
+}  // namespace vtloc::check

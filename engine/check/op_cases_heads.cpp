@@ -1,0 +1,134 @@
+// Self-test cases: disentangle (whole and split into row chunks), gma_decode,
+// chamfer, ilu (1/4/16 lanes per row), ilu_step, topk (ties), heatmap (with
+// and without symmetry) and belief (the shapes of tests/test_gma_ops.cpp,
+// test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
+#include <cmath>
+
+#include "engine/check/op_selftest.h"
+#include "engine/model/gma.h"
+#include "engine/model/heads.h"
+#include "engine/model/post.h"
+#include "engine/ops/common.h"
+
+namespace vtloc::check {
+
+namespace {
+
+OpCase disentangle_case(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t chunk_rows, uint32_t seed) {
+    const int64_t chunks = (K + chunk_rows - 1) / chunk_rows;
+    OpCase c("disentangle", std::to_string(rows) + "x" + std::to_string(K) + " by [" + std::to_string(K) + ", " +
+                                std::to_string(J) + ", " + std::to_string(L) + "] in " + std::to_string(chunks) +
+                                " row chunk" + (chunks > 1 ? "s" : ""));
+    c.w.add("wd", random_tensor({K, J, L}, seed + 1, -0.3f, 0.3f));
+    std::vector<int> in{c.input("x", random_tensor({rows, K}, seed, -2.0f, 2.0f))};
+    for (const std::string& n : split_weight_rows(c.w, "wd", uint64_t(chunk_rows * J * L * 4)))
+        in.push_back(c.g.weight(n, c.w.get(n).shape));
+    c.output(c.g.add1("disentangle", in, {{"act", double(ops::kActLeaky)}, {"slope", 0.01}}), "y");
+    return c;
+}
+
+void add_ilu_weights(OpCase& c, int64_t C, int64_t H, uint32_t seed) {
+    const float g = 1.0f / std::sqrt(float(3 * C)), hb = 1.0f / std::sqrt(float(C)), ob = 1.0f / std::sqrt(float(H));
+    uint32_t s = seed;
+    for (const char* gate : {"convz", "convr", "convq"}) {
+        c.w.add(std::string("ilu.") + gate + ".weight", random_tensor({C, 3 * C}, ++s, -g, g));
+        c.w.add(std::string("ilu.") + gate + ".bias", random_tensor({C}, ++s, -g, g));
+    }
+    c.w.add("ilu.head.0.weight", random_tensor({H, C}, ++s, -hb, hb));
+    c.w.add("ilu.head.0.bias", random_tensor({H}, ++s, -hb, hb));
+    c.w.add("ilu.head.2.weight", random_tensor({3, H}, ++s, -ob, ob));
+    c.w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
+}
+
+OpCase ilu_case(int64_t C, int64_t H, int iters, bool stepped, double lanes) {
+    OpCase c(stepped ? "ilu_step" : "ilu", "C " + std::to_string(C) + ", hidden " + std::to_string(H) + ", N " +
+                                               std::to_string(iters) +
+                                               (lanes > 0 ? ", " + std::to_string(int(lanes)) + " lanes per row" : ""));
+    add_ilu_weights(c, C, H, uint32_t(C) + 3);
+    int ft = c.input("ft", random_tensor({1, C}, 7, -2.0f, 2.0f)), fp = c.input("fp", random_tensor({1, C}, 8, -2.0f, 2.0f));
+    int iters_in = c.input("iters", ilu_iters_input(iters, iters));
+    if (lanes > 0) {
+        std::vector<int> in{ft, fp, iters_in};
+        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+            in.push_back(c.g.weight(n, c.w.get(n).shape));
+        c.output(c.g.add("ilu", in, {{"max_iters", double(iters)}, {"lanes", lanes}})[0], "c");
+        return c;
+    }
+    IluOutputs o = (stepped ? build_ilu_stepped : build_ilu)(c.g, c.w, ft, fp, iters_in, iters);
+    c.output(o.contact, "contact");
+    c.output(o.c, "c");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
+    std::vector<OpCase> v;
+    v.push_back(disentangle_case(1, 37, 13, 7, 10, 2));
+    v.push_back(disentangle_case(3, 64, 129, 5, 64, 3));
+    v.push_back(disentangle_case(1, 256, 300, 64, 97, 4));
+
+    OpCase dec("gma_decode", "[1, 37, 6] with a zero normal and one below the clamp");
+    HostTensor o = random_tensor({1, 37, 6}, 7, -3.0f, 3.0f);
+    for (int k = 3; k < 6; ++k) o.data[size_t(6 * 5 + k)] = 0.0f;
+    for (int k = 3; k < 6; ++k) o.data[size_t(6 * 6 + k)] = k == 3 ? 1e-8f : 0.0f;
+    dec.output(dec.g.add1("gma_decode", {dec.input("o", o)}), "y");
+    v.push_back(std::move(dec));
+
+    for (auto [a, b] : {std::pair<Shape, Shape>{{37, 3}, {53, 3}}, {{1, 300, 6}, {257, 6}}, {{1000, 3}, {7, 3}}}) {
+        OpCase c("chamfer", shape_str(a) + " vs " + shape_str(b));
+        std::vector<int> out = c.g.add("chamfer", {c.input("a", random_tensor(a, 1)), c.input("b", random_tensor(b, 2))});
+        c.output(out[0], "chamfer");
+        c.output(out[1], "mins");
+        v.push_back(std::move(c));
+    }
+
+    v.push_back(ilu_case(37, 19, 7, false, 0));
+    v.push_back(ilu_case(301, 33, 3, false, 0));
+    for (double lanes : {1.0, 4.0, 16.0}) v.push_back(ilu_case(37, 19, 5, false, lanes));
+    v.push_back(ilu_case(37, 19, 7, true, 0));
+
+    for (int64_t M : {37, 2049, 100003}) {
+        for (bool ties : {false, true}) {
+            const int k = M > 5000 ? 64 : 5;
+            OpCase c("topk", std::to_string(M) + " candidates, K " + std::to_string(k) + (ties ? ", many exact ties" : ""));
+            HostTensor cand = random_tensor({M, 3}, uint32_t(M), ties ? -4.0f : -1.0f, ties ? 4.0f : 1.0f);
+            if (ties)
+                for (float& x : cand.data) x = std::round(x) / 4.0f;
+            HostTensor centre = ties ? HostTensor({1, 3}, {0, 0, 0}) : HostTensor({3}, {0.1f, -0.2f, 0.05f});
+            std::vector<int> out = c.g.add("topk", {c.input("c", centre), c.input("cand", cand)}, {{"k", double(k)}});
+            c.output(out[0], "index");
+            c.output(out[1], "score");
+            c.tol = {0.0, 0.0};  // same fp32 roundings on both sides
+            v.push_back(std::move(c));
+        }
+    }
+
+    for (bool sym : {false, true}) {
+        OpCase c("heatmap", std::string("1037 points, 301 candidates, 5 centres (one repeated)") +
+                                (sym ? ", symmetry order 5" : ""));
+        std::vector<int32_t> idx{17, 3, 300, 0, 17};
+        std::vector<int> in{c.input("cloud", random_tensor({1037, sym ? 3 : 6}, 2)), c.input("cand", random_tensor({301, 3}, 1)),
+                            c.input("index", HostTensor::from_ints({5}, idx))};
+        if (sym) in.push_back(c.input("sym", symmetry_transforms({0.1, -0.2, 0.0}, {0.3, 1.0, -0.2}, 5)));
+        c.output(c.g.add1("heatmap", in), "heat");
+        v.push_back(std::move(c));
+    }
+
+    struct Belief { int64_t M, T; double window; };
+    for (Belief k : {Belief{37, 1, 4}, Belief{37, 6, 4}, Belief{1000, 3, 0}}) {
+        OpCase c("belief", std::to_string(k.M) + " candidates, " + std::to_string(k.T) + " touches, window " +
+                               std::to_string(int(k.window)));
+        std::vector<int> o2 = c.g.add("belief", {c.input("cand", random_tensor({k.M, 3}, uint32_t(k.M))),
+                                                 c.input("cp", random_tensor({k.T, 3}, uint32_t(k.T) + 5, -0.8f, 0.8f)),
+                                                 c.input("d", random_tensor({k.T - 1, 3}, 9, -0.1f, 0.1f))},
+                                      {{"window", k.window}, {"sigma", 0.2}, {"sigma_m", 0.05}});
+        c.output(o2[0], "belief");
+        c.output(o2[1], "log");
+        v.push_back(std::move(c));
+    }
+    return v;
+}
+
+}  // namespace vtloc::check

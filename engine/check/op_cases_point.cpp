@@ -1,0 +1,106 @@
+// Self-test cases: fps, ball_query, point_group, group_max, group_linear
+// (gather, plain and group-all inputs; fused max; texel and storage-buffer
+// paths) and cloud_normalize (the shapes of tests/test_point_ops.cpp).
+#include "engine/check/op_selftest.h"
+#include "engine/ops/common.h"
+#include "engine/ops/point_common.h"
+
+namespace vtloc::check {
+
+namespace {
+
+OpCase fps_case(int64_t n, int64_t d, int64_t npoint, double radius, int64_t nsample, bool no_registers,
+                const std::string& why) {
+    OpCase c("fps", why + ": " + std::to_string(n) + " points [N, " + std::to_string(d) + "] -> " +
+                        std::to_string(npoint));
+    int x = c.input("cloud", random_tensor({n, d}, uint32_t(n)));
+    Params p{{"npoint", double(npoint)}};
+    if (no_registers) p.set("no_registers", 1);
+    std::vector<int> f = c.g.add("fps", {x}, p);
+    c.output(f[0], "fps");
+    c.output(f[1], "centres");
+    if (nsample > 0) c.output(c.g.add1("ball_query", {x, f[1]}, {{"radius", radius}, {"nsample", double(nsample)}}), "ball");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
+    std::vector<OpCase> v;
+    v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
+    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
+    v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
+    for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, "")}) {
+        c.op = "ball_query";
+        c.variant = "after fps: " + c.variant.substr(2);
+        v.push_back(std::move(c));
+    }
+
+    // A PointNet++ stage: grouping, fused layers, neighbour max (ReLU).
+    const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
+    const double relu = ops::kActRelu;
+    auto stage = [&](const std::string& op, const std::string& why) {
+        OpCase c(op, why);
+        int x = c.input("cloud", random_tensor({N, 6}, 21));
+        std::vector<int> f = c.g.add("fps", {x}, {{"npoint", double(S)}});
+        int ball = c.g.add1("ball_query", {x, f[1]}, {{"radius", 0.6}, {"nsample", double(ns)}});
+        HostTensor w1 = random_tensor({C1, 6}, 11, -0.5f, 0.5f), w2 = random_tensor({C2, C1}, 13, -0.3f, 0.3f);
+        HostTensor w3 = random_tensor({C3, 3 + C1}, 15, -0.3f, 0.3f);
+        int b1 = c.weight("b1", random_tensor({C1}, 12, -0.2f, 0.2f)), b2 = c.weight("b2", random_tensor({C2}, 14, -0.2f, 0.2f));
+        int b3 = c.weight("b3", random_tensor({C3}, 16, -0.2f, 0.2f));
+        int w1t = c.weight("w1t", ops::point_weight_kn(w1)), w2t = c.weight("w2t", ops::point_weight_kn(w2));
+        int w3t = c.weight("w3t", ops::point_weight_kn(w3));
+        int w1v = c.weight("w1", w1), w2v = c.weight("w2", w2);
+        std::vector<int> fin{x, f[1], ball, w1t, b1, x};
+        if (op == "point_group") {
+            int grouped = c.g.add1("point_group", {x, f[1], ball, x}, {{"feat_begin", 3}});
+            c.output(grouped, "grouped");
+            int h = c.g.add1("linear", {grouped, w1v, b1}, {{"act", relu}});
+            c.output(c.g.add1("linear", {h, w2v, b2}, {{"act", relu}}), "y");
+        } else if (op == "group_max") {
+            int fh = c.g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}});
+            c.output(c.g.add1("group_max", {fh}, {{"group", double(ns)}, {"channel_major", 1}}), "max_cm");
+            int grouped = c.g.add1("point_group", {x, f[1], ball, x}, {{"feat_begin", 3}});
+            int h = c.g.add1("linear", {grouped, w1v, b1}, {{"act", relu}});
+            c.output(c.g.add1("group_max", {h}, {{"group", double(ns)}}), "max_pm");
+        } else {
+            const bool texel = why.find("storage") == std::string::npos;
+            int fh = c.g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}, {"texel", double(texel)}});
+            c.output(fh, "first");
+            c.output(c.g.add1("group_linear", {fh, w2t, b2}, {{"max", 1}, {"group", double(ns)}, {"act", relu},
+                                                               {"texel", double(texel)}}), "fused");
+            int one = c.g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu},
+                                                    {"texel", double(texel)}});
+            c.output(c.g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)},
+                                                                     {"texel", double(texel)}}), "all");
+        }
+        return c;
+    };
+    v.push_back(stage("point_group", "gather 37 groups of 12 from 300 points [N, 6], then two layers"));
+    v.push_back(stage("group_max", "channel-major and point-major, groups of 12"));
+    v.push_back(stage("group_linear", "gather, fused max, group-all; texel path"));
+    v.push_back(stage("group_linear", "gather, fused max, group-all; storage-buffer path"));
+    struct Wide { int64_t M, K, Nout, group; };
+    for (Wide k : {Wide{20 * 128, 131, 96, 128}, Wide{1001, 37, 37, 13}}) {
+        OpCase c("group_linear", "plain input [" + std::to_string(k.K) + ", " + std::to_string(k.M) + "] -> " +
+                                     std::to_string(k.Nout) + ", max over groups of " + std::to_string(k.group));
+        int x = c.input("x", random_tensor({k.K, k.M}, 33));
+        int wv = c.weight("w", random_tensor({k.K, k.Nout}, 31, -0.15f, 0.15f));
+        int bv = c.weight("b", random_tensor({k.Nout}, 32, -0.1f, 0.1f));
+        c.output(c.g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(k.group)}}), "max");
+        c.output(c.g.add1("group_linear", {x, wv, bv}, {{"act", double(ops::kActLeaky)}, {"slope", 0.1}}), "plain");
+        v.push_back(std::move(c));
+    }
+
+    for (int64_t n : {2, 4097}) {
+        OpCase c("cloud_normalize", std::to_string(n) + " points, coordinates in -50..80");
+        auto o = c.g.add("cloud_normalize", {c.input("c", random_tensor({n, 6}, uint32_t(40 + n), -50.0f, 80.0f))});
+        c.output(o[0], "cloud");
+        c.output(o[1], "frame");
+        c.tol = {2e-4, 1e-4};  // the fp32 mean of coordinates up to 80 (as tests/test_point_ops.cpp)
+        v.push_back(std::move(c));
+    }
+    return v;
+}
+
+}  // namespace vtloc::check

@@ -1,0 +1,146 @@
+// `vtloc check` through the public API: the model check passes on lavapipe
+// for the tiny model, fails naming the node when a test-only fault injector
+// corrupts one node's GPU output (fp32 and index outputs), and the op
+// self-test covers every registered op and passes. Validation layer on.
+#include <catch2/catch.hpp>
+#include <set>
+
+#include "engine/check/fault_injection.h"
+#include "engine/executor.h"
+#include "engine/op.h"
+#include "tests/api_test_util.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+namespace {
+
+api::CheckOptions tiny_check() {
+    return {test::tiny_model(), test::source_path("examples/touch_01.png"), test::source_path("examples/mug.glb")};
+}
+
+// Clears the fault even when a REQUIRE fails.
+struct FaultGuard {
+    ~FaultGuard() { check::testing::clear_fault(); }
+};
+
+}  // namespace
+
+TEST_CASE("check: the tiny model passes on this device, every node compared", "[check]") {
+    api::Context ctx(test::validated());
+    api::CheckResult r = api::check(ctx, tiny_check());
+    test::require_no_validation(ctx);
+    INFO("first failure " << (r.first_failure >= 0 ? r.nodes[size_t(r.first_failure)].node : "none"));
+    CHECK(r.ok);
+    CHECK(r.first_failure == -1);
+    CHECK(r.nodes.size() > 20);
+    std::set<std::string> ops, outputs;
+    for (const api::NodeCheck& n : r.nodes) {
+        ops.insert(n.op);
+        CHECK(n.ok);
+        CHECK(n.error.tolerance_used <= 1.0);
+        if (n.op != "flatten") CHECK(!n.dispatches.empty());  // shader and spec constants reported
+    }
+    for (const char* op : {"tactile_preprocess", "conv2d", "fps", "ball_query", "topk", "heatmap"}) CHECK(ops.count(op));
+    for (const api::OutputCheck& o : r.outputs) outputs.insert(o.name);
+    for (const char* name : {"contact", "topk.index", "heatmap", "point.sa1.fps"}) CHECK(outputs.count(name));
+    for (const api::NodeCheck& n : r.nodes)
+        if (n.op == "fps" || n.op == "topk") CHECK((n.error.has_indices && n.error.indices_equal));
+    CHECK(r.node_tolerance.abs == 1e-4);
+    CHECK(r.end_to_end_tolerance.rel == 2e-3);
+    CHECK(!r.device.driver.empty());
+}
+
+TEST_CASE("check: a corrupted GPU output fails the check and names its node", "[check]") {
+    api::Context ctx(test::validated());
+    api::CheckResult clean = api::check(ctx, tiny_check());
+    for (const api::NodeCheck& n : clean.nodes)
+        if (!n.ok) FAIL_CHECK("node " << n.node << " (" << n.op << "): " << n.error.first_mismatch << n.failure);
+    for (const api::OutputCheck& o : clean.outputs)
+        if (!o.ok) FAIL_CHECK("output " << o.name << ": " << o.error.first_mismatch);
+    REQUIRE(clean.ok);
+    FaultGuard guard;
+    for (const char* op : {"conv2d", "fps"}) {
+        std::string node;
+        for (const api::NodeCheck& n : clean.nodes)
+            if (n.op == op && node.empty()) node = n.node;
+        REQUIRE(!node.empty());
+        INFO("corrupting " << node << " (" << op << ")");
+        check::testing::set_fault(node, [](HostTensor& t) {
+            // fp32: one element off by 1e-2; indices: one index shifted by one.
+            if (t.type == ElemType::I32) t.set_int(t.data.size() / 2, t.int_at(t.data.size() / 2) + 1);
+            else t.data[t.data.size() / 2] += 1e-2f;
+        });
+        api::CheckResult r = api::check(ctx, tiny_check());
+        check::testing::clear_fault();
+        CHECK(!r.ok);
+        REQUIRE(r.first_failure >= 0);
+        const api::NodeCheck& bad = r.nodes[size_t(r.first_failure)];
+        CHECK(bad.node == node);
+        CHECK(bad.op == op);
+        CHECK(!bad.ok);
+        CHECK(bad.error.mismatches >= 1);
+        CHECK(bad.error.first_mismatch.find("element") != std::string::npos);
+        if (std::string(op) == "fps") CHECK(!bad.error.indices_equal);
+        else CHECK(bad.error.max_abs == Approx(1e-2).epsilon(1e-2));
+    }
+    test::require_no_validation(ctx);
+    // Cleared: the next check passes again.
+    CHECK(api::check(ctx, tiny_check()).ok);
+}
+
+TEST_CASE("check: a bad weight file is one api::Error line", "[check]") {
+    api::Context ctx(test::validated());
+    api::CheckOptions o = tiny_check();
+    o.model = test::source_path("examples/mug.glb");
+    std::string m = test::api_error([&] { api::check(ctx, o); });
+    CHECK(m.find("mug.glb") != std::string::npos);
+}
+
+TEST_CASE("check: the op self-test covers every registered op and passes", "[check][op]") {
+    api::Context ctx(test::validated());
+    size_t seen = 0;
+    api::OpsCheckResult r = api::check_ops(ctx, "", [&](size_t i, size_t n, const api::OpCheck& c) {
+        CHECK(i == seen++);
+        CHECK(i < n);
+        INFO(c.op << ": " << c.variant << " " << c.failure << " " << c.error.first_mismatch);
+        CHECK(c.ok);
+    });
+    test::require_no_validation(ctx);
+    CHECK(r.ok);
+    CHECK(r.uncovered_ops.empty());
+    CHECK(seen == r.cases.size());
+    std::set<std::string> covered;
+    for (const api::OpCheck& c : r.cases) covered.insert(c.op);
+    for (std::string_view op : op_names()) CHECK(covered.count(std::string(op)));
+    // Both binding paths of the ops that have them.
+    for (const char* op : {"conv2d", "max_pool2d", "group_linear"}) {
+        bool texel = false, storage = false;
+        for (const api::OpCheck& c : r.cases)
+            if (c.op == op) {
+                texel = texel || c.variant.find("texel") != std::string::npos;
+                storage = storage || c.variant.find("storage-buffer") != std::string::npos;
+            }
+        CHECK((texel && storage));
+    }
+    CHECK(!r.device.limits.empty());
+}
+
+TEST_CASE("executor keep_all: every value readable, outputs unchanged", "[check]") {
+    Graph g;
+    int x = g.input("x", {7, 5});
+    int a = g.add1("relu", {x}, {}, "a");
+    int b = g.add1("tanh", {a}, {}, "b");
+    g.output(g.add1("add", {a, b}, {}, "c"), "y");
+    TensorMap in{{"x", test::random_tensor({7, 5}, 3)}};
+    GpuExecutor plain(test::gpu(), g, WeightStore{}), kept(test::gpu(), g, WeightStore{}, false, true);
+    CHECK(kept.memory_plan().arena_bytes == kept.memory_plan().total_bytes);  // nothing shares bytes
+    TensorMap want = plain.run(in), got = kept.run(in);
+    CHECK(got.at("y").data == want.at("y").data);
+    TensorMap cpu = run_cpu(g, WeightStore{}, in);
+    HostTensor va = kept.value(a);
+    for (size_t i = 0; i < va.data.size(); ++i) CHECK(va.data[i] == std::max(0.0f, in.at("x").data[i]));
+    CHECK(kept.value(x).data == in.at("x").data);
+    CHECK_THROWS(plain.value(a));
+    test::require_no_validation_messages();
+}
