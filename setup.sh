@@ -11,6 +11,7 @@ packages=(
   nlohmann-json3-dev catch2
   libglm-dev libtinygltf-dev libstb-dev libopencv-dev
   python3 python3-torch python3-torchvision python3-numpy python3-pil python3-pytest
+  python3-tqdm libopenblas0-pthread
 )
 
 missing=()
