@@ -65,6 +65,8 @@ struct Session {
 // from. Throws api::Error when none holds the default model.
 std::filesystem::path shipped_dir();
 inline constexpr const char* kDefaultModel = "models/vtloc-r18-half-random.safetensors";
+// The demo's example for the default model (examples/<name>.json).
+inline constexpr const char* kDefaultExample = "touch_01";
 bool is_shipped_random_model(const std::string& path);
 std::string default_model_path();
 

@@ -19,7 +19,8 @@ const char* kHelp =
     "ground truth in touch_0N.json), prints the predicted and the true contact, and\n"
     "writes a heat-map picture (PNG) and point cloud (PLY).\n"
     "\n"
-    "  --example N   which example touch, 1..3 (default 1)\n"
+    "  --example E   which example: 1..3 (examples/touch_0E.json) or a name\n"
+    "                (examples/E.json; default: the shipped model's own example)\n"
     "  --out DIR     where to write heatmap.png and heatmap.ply\n"
     "                (default: <temp dir>/vtloc-demo)\n"
     "  --model M     another weight file, e.g. your trained export\n"
@@ -27,7 +28,7 @@ const char* kHelp =
     "                pixel size before the crop (the model must record a sensor)\n";
 
 struct Example {
-    fs::path object, tactile;
+    fs::path object, tactile, candidates;  // candidates: empty = the cloud's own points
     std::array<double, 3> contact{};
     std::string where;
 };
@@ -40,6 +41,7 @@ Example read_example(const fs::path& json_path) {
         Example e;
         e.object = json_path.parent_path() / j.at("object").get<std::string>();
         e.tactile = json_path.parent_path() / j.at("tactile").get<std::string>();
+        if (j.contains("candidates")) e.candidates = json_path.parent_path() / j.at("candidates").get<std::string>();
         for (size_t i = 0; i < 3; ++i) e.contact[i] = j.at("contact").at(i).get<double>();
         e.where = j.value("where", "");
         return e;
@@ -60,22 +62,28 @@ int cmd_demo(Session& s, int argc, char** argv) {
         std::fputs(kHelp, stdout);
         return 0;
     }
-    const int n = a.integer("--example", 1, 1, 3);
+    // A number picks one of the mug touches, a name any examples/<name>.json.
+    std::string name = a.get("--example").value_or(kDefaultExample);
+    if (name.size() == 1 && name[0] >= '1' && name[0] <= '3') name = "touch_0" + name;
+    else if (name.empty() || name.find_first_of("/\\.") != std::string::npos)
+        throw UsageError("--example takes 1..3 or the name of an examples/*.json file");
     api::LocalizeOptions opt;
     opt.mm_per_px = mm_per_px_option(a);
     const fs::path out = a.get("--out") ? fs::path(*a.get("--out")) : fs::temp_directory_path() / "vtloc-demo";
     const fs::path root = shipped_dir();
     const fs::path model_path = a.get("--model") ? fs::path(*a.get("--model")) : root / kDefaultModel;
     const bool random = is_shipped_random_model(model_path.string());
-    Example ex = read_example(root / "examples" / ("touch_0" + std::to_string(n) + ".json"));
+    const fs::path json_path = root / "examples" / (name + ".json");
+    if (!fs::exists(json_path)) throw api::Error(json_path.string() + ": no such example");
+    Example ex = read_example(json_path);
 
     api::Model model(s.gpu(), model_path.string());
     print_model(model.info(), random);
     std::printf("device    %s\n", s.gpu().device().name.c_str());
     api::TactileImage image = api::load_tactile_image(ex.tactile.string());
-    api::Object object = model.encode_object(ex.object.string());
-    std::printf("object    %s: %zu points sampled (the model's point.n_points)\n", ex.object.string().c_str(),
-                object.cloud().size());
+    api::Object object = model.encode_object(ex.object.string(), ex.candidates.string());
+    std::printf("object    %s: %zu points, %zu candidate contacts\n", ex.object.string().c_str(),
+                object.cloud().size(), object.candidate_count());
     std::printf("touch     %s (%dx%d GelSight frame)\n", ex.tactile.string().c_str(), image.width, image.height);
     api::TouchResult r = model.localize(object, image, opt);
 
@@ -91,8 +99,8 @@ int cmd_demo(Session& s, int argc, char** argv) {
     ro.contact = r.contact;
     ro.ground_truth = ex.contact;
     ro.tactile = &image;
-    ro.caption = model.info().name + (random ? " with RANDOM weights" : "") + ": touch_0" + std::to_string(n) +
-                 ".png on mug.glb";
+    ro.caption = model.info().name + (random ? " with RANDOM weights" : "") + ": " +
+                 ex.tactile.filename().string() + " on " + ex.object.filename().string();
     api::render_heatmap_png(png, object, r.heatmap, ro);
     api::write_heatmap_ply(ply, object, r.heatmap);
     std::printf("time      %.0f ms for the touch (a first run includes shader compilation)\n", r.timings.wall_ms);
