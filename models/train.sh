@@ -1,0 +1,24 @@
+#!/usr/bin/env bash
+# Reproduces a shipped model from scratch on this project's own data:
+#   1. the synthetic benchmark (data/synth/make_dataset.sh, seed 1) with 400 extra
+#      training touches per object (never within 2 mm of a test contact);
+#   2. weights_tools.train with the budget below (wall-clock minutes of training,
+#      so the step count depends on the machine; --steps N instead for bit-exact runs);
+#   3. the weight file copied to models/<config>.safetensors.
+# Interrupted? Run it again: the dataset resumes object by object and training
+# resumes from its checkpoint.
+#   bash models/train.sh [CONFIG] [MINUTES]      (default: vtloc-lite 30)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+config="${1:-vtloc-lite}"
+minutes="${2:-30}"
+data="$root/build/synth-extra"
+run="$root/build/runs/$config"
+bash "$root/data/synth/make_dataset.sh" "$data" 400
+resume=()
+[ -f "$run/checkpoint.pt" ] && resume=(--resume)
+cd "$root"
+PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 -m weights_tools.train --config "$config" --data "$data" \
+  --out "$run" --minutes "$minutes" --seed 0 --threads 2 "${resume[@]}"
+cp "$run/model.safetensors" "$root/models/$config.safetensors"
+echo "wrote models/$config.safetensors"
