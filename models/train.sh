@@ -6,15 +6,23 @@
 #      so the step count depends on the machine; --steps N instead for bit-exact runs);
 #   3. the weight file copied to models/<config>.safetensors.
 # Interrupted? Run it again: the dataset resumes object by object and training
-# resumes from its checkpoint.
-#   bash models/train.sh [CONFIG] [MINUTES]      (default: vtloc-lite 30)
+# resumes from its checkpoint. A run longer than a session is carried between
+# sessions as models/checkpoints/<config>.pt (+ .log.csv): it is picked up here
+# when the run folder has no checkpoint of its own.
+#   bash models/train.sh [CONFIG] [MINUTES]      (default: vtloc-lite 90)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
 config="${1:-vtloc-lite}"
-minutes="${2:-30}"
+minutes="${2:-90}"
 data="$root/build/synth-extra"
 run="$root/build/runs/$config"
 bash "$root/data/synth/make_dataset.sh" "$data" 400
+carried="$root/models/checkpoints/$config"
+if [ ! -f "$run/checkpoint.pt" ] && [ -f "$carried.pt" ]; then
+  mkdir -p "$run"
+  cp "$carried.pt" "$run/checkpoint.pt"
+  [ -f "$carried.log.csv" ] && cp "$carried.log.csv" "$run/log.csv"
+fi
 resume=()
 [ -f "$run/checkpoint.pt" ] && resume=(--resume)
 cd "$root"
