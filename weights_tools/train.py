@@ -16,6 +16,7 @@ import csv
 import json
 import math
 import os
+import shutil
 import subprocess
 import sys
 import time
@@ -35,7 +36,8 @@ from .tactile import IMAGENET_MEAN, IMAGENET_STD, center_crop, crop_start
 VAL_FRACTION = 0.1      # share of each seen object's train contacts held out
 EXTRA_CLEARANCE_MM = 2.0  # extra renders this close to a held-out contact are dropped too
 GAMMA = 0.9             # SPEC 4 sequence-loss decay
-LOG_COLUMNS = ("step", "elapsed_s", "lr", "loss", "loss_seq", "loss_recon", "val_loss", "val_nd")
+LOG_COLUMNS = ("step", "elapsed_s", "lr", "loss", "loss_seq", "loss_recon", "val_loss", "val_nd",
+               "loss_match")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -118,8 +120,9 @@ def sampling_plan(model, cloud):
             for i in range(1, n + 1)]
 
 
-def point_features(pe, cloud, plan):
-    """PointEncoder.forward with precomputed sampling (same graph, same modules)."""
+def point_features(pe, cloud, plan, local=None):
+    """PointEncoder.forward with precomputed sampling (same graph, same modules).
+    ``local``, a list, receives (centres, features) of every SA stage but group-all."""
     xyz = cloud[..., :3]
     feats = cloud[..., 3:6] if pe.use_normals else None
     for i, (fps, balls) in enumerate(plan, start=1):
@@ -132,6 +135,8 @@ def point_features(pe, cloud, plan):
             x = run_stack(grouped.permute(0, 3, 2, 1), sa.conv_blocks[s], sa.bn_blocks[s])
             outs.append(x.max(dim=2).values)
         xyz, feats = new_xyz, torch.cat(outs, dim=1).transpose(1, 2)
+        if local is not None:
+            local.append((xyz, feats))
     return pe.mlp(getattr(pe, f"sa{len(plan) + 1}")(xyz, feats))
 
 
@@ -226,14 +231,43 @@ def chamfer_batch(a, b):
     return da + db
 
 
-def losses(model, tobj, index, lam=1.0, gen=None, rotate=False):
-    """Loss parts on touches ``index`` of one object: (total, seq, recon, c^p B x 3)."""
+class LocalMatch(torch.nn.Module):
+    """Training-only auxiliary head, never exported: scores each centre of each of the
+    point branch's SA stages against the tactile feature, with a soft target peaked at
+    the centres nearest the true contact (width: half the stage's first ball radius).  With many objects the ILU loss alone gives
+    the tactile branch almost no gradient (the same imprint lies at different places
+    on different objects, so its average pull is towards the centre); this loss asks
+    both encoders for local-shape features that agree, on every object alike."""
+
+    def __init__(self, cfg, dim=32):
+        super().__init__()
+        sa = cfg["point"]["sa"]
+        self.dim = dim
+        self.q = torch.nn.ModuleList(torch.nn.Linear(cfg["C"], dim) for _ in sa)
+        self.k = torch.nn.ModuleList(torch.nn.Linear(sum(m[-1] for m in st["mlps"]), dim) for st in sa)
+        self.sigma = [0.5 * st["radii"][0] for st in sa]
+
+    def forward(self, ft, local, gt):
+        total = ft.new_zeros(())
+        for q, k, sigma, (centres, feats) in zip(self.q, self.k, self.sigma, local):
+            logits = q(ft) @ k(feats[0]).t() / math.sqrt(self.dim)
+            d2 = ((gt[:, None, :] - centres[0][None]) ** 2).sum(-1)
+            target = torch.softmax(-d2 / (2 * sigma ** 2), dim=1)
+            total = total - (target * torch.log_softmax(logits, dim=1)).sum(1).mean()
+        return total / len(self.q)
+
+
+def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0.0):
+    """Loss parts on touches ``index`` of one object: (total, seq, recon, c^p B x 3, match);
+    with ``match`` (a LocalMatch) and ``mu`` > 0 its loss, times mu, is in the total."""
     x = images_to_input(tobj.images[index], model.cfg, gen, rotate)
     gt = tobj.contacts[index]
     B = len(index)
-    fp = point_features(model.point, tobj.cloud, tobj.plan).expand(B, -1)
+    local = []
+    fp = point_features(model.point, tobj.cloud, tobj.plan, local).expand(B, -1)
     ft = model.tactile(x)
     zero = ft.new_zeros(())
+    aux = match(ft, local, gt) if match is not None and mu > 0 else zero
     if model.cfg["head"] == "mcr":
         cp = model.mcr(torch.cat([ft, fp], dim=-1))
         seq = F.smooth_l1_loss(cp, gt)
@@ -249,7 +283,7 @@ def losses(model, tobj, index, lam=1.0, gen=None, rotate=False):
     recon = zero
     if model.has("gma"):
         recon = chamfer_batch(model.gma(torch.cat([ft, fp], dim=-1)), tobj.target).mean()
-    return seq + lam * recon, seq, recon, cp
+    return seq + lam * recon + mu * aux, seq, recon, cp, aux
 
 
 @torch.no_grad()
@@ -265,7 +299,7 @@ def validate(model, objects, lam=1.0, batch=64):
         errs = []
         for i in range(0, len(idx), batch):
             chunk = idx[i:i + batch]
-            loss, _, _, cp = losses(model, o, chunk, lam)
+            loss, _, _, cp, _ = losses(model, o, chunk, lam)
             tot += float(loss) * len(chunk)
             n += len(chunk)
             errs.append(torch.linalg.vector_norm(cp - o.contacts[chunk], dim=-1).double() * float(o.scale))
@@ -411,7 +445,7 @@ def provenance(args, ds, objects, step, elapsed, val):
                      "val_touches": len(used[o.name].val_index) if o.name in used else 0}
                     for o in ds.objects],
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
-        "lambda": args.lam, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
+        "lambda": args.lam, "match_weight": args.match, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
         "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
         "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
         "torch": torch.__version__,
@@ -431,6 +465,7 @@ def run(args):
             raise ValueError(f"{ckpt_path}: trained config {saved['config']}, not {args.config}")
         for k in ("config", "seed", "batch", "lam", "lr", "minutes", "steps", "val_fraction", "rotate"):
             setattr(args, k, saved.get(k, getattr(args, k)))  # same run, same budget
+        args.match = saved.get("match", 0.0)  # runs from before the auxiliary loss had none
     elif args.export_only:
         raise ValueError(f"{ckpt_path}: missing (nothing to export)")
     if args.config is None:
@@ -440,13 +475,19 @@ def run(args):
     ds = read_dataset(args.data)
     model = make_model(cfg, args.seed)
     objects = load_objects(model, ds, args.val_fraction)
+    match = LocalMatch(cfg) if args.match > 0 else None  # seeded by make_model's manual_seed
     params = [p for p in model.parameters() if p.requires_grad]
+    n_model = sum(p.numel() for p in params)
+    if match is not None:
+        params += list(match.parameters())
     opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
     sampler = Sampler(objects, args.batch, args.seed)
     gen = torch.Generator().manual_seed(args.seed)
     step, elapsed = 0, 0.0
     if ckpt is not None:
         model.load_state_dict(ckpt["state_dict"])
+        if match is not None:
+            match.load_state_dict(ckpt["match"])
         opt.load_state_dict(ckpt["optimizer"])
         step, elapsed = ckpt["step"], ckpt["elapsed_s"]
         sampler.load(ckpt["sampler"])
@@ -454,7 +495,7 @@ def run(args):
         torch.set_rng_state(ckpt["torch_rng"])
     budget_s = None if args.minutes is None else 60.0 * args.minutes
     n_img = sum(o.images.numel() for o in objects)
-    print(f"{cfg['name']}: {sum(p.numel() for p in params)} parameters; {len(objects)} objects, "
+    print(f"{cfg['name']}: {n_model} parameters; {len(objects)} objects, "
           f"{sum(o.n_train for o in objects)} training / {sum(len(o.val_index) for o in objects)} "
           f"validation touches ({n_img / 2**20:.0f} MiB of frames); {torch.get_num_threads()} threads",
           file=sys.stderr)
@@ -470,9 +511,10 @@ def run(args):
     def checkpoint():
         save_atomic({"state_dict": model.state_dict(), "optimizer": opt.state_dict(), "step": step,
                      "elapsed_s": elapsed, "sampler": sampler.state(), "aug_rng": gen.get_state(),
-                     "torch_rng": torch.get_rng_state(), "config": cfg, "args": {
+                     "torch_rng": torch.get_rng_state(), "config": cfg,
+                     "match": None if match is None else match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
-                                                       "steps", "val_fraction", "rotate")}}, ckpt_path)
+                                                       "steps", "val_fraction", "rotate", "match")}}, ckpt_path)
 
     warmup = min(100, max(1, args.steps // 10)) if args.steps else 100
     val = (None, None)
@@ -483,7 +525,7 @@ def run(args):
             from tqdm import tqdm
             bar = tqdm(total=args.steps or int(budget_s), initial=step if args.steps else int(elapsed),
                        unit="step" if args.steps else "s", dynamic_ncols=True)
-        acc, acc_n, last_ckpt, last_log = np.zeros(3), 0, elapsed, step
+        acc, acc_n, last_ckpt, last_log = np.zeros(4), 0, elapsed, step
         t_prev = time.perf_counter()
         model.train()
         model.point.eval()
@@ -495,13 +537,14 @@ def run(args):
             k, index = sampler.next()
             for g in opt.param_groups:
                 g["lr"] = learning_rate(args.lr, step, progress(), warmup)
-            loss, seq, rec, _ = losses(model, objects[k], index, args.lam, gen, args.rotate)
+            loss, seq, rec, _, aux = losses(model, objects[k], index, args.lam, gen, args.rotate,
+                                            match, args.match)
             opt.zero_grad(set_to_none=True)
             loss.backward()
             torch.nn.utils.clip_grad_norm_(params, 5.0)
             opt.step()
             step += 1
-            acc += [float(loss), float(seq), float(rec)]
+            acc += [float(loss), float(seq), float(rec), float(aux)]
             acc_n += 1
             now = time.perf_counter()
             elapsed += now - t_prev
@@ -514,12 +557,16 @@ def run(args):
             if step - last_log >= args.log_every or done:
                 m = acc / max(acc_n, 1)
                 log.write(step=step, elapsed_s=elapsed, lr=opt.param_groups[0]["lr"], loss=m[0],
-                          loss_seq=m[1], loss_recon=m[2])
-                acc, acc_n, last_log = np.zeros(3), 0, step
+                          loss_seq=m[1], loss_recon=m[2], loss_match=m[3] if match is not None else None)
+                acc, acc_n, last_log = np.zeros(4), 0, step
             if elapsed - last_ckpt >= 60.0 * args.ckpt_minutes or done:
                 val = validate_calibrated(model, objects, args.lam)
                 log.write(step=step, elapsed_s=elapsed, val_loss=val[0], val_nd=val[1])
                 checkpoint()
+                if args.keep_every and int(elapsed / (60 * args.keep_every)) > int(last_ckpt / (60 * args.keep_every)):
+                    # the equal-budget comparisons need this run as it stood at a shorter budget
+                    mark = int(elapsed / (60 * args.keep_every)) * args.keep_every
+                    shutil.copyfile(ckpt_path, os.path.join(args.out, f"checkpoint-{mark:g}min.pt"))
                 last_ckpt = elapsed
                 t_prev = time.perf_counter()  # validation and saving are not training time
             if stop:
@@ -553,12 +600,16 @@ def parse_args(argv=None):
     ap.add_argument("--batch", type=int, default=16, help="touches per step (all of one object)")
     ap.add_argument("--lambda", dest="lam", type=float, default=1.0, help="weight of L_recon")
     ap.add_argument("--lr", type=float, default=3e-4)
+    ap.add_argument("--match", type=float, default=1.0,
+                    help="weight of the training-only local-matching loss (0: SPEC 4 losses only)")
     ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
     ap.add_argument("--rotate", action="store_true", help="also rotate the frames at random (a sensor spin)")
     ap.add_argument("--bn-every", type=int, default=50,
                     help="recompute the point branch's BatchNorm statistics every N steps (0: once)")
     ap.add_argument("--ckpt-minutes", type=float, default=5.0)
     ap.add_argument("--log-every", type=int, default=25)
+    ap.add_argument("--keep-every", type=float, default=0,
+                    help="also keep the checkpoint as checkpoint-<M>min.pt every M minutes of training")
     ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
     ap.add_argument("--resume", action="store_true", help="continue RUN_DIR/checkpoint.pt to its budget")
     ap.add_argument("--export-only", action="store_true", help="export RUN_DIR/checkpoint.pt and stop")

@@ -132,3 +132,31 @@ def test_lite_configs(name):
     assert n * 4 <= 16 * 2**20  # F32 weight file of at most 16 MiB
     assert cfg["tactile"]["crop"] == 120 and cfg["point"]["use_normals"] == (name == "vtloc-lite")
     assert (cfg["head"] == "mcr") == (name == "mcr-lite")
+
+
+def test_local_match_loss(tiny):
+    """The training-only matching loss adds to the total, reaches both encoders,
+    starts near chance (log of the centre count) and is off at weight 0."""
+    m, objs = tiny
+    m = copy.deepcopy(m).train()
+    match = train.LocalMatch(m.cfg)
+    idx = list(range(4))
+    total, seq, rec, _, aux = train.losses(m, objs[0], idx, 1.0, match=match, mu=0.5)
+    assert float(aux) > 0 and torch.isclose(total, seq + rec + 0.5 * aux)
+    chance = np.mean([np.log(st["npoint"]) for st in m.cfg["point"]["sa"]])
+    assert abs(float(aux) - chance) < 0.5
+    aux.backward()
+    for branch in (m.tactile, m.point):
+        assert any(p.grad is not None and float(p.grad.abs().sum()) > 0 for p in branch.parameters())
+    assert float(train.losses(m, objs[0], idx, 1.0, match=match, mu=0.0)[4]) == 0.0
+    # never part of the exported model
+    assert not any(k.startswith(("q.", "k.")) for k in m.state_dict())
+
+
+def test_match_weight_recorded(data_dir, tmp_path):
+    train.run(train.parse_args(_args(data_dir, tmp_path, "--steps", "3", "--match", "0")))
+    with open(tmp_path / "log.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert all(r["loss_match"] == "" for r in rows)
+    _, meta = safetensors_io.load(str(tmp_path / "model.safetensors"))
+    assert json.loads(meta["vtloc.provenance"])["match_weight"] == 0.0
