@@ -12,6 +12,7 @@ packages=(
   libglm-dev libtinygltf-dev libstb-dev libopencv-dev
   python3 python3-torch python3-torchvision python3-numpy python3-pil python3-pytest
   python3-tqdm libopenblas0-pthread
+  pybind11-dev python3-dev
 )
 
 missing=()

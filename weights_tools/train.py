@@ -37,7 +37,7 @@ VAL_FRACTION = 0.1      # share of each seen object's train contacts held out
 EXTRA_CLEARANCE_MM = 2.0  # extra renders this close to a held-out contact are dropped too
 GAMMA = 0.9             # SPEC 4 sequence-loss decay
 LOG_COLUMNS = ("step", "elapsed_s", "lr", "loss", "loss_seq", "loss_recon", "val_loss", "val_nd",
-               "loss_match")
+               "loss_aux")
 ROOT = os.path.dirname(os.path.dirname(os.path.abspath(__file__)))
 
 
@@ -257,9 +257,17 @@ class LocalMatch(torch.nn.Module):
         return total / len(self.q)
 
 
-def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0.0):
-    """Loss parts on touches ``index`` of one object: (total, seq, recon, c^p B x 3, match);
-    with ``match`` (a LocalMatch) and ``mu`` > 0 its loss, times mu, is in the total."""
+def feature_scale(f):
+    """(RMS over channels - 1)^2, averaged over the batch."""
+    return ((f.pow(2).mean(-1) + 1e-12).sqrt() - 1).pow(2).mean()
+
+
+def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0.0, beta=0.0):
+    """Loss parts on touches ``index`` of one object: (total, seq, recon, c^p B x 3, aux).
+    aux, the training-only terms (in the total, never in the exported graph): mu times
+    the LocalMatch loss (with ``match``) plus beta times the feature-scale penalty, which
+    keeps F^p and F^t near unit RMS.  Without it F^p grew to RMS ~10 (pushed by the
+    Chamfer loss) and saturated the ILU's gates: its output stayed at the centre."""
     x = images_to_input(tobj.images[index], model.cfg, gen, rotate)
     gt = tobj.contacts[index]
     B = len(index)
@@ -267,7 +275,9 @@ def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0
     fp = point_features(model.point, tobj.cloud, tobj.plan, local).expand(B, -1)
     ft = model.tactile(x)
     zero = ft.new_zeros(())
-    aux = match(ft, local, gt) if match is not None and mu > 0 else zero
+    aux = mu * match(ft, local, gt) if match is not None and mu > 0 else zero
+    if beta > 0:
+        aux = aux + beta * (feature_scale(fp[:1]) + feature_scale(ft))
     if model.cfg["head"] == "mcr":
         cp = model.mcr(torch.cat([ft, fp], dim=-1))
         seq = F.smooth_l1_loss(cp, gt)
@@ -283,7 +293,7 @@ def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0
     recon = zero
     if model.has("gma"):
         recon = chamfer_batch(model.gma(torch.cat([ft, fp], dim=-1)), tobj.target).mean()
-    return seq + lam * recon + mu * aux, seq, recon, cp, aux
+    return seq + lam * recon + aux, seq, recon, cp, aux
 
 
 @torch.no_grad()
@@ -445,7 +455,7 @@ def provenance(args, ds, objects, step, elapsed, val):
                      "val_touches": len(used[o.name].val_index) if o.name in used else 0}
                     for o in ds.objects],
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
-        "lambda": args.lam, "match_weight": args.match, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
+        "lambda": args.lam, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
         "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
         "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
         "torch": torch.__version__,
@@ -465,7 +475,8 @@ def run(args):
             raise ValueError(f"{ckpt_path}: trained config {saved['config']}, not {args.config}")
         for k in ("config", "seed", "batch", "lam", "lr", "minutes", "steps", "val_fraction", "rotate"):
             setattr(args, k, saved.get(k, getattr(args, k)))  # same run, same budget
-        args.match = saved.get("match", 0.0)  # runs from before the auxiliary loss had none
+        args.match = saved.get("match", 0.0)  # runs from before the auxiliary losses had none
+        args.feature_scale = saved.get("feature_scale", 0.0)
     elif args.export_only:
         raise ValueError(f"{ckpt_path}: missing (nothing to export)")
     if args.config is None:
@@ -514,7 +525,8 @@ def run(args):
                      "torch_rng": torch.get_rng_state(), "config": cfg,
                      "match": None if match is None else match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
-                                                       "steps", "val_fraction", "rotate", "match")}}, ckpt_path)
+                                                       "steps", "val_fraction", "rotate", "match",
+                                                       "feature_scale")}}, ckpt_path)
 
     warmup = min(100, max(1, args.steps // 10)) if args.steps else 100
     val = (None, None)
@@ -538,7 +550,7 @@ def run(args):
             for g in opt.param_groups:
                 g["lr"] = learning_rate(args.lr, step, progress(), warmup)
             loss, seq, rec, _, aux = losses(model, objects[k], index, args.lam, gen, args.rotate,
-                                            match, args.match)
+                                            match, args.match, args.feature_scale)
             opt.zero_grad(set_to_none=True)
             loss.backward()
             torch.nn.utils.clip_grad_norm_(params, 5.0)
@@ -557,7 +569,7 @@ def run(args):
             if step - last_log >= args.log_every or done:
                 m = acc / max(acc_n, 1)
                 log.write(step=step, elapsed_s=elapsed, lr=opt.param_groups[0]["lr"], loss=m[0],
-                          loss_seq=m[1], loss_recon=m[2], loss_match=m[3] if match is not None else None)
+                          loss_seq=m[1], loss_recon=m[2], loss_aux=m[3] if match is not None or args.feature_scale > 0 else None)
                 acc, acc_n, last_log = np.zeros(4), 0, step
             if elapsed - last_ckpt >= 60.0 * args.ckpt_minutes or done:
                 val = validate_calibrated(model, objects, args.lam)
@@ -601,7 +613,9 @@ def parse_args(argv=None):
     ap.add_argument("--lambda", dest="lam", type=float, default=1.0, help="weight of L_recon")
     ap.add_argument("--lr", type=float, default=3e-4)
     ap.add_argument("--match", type=float, default=1.0,
-                    help="weight of the training-only local-matching loss (0: SPEC 4 losses only)")
+                    help="weight of the training-only local-matching loss (0: off)")
+    ap.add_argument("--feature-scale", type=float, default=1.0,
+                    help="weight of the training-only penalty keeping F^p and F^t near unit RMS (0: off)")
     ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
     ap.add_argument("--rotate", action="store_true", help="also rotate the frames at random (a sensor spin)")
     ap.add_argument("--bn-every", type=int, default=50,

@@ -141,8 +141,10 @@ def test_local_match_loss(tiny):
     m = copy.deepcopy(m).train()
     match = train.LocalMatch(m.cfg)
     idx = list(range(4))
-    total, seq, rec, _, aux = train.losses(m, objs[0], idx, 1.0, match=match, mu=0.5)
-    assert float(aux) > 0 and torch.isclose(total, seq + rec + 0.5 * aux)
+    total, seq, rec, _, aux = train.losses(m, objs[0], idx, 1.0, match=match, mu=1.0)
+    assert float(aux) > 0 and torch.isclose(total, seq + rec + aux)
+    half = train.losses(m, objs[0], idx, 1.0, match=match, mu=0.5)[4]
+    assert torch.isclose(half, 0.5 * aux)
     chance = np.mean([np.log(st["npoint"]) for st in m.cfg["point"]["sa"]])
     assert abs(float(aux) - chance) < 0.5
     aux.backward()
@@ -154,9 +156,24 @@ def test_local_match_loss(tiny):
 
 
 def test_match_weight_recorded(data_dir, tmp_path):
-    train.run(train.parse_args(_args(data_dir, tmp_path, "--steps", "3", "--match", "0")))
+    train.run(train.parse_args(_args(data_dir, tmp_path, "--steps", "3", "--match", "0", "--feature-scale", "0")))
     with open(tmp_path / "log.csv") as f:
         rows = list(csv.DictReader(f))
-    assert all(r["loss_match"] == "" for r in rows)
+    assert all(r["loss_aux"] == "" for r in rows)
     _, meta = safetensors_io.load(str(tmp_path / "model.safetensors"))
     assert json.loads(meta["vtloc.provenance"])["match_weight"] == 0.0
+
+
+def test_feature_scale_penalty(tiny):
+    """Zero at unit RMS per row, positive otherwise; in the total with weight beta."""
+    assert float(train.feature_scale(torch.ones(3, 8))) < 1e-9
+    assert abs(float(train.feature_scale(torch.full((2, 8), 3.0))) - 4.0) < 1e-6
+    m, objs = tiny
+    m = copy.deepcopy(m).train()
+    idx = list(range(4))
+    torch.manual_seed(0)
+    a = train.losses(m, objs[0], idx, 1.0, beta=0.0)
+    torch.manual_seed(0)
+    b = train.losses(m, objs[0], idx, 1.0, beta=2.0)
+    assert float(a[4]) == 0.0 and float(b[4]) > 0
+    assert torch.isclose(b[0], a[0] + b[4])

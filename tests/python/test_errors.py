@@ -1,0 +1,74 @@
+"""Bad arrays and arguments: a vtloc.Error whose one-line message names the
+argument and what was wrong; never a crash, never a silent conversion."""
+
+import os
+
+import numpy as np
+import pytest
+
+import vtloc
+
+
+def expect(fragment, fn, *args, **kwargs):
+    with pytest.raises(vtloc.Error) as e:
+        fn(*args, **kwargs)
+    msg = str(e.value)
+    assert fragment in msg and "\n" not in msg, msg
+
+
+def test_bad_images(tiny, mug, touch):
+    im = vtloc.load_tactile_image(touch)
+    expect("expected an H x W x 3 uint8 RGB array or a path, got a float32 array of shape (120, 160, 3)",
+           tiny.localize, mug, im.astype(np.float32))
+    expect("got a uint8 array of shape (120, 160)", tiny.localize, mug, im[:, :, 0].copy())
+    expect("got a uint8 array of shape (120, 160, 4)", tiny.localize, mug,
+           np.concatenate([im, im[:, :, :1]], axis=2))
+    expect("is not C-contiguous", tiny.localize, mug, im[:, ::2])
+    expect("expected a numpy array, got list", tiny.localize, mug, [im.tolist()])
+    expect("image[1]: expected", tiny.localize, mug, [im, im.astype(np.int16)])
+    expect("the list of frames is empty", tiny.localize, mug, [])
+    expect("smallest accepted", tiny.localize, mug, np.zeros((4, 4, 3), np.uint8))
+    expect("nosuch.png", tiny.localize, mug, os.path.join(os.path.dirname(touch), "nosuch.png"))
+
+
+def test_bad_clouds(tiny, mug):
+    cloud = mug.cloud.copy()
+    expect("an N x 3 cloud has no normals", tiny.encode_object, cloud[:, :3].copy())
+    expect("expected a float32 or float64 array of shape (N, 6)", tiny.encode_object, cloud.astype(np.int32))
+    expect("got a float32 array of shape (128, 5)", tiny.encode_object, cloud[:, :5].copy())
+    nan = cloud.copy()
+    nan[17, 1] = np.nan
+    expect("row 17 holds NaN or inf", tiny.encode_object, nan)
+    inf = cloud.astype(np.float64)
+    inf[3, 4] = np.inf
+    expect("row 3 holds NaN or inf", tiny.encode_object, inf)
+    expect("the cloud is empty", tiny.encode_object, np.zeros((0, 6), np.float32))
+    expect("is not C-contiguous", tiny.encode_object, np.asfortranarray(cloud))
+    zero = cloud.copy()
+    zero[5, 3:] = 0
+    expect("normal", tiny.encode_object, zero)
+    expect("candidates: expected a float32 or float64 array of shape (N, 3)", tiny.encode_object, cloud,
+           cloud[:, :2].copy())
+    expect("backend must be 'gpu' or 'cpu', got 'tpu'", tiny.encode_object, cloud, None, "tpu")
+
+
+def test_bad_options(tiny, mug, touch):
+    expect("iters must be in 0..64", tiny.localize, mug, touch, iters=65)
+    expect("K must be in 1..256, got 100000", tiny.localize, mug, touch, top_k=100000)
+    expect("larger than the candidate set", tiny.localize, mug, touch, top_k=200)
+    expect("symmetry: expected a vtloc.Symmetry", tiny.localize, mug, touch, symmetry=(0, 0, 1))
+    expect("mm_per_px: expected a number", tiny.localize, mug, touch, mm_per_px="0.1")
+    expect("no sensor pixel size", tiny.localize, mug, touch, mm_per_px=0.1)
+    expect("axis_dir: expected 3 numbers", vtloc.Symmetry, (0, 0, 0), (0, 1), 2)
+    expect("motions: expected a float32 or float64 array of shape (N, 3)", tiny.localize_sequence, mug,
+           [touch, touch], np.zeros((1, 2)))
+    expect("heat: expected a 1-D float32 or float64 array", vtloc.write_heatmap_ply, "/tmp/x.ply", mug,
+           np.zeros((2, 2), np.float32))
+
+
+def test_bad_files(ctx, tmp_path):
+    bad = tmp_path / "bad.safetensors"
+    bad.write_bytes(b"\x05\x00\x00\x00\x00\x00\x00\x00{abc}")
+    expect("bad.safetensors", vtloc.Model, ctx, str(bad))
+    expect("nosuch", vtloc.inspect_model, str(tmp_path / "nosuch.safetensors"))
+    expect("nosuch", vtloc.Context, "nosuch-device-name")

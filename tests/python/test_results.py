@@ -1,0 +1,111 @@
+"""The module's results equal the C++ API's (through the CLI, which calls it)
+bit for bit, and arrays in give the same results as files in."""
+
+import json
+import os
+import subprocess
+
+import numpy as np
+
+import vtloc
+from weights_tools import safetensors_io
+
+
+def run_cli(cli, *args):
+    p = subprocess.run([cli, *args], capture_output=True, text=True, timeout=300)
+    assert p.returncode == 0, p.stderr
+    return p.stdout
+
+
+def test_localize_equals_the_cli(cli, tiny, tiny_path, mug, touch, root, tmp_path):
+    out = json.loads(run_cli(cli, "localize", "--model", tiny_path, "--tactile", touch, "--object",
+                             os.path.join(root, "examples", "mug.glb"), "--json", "--dump", str(tmp_path),
+                             "--heatmap", str(tmp_path / "cli.ply")))
+    r = tiny.localize(mug, touch, keep_tensors=True)
+    assert r.contact.tolist() == out["contact"]
+    assert r.contact_normalised.tolist() == out["contact_normalised"]
+    assert r.iterates.tolist() == out["iterates"]
+    assert r.alignment == out["alignment"]
+    dumped, _ = safetensors_io.load(str(tmp_path / "tensors.safetensors"))
+    assert sorted(r.tensors) == sorted(dumped)
+    for name, t in dumped.items():
+        assert np.array_equal(r.tensors[name], t.numpy()), name
+    assert np.array_equal(r.topk_index, dumped["topk.index"].numpy().reshape(-1))
+    assert np.array_equal(r.heatmap, dumped["heatmap"].numpy().reshape(-1))
+    vtloc.write_heatmap_ply(str(tmp_path / "py.ply"), mug, r.heatmap)
+    assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
+
+
+def test_sequence_equals_the_cli(cli, tiny, tiny_path, mug, root, tmp_path):
+    frames = [os.path.join(root, "examples", f"touch_0{i}.png") for i in (1, 2, 3)]
+    motions = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]])
+    touch_args = ["--touch", frames[0]]
+    for f, m in zip(frames[1:], motions.tolist()):
+        touch_args += ["--touch", f"{f},{m[0]},{m[1]},{m[2]}"]
+    out = json.loads(run_cli(cli, "sequence", "--model", tiny_path, "--object",
+                             os.path.join(root, "examples", "mug.glb"), *touch_args, "--json"))
+    s = tiny.localize_sequence(mug, frames, motions)
+    assert s.best == out["belief"]["best"]
+    assert s.best_point.tolist() == out["belief"]["best_point"]
+    assert np.array_equal(s.belief, np.array(out["belief"]["values"], dtype=np.float32))
+    assert abs(float(s.belief.sum()) - 1.0) < 1e-5
+    for t, single in zip(s.touches, tiny.localize(mug, frames)):
+        assert np.array_equal(t.contact, single.contact)
+
+
+def test_batch_equals_single_touches(tiny, mug, root):
+    frames = [vtloc.load_tactile_image(os.path.join(root, "examples", f"touch_0{i}.png")) for i in (1, 2, 3)]
+    batch = tiny.localize(mug, frames)
+    assert isinstance(batch, list) and len(batch) == 3
+    for im, b in zip(frames, batch):
+        one = tiny.localize(mug, im)
+        for field in ("contact", "iterates", "topk_index", "topk_score", "heatmap"):
+            assert np.array_equal(getattr(one, field), getattr(b, field)), field
+
+
+def test_arrays_in_equal_files_in(tiny, mug, touch):
+    again = tiny.encode_object(mug.cloud, mug.candidates)
+    image = vtloc.load_tactile_image(touch)
+    assert image.dtype == np.uint8 and image.shape[2] == 3
+    a, b = tiny.localize(mug, touch), tiny.localize(again, image)
+    assert np.array_equal(a.contact, b.contact) and np.array_equal(a.heatmap, b.heatmap)
+    # float64 points are the same points
+    c = tiny.localize(tiny.encode_object(mug.cloud.astype(np.float64)), image)
+    assert np.array_equal(a.contact, c.contact)
+
+
+def test_result_arrays(tiny, mug, touch):
+    r = tiny.localize(mug, touch, top_k=7, iters=3)
+    info = tiny.info
+    assert r.iterates.shape == (3, 3) and r.contact.shape == (3,)
+    assert r.topk_index.dtype == np.int32 and r.topk_index.shape == (7,)
+    assert r.topk_point.shape == (7, 3) and r.topk_score.dtype == np.float32
+    assert np.array_equal(r.topk_point, mug.candidates[r.topk_index].astype(np.float64))
+    assert r.heatmap.shape == (mug.cloud.shape[0],) and 0 <= r.heatmap.min() and r.heatmap.max() <= 1
+    assert info["name"] == "vtloc-tiny" and info["head"] == "ilu"
+    assert r.timings["wall_ms"] > 0
+    assert tiny.localize(mug, touch, gma=False).alignment is None
+
+
+def test_cpu_backend_matches_gpu(tiny_path, tiny, mug, touch):
+    cpu_only = vtloc.Model(tiny_path)
+    obj = cpu_only.encode_object(mug.cloud, backend="cpu")
+    a = cpu_only.localize(obj, touch, backend="cpu")
+    b = tiny.localize(mug, touch)
+    # end-to-end fp32 through two implementations: the tolerance `vtloc check` uses end to end
+    assert np.all(np.abs(a.contact - b.contact) <= 2e-3 + 2e-3 * np.abs(b.contact))
+    try:
+        cpu_only.localize(obj, touch)
+        raise AssertionError("a CPU-only model ran on the GPU")
+    except vtloc.Error as e:
+        assert "without a GPU context" in str(e)
+
+
+def test_outputs_and_info(tiny, mug, touch, tiny_path, tmp_path):
+    r = tiny.localize(mug, touch)
+    vtloc.render_heatmap_png(str(tmp_path / "h.png"), mug, r.heatmap, contact=r.contact, caption="py",
+                             tactile=touch)
+    assert (tmp_path / "h.png").read_bytes()[:8] == b"\x89PNG\r\n\x1a\n"
+    info = vtloc.inspect_model(tiny_path)
+    assert info["parameter_count"] > 0 and len(info["tensors"]) > 0
+    assert any(d["name"] for d in vtloc.list_devices())
