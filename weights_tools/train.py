@@ -268,16 +268,31 @@ def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0
     the LocalMatch loss (with ``match``) plus beta times the feature-scale penalty, which
     keeps F^p and F^t near unit RMS.  Without it F^p grew to RMS ~10 (pushed by the
     Chamfer loss) and saturated the ILU's gates: its output stayed at the centre."""
-    x = images_to_input(tobj.images[index], model.cfg, gen, rotate)
-    gt = tobj.contacts[index]
-    B = len(index)
-    local = []
-    fp = point_features(model.point, tobj.cloud, tobj.plan, local).expand(B, -1)
+    return group_losses(model, [(tobj, index)], lam, gen, rotate, match, mu, beta)
+
+
+def group_losses(model, groups, lam=1.0, gen=None, rotate=False, match=None, mu=0.0, beta=0.0):
+    """losses() over a batch made of groups (object, touch indices): one tactile forward
+    over all frames (so its BatchNorm sees several objects, as running statistics do),
+    the point branch once per group; per-object terms averaged over groups by size."""
+    x = images_to_input(torch.cat([o.images[i] for o, i in groups]), model.cfg, gen, rotate)
+    gt = torch.cat([o.contacts[i] for o, i in groups])
+    B = len(gt)
+    locals_, fps = [], []
+    for o, i in groups:
+        local = []
+        fps.append(point_features(model.point, o.cloud, o.plan, local).expand(len(i), -1))
+        locals_.append(local)
+    fp = torch.cat(fps)
     ft = model.tactile(x)
     zero = ft.new_zeros(())
-    aux = mu * match(ft, local, gt) if match is not None and mu > 0 else zero
+    starts = np.cumsum([0] + [len(i) for _, i in groups])
+    parts = [slice(int(a), int(b)) for a, b in zip(starts[:-1], starts[1:])]
+    aux = zero
+    if match is not None and mu > 0:
+        aux = mu * sum(match(ft[p], loc, gt[p]) * (p.stop - p.start) for p, loc in zip(parts, locals_)) / B
     if beta > 0:
-        aux = aux + beta * (feature_scale(fp[:1]) + feature_scale(ft))
+        aux = aux + beta * (sum(feature_scale(f[:1]) for f in fps) / len(fps) + feature_scale(ft))
     if model.cfg["head"] == "mcr":
         cp = model.mcr(torch.cat([ft, fp], dim=-1))
         seq = F.smooth_l1_loss(cp, gt)
@@ -292,7 +307,8 @@ def losses(model, tobj, index, lam=1.0, gen=None, rotate=False, match=None, mu=0
             cp = cs[:, -1]
     recon = zero
     if model.has("gma"):
-        recon = chamfer_batch(model.gma(torch.cat([ft, fp], dim=-1)), tobj.target).mean()
+        cloud = model.gma(torch.cat([ft, fp], dim=-1))
+        recon = sum(chamfer_batch(cloud[p], o.target).sum() for p, (o, _) in zip(parts, groups)) / B
     return seq + lam * recon + aux, seq, recon, cp, aux
 
 
@@ -336,25 +352,29 @@ def validate_calibrated(model, objects, lam=1.0):
 # ---------------------------------------------------------------- sampling, schedule
 
 class Sampler:
-    """Epochs of one-object batches: each object's training touches shuffled and cut
-    into batches, all batches shuffled.  Epoch e's order depends only on (seed, e), so
+    """Epochs of batches made of ``groups`` chunks of batch/groups touches of one object
+    each: every object's training touches shuffled and cut into chunks, all chunks
+    shuffled, consecutive chunks batched.  Epoch e's order depends only on (seed, e), so
     the position (epoch, index) is all a checkpoint needs to continue identically."""
 
-    def __init__(self, objects, batch, seed):
+    def __init__(self, objects, batch, seed, groups=1):
         self.objects, self.batch, self.seed = objects, batch, seed
+        self.groups = max(1, min(groups, batch))
         self.epoch, self.pos, self._batches = 0, 0, None
 
     def _make(self):
         g = np.random.default_rng([self.seed, self.epoch])
+        size = self.batch // self.groups
         out = []
         for k, o in enumerate(self.objects):
             perm = g.permutation(o.n_train)
-            for i in range(0, len(perm), self.batch):
-                chunk = perm[i:i + self.batch]
+            for i in range(0, len(perm), size):
+                chunk = perm[i:i + size]
                 # a short remainder is a poor BatchNorm batch; its touches come back next epoch
-                if len(chunk) >= max(2, self.batch // 2) or len(perm) < 2 * self.batch:
+                if len(chunk) >= max(1 if self.groups > 1 else 2, size // 2) or len(perm) < 2 * size:
                     out.append((k, chunk.tolist()))
-        return [out[i] for i in g.permutation(len(out))]
+        out = [out[i] for i in g.permutation(len(out))]
+        return [out[i:i + self.groups] for i in range(0, len(out), self.groups)]
 
     def next(self):
         if self._batches is None:
@@ -455,7 +475,7 @@ def provenance(args, ds, objects, step, elapsed, val):
                      "val_touches": len(used[o.name].val_index) if o.name in used else 0}
                     for o in ds.objects],
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
-        "lambda": args.lam, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
+        "lambda": args.lam, "objects_per_batch": args.groups, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
         "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
         "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
         "torch": torch.__version__,
@@ -477,6 +497,7 @@ def run(args):
             setattr(args, k, saved.get(k, getattr(args, k)))  # same run, same budget
         args.match = saved.get("match", 0.0)  # runs from before the auxiliary losses had none
         args.feature_scale = saved.get("feature_scale", 0.0)
+        args.groups = saved.get("groups", 1)
     elif args.export_only:
         raise ValueError(f"{ckpt_path}: missing (nothing to export)")
     if args.config is None:
@@ -492,7 +513,7 @@ def run(args):
     if match is not None:
         params += list(match.parameters())
     opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
-    sampler = Sampler(objects, args.batch, args.seed)
+    sampler = Sampler(objects, args.batch, args.seed, args.groups)
     gen = torch.Generator().manual_seed(args.seed)
     step, elapsed = 0, 0.0
     if ckpt is not None:
@@ -526,7 +547,7 @@ def run(args):
                      "match": None if match is None else match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
                                                        "steps", "val_fraction", "rotate", "match",
-                                                       "feature_scale")}}, ckpt_path)
+                                                       "feature_scale", "groups")}}, ckpt_path)
 
     warmup = min(100, max(1, args.steps // 10)) if args.steps else 100
     val = (None, None)
@@ -546,11 +567,11 @@ def run(args):
             # At fixed steps, so a resumed run recalibrates exactly where an uninterrupted one does.
             if step % args.bn_every == 0 if args.bn_every else step == 0:
                 calibrate_point_bn(model, objects)
-            k, index = sampler.next()
+            batch = sampler.next()
             for g in opt.param_groups:
                 g["lr"] = learning_rate(args.lr, step, progress(), warmup)
-            loss, seq, rec, _, aux = losses(model, objects[k], index, args.lam, gen, args.rotate,
-                                            match, args.match, args.feature_scale)
+            loss, seq, rec, _, aux = group_losses(model, [(objects[k], i) for k, i in batch], args.lam, gen,
+                                                  args.rotate, match, args.match, args.feature_scale)
             opt.zero_grad(set_to_none=True)
             loss.backward()
             torch.nn.utils.clip_grad_norm_(params, 5.0)
@@ -610,6 +631,8 @@ def parse_args(argv=None):
     ap.add_argument("--steps", type=int, help="step budget")
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--batch", type=int, default=16, help="touches per step (all of one object)")
+    ap.add_argument("--objects-per-batch", dest="groups", type=int, default=1,
+                    help="objects in a batch (batch/N touches of each; the point branch runs N times)")
     ap.add_argument("--lambda", dest="lam", type=float, default=1.0, help="weight of L_recon")
     ap.add_argument("--lr", type=float, default=3e-4)
     ap.add_argument("--match", type=float, default=1.0,
