@@ -27,7 +27,7 @@ std::vector<double> float_rows(const py::handle& obj, const std::string& what, l
     py::array a = need_array(obj, what);
     if (!is_float(a) || a.ndim() != 2 || a.shape(1) != cols)
         fail(what + ": expected a float32 or float64 array of shape (N, " + std::to_string(cols) + ") (" + layout +
-             "), got a " + describe(a));
+             (cols == 6 ? "; or (N, 3) without normals" : "") + "), got a " + describe(a));
     const size_t n = size_t(a.size());
     std::vector<double> out(n);
     if (a.dtype().is(py::dtype::of<float>())) {
@@ -76,21 +76,21 @@ std::vector<api::TactileImage> to_images(const py::handle& obj, const std::strin
 }
 
 api::PointCloud to_cloud(const py::handle& obj, const std::string& what) {
+    long cols = 6;
     if (py::isinstance<py::array>(obj)) {
         py::array a = py::reinterpret_borrow<py::array>(obj);
-        if (a.ndim() == 2 && a.shape(1) == 3)
-            fail(what + ": an N x 3 cloud has no normals; the engine needs N x 6 (x y z nx ny nz)");
+        if (a.ndim() == 2 && a.shape(1) == 3) cols = 3;
     }
-    const std::vector<double> v = float_rows(obj, what, 6, "x y z nx ny nz");
+    const std::vector<double> v = float_rows(obj, what, cols, cols == 6 ? "x y z nx ny nz" : "x y z");
     api::PointCloud c;
-    const size_t n = v.size() / 6;
+    const size_t n = v.size() / size_t(cols);
     if (n == 0) fail(what + ": the cloud is empty");
     c.xyz.resize(n * 3);
-    c.normals.resize(n * 3);
+    if (cols == 6) c.normals.resize(n * 3);
     for (size_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-            c.xyz[i * 3 + k] = float(v[i * 6 + k]);
-            c.normals[i * 3 + k] = float(v[i * 6 + 3 + k]);
+        for (size_t k = 0; k < 3; ++k) {
+            c.xyz[i * 3 + k] = float(v[i * size_t(cols) + k]);
+            if (cols == 6) c.normals[i * 3 + k] = float(v[i * 6 + 3 + k]);
         }
     return c;
 }

@@ -23,7 +23,8 @@ api::TactileImage to_image(const py::handle& obj, const std::string& what);
 // One frame or a list/tuple of frames.
 std::vector<api::TactileImage> to_images(const py::handle& obj, const std::string& what);
 
-// N x 6 (x y z nx ny nz) float32/float64 points: checked finite.
+// N x 6 (x y z nx ny nz) or N x 3 (x y z: normals estimated at encoding)
+// float32/float64 points: checked finite.
 api::PointCloud to_cloud(const py::handle& obj, const std::string& what);
 // M x 3 float32/float64 -> 3 floats each; None -> empty.
 std::vector<float> to_points3(const py::handle& obj, const std::string& what);

@@ -124,7 +124,9 @@ void bind_model(py::module_& m) {
         }, "M x 3 float32 candidate contact points, object units")
         .def_property_readonly("candidate_count", &api::Object::candidate_count)
         .def_property_readonly("centre", [](const api::Object& o) { return vec3(o.centre()); })
-        .def_property_readonly("scale", &api::Object::scale);
+        .def_property_readonly("scale", &api::Object::scale)
+        .def_property_readonly("normals_estimated", &api::Object::normals_estimated,
+                               "True when the input had no normals and cloud holds estimated ones");
 
     py::class_<api::Model>(m, "Model", "A weight file loaded on a Context (or CPU-only without one).")
         .def(py::init([](api::Context& ctx, const std::string& path) {
@@ -140,9 +142,10 @@ void bind_model(py::module_& m) {
         .def_property_readonly("info", [](const api::Model& mo) { return model_info_dict(mo.info()); })
         .def("encode_object", &encode, py::arg("source"), py::arg("candidates") = py::none(),
              py::arg("backend") = "gpu",
-             "Runs the point branch once. source: a mesh/PLY path (a mesh is sampled to\n"
-             "info['sample_points']) or an N x 6 float array (x y z nx ny nz); candidates:\n"
-             "None (the cloud's own points), an M x 3 float array or a file.")
+             "Runs the point branch once. source: a mesh or cloud file (a mesh is sampled to\n"
+             "info['sample_points']) or an N x 6 (x y z nx ny nz) or N x 3 float array; a cloud\n"
+             "without normals gets estimated ones (object.normals_estimated); candidates: None\n"
+             "(the cloud's own points), an M x 3 float array or a file.")
         .def("localize",
              [](api::Model& mo, const api::Object& obj, const py::object& image, int iters, int top_k, bool gma,
                 const py::object& symmetry, const std::string& backend, bool keep_tensors, bool profile,

@@ -203,5 +203,5 @@ TEST_CASE("glTF errors name the file and the problem", "[io]") {
         flat.triangles = {0, 1, 2};
         require_error([&] { sample_surface(flat, 10, 0, "flat.glb"); }, {"flat.glb", "no triangle with non-zero area"});
     }
-    require_error([] { load_object(write_temp("object.obj", "v 0 0 0\n"), 10); }, {"object.obj", "unknown object file type"});
+    require_error([] { load_object(write_temp("object.foo", "v 0 0 0\n"), 10); }, {"object.foo", "unknown object file type"});
 }

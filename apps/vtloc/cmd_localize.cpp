@@ -16,8 +16,9 @@ const char* kHelp =
     "\n"
     "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
     "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
-    "  --object FILE             glTF mesh (.glb/.gltf; sampled to the model's point count)\n"
-    "                            or a PLY point cloud with normals (x y z nx ny nz)\n"
+    "  --object FILE             a mesh (.glb .gltf .obj .off .stl, .ply with faces; sampled to\n"
+    "                            the model's point count) or a point cloud (.ply .pcd .xyz .csv);\n"
+    "                            a cloud without normals gets estimated ones (k = 16, PCA)\n"
     "  --candidates F            candidate contact points (.ply, or x,y,z text rows);\n"
     "                            default: the object's points\n"
     "%s"
@@ -116,8 +117,9 @@ int cmd_localize(Session& s, int argc, char** argv) {
     }
     print_model(info, random);
     std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
-    std::printf("object    %s: %zu points, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
-                object.candidate_count(), candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
+    std::printf("object    %s: %zu points%s, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
+                object.normals_estimated() ? " (normals estimated)" : "", object.candidate_count(),
+                candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
     std::printf("tactile   %s (%dx%d)\n", tactile_path.c_str(), image.width, image.height);
     print_touch(r);
     std::printf("time      encode object %.1f ms, touch %.1f ms%s\n", encode_ms, r.timings.wall_ms,

@@ -22,6 +22,7 @@ json object_json(const api::Object& o, const std::string& candidates_path) {
             {"points", o.cloud().size()},
             {"candidates", o.candidate_count()},
             {"candidates_from", candidates_path.empty() ? "the object's points" : candidates_path},
+            {"normals", o.normals_estimated() ? "estimated (k = 16 nearest points, PCA)" : "given"},
             {"centre", point_json(o.centre())},
             {"scale", o.scale()}};
 }

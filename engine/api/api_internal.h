@@ -23,6 +23,7 @@ struct Object::Impl {
     PointCloud cloud;
     std::vector<float> candidates;
     bool own_candidates = false;  // candidates are the cloud's points
+    bool normals_estimated = false;  // the input had none (normal_estimate made them)
     HostTensor raw_cloud;         // [N, 6] object units, checked
     EncodedObject encoded;
 };

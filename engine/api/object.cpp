@@ -6,6 +6,7 @@
 #include "engine/io/candidates.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
+#include "engine/model/normals.h"
 
 namespace vtloc::api {
 
@@ -25,6 +26,18 @@ PointCloud to_point_cloud(const HostTensor& t) {
 }
 
 std::string where(const std::string& source) { return source.empty() ? "the object" : source; }
+
+// N x 3 clouds get estimated normals: on the model's GPU for Backend::Gpu,
+// else with the CPU reference. N x 6 ones are returned as they are.
+HostTensor with_normals(const Model::Impl& m, HostTensor cloud, Backend b, const std::string& source, bool& estimated) {
+    estimated = cloud.shape.size() == 2 && cloud.shape[1] == 3;
+    if (!estimated) return cloud;
+    try {
+        return estimate_normals(b == Backend::Gpu ? m.gpu : nullptr, cloud);
+    } catch (const std::exception& e) {
+        throw Error(where(source) + ": " + one_line(e.what()));
+    }
+}
 
 Object::Impl make_object(const std::string& source, HostTensor cloud, const HostTensor* candidates) {
     Object::Impl o;
@@ -54,6 +67,11 @@ PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t 
     return guarded([&] {
         if (n_points < 1) throw Error("load_point_cloud: n_points must be >= 1");
         HostTensor t = io::load_object(path, n_points, seed);
+        if (t.shape[1] == 3) {  // no normals in the file: xyz only
+            PointCloud c;
+            c.xyz = t.data;
+            return c;
+        }
         io::check_cloud(t, path);
         return to_point_cloud(t);
     });
@@ -86,12 +104,15 @@ std::shared_ptr<const Object::Impl> encode(Model::Impl& m, Object::Impl o, Backe
 
 Object Model::encode_object(const std::string& object_path, const std::string& candidates_path, Backend backend) {
     return guarded([&] {
-        HostTensor cloud = io::load_object(object_path, impl_->info.sample_points);
+        bool estimated = false;
+        HostTensor cloud = with_normals(*impl_, io::load_object(object_path, impl_->info.sample_points), backend,
+                                        object_path, estimated);
         HostTensor cand;
         if (!candidates_path.empty()) cand = io::load_candidates(candidates_path);
+        Object::Impl o = make_object(object_path, std::move(cloud), candidates_path.empty() ? nullptr : &cand);
+        o.normals_estimated = estimated;
         Object out;
-        out.impl_ = encode(*impl_, make_object(object_path, std::move(cloud), candidates_path.empty() ? nullptr : &cand),
-                           backend);
+        out.impl_ = encode(*impl_, std::move(o), backend);
         return out;
     });
 }
@@ -100,20 +121,29 @@ Object Model::encode_object(const PointCloud& cloud, const std::vector<float>& c
     return guarded([&] {
         const size_t n = cloud.size();
         if (cloud.xyz.size() % 3 != 0) throw Error("the object cloud: xyz needs 3 floats per point");
-        if (cloud.normals.size() != cloud.xyz.size())
+        const bool has_normals = !cloud.normals.empty();
+        if (has_normals && cloud.normals.size() != cloud.xyz.size())
             throw Error("the object cloud has " + std::to_string(n) + " points but " +
                         std::to_string(cloud.normals.size() / 3) + " normals");
         if (n == 0) throw Error("the object cloud is empty");
-        HostTensor t({int64_t(n), 6});
+        const int64_t w = has_normals ? 6 : 3;
+        HostTensor t({int64_t(n), w});
         for (size_t i = 0; i < n; ++i)
             for (size_t k = 0; k < 3; ++k) {
-                t.data[i * 6 + k] = cloud.xyz[i * 3 + k];
-                t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
+                t.data[i * size_t(w) + k] = cloud.xyz[i * 3 + k];
+                if (has_normals) t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
             }
+        if (!has_normals)
+            for (size_t i = 0; i < n * 3; ++i)
+                if (!std::isfinite(t.data[i])) throw Error("the object cloud: point " + std::to_string(i / 3) + " has a non-finite coordinate");
+        bool estimated = false;
+        t = with_normals(*impl_, std::move(t), backend, "", estimated);
         HostTensor cand;
         if (!candidates.empty()) cand = candidate_tensor(candidates, "the candidates");
+        Object::Impl o = make_object("", std::move(t), candidates.empty() ? nullptr : &cand);
+        o.normals_estimated = estimated;
         Object out;
-        out.impl_ = encode(*impl_, make_object("", std::move(t), candidates.empty() ? nullptr : &cand), backend);
+        out.impl_ = encode(*impl_, std::move(o), backend);
         return out;
     });
 }
@@ -136,6 +166,7 @@ const std::vector<float>& Object::candidates() const {
     return guarded([&]() -> const std::vector<float>& { return need(impl_).candidates; });
 }
 size_t Object::candidate_count() const { return candidates().size() / 3; }
+bool Object::normals_estimated() const { return guarded([&] { return need(impl_).normals_estimated; }); }
 std::array<double, 3> Object::centre() const { return guarded([&] { return need(impl_).encoded.frame.centre; }); }
 double Object::scale() const { return guarded([&] { return need(impl_).encoded.frame.scale; }); }
 

@@ -1,9 +1,13 @@
 #include "engine/io/object.h"
 
+#include <algorithm>
 #include <cmath>
+#include <cstddef>
 
 #include "engine/io/file_bytes.h"
+#include "engine/io/mesh_formats.h"
 #include "engine/io/ply.h"
+#include "engine/io/point_text.h"
 
 namespace vtloc::io {
 
@@ -31,11 +35,49 @@ HostTensor load_ply_cloud(const std::string& path) {
     return cloud;
 }
 
+namespace {
+
+// Whether a PLY header declares a face element (then the file is a mesh).
+bool ply_has_faces(const std::string& path) {
+    const std::vector<uint8_t> bytes = read_file_bytes(path);
+    const std::string head(bytes.begin(), bytes.begin() + std::ptrdiff_t(std::min<size_t>(bytes.size(), 1 << 16)));
+    const size_t end = head.find("end_header");
+    return head.substr(0, end).find("\nelement face ") != std::string::npos;
+}
+
+HostTensor finite_xyz(HostTensor c, const std::string& path) {
+    for (int64_t i = 0; i < c.shape[0]; ++i)
+        for (int k = 0; k < 3; ++k)
+            if (!std::isfinite(c.data[size_t(i * c.shape[1] + k)]))
+                fail(path, "point " + std::to_string(i) + " has a non-finite coordinate");
+    if (c.shape[0] == 0) fail(path, "the point cloud is empty");
+    return c;
+}
+
+}  // namespace
+
 HostTensor load_object(const std::string& path, int64_t n_points, uint64_t seed) {
     std::string ext = extension_of(path);
-    if (ext == "ply") return load_ply_cloud(path);
     if (ext == "glb" || ext == "gltf") return sample_surface(load_gltf_mesh(path), n_points, seed, path);
-    fail(path, "unknown object file type '." + ext + "' (expected .glb, .gltf or .ply)");
+    if (ext == "obj" || ext == "off" || ext == "stl") return sample_surface(load_mesh(path), n_points, seed, path);
+    if (ext == "ply") {
+        PlyVertices v = read_ply_vertices(path);
+        if (v.column("nx") >= 0 && v.column("ny") >= 0 && v.column("nz") >= 0) return load_ply_cloud(path);
+        if (ply_has_faces(path)) return sample_surface(load_mesh(path), n_points, seed, path);
+        return finite_xyz(ply_columns(v, {"x", "y", "z"}, path), path);
+    }
+    if (ext == "xyz" || ext == "csv" || ext == "txt") {
+        HostTensor c = finite_xyz(load_point_text(path, "points", true), path);
+        if (c.shape[1] == 6) check_cloud(c, path);
+        return c;
+    }
+    if (ext == "pcd") {
+        HostTensor c = load_pcd(path);
+        if (c.shape[1] == 6) check_cloud(c, path);
+        return c;
+    }
+    fail(path, "unknown object file type '." + ext +
+                   "' (meshes: .glb .gltf .obj .off .stl .ply with faces; clouds: .ply .pcd .xyz .csv .txt)");
 }
 
 void require_points(const HostTensor& cloud, int64_t needed, const std::string& source) {

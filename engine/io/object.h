@@ -19,10 +19,22 @@ void check_cloud(HostTensor& cloud, const std::string& source);
 // other properties skipped), checked by check_cloud.
 HostTensor load_ply_cloud(const std::string& path);
 
-// By extension: .glb / .gltf meshes are sampled to n_points (sample_surface
-// with `seed`); .ply clouds are read as they are, whatever their size (use
-// require_points for the model's count).
+// By extension: meshes (.glb .gltf .obj .off .stl, and .ply with a face
+// element) are sampled to n_points (sample_surface with `seed`): N x 6.
+// Point clouds are read as they are, whatever their size (use require_points
+// for the model's count): N x 6 when the file has normals (.ply nx ny nz,
+// text rows of six values, checked by check_cloud), N x 3 when it has none
+// (.ply without normals, .pcd, text rows of three): estimate them then
+// (engine/model/normals.h). Every coordinate is checked finite.
 HostTensor load_object(const std::string& path, int64_t n_points, uint64_t seed = kDefaultSampleSeed);
+
+
+// A PCD file as PCL writes it (DATA ascii or binary; binary_compressed is
+// refused with a clear error): fields x y z, and normal_x normal_y normal_z
+// when present (then N x 6), other fields skipped; any SIZE/TYPE/COUNT.
+// Points with a NaN coordinate (PCL's "no measurement" in organised clouds)
+// are dropped; a cloud left empty is an error.
+HostTensor load_pcd(const std::string& path);
 
 // Throws "<source>: the object has K points, the model needs at least N" when
 // the cloud is smaller than `needed`.

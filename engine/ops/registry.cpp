@@ -33,6 +33,7 @@ const OpDef* const kOps[] = {
     &ops::op_group_max,
     &ops::op_group_linear,
     &ops::op_cloud_normalize,
+    &ops::op_normal_estimate,
 };
 }  // namespace
 

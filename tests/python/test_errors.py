@@ -33,8 +33,12 @@ def test_bad_images(tiny, mug, touch):
 
 def test_bad_clouds(tiny, mug):
     cloud = mug.cloud.copy()
-    expect("an N x 3 cloud has no normals", tiny.encode_object, cloud[:, :3].copy())
-    expect("expected a float32 or float64 array of shape (N, 6)", tiny.encode_object, cloud.astype(np.int32))
+    line = np.zeros((40, 3), np.float32)
+    line[:, 0] = np.arange(40)
+    expect("collinear or identical", tiny.encode_object, line)
+    expect("at least 16 points", tiny.encode_object, cloud[:5, :3].copy())
+    expect("expected a float32 or float64 array of shape (N, 6) (x y z nx ny nz; or (N, 3) without normals)",
+           tiny.encode_object, cloud.astype(np.int32))
     expect("got a float32 array of shape (128, 5)", tiny.encode_object, cloud[:, :5].copy())
     nan = cloud.copy()
     nan[17, 1] = np.nan

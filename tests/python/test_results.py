@@ -109,3 +109,18 @@ def test_outputs_and_info(tiny, mug, touch, tiny_path, tmp_path):
     info = vtloc.inspect_model(tiny_path)
     assert info["parameter_count"] > 0 and len(info["tensors"]) > 0
     assert any(d["name"] for d in vtloc.list_devices())
+
+
+def test_cloud_without_normals_equals_the_cli(cli, tiny, tiny_path, mug, touch, tmp_path):
+    """An N x 3 array and the same points as an .xyz file: normals estimated the same
+    way (on the GPU), the same result through the module and the CLI."""
+    xyz = np.ascontiguousarray(mug.cloud[:, :3])
+    np.savetxt(tmp_path / "mug.xyz", xyz, fmt="%.9g")  # 9 digits: float32 round-trips
+    obj = tiny.encode_object(xyz)
+    assert obj.normals_estimated and not mug.normals_estimated
+    assert np.array_equal(obj.cloud[:, :3], xyz)
+    assert np.allclose(np.linalg.norm(obj.cloud[:, 3:], axis=1), 1, atol=1e-5)
+    out = json.loads(run_cli(cli, "localize", "--model", tiny_path, "--tactile", touch, "--object",
+                             str(tmp_path / "mug.xyz"), "--json"))
+    assert out["object"]["normals"].startswith("estimated")
+    assert tiny.localize(obj, touch).contact.tolist() == out["contact"]

@@ -149,15 +149,18 @@ enum class Backend { Gpu, Cpu };  // Cpu: the plain C++ reference ops (slow; for
 
 // Objects: the object point cloud P in object units. xyz and normals hold 3
 // floats per point; normals are scaled to unit length (a zero normal is an
-// error).
+// error). Empty normals: estimated at encode_object (k = 16 nearest points and
+// PCA, oriented away from the centroid; Object::normals_estimated says so).
 struct PointCloud {
     std::vector<float> xyz;
     std::vector<float> normals;
     size_t size() const { return xyz.size() / 3; }
 };
 
-// .glb/.gltf: area-weighted surface samples (n_points, fixed seed); .ply: the
-// file's points with normals (nx ny nz), whatever their number.
+// Meshes (.glb .gltf .obj .off .stl, .ply with faces): area-weighted surface
+// samples (n_points, fixed seed). Point clouds (.ply, .pcd, .xyz/.csv/.txt
+// rows): the file's points, whatever their number, with normals when the file
+// has them (nx ny nz; PCD normal_x..), else with empty normals.
 PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed = 0);
 // Candidate contact points (3 floats each): a .ply's vertices or a text file
 // of x,y,z rows (see engine/io/candidates.h).
@@ -178,6 +181,7 @@ public:
     size_t candidate_count() const;
     std::array<double, 3> centre() const;      // normalised frame: (p - centre) / scale
     double scale() const;
+    bool normals_estimated() const;            // the input had no normals: cloud() holds estimated ones
 
     struct Impl;
 
@@ -284,6 +288,7 @@ public:
     const ModelInfo& info() const;
 
     // Runs the point branch once. A mesh is sampled to info().sample_points;
+    // a cloud without normals gets estimated ones (on this backend);
     // candidates "" = the cloud's own points.
     Object encode_object(const std::string& object_path, const std::string& candidates_path = "",
                          Backend backend = Backend::Gpu);

@@ -1,0 +1,53 @@
+#include "engine/model/normals.h"
+
+#include <cmath>
+
+#include "engine/error.h"
+#include "engine/executor.h"
+#include "engine/graph.h"
+#include "engine/ops/point_grid.h"
+
+namespace vtloc {
+
+HostTensor estimate_normals(rt::Context* ctx, const HostTensor& xyz, const NormalOptions& o) {
+    if (xyz.shape.size() != 2 || xyz.shape[1] < 3)
+        throw Error("normal estimation: points must be [N, >= 3], got " + shape_str(xyz.shape));
+    const int64_t N = xyz.shape[0], D = xyz.shape[1];
+    if (N < o.k)
+        throw Error("normal estimation needs at least " + std::to_string(o.k) + " points (its neighbourhood size), got " +
+                    std::to_string(N));
+    const ops::PointGrid grid = ops::build_point_grid(xyz, o.k);  // also checks the points are finite
+    Params p{{"k", double(o.k)}};
+    ops::set_grid_params(p, grid);
+    std::array<double, 3> ref{0, 0, 0};
+    if (o.towards) {
+        ref = *o.towards;
+        p.set("orient", 2);
+    } else {
+        for (int64_t i = 0; i < N; ++i)
+            for (int a = 0; a < 3; ++a) ref[size_t(a)] += double(xyz.data[size_t(i * D + a)]) / double(N);
+        p.set("orient", 1);
+    }
+    p.set("rx", ref[0]).set("ry", ref[1]).set("rz", ref[2]);
+    Graph g;
+    const int x = g.input("points", xyz.shape);
+    const int order = g.input("order", grid.order.shape, ElemType::I32);
+    const int start = g.input("cell_start", grid.cell_start.shape, ElemType::I32);
+    g.output(g.add1("normal_estimate", {x, order, start}, p, "normals"), "normals");
+    const TensorMap in{{"points", xyz}, {"order", grid.order}, {"cell_start", grid.cell_start}};
+    const HostTensor n = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("normals")
+                             : run_cpu(g, WeightStore{}, in).at("normals");
+    HostTensor out({N, 6});
+    for (int64_t i = 0; i < N; ++i) {
+        if (!std::isfinite(n.data[size_t(i * 3)]))
+            throw Error("normal estimation: point " + std::to_string(i) + " has no normal: its " + std::to_string(o.k) +
+                        " nearest points are collinear or identical");
+        for (int a = 0; a < 3; ++a) {
+            out.data[size_t(i * 6 + a)] = xyz.data[size_t(i * D + a)];
+            out.data[size_t(i * 6 + 3 + a)] = n.data[size_t(i * 3 + a)];
+        }
+    }
+    return out;
+}
+
+}  // namespace vtloc
