@@ -29,6 +29,6 @@ cd "$root"
 # Passive OpenMP waits: spinning torch threads collapse (~20x slower) as soon as
 # anything else wants a core; passive ones are also faster alone here (115 vs 82 touches/s).
 OMP_WAIT_POLICY=PASSIVE PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 -m weights_tools.train --config "$config" --data "$data" \
-  --out "$run" --minutes "$minutes" --seed 0 --threads 2 --objects-per-batch 4 --keep-every 20 "${resume[@]}"
+  --out "$run" --minutes "$minutes" --seed 0 --threads 2 --keep-every 20 "${resume[@]}"
 cp "$run/model.safetensors" "$root/models/$config.safetensors"
 echo "wrote models/$config.safetensors"
