@@ -63,8 +63,11 @@ py::array_t<float> cloud_array(const api::PointCloud& c) {
     return a;
 }
 
-api::Object encode(api::Model& m, const py::object& source, const py::object& candidates, const std::string& backend) {
+api::Object encode(api::Model& m, const py::object& source, const py::object& candidates, const std::string& backend,
+                   const py::object& viewpoint) {
     const api::Backend b = backend_of(backend);
+    if (!viewpoint.is_none() && py::isinstance<py::str>(source))
+        throw api::Error("viewpoint: only for clouds given as arrays (a file's cloud is oriented away from its centroid)");
     const bool cand_path = py::isinstance<py::str>(candidates);
     if (py::isinstance<py::str>(source) && (candidates.is_none() || cand_path)) {
         const auto path = source.cast<std::string>();
@@ -88,6 +91,7 @@ api::Object encode(api::Model& m, const py::object& source, const py::object& ca
         cloud = api::load_point_cloud(path, n);
     } else {
         cloud = to_cloud(source, "points");
+        cloud.viewpoint = optional_triple(viewpoint, "viewpoint");
     }
     py::gil_scoped_release release;
     return m.encode_object(cloud, cands, b);
@@ -126,7 +130,9 @@ void bind_model(py::module_& m) {
         .def_property_readonly("centre", [](const api::Object& o) { return vec3(o.centre()); })
         .def_property_readonly("scale", &api::Object::scale)
         .def_property_readonly("normals_estimated", &api::Object::normals_estimated,
-                               "True when the input had no normals and cloud holds estimated ones");
+                               "True when the input had no normals and cloud holds estimated ones")
+        .def_property_readonly("source_points", &api::Object::source_points,
+                               "points in the input (a cloud of >= 100,000 is reduced to the model's count)");
 
     py::class_<api::Model>(m, "Model", "A weight file loaded on a Context (or CPU-only without one).")
         .def(py::init([](api::Context& ctx, const std::string& path) {
@@ -141,11 +147,35 @@ void bind_model(py::module_& m) {
              py::arg("path"), "CPU-only model: backend='cpu' calls only, no Vulkan needed.")
         .def_property_readonly("info", [](const api::Model& mo) { return model_info_dict(mo.info()); })
         .def("encode_object", &encode, py::arg("source"), py::arg("candidates") = py::none(),
-             py::arg("backend") = "gpu",
+             py::arg("backend") = "gpu", py::arg("viewpoint") = py::none(),
              "Runs the point branch once. source: a mesh or cloud file (a mesh is sampled to\n"
              "info['sample_points']) or an N x 6 (x y z nx ny nz) or N x 3 float array; a cloud\n"
              "without normals gets estimated ones (object.normals_estimated); candidates: None\n"
-             "(the cloud's own points), an M x 3 float array or a file.")
+             "(the cloud's own points), an M x 3 float array or a file; viewpoint: estimated\n"
+             "normals of an array face this point (a camera), else away from the centroid.")
+        .def("encode_depth",
+             [](api::Model& mo, const std::string& depth, const py::object& intrinsics, const py::object& mask,
+                double unit_mm, const py::object& candidates, const std::string& backend) {
+                 std::vector<double> k;
+                 try {
+                     k = intrinsics.cast<std::vector<double>>();
+                 } catch (const py::cast_error&) {
+                 }
+                 if (k.size() != 4) throw api::Error("intrinsics: expected 4 numbers fx, fy, cx, cy");
+                 const std::string m = mask.is_none() ? std::string() : mask.cast<std::string>();
+                 std::vector<float> cands = py::isinstance<py::str>(candidates)
+                                                ? api::load_candidates(candidates.cast<std::string>())
+                                                : to_points3(candidates, "candidates");
+                 const api::Backend b = backend_of(backend);
+                 py::gil_scoped_release release;
+                 api::PointCloud cloud = api::load_depth_cloud(depth, {k[0], k[1], k[2], k[3]}, m, unit_mm);
+                 return mo.encode_object(cloud, cands, b);
+             },
+             py::arg("depth"), py::arg("intrinsics"), py::arg("mask") = py::none(), py::arg("unit_mm") = 1.0,
+             py::arg("candidates") = py::none(), py::arg("backend") = "gpu",
+             "A depth camera's view as the object: a 16-bit depth PNG (value * unit_mm = mm, 0 = none),\n"
+             "intrinsics (fx, fy, cx, cy) in pixels, an optional mask image (nonzero = the object).\n"
+             "The partial cloud is in the camera frame (mm); normals are estimated facing the camera.")
         .def("localize",
              [](api::Model& mo, const api::Object& obj, const py::object& image, int iters, int top_k, bool gma,
                 const py::object& symmetry, const std::string& backend, bool keep_tensors, bool profile,

@@ -78,6 +78,13 @@ api::LocalizeOptions touch_options(const Args& a);
 std::optional<double> mm_per_px_option(const Args& a, const std::string& name = "--mm-per-px");
 extern const char* kTouchOptionsHelp;
 
+// The object of a touch command: --object FILE, or --depth D.png --intrinsics
+// fx,fy,cx,cy [--mask M.png] [--depth-unit MM] (apps/vtloc/object_source.cpp).
+std::vector<OptionSpec> object_option_specs();
+extern const char* kObjectOptionsHelp;
+api::Object encode_cli_object(api::Model& model, const Args& a, const std::string& candidates, api::Backend backend);
+std::string object_label(const Args& a);  // the file named, for messages and captions
+
 // Model on the requested backend (no Vulkan for --backend cpu).
 api::Model load_model(Session& s, const std::string& path, api::Backend backend);
 

@@ -9,16 +9,14 @@ namespace vtloc::cli {
 namespace {
 
 const char* kHelp =
-    "usage: vtloc localize [--model M] --tactile IMG --object MESH|PLY [options]\n"
+    "usage: vtloc localize [--model M] --tactile IMG (--object FILE | --depth D.png --intrinsics K) [options]\n"
     "\n"
     "Localises one touch: where on the object the tactile image was taken, with a\n"
     "heat-map over the object's points.\n"
     "\n"
     "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
     "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
-    "  --object FILE             a mesh (.glb .gltf .obj .off .stl, .ply with faces; sampled to\n"
-    "                            the model's point count) or a point cloud (.ply .pcd .xyz .csv);\n"
-    "                            a cloud without normals gets estimated ones (k = 16, PCA)\n"
+    "%s"
     "  --candidates F            candidate contact points (.ply, or x,y,z text rows);\n"
     "                            default: the object's points\n"
     "%s"
@@ -48,16 +46,18 @@ std::string golden_command(const std::string& model, const std::string& tactile,
 }  // namespace
 
 int cmd_localize(Session& s, int argc, char** argv) {
-    std::vector<OptionSpec> specs{{"--model"},     {"--tactile"}, {"--object"}, {"--candidates"},
+    std::vector<OptionSpec> specs{{"--model"},     {"--tactile"}, {"--candidates"},
                                   {"--json", false}, {"--heatmap"}, {"--render"}, {"--dump"},
                                   {"--profile", false}};
     for (OptionSpec& o : touch_option_specs()) specs.push_back(o);
+    for (OptionSpec& o : object_option_specs()) specs.push_back(o);
     Args a(argc, argv, 2, specs);
     if (a.help()) {
-        std::printf(kHelp, kTouchOptionsHelp);
+        std::printf(kHelp, kObjectOptionsHelp, kTouchOptionsHelp);
         return 0;
     }
-    const std::string tactile_path = a.required("--tactile"), object_path = a.required("--object");
+    const std::string tactile_path = a.required("--tactile"), object_path = object_label(a);
+    if (object_path.empty()) throw UsageError("give --object FILE or --depth D.png --intrinsics fx,fy,cx,cy");
     const std::string candidates = a.get("--candidates").value_or("");
     api::LocalizeOptions opt = touch_options(a);
     opt.profile = a.flag("--profile");
@@ -72,7 +72,7 @@ int cmd_localize(Session& s, int argc, char** argv) {
     const api::ModelInfo& info = model.info();
 
     auto t0 = std::chrono::steady_clock::now();
-    api::Object object = model.encode_object(object_path, candidates, opt.backend);
+    api::Object object = encode_cli_object(model, a, candidates, opt.backend);
     double encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     api::TouchResult r = model.localize(object, image, opt);
 

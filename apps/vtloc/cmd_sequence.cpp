@@ -11,15 +11,14 @@ namespace vtloc::cli {
 namespace {
 
 const char* kHelp =
-    "usage: vtloc sequence [--model M] --object MESH|PLY\n"
+    "usage: vtloc sequence [--model M] (--object FILE | --depth D.png --intrinsics K)\n"
     "                      (--touch IMG[,dx,dy,dz] ... | --touches FILE.json) [options]\n"
     "\n"
     "Multi-contact localisation (SPEC section 6): touches on one object, in order, with the\n"
     "sensor's motion between them, give a belief over the candidate contact points.\n"
     "\n"
     "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
-    "  --object FILE             a mesh (.glb .gltf .obj .off .stl .ply) or a point cloud\n"
-    "                            (.ply .pcd .xyz .csv; normals estimated when it has none)\n"
+    "%s"
     "  --touch IMG[,dx,dy,dz]    one touch (repeat, in order); dx,dy,dz = the sensor's\n"
     "                            displacement since the previous touch, object units\n"
     "                            (default 0,0,0; none for the first touch)\n"
@@ -86,16 +85,18 @@ std::vector<Touch> read_touch_file(const std::string& path) {
 }  // namespace
 
 int cmd_sequence(Session& s, int argc, char** argv) {
-    std::vector<OptionSpec> specs{{"--model"},   {"--object"},  {"--touch", true, true}, {"--touches"},
+    std::vector<OptionSpec> specs{{"--model"},   {"--touch", true, true}, {"--touches"},
                                   {"--candidates"}, {"--sigma"}, {"--sigma-m"},         {"--window"},
                                   {"--json", false}, {"--heatmap"}, {"--render"}};
     for (OptionSpec& o : touch_option_specs()) specs.push_back(o);
+    for (OptionSpec& o : object_option_specs()) specs.push_back(o);
     Args a(argc, argv, 2, specs);
     if (a.help()) {
-        std::printf(kHelp, kTouchOptionsHelp);
+        std::printf(kHelp, kObjectOptionsHelp, kTouchOptionsHelp);
         return 0;
     }
-    const std::string object_path = a.required("--object");
+    const std::string object_path = object_label(a);
+    if (object_path.empty()) throw UsageError("give --object FILE or --depth D.png --intrinsics fx,fy,cx,cy");
     const std::string candidates = a.get("--candidates").value_or("");
     std::vector<Touch> touches;
     if (a.get("--touches") && a.flag("--touch")) throw UsageError("give --touch or --touches, not both");
@@ -118,7 +119,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     const auto model_arg = a.get("--model");
     const std::string model_file = model_arg ? *model_arg : default_model_path();
     api::Model model = load_model(s, model_file, opt.backend);
-    api::Object object = model.encode_object(object_path, candidates, opt.backend);
+    api::Object object = encode_cli_object(model, a, candidates, opt.backend);
     api::SequenceResult r = model.localize_sequence(object, images, motions, opt, belief);
 
     // The most believed candidates, best first (argmax included).

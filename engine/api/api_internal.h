@@ -24,6 +24,7 @@ struct Object::Impl {
     std::vector<float> candidates;
     bool own_candidates = false;  // candidates are the cloud's points
     bool normals_estimated = false;  // the input had none (normal_estimate made them)
+    size_t source_points = 0;        // points in the input, before a large cloud's reduction
     HostTensor raw_cloud;         // [N, 6] object units, checked
     EncodedObject encoded;
 };

@@ -6,6 +6,8 @@
 #include "engine/io/candidates.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
+#include "engine/io/depth.h"
+#include "engine/model/cloud_reduce.h"
 #include "engine/model/normals.h"
 
 namespace vtloc::api {
@@ -27,20 +29,32 @@ PointCloud to_point_cloud(const HostTensor& t) {
 
 std::string where(const std::string& source) { return source.empty() ? "the object" : source; }
 
-// N x 3 clouds get estimated normals: on the model's GPU for Backend::Gpu,
-// else with the CPU reference. N x 6 ones are returned as they are.
-HostTensor with_normals(const Model::Impl& m, HostTensor cloud, Backend b, const std::string& source, bool& estimated) {
-    estimated = cloud.shape.size() == 2 && cloud.shape[1] == 3;
-    if (!estimated) return cloud;
+// What a cloud goes through before the point branch, on the model's GPU for
+// Backend::Gpu (else the CPU reference): a large one (kReduceFromPoints) is
+// voxel-reduced to ~4 x sample_points; one without normals (N x 3) gets
+// estimated ones, oriented towards `viewpoint` when given; a reduced one is
+// then cut to sample_points by FPS. Fills the Object's provenance fields.
+HostTensor prepare_cloud(const Model::Impl& m, HostTensor cloud, Backend b, const std::string& source,
+                         const std::optional<std::array<double, 3>>& viewpoint, Object::Impl& o) {
+    rt::Context* ctx = b == Backend::Gpu ? m.gpu : nullptr;
     try {
-        return estimate_normals(b == Backend::Gpu ? m.gpu : nullptr, cloud);
+        o.source_points = size_t(cloud.shape[0]);
+        const bool large = cloud.shape[0] >= kReduceFromPoints;
+        if (large) cloud = voxel_reduce(cloud, 4 * m.info.sample_points);
+        o.normals_estimated = cloud.shape[1] == 3;
+        if (o.normals_estimated) {
+            NormalOptions n;
+            n.towards = viewpoint;
+            cloud = estimate_normals(ctx, cloud, n);
+        }
+        if (large) cloud = reduce_cloud(ctx, cloud, m.info.sample_points);
+        return cloud;
     } catch (const std::exception& e) {
         throw Error(where(source) + ": " + one_line(e.what()));
     }
 }
 
-Object::Impl make_object(const std::string& source, HostTensor cloud, const HostTensor* candidates) {
-    Object::Impl o;
+Object::Impl make_object(Object::Impl o, const std::string& source, HostTensor cloud, const HostTensor* candidates) {
     o.source = source;
     io::check_cloud(cloud, where(source));  // finite, no zero normal; normals made unit
     o.raw_cloud = std::move(cloud);
@@ -77,6 +91,17 @@ PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t 
     });
 }
 
+PointCloud load_depth_cloud(const std::string& depth_path, const std::array<double, 4>& intrinsics,
+                            const std::string& mask_path, double unit_mm) {
+    return guarded([&] {
+        const io::CameraIntrinsics k{intrinsics[0], intrinsics[1], intrinsics[2], intrinsics[3]};
+        PointCloud c;
+        c.xyz = io::depth_to_cloud(depth_path, k, mask_path, unit_mm).data;
+        c.viewpoint = std::array<double, 3>{0, 0, 0};  // the camera
+        return c;
+    });
+}
+
 std::vector<float> load_candidates(const std::string& path) {
     return guarded([&] { return io::load_candidates(path).data; });
 }
@@ -104,13 +129,12 @@ std::shared_ptr<const Object::Impl> encode(Model::Impl& m, Object::Impl o, Backe
 
 Object Model::encode_object(const std::string& object_path, const std::string& candidates_path, Backend backend) {
     return guarded([&] {
-        bool estimated = false;
-        HostTensor cloud = with_normals(*impl_, io::load_object(object_path, impl_->info.sample_points), backend,
-                                        object_path, estimated);
+        Object::Impl o;
+        HostTensor cloud = prepare_cloud(*impl_, io::load_object(object_path, impl_->info.sample_points), backend,
+                                         object_path, std::nullopt, o);
         HostTensor cand;
         if (!candidates_path.empty()) cand = io::load_candidates(candidates_path);
-        Object::Impl o = make_object(object_path, std::move(cloud), candidates_path.empty() ? nullptr : &cand);
-        o.normals_estimated = estimated;
+        o = make_object(std::move(o), object_path, std::move(cloud), candidates_path.empty() ? nullptr : &cand);
         Object out;
         out.impl_ = encode(*impl_, std::move(o), backend);
         return out;
@@ -136,12 +160,11 @@ Object Model::encode_object(const PointCloud& cloud, const std::vector<float>& c
         if (!has_normals)
             for (size_t i = 0; i < n * 3; ++i)
                 if (!std::isfinite(t.data[i])) throw Error("the object cloud: point " + std::to_string(i / 3) + " has a non-finite coordinate");
-        bool estimated = false;
-        t = with_normals(*impl_, std::move(t), backend, "", estimated);
+        Object::Impl o;
+        t = prepare_cloud(*impl_, std::move(t), backend, "", cloud.viewpoint, o);
         HostTensor cand;
         if (!candidates.empty()) cand = candidate_tensor(candidates, "the candidates");
-        Object::Impl o = make_object("", std::move(t), candidates.empty() ? nullptr : &cand);
-        o.normals_estimated = estimated;
+        o = make_object(std::move(o), "", std::move(t), candidates.empty() ? nullptr : &cand);
         Object out;
         out.impl_ = encode(*impl_, std::move(o), backend);
         return out;
@@ -167,6 +190,7 @@ const std::vector<float>& Object::candidates() const {
 }
 size_t Object::candidate_count() const { return candidates().size() / 3; }
 bool Object::normals_estimated() const { return guarded([&] { return need(impl_).normals_estimated; }); }
+size_t Object::source_points() const { return guarded([&] { return need(impl_).source_points; }); }
 std::array<double, 3> Object::centre() const { return guarded([&] { return need(impl_).encoded.frame.centre; }); }
 double Object::scale() const { return guarded([&] { return need(impl_).encoded.frame.scale; }); }
 

@@ -22,9 +22,8 @@ void quiet_opencv() {
     (void)once;
 }
 
-}  // namespace
-
-RgbImage load_tactile_image(const std::string& path) {
+// Decodes any image file as stored (depth, channels), or throws naming the file.
+cv::Mat decode(const std::string& path) {
     quiet_opencv();
     std::vector<uint8_t> bytes = read_file_bytes(path);
     if (bytes.empty()) fail(path, "file is empty, not an image");
@@ -44,6 +43,13 @@ RgbImage load_tactile_image(const std::string& path) {
         }
         fail(path, known ? "image data is corrupt or truncated" : "not an image (no image format recognised)");
     }
+    return raw;
+}
+
+}  // namespace
+
+RgbImage load_tactile_image(const std::string& path) {
+    cv::Mat raw = decode(path);
     if (raw.depth() == CV_16U) {
         raw.convertTo(raw, CV_8U, 1.0 / 257.0);  // 65535 -> 255
     } else if (raw.depth() != CV_8U) {
@@ -63,6 +69,30 @@ RgbImage load_tactile_image(const std::string& path) {
     RgbImage out(rgb.rows, rgb.cols);
     for (int y = 0; y < rgb.rows; ++y)
         std::memcpy(out.at(y, 0), rgb.ptr<uint8_t>(y), size_t(rgb.cols) * 3);
+    return out;
+}
+
+DepthImage load_depth_image(const std::string& path) {
+    cv::Mat raw = decode(path);
+    if (raw.channels() != 1 || raw.depth() != CV_16U)
+        fail(path, "a depth image must be a single-channel 16-bit PNG, got " + std::to_string(raw.channels()) +
+                       " channel(s) of " + (raw.depth() == CV_8U ? "8" : raw.depth() == CV_16U ? "16" : "other") +
+                       "-bit values");
+    DepthImage out{raw.rows, raw.cols, std::vector<uint16_t>(size_t(raw.rows) * size_t(raw.cols))};
+    for (int y = 0; y < raw.rows; ++y)
+        std::memcpy(&out.depth[size_t(y) * size_t(raw.cols)], raw.ptr<uint16_t>(y), size_t(raw.cols) * 2);
+    return out;
+}
+
+MaskImage load_mask_image(const std::string& path) {
+    cv::Mat raw = decode(path);
+    if (raw.channels() != 1) fail(path, "a mask must be a single-channel image, got " + std::to_string(raw.channels()) + " channels");
+    MaskImage out{raw.rows, raw.cols, std::vector<uint8_t>(size_t(raw.rows) * size_t(raw.cols))};
+    for (int y = 0; y < raw.rows; ++y)
+        for (int x = 0; x < raw.cols; ++x)
+            out.on[size_t(y) * size_t(raw.cols) + size_t(x)] =
+                raw.depth() == CV_16U ? raw.at<uint16_t>(y, x) != 0 : raw.depth() == CV_8U ? raw.at<uint8_t>(y, x) != 0 : 0;
+    if (raw.depth() != CV_8U && raw.depth() != CV_16U) fail(path, "a mask must hold 8- or 16-bit integers");
     return out;
 }
 

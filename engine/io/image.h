@@ -29,6 +29,21 @@ inline constexpr int kMinImageSide = 8;
 // than kMinImageSide on either side.
 RgbImage load_tactile_image(const std::string& path);
 
+// A depth camera's frame: one 16-bit value per pixel (0 = no measurement).
+struct DepthImage {
+    int height = 0, width = 0;
+    std::vector<uint16_t> depth;  // row-major
+};
+// A single-channel 16-bit image (PNG), as stored; throws naming the file otherwise.
+DepthImage load_depth_image(const std::string& path);
+
+// An object mask: nonzero pixels (of an 8- or 16-bit single-channel image) are the object.
+struct MaskImage {
+    int height = 0, width = 0;
+    std::vector<uint8_t> on;  // 0/1, row-major
+};
+MaskImage load_mask_image(const std::string& path);
+
 // Writes a PNG (lossless, so a frame survives a round trip bit for bit).
 void save_png(const std::string& path, const RgbImage& image);
 

@@ -6,6 +6,7 @@ import os
 import subprocess
 
 import numpy as np
+import pytest
 
 import vtloc
 from weights_tools import safetensors_io
@@ -124,3 +125,33 @@ def test_cloud_without_normals_equals_the_cli(cli, tiny, tiny_path, mug, touch, 
                              str(tmp_path / "mug.xyz"), "--json"))
     assert out["object"]["normals"].startswith("estimated")
     assert tiny.localize(obj, touch).contact.tolist() == out["contact"]
+
+
+def _sphere_depth(path):
+    """A 160 x 120 16-bit depth PNG of a 40 mm sphere 400 mm ahead (fx 300, fy 310)."""
+    from PIL import Image
+    v, u = np.mgrid[0:120, 0:160]
+    rx, ry = (u - 79.5) / 300.0, (v - 59.5) / 310.0
+    a, b, c = rx * rx + ry * ry + 1, -800.0, 400.0 ** 2 - 40.0 ** 2
+    disc = b * b - 4 * a * c
+    z = np.where(disc >= 0, (-b - np.sqrt(np.maximum(disc, 0))) / (2 * a), 0)
+    Image.fromarray(np.round(z).astype(np.uint16)).save(path)
+    return (300.0, 310.0, 79.5, 59.5)
+
+
+def test_depth_view_equals_the_cli(cli, tiny, tiny_path, touch, tmp_path):
+    k = _sphere_depth(tmp_path / "depth.png")
+    obj = tiny.encode_depth(str(tmp_path / "depth.png"), k)
+    assert obj.normals_estimated and obj.source_points == obj.cloud.shape[0]
+    # facing the camera at the origin
+    assert np.all((obj.cloud[:, :3] * obj.cloud[:, 3:]).sum(1) < 0)
+    # an array with the camera as viewpoint: the same object
+    again = tiny.encode_object(np.ascontiguousarray(obj.cloud[:, :3]), viewpoint=(0, 0, 0))
+    assert np.array_equal(again.cloud, obj.cloud)
+    out = json.loads(run_cli(cli, "localize", "--model", tiny_path, "--tactile", touch, "--depth",
+                             str(tmp_path / "depth.png"), "--intrinsics", ",".join(map(str, k)), "--json"))
+    assert tiny.localize(obj, touch).contact.tolist() == out["contact"]
+    with pytest.raises(vtloc.Error, match="intrinsics: expected 4 numbers"):
+        tiny.encode_depth(str(tmp_path / "depth.png"), (1, 2, 3))
+    with pytest.raises(vtloc.Error, match="viewpoint: only for clouds given as arrays"):
+        tiny.encode_object(str(tmp_path / "depth.png"), viewpoint=(0, 0, 0))

@@ -150,10 +150,14 @@ enum class Backend { Gpu, Cpu };  // Cpu: the plain C++ reference ops (slow; for
 // Objects: the object point cloud P in object units. xyz and normals hold 3
 // floats per point; normals are scaled to unit length (a zero normal is an
 // error). Empty normals: estimated at encode_object (k = 16 nearest points and
-// PCA, oriented away from the centroid; Object::normals_estimated says so).
+// PCA, oriented towards `viewpoint` when set, else away from the centroid;
+// Object::normals_estimated says so). Clouds of 100,000 points or more are
+// reduced at encode_object: a voxel grid to ~4 x the model's point count, then
+// farthest point sampling to that count (Object::source_points keeps N).
 struct PointCloud {
     std::vector<float> xyz;
     std::vector<float> normals;
+    std::optional<std::array<double, 3>> viewpoint;  // e.g. the camera that saw the points
     size_t size() const { return xyz.size() / 3; }
 };
 
@@ -162,6 +166,12 @@ struct PointCloud {
 // rows): the file's points, whatever their number, with normals when the file
 // has them (nx ny nz; PCD normal_x..), else with empty normals.
 PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed = 0);
+// A depth camera's view: a 16-bit PNG (value * unit_mm = depth in mm, 0 = none),
+// intrinsics fx, fy, cx, cy (pixels), an optional mask image (nonzero = the
+// object). -> the partial cloud in the camera frame (mm; x right, y down, z
+// forward), no normals, viewpoint = the camera (0, 0, 0).
+PointCloud load_depth_cloud(const std::string& depth_path, const std::array<double, 4>& intrinsics,
+                            const std::string& mask_path = "", double unit_mm = 1.0);
 // Candidate contact points (3 floats each): a .ply's vertices or a text file
 // of x,y,z rows (see engine/io/candidates.h).
 std::vector<float> load_candidates(const std::string& path);
@@ -182,6 +192,7 @@ public:
     std::array<double, 3> centre() const;      // normalised frame: (p - centre) / scale
     double scale() const;
     bool normals_estimated() const;            // the input had no normals: cloud() holds estimated ones
+    size_t source_points() const;              // points in the input (before a large cloud's reduction)
 
     struct Impl;
 
