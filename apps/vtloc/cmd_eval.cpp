@@ -35,6 +35,9 @@ const char* kHelp =
     "  --sequence S              multi-contact: each touch with the S-1 touches before it in\n"
     "                            collection order and their motions, through the belief filter\n"
     "                            (SPEC section 6); default 1 = single touches\n"
+    "  --cloud full|xyz|view     the object cloud: points.csv with its normals (default), its points\n"
+    "                            with estimated normals (xyz), or the single view a depth camera sees\n"
+    "                            (view.xyz of vtloc synth --view; estimated normals facing the camera)\n"
     "  --json FILE               the report as JSON (vtloc-eval/1)\n"
     "  --markdown FILE           the table as markdown\n"
     "  --per-touch FILE.csv      object, touch, subset, error_mm, nd, rank, mpe per touch\n"
@@ -80,6 +83,7 @@ eval::Options parse(const Args& a) {
     o.iters = a.integer("--iters", -1, 0, 64);
     o.topk = a.integer("--topk", 5, 1, 256);
     o.sequence = a.integer("--sequence", 1, 1, 64);
+    o.cloud = one_of(a, "--cloud", "full", {"full", "xyz", "view"});
     o.json = a.get("--json");
     o.markdown = a.get("--markdown");
     o.per_touch = a.get("--per-touch");
@@ -201,7 +205,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
                                   {"--markdown"},  {"--per-touch"}, {"--render"},    {"--render-count"},
                                   {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
-                                  {"--mm-per-px"}};
+                                  {"--mm-per-px"}, {"--cloud"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);

@@ -36,6 +36,9 @@ const char* kHelp =
     "  --n-points N        points per object cloud (default 1024)\n"
     "  --max-tilt DEG      sensor axis tilt, uniform in 0..DEG, at most 10 (default 5)\n"
     "  --plain-look        no appearance randomisation of training touches\n"
+    "  --view              also write each object's single-view cloud (view.xyz, view.json:\n"
+    "                      what a depth camera far away sees from one seeded direction, no\n"
+    "                      normals); adds them to an already built dataset too\n"
     "  --seed S            (default 1)\n"
     "  --threads N         (default: all cores)\n"
     "sensor:\n"
@@ -67,7 +70,7 @@ int cmd_synth(Session&, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--out"}, {"--objects"}, {"--mesh-dir"}, {"--shape", true, true}, {"--mesh", true, true},
             {"--scale-mm"}, {"--list-shapes", false}, {"--contacts"}, {"--extra"}, {"--n-points"},
-            {"--max-tilt"}, {"--plain-look", false}, {"--seed"}, {"--threads"}, {"--calibration"},
+            {"--max-tilt"}, {"--plain-look", false}, {"--view", false}, {"--seed"}, {"--threads"}, {"--calibration"},
             {"--background"}, {"--mm-per-px"}, {"--check-sensor"}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -100,6 +103,7 @@ int cmd_synth(Session&, int argc, char** argv) {
         o.max_tilt_deg = a.number("--max-tilt", 5);
         if (o.max_tilt_deg < 0 || o.max_tilt_deg > 10) throw UsageError("--max-tilt must be within 0..10 degrees");
         o.randomize_train_look = !a.flag("--plain-look");
+        o.view = a.flag("--view");
         o.seed = uint64_t(a.integer("--seed", 1, 0, 2147483647));
         o.threads = a.integer("--threads", 0, 0, 256);
         o.calibration = a.get("--calibration").value_or("");

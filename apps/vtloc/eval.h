@@ -19,6 +19,7 @@ struct Options {
     int iters = -1;                // -1 = the model's default
     int topk = 5;
     int sequence = 1;              // touches per belief window (1 = single touches)
+    std::string cloud = "full";    // full (points.csv) | xyz (its points, normals estimated) | view (view.xyz)
     std::optional<std::string> json, markdown, per_touch, render_dir;
     int render_count = 3;
     bool skip_bad = false, baselines = true;

@@ -11,6 +11,12 @@ namespace vtloc::cli::eval {
 
 namespace {
 
+const char* cloud_label(const std::string& cloud) {
+    return cloud == "full" ? "full clouds with normals"
+                           : cloud == "xyz" ? "full clouds, normals estimated" : "single-view clouds, normals estimated";
+}
+
+
 const char* kSubsets[] = {"non-uniform", "uniform", "all"};
 
 void write_text(const std::string& path, const std::string& text) {
@@ -59,6 +65,7 @@ void print_table(const Report& rep) {
                     cell("%.1f", r.m.top5, none).c_str(), cell("%.3f", r.m.mpe, none).c_str());
     }
     for (const std::string& n : rep.notes) std::printf("%s\n", n.c_str());
+    if (rep.opt.cloud != "full") std::printf("object clouds: %s\n", cloud_label(rep.opt.cloud));
     std::printf("engine time %.2f ms per touch (%s; warm: each new batch shape ran once untimed)\n",
                 rep.time_per_touch_ms, rep.head == "mcr" ? "MCR head" : (std::to_string(rep.iters) + " ILU iterations").c_str());
 }
@@ -78,7 +85,8 @@ void write_markdown(const std::string& path, const Report& rep) {
            << cell("%.3f", r.m.mpe, none) << " |\n";
     }
     md << "\n" << rep.opt.split << " touches, " << rep.opt.objects << " objects, " << rep.iters
-       << " ILU iterations, top-" << rep.opt.topk << (rep.opt.sequence > 1 ? ", sequences of " + std::to_string(rep.opt.sequence) : "")
+       << " ILU iterations, " << cloud_label(rep.opt.cloud)
+       << ", top-" << rep.opt.topk << (rep.opt.sequence > 1 ? ", sequences of " + std::to_string(rep.opt.sequence) : "")
        << "; " << fmt("%.2f", rep.time_per_touch_ms) << " ms engine time per touch.\n";
     for (const std::string& n : rep.notes) md << "\n" << n << "\n";
     for (const std::string& w : rep.warnings) md << "\n**" << w << "**\n";
@@ -112,6 +120,7 @@ void write_json(const std::string& path, const Report& rep, const MethodResult& 
                      {"iters", rep.head == "mcr" ? nlohmann::json(nullptr) : nlohmann::json(rep.iters)},
                      {"topk", rep.opt.topk},
                      {"sequence", rep.opt.sequence},
+                     {"cloud", rep.opt.cloud},
                      {"mm_per_px", rep.opt.frames_mm_per_px ? nlohmann::json(*rep.opt.frames_mm_per_px)
                                                             : nlohmann::json(nullptr)},
                      {"backend", rep.opt.backend == api::Backend::Gpu ? "gpu" : "cpu"},

@@ -3,8 +3,11 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
 #include <numeric>
 #include <set>
+
+#include <nlohmann/json.hpp>
 
 #include "apps/vtloc/eval.h"
 
@@ -34,20 +37,36 @@ std::string reason_of(const std::string& message, const std::string& path) {
     return message.rfind(prefix, 0) == 0 ? message.substr(prefix.size()) : message;
 }
 
-api::Object encode(api::Model& model, const Job& job, api::Backend backend) {
+// The object cloud --cloud asks for: points.csv with its normals (full), its
+// points alone (xyz: normals estimated), or view.xyz with the camera of view.json.
+api::Object encode(api::Model& model, const Job& job, const Options& opt) {
+    const std::filesystem::path folder(job.rec->folder);
     const HostTensor& p = job.rec->points;
     api::PointCloud cloud;
-    const size_t n = size_t(p.shape[0]), w = size_t(p.shape[1]);
-    for (size_t i = 0; i < n; ++i)
-        for (size_t k = 0; k < 3; ++k) {
-            cloud.xyz.push_back(p.data[i * w + k]);
-            cloud.normals.push_back(w >= 6 ? p.data[i * w + 3 + k] : 0.0f);
-        }
+    std::string source = (folder / "points.csv").string();
+    if (opt.cloud == "view") {
+        source = (folder / "view.xyz").string();
+        cloud = api::load_point_cloud(source, 1);
+        const std::string cam_path = (folder / "view.json").string();
+        std::ifstream f(cam_path);
+        const nlohmann::json cam = nlohmann::json::parse(f, nullptr, false);
+        if (cam.is_discarded() || !cam.contains("camera") || !cam["camera"].is_array() || cam["camera"].size() != 3)
+            throw api::Error(cam_path + ": missing or without a camera position (run vtloc synth --view)");
+        cloud.viewpoint = std::array<double, 3>{cam["camera"][0].get<double>(), cam["camera"][1].get<double>(),
+                                                cam["camera"][2].get<double>()};
+    } else {
+        const size_t n = size_t(p.shape[0]), w = size_t(p.shape[1]);
+        for (size_t i = 0; i < n; ++i)
+            for (size_t k = 0; k < 3; ++k) {
+                cloud.xyz.push_back(p.data[i * w + k]);
+                if (opt.cloud == "full") cloud.normals.push_back(w >= 6 ? p.data[i * w + 3 + k] : 0.0f);
+            }
+    }
     const HostTensor c = job.rec->candidates();
     try {
-        return model.encode_object(cloud, c.data, backend);
+        return model.encode_object(cloud, c.data, opt.backend);
     } catch (const api::Error& e) {
-        throw api::Error((std::filesystem::path(job.rec->folder) / "points.csv").string() + ": " + e.what());
+        throw api::Error(source + ": " + e.what());
     }
 }
 
@@ -126,7 +145,7 @@ MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options&
         lo.backend = opt.backend;
         lo.mm_per_px = opt.frames_mm_per_px;
         ImageCache cache(o, opt, skips);
-        api::Object object = encode(model, job, opt.backend);
+        api::Object object = encode(model, job, opt);
         res.encoded.push_back(object);
         std::vector<const sim::TouchRecord*> kept;
 

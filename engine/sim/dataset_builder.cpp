@@ -18,6 +18,7 @@
 #include "engine/error.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/splitmix64.h"
+#include "engine/sim/partial_view.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/shapes.h"
 #include "engine/sim/touch_renderer.h"
@@ -427,6 +428,13 @@ BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildO
                     resumed++;
                 } else {
                     built[size_t(i)] = build_object(jobs[size_t(i)], sh);
+                }
+                if (opt.view && !fs::exists(dir / "view.xyz")) {
+                    // Seeded by the dataset seed and the object's name: the same view on any thread count.
+                    uint64_t h = opt.seed ^ 0x7669657700000000ull;
+                    for (char ch : jobs[size_t(i)].name) h = (h ^ uint8_t(ch)) * 0x100000001B3ull;
+                    write_partial_view(dir, render_partial_view(io::load_mesh((dir / "mesh.ply").string()), h,
+                                                                opt.n_points));
                 }
             } catch (const std::exception& e) {
                 errors[size_t(i)] = e.what();

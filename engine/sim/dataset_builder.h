@@ -37,6 +37,10 @@ struct BuildOptions {
     std::string background;           // a user's empty sensor frame (PNG) replacing the calibration's
     std::optional<double> mm_per_px;  // a user's pixel size
     int threads = 0;                  // 0 = hardware concurrency
+    // Also write each object's single-view cloud (partial_view.h: view.xyz,
+    // view.json), for built and resumed objects alike; not part of the options
+    // a resumed dataset must match, so --view can be added to a built dataset.
+    bool view = false;
     // Called after each object: (objects done, objects total, touches rendered so far).
     std::function<void(int, int, long)> progress;
 };

@@ -1,11 +1,12 @@
 # Builds the eval tests' datasets: a tiny synthetic one with `vtloc synth`
 # (a uniform sphere and a non-uniform comb, 20 contacts of which 6 test,
-# 128 points: the tiny model's count), and a copy with one test touch's image deleted.
+# 128 points: the tiny model's count; single views too), and a copy with one
+# test touch's image deleted and the sphere's view.json removed.
 #   cmake -DVTLOC=<exe> -DOUT=<dir> -P make_datasets.cmake
 # (and the renders of earlier runs, which eval.run.outputs counts)
 file(REMOVE_RECURSE "${OUT}/ds" "${OUT}/ds_missing" "${OUT}/render")
 execute_process(COMMAND "${VTLOC}" synth --out "${OUT}/ds" --shape sphere --shape comb_fine --contacts 20 --seed 3
-                        --n-points 128
+                        --n-points 128 --view
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT EXISTS "${OUT}/ds/dataset.json")
   message(FATAL_ERROR "vtloc synth failed (${rc})\n${out}\n${err}")
@@ -34,3 +35,4 @@ if(victim STREQUAL "" OR NOT EXISTS "${dir}/${victim}")
 endif()
 file(REMOVE "${dir}/${victim}")
 message(STATUS "removed ${dir}/${victim}")
+file(REMOVE "${OUT}/ds_missing/objects/sphere/view.json")  # for eval.cloud_view_missing
