@@ -1,9 +1,13 @@
 // Self-test cases: fps, ball_query, point_group, group_max, group_linear
 // (gather, plain and group-all inputs; fused max; texel and storage-buffer
-// paths) and cloud_normalize (the shapes of tests/test_point_ops.cpp).
+// paths), cloud_normalize (the shapes of tests/test_point_ops.cpp) and
+// normal_estimate (a sphere sample, as tests/test_normals.cpp).
+#include <cmath>
+
 #include "engine/check/op_selftest.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
+#include "engine/ops/point_grid.h"
 
 namespace vtloc::check {
 
@@ -98,6 +102,23 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         c.output(o[0], "cloud");
         c.output(o[1], "frame");
         c.tol = {2e-4, 1e-4};  // the fp32 mean of coordinates up to 80 (as tests/test_point_ops.cpp)
+        v.push_back(std::move(c));
+    }
+
+    for (int k : {5, 16}) {
+        OpCase c("normal_estimate", "sphere of 777 points, k = " + std::to_string(k));
+        HostTensor xyz = random_tensor({777, 3}, uint32_t(50 + k));
+        for (int64_t i = 0; i < 777; ++i) {  // onto a sphere of radius 20: a smooth surface
+            float* p = &xyz.data[size_t(i * 3)];
+            const float l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]);
+            for (int a = 0; a < 3; ++a) p[a] = 20.0f * p[a] / l;
+        }
+        const ops::PointGrid grid = ops::build_point_grid(xyz, k);
+        Params p{{"k", double(k)}, {"orient", 1}};
+        ops::set_grid_params(p, grid);
+        const int x = c.input("points", xyz), o = c.input("order", grid.order), s0 = c.input("cell_start", grid.cell_start);
+        c.output(c.g.add1("normal_estimate", {x, o, s0}, p), "normals");
+        c.tol = {2e-3, 0};  // fp32 PCA in the shader, double in the reference (tests/test_normals.cpp)
         v.push_back(std::move(c));
     }
     return v;
