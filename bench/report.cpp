@@ -92,6 +92,15 @@ void print_report(const json& r, std::FILE* f) {
     std::fprintf(f, "device: %s (%s, driver %s, subgroup %d)\n", d["name"].get<std::string>().c_str(),
                  d["type"].get<std::string>().c_str(), d["driver_version"].get<std::string>().c_str(),
                  d["subgroup_size"].get<int>());
+    if (r.contains("host")) {
+        std::string simd;
+        for (const json& s : r["host"]["simd"]) {
+            if (!simd.empty()) simd += ' ';
+            simd += s.get<std::string>();
+        }
+        std::fprintf(f, "host: %s, %d cores, SIMD: %s\n", r["host"]["cpu"].get<std::string>().c_str(),
+                     r["host"]["cores"].get<int>(), simd.empty() ? "none listed" : simd.c_str());
+    }
     const json& m = r["model"];
     std::fprintf(f, "model: %s (%s): %lld parameters = %.2f MiB fp32\n", m["source"].get<std::string>().c_str(),
                  m["config_name"].get<std::string>().c_str(), m["parameters"].get<long long>(), m["mib_fp32"].get<double>());
@@ -105,6 +114,16 @@ void print_report(const json& r, std::FILE* f) {
                      r["probe"]["dispatch_overhead_us"].get<double>());
     for (const char* b : {"gpu", "cpu"})
         if (r.contains(b)) backend(f, b, r[b]);
+    if (r.contains("pytorch")) {
+        const json& t = r["pytorch"];
+        std::fprintf(f, "\n== PyTorch reference (torch %s, %s, %d threads, BLAS built %s, loaded %s) ==\n",
+                     t["torch"].get<std::string>().c_str(), t["dtype"].get<std::string>().c_str(), t["threads"].get<int>(),
+                     t["blas"]["built_with"].get<std::string>().c_str(), t["blas"]["loaded"].get<std::string>().c_str());
+        std::fprintf(f, "  %-34s %9.2f ms\n", "end to end (one touch)", med(t["end_to_end_ms"]));
+        for (auto& [k, v] : t["stages_ms"].items()) std::fprintf(f, "    %-12s %9.2f ms\n", k.c_str(), med(v));
+        std::fprintf(f, "\n== engine / PyTorch (times, below 1 = the engine is faster) ==\n");
+        for (auto& [k, v] : r["engine_over_pytorch"].items()) std::fprintf(f, "  %-20s %10.3g\n", k.c_str(), v.get<double>());
+    }
     if (r.contains("cpu_over_gpu")) {
         std::fprintf(f, "\n== CPU reference / GPU (times, higher = GPU faster) ==\n");
         for (auto& [k, v] : r["cpu_over_gpu"].items()) std::fprintf(f, "  %-20s %10.3gx\n", k.c_str(), v.get<double>());

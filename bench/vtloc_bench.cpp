@@ -14,6 +14,7 @@
 #include "bench/model_bench.h"
 #include "bench/probe.h"
 #include "bench/report.h"
+#include "bench/versus.h"
 #include "engine/error.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
@@ -52,6 +53,9 @@ const char* kUsage = R"(usage: vtloc-bench [options]
   --no-probe           skip the fma peak probe
   --json FILE          write the report as JSON
   --plot FILE.png      draw latency over N and the per-stage breakdown
+  --vs-pytorch         also time the PyTorch reference (weights_tools.bench_torch: float32, as many
+                       threads as cores) on the same weights, image and cloud, in the same run, and
+                       report engine/PyTorch ratios (VTLOC_PYTHON picks the interpreter)
 The GPU is the default Vulkan device (VTLOC_DEVICE picks another: index or name).
 )";
 
@@ -59,7 +63,7 @@ struct Args {
     std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
     bench::ModelBenchOptions opt;
     int cpu_reps = 2;
-    bool probe = true;
+    bool probe = true, vs_pytorch = false;
 };
 
 std::vector<int64_t> int_list(const std::string& flag, const std::string& s) {
@@ -91,6 +95,10 @@ Args parse(int argc, char** argv) {
         }
         if (f == "--no-probe") {
             a.probe = false;
+            continue;
+        }
+        if (f == "--vs-pytorch") {
+            a.vs_pytorch = true;
             continue;
         }
         if (i + 1 >= argc) throw Error("unknown option or missing value: " + f + " (see --help)");
@@ -243,6 +251,7 @@ int run(int argc, char** argv) {
 
     report["device"] = {{"name", "CPU reference (one thread)"}, {"type", "cpu"}, {"driver_version", "-"},
                         {"subgroup_size", 0}};
+    report["host"] = bench::host_cpu();
     std::unique_ptr<rt::Context> ctx;
     if (a.backend != "cpu") {
         ctx = std::make_unique<rt::Context>();
@@ -278,6 +287,15 @@ int run(int argc, char** argv) {
         in.probe_gflops = 0;  // the probe measures the GPU, not this
         report["cpu"] = bench::measure_model(runner, in, c);
         if (report.contains("gpu")) report["cpu_over_gpu"] = ratios(report["gpu"], report["cpu"]);
+    }
+
+    if (a.vs_pytorch) {
+        const char* env = std::getenv("VTLOC_PYTHON");
+        bench::TorchRun t{env && *env ? env : VTLOC_PYTHON, data_dir().string(), fs::absolute(weights_path).string(),
+                          fs::absolute(image_path).string(), cloud, a.opt.reps, a.opt.warmup};
+        report["pytorch"] = bench::run_pytorch(t);
+        report["engine_over_pytorch"] = bench::engine_over_pytorch(report.contains("gpu") ? report["gpu"] : report["cpu"],
+                                                                   report["pytorch"]);
     }
 
     if (ctx) {  // with VTLOC_VALIDATION=1 (the smoke test), a validation message fails the run
