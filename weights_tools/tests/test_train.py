@@ -177,3 +177,20 @@ def test_feature_scale_penalty(tiny):
     b = train.losses(m, objs[0], idx, 1.0, beta=2.0)
     assert float(a[4]) == 0.0 and float(b[4]) > 0
     assert torch.isclose(b[0], a[0] + b[4])
+
+
+def test_shipped_trained_models():
+    """Every trained weight file in models/ (not the random stand-in): its named
+    config, at most 16 MiB, provenance of a finished run on the synthetic benchmark."""
+    root = os.path.join(os.path.dirname(__file__), "..", "..", "models")
+    files = [f for f in os.listdir(root) if f.endswith(".safetensors") and "random" not in f]
+    for f in files:
+        path = os.path.join(root, f)
+        assert os.path.getsize(path) <= 16 * 2**20, f
+        _, meta = safetensors_io.load(path)
+        cfg = json.loads(meta["vtloc.config"])
+        prov = json.loads(meta["vtloc.provenance"])
+        assert cfg == config.named(prov["config"]) and prov["config"] in ("vtloc-lite", "vtloc-lite-xyz", "mcr-lite")
+        assert prov["steps"] > 0 and prov["data_format"] == "vtloc-synth/1" and prov["data_seed"] == 1
+        assert sum(o["object_split"] == "seen" for o in prov["objects"]) == 30
+        model.load(path)  # loads into the reference

@@ -1,0 +1,30 @@
+#!/usr/bin/env bash
+# Every number of docs/results.md: `vtloc eval` (this engine) on the exported weights,
+# known and unknown objects of the synthetic benchmark, each beside the PyTorch
+# reference's metrics on the same touches (tests/eval/compare_eval.py prints the
+# largest difference), and the ILU N ablation (N varied at run time on one model).
+#   bash models/results.sh OUT_DIR MODEL.safetensors [MODEL ...]
+set -euo pipefail
+root="$(cd "$(dirname "$0")/.." && pwd)"
+out="$1"; shift
+data="$root/build/synth-extra"   # models/train.sh's data: the benchmark's test touches + extra renders
+mkdir -p "$out"
+cd "$root"
+for model in "$@"; do
+  name="$(basename "$model" .safetensors)"
+  for objects in known unknown; do
+    build/vtloc eval --model "$model" --data "$data" --objects "$objects" \
+      --json "$out/$name.$objects.json" --markdown "$out/$name.$objects.md" --per-touch "$out/$name.$objects.csv"
+    OMP_NUM_THREADS=2 PYTHONDONTWRITEBYTECODE=1 /usr/bin/python3 -m weights_tools.eval --model "$model" \
+      --data "$data" --objects "$objects" --json "$out/$name.$objects.py.json" > /dev/null
+    /usr/bin/python3 tests/eval/compare_eval.py "$out/$name.$objects.json" "$out/$name.$objects.py.json" "$data" \
+      | tee "$out/$name.$objects.compare.txt"
+  done
+done
+# ILU N ablation on the first model: accuracy per N and this engine's time per touch.
+model="$1"; name="$(basename "$model" .safetensors)"
+for n in 0 4 8 16 32; do
+  build/vtloc eval --model "$model" --data "$data" --objects known --iters "$n" --no-baselines \
+    --json "$out/$name.iters$n.json" > /dev/null
+done
+echo "wrote $out"
