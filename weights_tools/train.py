@@ -477,7 +477,9 @@ def provenance(args, ds, objects, step, elapsed, val):
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
         "lambda": args.lam, "objects_per_batch": args.groups, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
         "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
-        "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
+        # the command that started the run (a resume or --export-only keeps it), then this one
+        "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.first_argv),
+        "last_command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
         "torch": torch.__version__,
     }
 
@@ -498,6 +500,7 @@ def run(args):
         args.match = saved.get("match", 0.0)  # runs from before the auxiliary losses had none
         args.feature_scale = saved.get("feature_scale", 0.0)
         args.groups = saved.get("groups", 1)
+        args.first_argv = saved.get("first_argv", args.argv)
     elif args.export_only:
         raise ValueError(f"{ckpt_path}: missing (nothing to export)")
     if args.config is None:
@@ -547,7 +550,7 @@ def run(args):
                      "match": None if match is None else match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
                                                        "steps", "val_fraction", "rotate", "match",
-                                                       "feature_scale", "groups")}}, ckpt_path)
+                                                       "feature_scale", "groups", "first_argv")}}, ckpt_path)
 
     warmup = min(100, max(1, args.steps // 10)) if args.steps else 100
     val = (None, None)
@@ -657,6 +660,7 @@ def parse_args(argv=None):
     if args.batch < 1:
         ap.error("--batch must be >= 1")
     args.argv = argv
+    args.first_argv = argv  # replaced by the checkpoint's on --resume / --export-only
     return args
 
 

@@ -107,6 +107,8 @@ def test_training_lowers_loss_and_resumes(data_dir, tiny, tmp_path):
     _, meta = safetensors_io.load(path)
     prov = json.loads(meta["vtloc.provenance"])
     assert prov["steps"] == 24 and prov["data_seed"] == 0 and prov["config"] == "vtloc-tiny"
+    # the run's first command (interrupted at 10 steps), and the resume that finished it
+    assert "--stop-after 10" in prov["command"] and "--resume" in prov["last_command"]
     assert [(o["name"], o["object_split"]) for o in prov["objects"]] == [
         ("shape00", "seen"), ("shape01", "seen"), ("shape02", "unseen")]
     assert prov["sensor"]["height"] == 120 and len(prov["git_commit"]) in (7, 40) or \
