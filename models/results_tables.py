@@ -11,6 +11,8 @@ import os
 import re
 import sys
 
+BASELINES = ("Chance", "Point Filtering")
+
 
 def load(path):
     with open(path) as f:
@@ -30,15 +32,16 @@ def main():
         print("| --- | --- | ---: | ---: | ---: | ---: | ---: | ---: | ---: | ---: |")
         first = load(os.path.join(out, f"{pairs[0][0]}.{objects}.json"))
         for r in first["rows"]:
-            if r["method"] in ("Chance (analytic)", "Point Filtering"):
-                print(f"| {r['method']} | {r['subset']} | {r['objects']} | {r['touches']} | {row(r)} | - |")
+            if r["method"] in BASELINES:
+                label = "Chance (analytic)" if r["method"] == "Chance" else r["method"]
+                print(f"| {label} | {r['subset']} | {r['objects']} | {r['touches']} | {row(r)} | - |")
         worst = 0.0
         for name, label in pairs:
             eng = load(os.path.join(out, f"{name}.{objects}.json"))
             ref = {(r["subset"]): r for r in load(os.path.join(out, f"{name}.{objects}.py.json"))["rows"]
-                   if r["method"] not in ("Chance (analytic)", "Point Filtering")}
+                   if r["method"] not in BASELINES}
             for r in eng["rows"]:
-                if r["method"] in ("Chance (analytic)", "Point Filtering"):
+                if r["method"] in BASELINES:
                     continue
                 p = ref[r["subset"]]
                 worst = max(worst, *(abs(r[k] - p[k]) for k in ("mm", "nd", "top1", "top5", "mpe")))
