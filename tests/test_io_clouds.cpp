@@ -86,7 +86,7 @@ TEST_CASE("cloud file errors name the file and the problem", "[io]") {
     require_error([] { load_object(write_temp("word.pcd", kPcdHead3 + "DATA ascii\n1 2 x 0\n"), 10); },
                   {"word.pcd", "point 0", "'x' is not a number"});
     require_error([] { load_object(write_temp("allnan.pcd", "FIELDS x y z\nPOINTS 1\nDATA ascii\nnan nan nan\n"), 10); },
-                  {"allnan.pcd", "no point with finite coordinates"});
+                  {"allnan.pcd", "no point with measured (non-NaN) coordinates"});
     require_error([] { load_object(write_temp("nan.xyz", "1 2 3\n1 nan 3\n"), 10); }, {"nan.xyz", "line 2", "non-finite"});
     require_error([] { load_object(write_temp("empty.xyz", "# nothing\n"), 10); }, {"empty.xyz", "no points in the file"});
     require_error([] {

@@ -56,7 +56,7 @@ HostTensor prepare_cloud(const Model::Impl& m, HostTensor cloud, Backend b, cons
 
 Object::Impl make_object(Object::Impl o, const std::string& source, HostTensor cloud, const HostTensor* candidates) {
     o.source = source;
-    io::check_cloud(cloud, where(source));  // finite, no zero normal; normals made unit
+    // `cloud` is checked where it came in (load_object, encode_object) and its normals are unit
     o.raw_cloud = std::move(cloud);
     o.cloud = to_point_cloud(o.raw_cloud);
     if (candidates) {
@@ -80,14 +80,11 @@ HostTensor candidate_tensor(const std::vector<float>& c, const std::string& what
 PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed) {
     return guarded([&] {
         if (n_points < 1) throw Error("load_point_cloud: n_points must be >= 1");
-        HostTensor t = io::load_object(path, n_points, seed);
-        if (t.shape[1] == 3) {  // no normals in the file: xyz only
-            PointCloud c;
-            c.xyz = t.data;
-            return c;
-        }
-        io::check_cloud(t, path);
-        return to_point_cloud(t);
+        HostTensor t = io::load_object(path, n_points, seed);  // checked
+        if (t.shape[1] == 6) return to_point_cloud(t);
+        PointCloud c;  // no normals in the file: xyz only
+        c.xyz = t.data;
+        return c;
     });
 }
 
@@ -157,9 +154,7 @@ Object Model::encode_object(const PointCloud& cloud, const std::vector<float>& c
                 t.data[i * size_t(w) + k] = cloud.xyz[i * 3 + k];
                 if (has_normals) t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
             }
-        if (!has_normals)
-            for (size_t i = 0; i < n * 3; ++i)
-                if (!std::isfinite(t.data[i])) throw Error("the object cloud: point " + std::to_string(i / 3) + " has a non-finite coordinate");
+        io::check_cloud(t, "the object cloud");
         Object::Impl o;
         t = prepare_cloud(*impl_, std::move(t), backend, "", cloud.viewpoint, o);
         HostTensor cand;

@@ -3,28 +3,12 @@
 #include "engine/error.h"
 
 #include <cmath>
-#include <sstream>
 #include <vector>
 
 #include "engine/io/file_bytes.h"
 #include "engine/io/image.h"
 
 namespace vtloc::io {
-
-CameraIntrinsics parse_intrinsics(const std::string& text, const std::string& what) {
-    std::vector<double> v;
-    std::stringstream ss(text);
-    for (std::string item; std::getline(ss, item, ',');) {
-        char* end = nullptr;
-        const double x = std::strtod(item.c_str(), &end);
-        if (item.empty() || *end != 0 || !std::isfinite(x))
-            throw Error(what + ": '" + text + "' is not fx,fy,cx,cy (four numbers)");
-        v.push_back(x);
-    }
-    if (v.size() != 4) throw Error(what + ": '" + text + "' is not fx,fy,cx,cy (four numbers)");
-    if (!(v[0] > 0) || !(v[1] > 0)) throw Error(what + ": the focal lengths fx, fy must be > 0");
-    return {v[0], v[1], v[2], v[3]};
-}
 
 HostTensor depth_to_cloud(const std::string& depth_path, const CameraIntrinsics& k, const std::string& mask_path,
                           double unit_mm) {

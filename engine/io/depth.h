@@ -12,9 +12,6 @@ struct CameraIntrinsics {
     double fx = 0, fy = 0, cx = 0, cy = 0;  // pixels
 };
 
-// Parses "fx,fy,cx,cy"; throws naming `what` unless four finite numbers with fx, fy > 0.
-CameraIntrinsics parse_intrinsics(const std::string& text, const std::string& what);
-
 // depth_path: 16-bit PNG, value * unit_mm = depth in mm, 0 = none. mask_path:
 // "" or an image of the same size. -> N x 3, camera frame (x right, y down,
 // z forward), mm: p = ((u - cx) z / fx, (v - cy) z / fy, z) at pixel

@@ -128,15 +128,10 @@ HostTensor load_pcd(const std::string& path) {
     const int width = normals ? 6 : 3;
     std::vector<float> out;
     std::vector<double> row(static_cast<size_t>(values));
-    auto keep = [&](int64_t i) {
+    auto keep = [&]() {  // a NaN coordinate is PCL's "no measurement"; the rest is load_object's check_cloud
         for (int k = 0; k < 3; ++k)
-            if (!std::isfinite(row[size_t(col[size_t(k)])])) return;  // no measurement
-        for (int k = 0; k < width; ++k) {
-            const double v = row[size_t(col[size_t(k)])];
-            if (!std::isfinite(v) || !std::isfinite(float(v)))
-                fail(path, "point " + std::to_string(i) + " has a non-finite " + (k < 3 ? "coordinate" : "normal"));
-            out.push_back(float(v));
-        }
+            if (std::isnan(row[size_t(col[size_t(k)])])) return;
+        for (int k = 0; k < width; ++k) out.push_back(float(row[size_t(col[size_t(k)])]));
     };
     if (data == "binary") {
         if (bytes.size() - pos < uint64_t(points) * uint64_t(record))
@@ -144,7 +139,7 @@ HostTensor load_pcd(const std::string& path) {
         for (int64_t i = 0; i < points; ++i) {
             const uint8_t* r = bytes.data() + pos + size_t(i) * size_t(record);
             for (int v = 0; v < values; ++v) row[size_t(v)] = read_binary(r + value_at[size_t(v)], *field_of[size_t(v)]);
-            keep(i);
+            keep();
         }
     } else {
         std::string text(bytes.begin() + std::ptrdiff_t(pos), bytes.end());
@@ -157,10 +152,10 @@ HostTensor load_pcd(const std::string& path) {
                 row[size_t(v)] = std::strtod(tok.c_str(), &end);
                 if (*end != 0) fail(path, "point " + std::to_string(i) + ": '" + tok + "' is not a number");
             }
-            keep(i);
+            keep();
         }
     }
-    if (out.empty()) fail(path, "the PCD file has no point with finite coordinates");
+    if (out.empty()) fail(path, "the PCD file has no point with measured (non-NaN) coordinates");
     const int64_t n = int64_t(out.size()) / width;
     return HostTensor({n, width}, std::move(out));
 }

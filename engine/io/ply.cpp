@@ -283,6 +283,7 @@ PlyVertices read_ply_vertices(const std::string& path) {
     if (!vertex) fail(path, "PLY file has no vertex element");
     PlyVertices out;
     out.count = vertex->count;
+    for (auto& e : h.elems) out.elements.push_back(e.name);
     for (auto& p : vertex->props)
         if (!p.is_list && out.column(p.name) < 0) out.names.push_back(p.name);
     if (out.names.size() != [&] {

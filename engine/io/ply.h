@@ -17,6 +17,7 @@ struct PlyVertices {
     int64_t count = 0;
     std::vector<std::string> names;  // in file order
     std::vector<double> values;      // count x names.size(), row-major
+    std::vector<std::string> elements;  // every element's name, in file order ("vertex", "face", ...)
 
     int column(const std::string& name) const;  // -1 when absent
 };

@@ -29,6 +29,23 @@ std::vector<int64_t> voxel_firsts(const HostTensor& cloud, double size, const do
 
 }  // namespace
 
+std::vector<int64_t> farthest_points(rt::Context* ctx, const HostTensor& cloud, int64_t n) {
+    std::vector<int64_t> out;
+    if (cloud.shape[0] <= n) {
+        for (int64_t i = 0; i < cloud.shape[0]; ++i) out.push_back(i);
+        return out;
+    }
+    Graph g;
+    const int x = g.input("cloud", cloud.shape);
+    const std::vector<int> f = g.add("fps", {x}, {{"npoint", double(n)}}, "fps");
+    g.output(f[0], "index");
+    const TensorMap in{{"cloud", cloud}};
+    const HostTensor idx = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("index")
+                               : run_cpu(g, WeightStore{}, in).at("index");
+    for (int64_t r = 0; r < n; ++r) out.push_back(idx.int_at(size_t(r)));
+    return out;
+}
+
 HostTensor voxel_reduce(const HostTensor& cloud, int64_t target) {
     const int64_t N = cloud.shape[0], D = cloud.shape[1];
     if (N <= target) return cloud;
@@ -66,17 +83,11 @@ HostTensor reduce_cloud(rt::Context* ctx, const HostTensor& cloud, int64_t n) {
     if (cloud.shape[0] <= n) return cloud;
     const HostTensor pre = voxel_reduce(cloud, 4 * n);
     if (pre.shape[0] <= n) return pre;  // fewer distinct points than n
-    Graph g;
-    const int x = g.input("cloud", pre.shape);
-    const std::vector<int> f = g.add("fps", {x}, {{"npoint", double(n)}}, "reduce.fps");
-    g.output(f[0], "index");
-    const TensorMap in{{"cloud", pre}};
-    const HostTensor idx = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("index")
-                               : run_cpu(g, WeightStore{}, in).at("index");
+    const std::vector<int64_t> idx = farthest_points(ctx, pre, n);
     const int64_t D = pre.shape[1];
     HostTensor out({n, D});
     for (int64_t r = 0; r < n; ++r)
-        std::copy_n(&pre.data[size_t(int64_t(idx.int_at(size_t(r))) * D)], size_t(D), &out.data[size_t(r * D)]);
+        std::copy_n(&pre.data[size_t(idx[size_t(r)] * D)], size_t(D), &out.data[size_t(r * D)]);
     return out;
 }
 

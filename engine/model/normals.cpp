@@ -5,6 +5,7 @@
 #include "engine/error.h"
 #include "engine/executor.h"
 #include "engine/graph.h"
+#include "engine/model/object_frame.h"
 #include "engine/ops/point_grid.h"
 
 namespace vtloc {
@@ -24,8 +25,7 @@ HostTensor estimate_normals(rt::Context* ctx, const HostTensor& xyz, const Norma
         ref = *o.towards;
         p.set("orient", 2);
     } else {
-        for (int64_t i = 0; i < N; ++i)
-            for (int a = 0; a < 3; ++a) ref[size_t(a)] += double(xyz.data[size_t(i * D + a)]) / double(N);
+        ref = object_frame(xyz, "normal estimation").centre;  // the centroid, as SPEC 1's frame has it
         p.set("orient", 1);
     }
     p.set("rx", ref[0]).set("ry", ref[1]).set("rz", ref[2]);

@@ -3,13 +3,13 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <fstream>
-#include <limits>
 
 #include <nlohmann/json.hpp>
 
 #include "engine/error.h"
+#include "engine/io/file_bytes.h"
 #include "engine/io/splitmix64.h"
+#include "engine/model/cloud_reduce.h"
 #include "engine/sim/height_field.h"
 
 namespace vtloc::sim {
@@ -22,35 +22,6 @@ V3 cross(const V3& a, const V3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b
 V3 unit(const V3& a) {
     const double l = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
     return {a[0] / l, a[1] / l, a[2] / l};
-}
-
-// Farthest point sampling from row 0, in double: n rows of `pts` (all if fewer).
-std::vector<size_t> farthest(const std::vector<V3>& pts, size_t n) {
-    std::vector<size_t> pick;
-    if (pts.empty()) return pick;
-    std::vector<double> d(pts.size(), std::numeric_limits<double>::infinity());
-    size_t cur = 0;
-    for (size_t k = 0; k < std::min(n, pts.size()); ++k) {
-        pick.push_back(cur);
-        size_t best = 0;
-        for (size_t i = 0; i < pts.size(); ++i) {
-            const double dx = pts[i][0] - pts[cur][0], dy = pts[i][1] - pts[cur][1], dz = pts[i][2] - pts[cur][2];
-            d[i] = std::min(d[i], dx * dx + dy * dy + dz * dz);
-            if (d[i] > d[best]) best = i;
-        }
-        cur = best;
-    }
-    return pick;
-}
-
-void write_atomic(const std::filesystem::path& path, const std::string& text) {
-    const std::filesystem::path tmp = path.string() + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        f << text;
-        if (!f) throw Error(tmp.string() + ": cannot write");
-    }
-    std::filesystem::rename(tmp, path);
 }
 
 }  // namespace
@@ -76,24 +47,25 @@ PartialView render_partial_view(const io::TriangleMesh& mesh, uint64_t seed, int
     detail::SensorFrame f{x, y, z, {c[0] - 2 * r * z[0], c[1] - 2 * r * z[1], c[2] - 2 * r * z[2]}};
     detail::PixelGrid g{pixels, pixels, 2.0 * r / pixels, 0, 0};
     const detail::HeightField hf = detail::rasterise(m, f, g);
-    std::vector<V3> pts;
+    std::vector<float> pts;  // x y z per visible pixel
     for (int row = 0; row < g.rows; ++row)
         for (int col = 0; col < g.cols; ++col) {
             const double w = hf.w[size_t(row) * size_t(g.cols) + size_t(col)];
             if (!std::isfinite(w)) continue;
             const double u = (col - (g.cols - 1) / 2.0) * g.mm_per_px, v = (row - (g.rows - 1) / 2.0) * g.mm_per_px;
-            pts.push_back({f.origin[0] + u * x[0] + v * y[0] + w * z[0], f.origin[1] + u * x[1] + v * y[1] + w * z[1],
-                           f.origin[2] + u * x[2] + v * y[2] + w * z[2]});
+            for (size_t a = 0; a < 3; ++a) pts.push_back(float(f.origin[a] + u * x[a] + v * y[a] + w * z[a]));
         }
     if (pts.empty()) throw Error("partial view: no pixel sees the object");
     PartialView out;
-    out.visible_pixels = int(pts.size());
+    const int64_t visible = int64_t(pts.size() / 3);  // before pts is moved below
+    out.visible_pixels = int(visible);
     out.direction = z;
     out.camera = {c[0] - 20 * r * z[0], c[1] - 20 * r * z[1], c[2] - 20 * r * z[2]};
-    const std::vector<size_t> pick = farthest(pts, size_t(n_points));
+    const HostTensor all({visible, 3}, std::move(pts));
+    const std::vector<int64_t> pick = farthest_points(nullptr, all, n_points);  // the fps op's CPU reference
     out.xyz = HostTensor({int64_t(pick.size()), 3});
     for (size_t k = 0; k < pick.size(); ++k)
-        for (int a = 0; a < 3; ++a) out.xyz.data[k * 3 + size_t(a)] = float(pts[pick[k]][size_t(a)]);
+        std::copy_n(&all.data[size_t(pick[k]) * 3], 3, &out.xyz.data[k * 3]);
     return out;
 }
 
@@ -105,14 +77,15 @@ void write_partial_view(const std::filesystem::path& dir, const PartialView& v) 
                       v.xyz.data[size_t(i * 3 + 2)]);
         rows += buf;
     }
-    write_atomic(dir / "view.xyz", rows);
+    io::write_file_atomic((dir / "view.xyz").string(), rows.data(), rows.size());
     nlohmann::json j{{"format", "vtloc-synth-view/1"},
                      {"projection", "orthographic"},
                      {"direction", v.direction},
                      {"camera", v.camera},
                      {"points", v.xyz.shape[0]},
                      {"visible_pixels", v.visible_pixels}};
-    write_atomic(dir / "view.json", j.dump(2) + "\n");
+    const std::string meta = j.dump(2) + "\n";
+    io::write_file_atomic((dir / "view.json").string(), meta.data(), meta.size());
 }
 
 }  // namespace vtloc::sim
