@@ -27,5 +27,6 @@ if ((${#missing[@]})); then
   DEBIAN_FRONTEND=noninteractive $sudo apt-get install -y -q "${missing[@]}"
 fi
 
-cmake -S . -B build -DCMAKE_BUILD_TYPE=Release
+# VTLOC_CMAKE_ARGS: extra configure options (CI passes -DVTLOC_WARNINGS_AS_ERRORS=ON).
+cmake -S . -B build -DCMAKE_BUILD_TYPE=Release ${VTLOC_CMAKE_ARGS:-}
 cmake --build build -j"$(nproc)"

@@ -8,7 +8,7 @@
 
 #include "bench/flops.h"
 #include "bench/stages.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/object.h"
 
 namespace vtloc::bench {
@@ -109,7 +109,7 @@ double slope(const std::vector<double>& x, const std::vector<double>& y) {
     return d != 0 ? (n * sxy - sx * sy) / d : 0.0;
 }
 
-bool has_ilu(const VtlocRunner& r) { return r.config().at("head").get<std::string>() == "ilu"; }
+bool has_ilu(const VtlocRunner& r) { return r.config().head == Head::Ilu; }
 
 json ilu_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
     json rows = json::array();

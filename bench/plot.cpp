@@ -8,7 +8,7 @@
 
 #include "bench/report.h"
 #include "bench/stages.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::bench {
 

@@ -16,7 +16,7 @@
 #include "bench/flops.h"
 #include "bench/probe.h"
 #include "bench/random_weights.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/point_encoder.h"
 #include "runtime/context.h"
@@ -25,25 +25,22 @@ using namespace vtloc;
 
 namespace {
 
-const char* kR18Point = R"({"C": 128, "point": {"n_points": 1024, "use_normals": true,
-  "sa": [{"npoint": 512, "radii": [0.1, 0.2, 0.4], "nsample": [16, 32, 128], "mlps": [[32, 32, 64], [64, 64, 128], [64, 96, 128]]},
-         {"npoint": 128, "radii": [0.2, 0.4, 0.8], "nsample": [32, 64, 128], "mlps": [[64, 64, 128], [128, 128, 256], [128, 128, 256]]}],
-  "group_all_mlp": [256, 512, 1024], "mlp": [512]}})";
-
-WeightStore random_weights(const nlohmann::json& cfg) {
+WeightStore random_weights(const nlohmann::json& json) {
+    const ModelConfig cfg = ModelConfig::parse(json, "bench");
+    const PointConfig& p = cfg.point;
     WeightStore w;
-    w.set_config(cfg);
+    w.set_config(json);
     bench::RandomWeights r(w, 11);
-    const nlohmann::json& p = cfg["point"];
     int64_t ch = 3;
-    for (size_t i = 0; i < p["sa"].size(); ++i) {
+    for (size_t i = 0; i < p.sa.size(); ++i) {
         const std::string sa = "point.sa" + std::to_string(i + 1);
         int64_t next = 0;
-        for (size_t s = 0; s < p["sa"][i]["mlps"].size(); ++s) {
+        for (size_t s = 0; s < p.sa[i].mlps.size(); ++s) {
             int64_t in = ch + 3;
-            for (size_t l = 0; l < p["sa"][i]["mlps"][s].size(); ++l) {
-                const std::string at = "." + std::to_string(s) + "." + std::to_string(l);
-                int64_t out = p["sa"][i]["mlps"][s][l].get<int64_t>();
+            for (size_t l = 0; l < p.sa[i].mlps[s].size(); ++l) {
+                std::string at = ".";  // built piecewise: GCC 12's -Wrestrict false positive on "." + string
+                at.append(std::to_string(s)).append(".").append(std::to_string(l));
+                const int64_t out = p.sa[i].mlps[s][l];
                 r.conv_bn(sa + ".conv_blocks" + at, sa + ".bn_blocks" + at, {out, in, 1, 1}, true);
                 in = out;
             }
@@ -52,15 +49,15 @@ WeightStore random_weights(const nlohmann::json& cfg) {
         ch = next;
     }
     int64_t in = ch + 3;
-    const std::string ga = "point.sa" + std::to_string(p["sa"].size() + 1);
-    for (size_t l = 0; l < p["group_all_mlp"].size(); ++l) {
-        int64_t out = p["group_all_mlp"][l].get<int64_t>();
+    const std::string ga = "point.sa" + std::to_string(p.sa.size() + 1);
+    for (size_t l = 0; l < p.group_all.size(); ++l) {
+        const int64_t out = p.group_all[l];
         r.conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), {out, in, 1, 1}, true);
         in = out;
     }
     std::vector<int64_t> sizes{in};
-    for (auto& h : p["mlp"]) sizes.push_back(h.get<int64_t>());
-    sizes.push_back(cfg["C"].get<int64_t>());
+    sizes.insert(sizes.end(), p.mlp.begin(), p.mlp.end());
+    sizes.push_back(cfg.C);
     r.mlp("point.mlp", sizes);
     return w;
 }
@@ -84,8 +81,8 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
 int main(int argc, char** argv) {
     try {
         rt::Context ctx;
-        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(kR18Point));
-        const nlohmann::json& cfg = w.config();
+        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
+        const ModelConfig cfg = config_of(w);
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
         const double probe = bench::peak_gflops(ctx);
         std::printf("fma probe: %.1f GFLOP/s\n\n", probe);

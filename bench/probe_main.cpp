@@ -2,7 +2,7 @@
 #include <cstdio>
 
 #include "bench/probe.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/context.h"
 
 int main() {

@@ -4,6 +4,15 @@
 
 namespace vtloc::bench {
 
+const char* const kR18Config = R"({"name": "vtloc-r18", "C": 128, "K": 5,
+  "tactile": {"crop": 320, "in_size": 224, "widths": [64, 128, 256, 512], "blocks": [2, 2, 2, 2], "mlp": [256]},
+  "point": {"n_points": 1024, "use_normals": true,
+    "sa": [{"npoint": 512, "radii": [0.1, 0.2, 0.4], "nsample": [16, 32, 128], "mlps": [[32, 32, 64], [64, 64, 128], [64, 96, 128]]},
+           {"npoint": 128, "radii": [0.2, 0.4, 0.8], "nsample": [32, 64, 128], "mlps": [[64, 64, 128], [128, 128, 256], [128, 128, 256]]}],
+    "group_all_mlp": [256, 512, 1024], "mlp": [512]},
+  "gma": {"n_points": 1024, "channels": 64, "decoder": [64, 32, 16]},
+  "ilu": {"iters": 16, "head_hidden": 64}, "head": "ilu", "mcr": null})";
+
 void RandomWeights::normal(const std::string& name, const Shape& s, double stddev, double mean) {
     std::normal_distribution<float> d{float(mean), float(stddev)};
     HostTensor t(s);

@@ -11,6 +11,9 @@
 
 namespace vtloc::bench {
 
+// The paper config (weights_tools' vtloc-r18), for the branch benches' random weights.
+extern const char* const kR18Config;
+
 class RandomWeights {
 public:
     RandomWeights(WeightStore& w, uint32_t seed) : w_(w), rng_(seed) {}

@@ -14,7 +14,7 @@
 #include "bench/flops.h"
 #include "bench/probe.h"
 #include "bench/random_weights.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/tactile_encoder.h"
 #include "engine/ops/conv2d.h"
@@ -25,14 +25,12 @@ using namespace vtloc;
 
 namespace {
 
-const char* kR18Tactile = R"({"C": 128, "tactile": {"crop": 320, "in_size": 224, "widths": [64, 128, 256, 512],
-                              "blocks": [2, 2, 2, 2], "mlp": [256]}})";
-
 // torchvision resnet18 names (minus fc) and the MLP head, He-initialised.
-WeightStore random_weights(const nlohmann::json& cfg) {
-    TactileConfig c = tactile_config(cfg);
+WeightStore random_weights(const nlohmann::json& json) {
+    const ModelConfig cfg = ModelConfig::parse(json, "bench");
+    const TactileConfig& c = cfg.tactile;
     WeightStore w;
-    w.set_config(cfg);
+    w.set_config(json);
     bench::RandomWeights r(w, 7);
     const std::string p = "tactile.backbone.";
     r.conv_bn(p + "conv1", p + "bn1", {c.widths[0], 3, 7, 7}, false);
@@ -48,7 +46,7 @@ WeightStore random_weights(const nlohmann::json& cfg) {
         }
     std::vector<int64_t> sizes{in};
     sizes.insert(sizes.end(), c.mlp.begin(), c.mlp.end());
-    sizes.push_back(c.C);
+    sizes.push_back(cfg.C);
     r.mlp("tactile.mlp", sizes);
     return w;
 }
@@ -62,9 +60,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
     try {
         rt::Context ctx;
-        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(kR18Tactile));
-        const nlohmann::json& cfg = w.config();
-        const int64_t S = tactile_config(cfg).in_size;
+        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
+        const ModelConfig cfg = config_of(w);
+        const int64_t S = cfg.tactile.in_size;
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
 
         Graph g;

@@ -8,7 +8,7 @@
 #include <thread>
 #include <unistd.h>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/ply.h"
 
 namespace vtloc::bench {

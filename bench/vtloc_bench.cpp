@@ -15,9 +15,10 @@
 #include "bench/probe.h"
 #include "bench/report.h"
 #include "bench/versus.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
+#include "engine/model/model_config.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "runtime/context.h"
 
@@ -219,8 +220,8 @@ int run(int argc, char** argv) {
     const std::string object_path = !a.object.empty() ? a.object : (data_dir() / "examples" / "mug.glb").string();
 
     WeightStore weights = WeightStore::load(weights_path);
-    const nlohmann::json cfg = weights.config();
-    const int64_t n_points = cfg.at("point").at("n_points").get<int64_t>();
+    const ModelConfig cfg = config_of(weights);
+    const int64_t n_points = cfg.point.n_points;
     io::RgbImage img = io::load_tactile_image(image_path);
     HostTensor cloud = io::load_object(object_path, n_points);
     io::require_points(cloud, n_points, object_path);
@@ -235,7 +236,7 @@ int run(int argc, char** argv) {
     report["schema"] = "vtloc-bench/1";
     report["date"] = today();
     const size_t params = weights.parameter_count();
-    report["model"] = {{"source", weights_path}, {"config_name", cfg.value("name", a.config.empty() ? "?" : a.config)},
+    report["model"] = {{"source", weights_path}, {"config_name", cfg.name},
                        {"parameters", params}, {"mib_fp32", double(params) * 4 / (1024.0 * 1024.0)},
                        {"file_bytes", fs::file_size(weights_path)}};
     report["inputs"] = {{"image", image_path}, {"image_size", {img.height, img.width}}, {"object", object_path},

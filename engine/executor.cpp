@@ -5,7 +5,7 @@
 #include <climits>
 #include <cstring>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/op.h"
 #include "runtime/context.h"
 

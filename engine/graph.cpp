@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/op.h"
 
 namespace vtloc {
@@ -48,9 +48,12 @@ std::vector<int> Graph::add(const std::string& op, const std::vector<int>& input
         throw Error("node '" + label + "' (" + op + "): " + e.what());
     }
     Node n{op, label, inputs, {}, std::move(params)};
-    for (size_t i = 0; i < out_descs.size(); ++i)
-        n.outputs.push_back(new_value(label + (out_descs.size() > 1 ? ":" + std::to_string(i) : ""),
-                                      out_descs[i].shape, ValueKind::Intermediate, out_descs[i].type));
+    for (size_t i = 0; i < out_descs.size(); ++i) {
+        // Appended piecewise: `":" + std::to_string(i)` trips GCC 12's -Wrestrict false positive.
+        std::string name = label;
+        if (out_descs.size() > 1) name.append(":").append(std::to_string(i));
+        n.outputs.push_back(new_value(name, out_descs[i].shape, ValueKind::Intermediate, out_descs[i].type));
+    }
     nodes_.push_back(std::move(n));
     return nodes_.back().outputs;
 }

@@ -1,6 +1,6 @@
 #include "engine/weights.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/safetensors.h"
 
 namespace vtloc {

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <utility>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/pipeline.h"
 
 namespace vtloc::rt {

@@ -3,12 +3,13 @@
 #include <string>
 #include <utility>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/context.h"
 
 namespace vtloc::rt {
 
-Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) : device_(ctx.device()) {
+Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) {
+    VkDevice dev = ctx.device();
     size_ = size < 16 ? 16 : size;  // zero-sized buffers are invalid; keep bindings legal
     VkBufferCreateInfo bi{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO};
     bi.size = size_;
@@ -16,10 +17,10 @@ Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) : device_(ctx.d
     if (kind == MemoryKind::Device)
         bi.usage |= VK_BUFFER_USAGE_STORAGE_BUFFER_BIT | VK_BUFFER_USAGE_UNIFORM_TEXEL_BUFFER_BIT;
     bi.sharingMode = VK_SHARING_MODE_EXCLUSIVE;
-    check_vk(vkCreateBuffer(device_, &bi, nullptr, &buffer_), "vkCreateBuffer");
+    check_vk(vkCreateBuffer(dev, &bi, nullptr, buffer_.out(dev)), "vkCreateBuffer");
 
     VkMemoryRequirements req;
-    vkGetBufferMemoryRequirements(device_, buffer_, &req);
+    vkGetBufferMemoryRequirements(dev, buffer_.get(), &req);
     VkMemoryPropertyFlags required =
         kind == MemoryKind::Staging
             ? VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT
@@ -29,43 +30,14 @@ Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) : device_(ctx.d
                                     : VK_MEMORY_PROPERTY_DEVICE_LOCAL_BIT;
     VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
-    try {
-        ai.memoryTypeIndex = ctx.memory_type(req.memoryTypeBits, required, preferred);
-        VkResult r = vkAllocateMemory(device_, &ai, nullptr, &memory_);
-        if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
-            throw Error("out of memory allocating a " + std::to_string(size_ >> 20) +
-                        " MiB Vulkan buffer");
-        check_vk(r, "vkAllocateMemory");
-        check_vk(vkBindBufferMemory(device_, buffer_, memory_, 0), "vkBindBufferMemory");
-        if (kind == MemoryKind::Staging)
-            check_vk(vkMapMemory(device_, memory_, 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
-    } catch (...) {
-        release();
-        throw;
-    }
-}
-
-Buffer::~Buffer() { release(); }
-
-Buffer& Buffer::operator=(Buffer&& o) noexcept {
-    if (this != &o) {
-        release();
-        device_ = std::exchange(o.device_, VK_NULL_HANDLE);
-        buffer_ = std::exchange(o.buffer_, VK_NULL_HANDLE);
-        memory_ = std::exchange(o.memory_, VK_NULL_HANDLE);
-        size_ = std::exchange(o.size_, 0);
-        mapped_ = std::exchange(o.mapped_, nullptr);
-    }
-    return *this;
-}
-
-void Buffer::release() {
-    if (!device_) return;
-    if (buffer_) vkDestroyBuffer(device_, buffer_, nullptr);
-    if (memory_) vkFreeMemory(device_, memory_, nullptr);  // unmaps implicitly
-    buffer_ = VK_NULL_HANDLE;
-    memory_ = VK_NULL_HANDLE;
-    mapped_ = nullptr;
+    ai.memoryTypeIndex = ctx.memory_type(req.memoryTypeBits, required, preferred);
+    VkResult r = vkAllocateMemory(dev, &ai, nullptr, memory_.out(dev));
+    if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
+        throw Error("out of memory allocating a " + std::to_string(size_ >> 20) + " MiB Vulkan buffer");
+    check_vk(r, "vkAllocateMemory");
+    check_vk(vkBindBufferMemory(dev, buffer_.get(), memory_.get(), 0), "vkBindBufferMemory");
+    if (kind == MemoryKind::Staging)
+        check_vk(vkMapMemory(dev, memory_.get(), 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
 }
 
 ChunkedBuffers::Slot ChunkedBuffers::reserve(VkDeviceSize size) {

@@ -4,6 +4,10 @@
 // weights buffers, so a run allocates nothing.
 #include <vulkan/vulkan.h>
 
+#include <utility>
+
+#include "runtime/handle.h"
+
 #include <cstdint>
 #include <vector>
 
@@ -20,22 +24,25 @@ class Buffer {
 public:
     Buffer() = default;
     Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind);
-    ~Buffer();
     Buffer(Buffer&& o) noexcept { *this = std::move(o); }
-    Buffer& operator=(Buffer&& o) noexcept;
-    Buffer(const Buffer&) = delete;
-    Buffer& operator=(const Buffer&) = delete;
+    Buffer& operator=(Buffer&& o) noexcept {
+        buffer_ = std::move(o.buffer_);  // the buffer goes before its memory
+        memory_ = std::move(o.memory_);
+        size_ = std::exchange(o.size_, 0);
+        mapped_ = std::exchange(o.mapped_, nullptr);
+        return *this;
+    }
 
-    VkBuffer handle() const { return buffer_; }
+    VkBuffer handle() const { return buffer_.get(); }
     VkDeviceSize size() const { return size_; }
     // Non-null for staging buffers (persistently mapped).
     void* mapped() const { return mapped_; }
 
 private:
-    void release();
-    VkDevice device_ = VK_NULL_HANDLE;
-    VkBuffer buffer_ = VK_NULL_HANDLE;
-    VkDeviceMemory memory_ = VK_NULL_HANDLE;
+    // The memory outlives the buffer bound to it (members go in reverse order);
+    // freeing it unmaps it.
+    MemoryHandle memory_;
+    BufferHandle buffer_;
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
 };

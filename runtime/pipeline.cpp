@@ -3,24 +3,41 @@
 #include <bit>
 #include <tuple>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/context.h"
-#include "runtime/shader_registry.h"
+#include "runtime/spirv_reflect.h"
+#include "shaders/shader_registry.h"
 
 namespace vtloc::rt {
+
+namespace {
+
+// The op's description of the bindings and push constants must be the shader's.
+// The op may bind a buffer the shader does not declare (a variant that does not
+// read it: the layout just has an unused slot), never the reverse.
+void check_interface(const PipelineDesc& desc, const ShaderInterface& iface) {
+    const std::string what = "shader '" + desc.shader + "'";
+    if (iface.bindings.size() > desc.bindings)
+        throw Error(what + " declares " + std::to_string(iface.bindings.size()) + " bindings; the op passes " +
+                    std::to_string(desc.bindings));
+    for (uint32_t i = 0; i < iface.bindings.size(); ++i) {
+        const BindingKind want = (desc.texel_bindings >> i) & 1 ? BindingKind::TexelBuffer : BindingKind::StorageBuffer;
+        if (iface.bindings[i] != want && iface.bindings[i] != BindingKind::Other)
+            throw Error(what + ": binding " + std::to_string(i) + " is " +
+                        (iface.bindings[i] == BindingKind::TexelBuffer ? "a texel buffer" : "a storage buffer") +
+                        " in the shader, but the op binds " +
+                        (want == BindingKind::TexelBuffer ? "a texel buffer" : "a storage buffer"));
+    }
+    if (iface.push_bytes != desc.push_bytes)
+        throw Error(what + " declares " + std::to_string(iface.push_bytes) + " bytes of push constants; the op pushes " +
+                    std::to_string(desc.push_bytes));
+}
+
+}  // namespace
 
 bool PipelineDesc::operator<(const PipelineDesc& o) const {
     return std::tie(shader, bindings, push_bytes, spec, texel_bindings) <
            std::tie(o.shader, o.bindings, o.push_bytes, o.spec, o.texel_bindings);
-}
-
-PipelineCache::~PipelineCache() {
-    VkDevice dev = ctx_.device();
-    for (auto& [desc, p] : pipelines_) {
-        vkDestroyPipeline(dev, p->pipeline, nullptr);
-        vkDestroyPipelineLayout(dev, p->layout, nullptr);
-        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
-    }
 }
 
 size_t PipelineCache::size() const {
@@ -52,6 +69,7 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     if (lx == 0 || lx > info.max_workgroup_size[0] || lx > info.max_invocations)
         throw Error("shader '" + desc.shader + "': workgroup size " + std::to_string(lx) +
                     " is outside the device's limits");
+    check_interface(desc, reflect_spirv(spirv, desc.shader));
 
     VkDevice dev = ctx_.device();
     auto p = std::make_unique<Pipeline>();
@@ -69,31 +87,21 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     VkDescriptorSetLayoutCreateInfo dl{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_LAYOUT_CREATE_INFO};
     dl.bindingCount = desc.bindings;
     dl.pBindings = binds.data();
-    check_vk(vkCreateDescriptorSetLayout(dev, &dl, nullptr, &p->set_layout),
-             "vkCreateDescriptorSetLayout");
+    check_vk(vkCreateDescriptorSetLayout(dev, &dl, nullptr, p->set_layout.out(dev)), "vkCreateDescriptorSetLayout");
 
     VkPushConstantRange pc{VK_SHADER_STAGE_COMPUTE_BIT, 0, desc.push_bytes};
     VkPipelineLayoutCreateInfo pl{VK_STRUCTURE_TYPE_PIPELINE_LAYOUT_CREATE_INFO};
     pl.setLayoutCount = 1;
-    pl.pSetLayouts = &p->set_layout;
+    pl.pSetLayouts = p->set_layout.ptr();
     pl.pushConstantRangeCount = desc.push_bytes ? 1 : 0;
     pl.pPushConstantRanges = &pc;
-    VkResult r = vkCreatePipelineLayout(dev, &pl, nullptr, &p->layout);
-    if (r != VK_SUCCESS) {
-        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
-        check_vk(r, "vkCreatePipelineLayout");
-    }
+    check_vk(vkCreatePipelineLayout(dev, &pl, nullptr, p->layout.out(dev)), "vkCreatePipelineLayout");
 
     VkShaderModuleCreateInfo sm{VK_STRUCTURE_TYPE_SHADER_MODULE_CREATE_INFO};
     sm.codeSize = spirv.size() * sizeof(uint32_t);
     sm.pCode = spirv.data();
-    VkShaderModule module = VK_NULL_HANDLE;
-    r = vkCreateShaderModule(dev, &sm, nullptr, &module);
-    if (r != VK_SUCCESS) {
-        vkDestroyPipelineLayout(dev, p->layout, nullptr);
-        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
-        check_vk(r, "vkCreateShaderModule");
-    }
+    ShaderModuleHandle module;
+    check_vk(vkCreateShaderModule(dev, &sm, nullptr, module.out(dev)), "vkCreateShaderModule");
 
     std::vector<VkSpecializationMapEntry> entries(desc.spec.size());
     for (uint32_t i = 0; i < desc.spec.size(); ++i)
@@ -107,17 +115,12 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     VkComputePipelineCreateInfo ci{VK_STRUCTURE_TYPE_COMPUTE_PIPELINE_CREATE_INFO};
     ci.stage = {VK_STRUCTURE_TYPE_PIPELINE_SHADER_STAGE_CREATE_INFO};
     ci.stage.stage = VK_SHADER_STAGE_COMPUTE_BIT;
-    ci.stage.module = module;
+    ci.stage.module = module.get();
     ci.stage.pName = "main";
     ci.stage.pSpecializationInfo = desc.spec.empty() ? nullptr : &si;
-    ci.layout = p->layout;
-    r = vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, &p->pipeline);
-    vkDestroyShaderModule(dev, module, nullptr);
-    if (r != VK_SUCCESS) {
-        vkDestroyPipelineLayout(dev, p->layout, nullptr);
-        vkDestroyDescriptorSetLayout(dev, p->set_layout, nullptr);
-        check_vk(r, ("vkCreateComputePipelines for shader " + desc.shader).c_str());
-    }
+    ci.layout = p->layout.get();
+    check_vk(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, p->pipeline.out(dev)),
+             ("vkCreateComputePipelines for shader " + desc.shader).c_str());
     return *(pipelines_[desc] = std::move(p));
 }
 

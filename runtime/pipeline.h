@@ -14,6 +14,8 @@
 #include <string>
 #include <vector>
 
+#include "runtime/handle.h"
+
 namespace vtloc::rt {
 
 class Context;
@@ -32,9 +34,10 @@ struct PipelineDesc {
 };
 
 struct Pipeline {
-    VkPipeline pipeline = VK_NULL_HANDLE;
-    VkPipelineLayout layout = VK_NULL_HANDLE;
-    VkDescriptorSetLayout set_layout = VK_NULL_HANDLE;
+    // Declared in creation order; destroyed in reverse.
+    SetLayoutHandle set_layout;
+    PipelineLayoutHandle layout;
+    PipelineHandle pipeline;
     PipelineDesc desc;
     uint32_t local_size_x() const { return desc.spec.empty() ? 1 : desc.spec[0]; }
 };
@@ -42,7 +45,6 @@ struct Pipeline {
 class PipelineCache {
 public:
     explicit PipelineCache(Context& ctx) : ctx_(ctx) {}
-    ~PipelineCache();
     PipelineCache(const PipelineCache&) = delete;
     PipelineCache& operator=(const PipelineCache&) = delete;
 

@@ -1,6 +1,6 @@
 #include "runtime/sequence.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/context.h"
 #include "runtime/pipeline.h"
 
@@ -18,28 +18,17 @@ Sequence::Sequence(Context& ctx, bool profile) : ctx_(ctx), profile_(profile) {
     VkCommandPoolCreateInfo pi{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO};
     pi.flags = VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT;
     pi.queueFamilyIndex = ctx_.queue_family();
-    check_vk(vkCreateCommandPool(ctx_.device(), &pi, nullptr, &pool_), "vkCreateCommandPool");
+    check_vk(vkCreateCommandPool(ctx_.device(), &pi, nullptr, pool_.out(ctx_.device())), "vkCreateCommandPool");
     VkCommandBufferAllocateInfo ai{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO};
-    ai.commandPool = pool_;
+    ai.commandPool = pool_.get();
     ai.level = VK_COMMAND_BUFFER_LEVEL_PRIMARY;
     ai.commandBufferCount = 1;
     VkFenceCreateInfo fi{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO};
-    VkResult r = vkAllocateCommandBuffers(ctx_.device(), &ai, &cmd_);
-    if (r == VK_SUCCESS) r = vkCreateFence(ctx_.device(), &fi, nullptr, &fence_);
-    if (r != VK_SUCCESS) {
-        vkDestroyCommandPool(ctx_.device(), pool_, nullptr);
-        check_vk(r, "Sequence setup");
-    }
+    check_vk(vkAllocateCommandBuffers(ctx_.device(), &ai, &cmd_), "vkAllocateCommandBuffers");
+    check_vk(vkCreateFence(ctx_.device(), &fi, nullptr, fence_.out(ctx_.device())), "vkCreateFence");
 }
 
-Sequence::~Sequence() {
-    VkDevice dev = ctx_.device();
-    for (auto p : query_pools_) vkDestroyQueryPool(dev, p, nullptr);
-    for (auto p : descriptor_pools_) vkDestroyDescriptorPool(dev, p, nullptr);
-    for (auto v : texel_views_) vkDestroyBufferView(dev, v, nullptr);
-    if (fence_) vkDestroyFence(dev, fence_, nullptr);
-    if (pool_) vkDestroyCommandPool(dev, pool_, nullptr);
-}
+Sequence::~Sequence() = default;
 
 void Sequence::check_recording(const char* what) const {
     if (!recording_) throw Error(std::string("Sequence::") + what + " outside begin()/end()");
@@ -47,9 +36,8 @@ void Sequence::check_recording(const char* what) const {
 
 void Sequence::begin() {
     check_vk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
-    for (auto p : descriptor_pools_) vkResetDescriptorPool(ctx_.device(), p, 0);
+    for (auto& p : descriptor_pools_) vkResetDescriptorPool(ctx_.device(), p.get(), 0);
     pools_used_ = 0;
-    for (auto v : texel_views_) vkDestroyBufferView(ctx_.device(), v, nullptr);
     texel_views_.clear();
     VkCommandBufferBeginInfo bi{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO};
     check_vk(vkBeginCommandBuffer(cmd_, &bi), "vkBeginCommandBuffer");
@@ -124,7 +112,7 @@ void Sequence::copy(const BufferView& src, const BufferView& dst) {
 VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
     VkDescriptorSetAllocateInfo ai{VK_STRUCTURE_TYPE_DESCRIPTOR_SET_ALLOCATE_INFO};
     ai.descriptorSetCount = 1;
-    ai.pSetLayouts = &p.set_layout;
+    ai.pSetLayouts = p.set_layout.ptr();
     VkDescriptorSet set = VK_NULL_HANDLE;
     while (true) {
         if (pools_used_ == descriptor_pools_.size()) {
@@ -135,12 +123,12 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
             pi.maxSets = kSetsPerPool;
             pi.poolSizeCount = 2;
             pi.pPoolSizes = sizes;
-            VkDescriptorPool pool;
-            check_vk(vkCreateDescriptorPool(ctx_.device(), &pi, nullptr, &pool),
+            DescriptorPoolHandle pool;
+            check_vk(vkCreateDescriptorPool(ctx_.device(), &pi, nullptr, pool.out(ctx_.device())),
                      "vkCreateDescriptorPool");
-            descriptor_pools_.push_back(pool);
+            descriptor_pools_.push_back(std::move(pool));
         }
-        ai.descriptorPool = descriptor_pools_[pools_used_];
+        ai.descriptorPool = descriptor_pools_[pools_used_].get();
         VkResult r = vkAllocateDescriptorSets(ctx_.device(), &ai, &set);
         if (r == VK_SUCCESS) return set;
         if (r != VK_ERROR_OUT_OF_POOL_MEMORY && r != VK_ERROR_FRAGMENTED_POOL)
@@ -169,10 +157,10 @@ VkBufferView Sequence::texel_view(const Pipeline& p, uint32_t index, const Bindi
     vi.format = b.texel_format;
     vi.offset = b.view.offset;
     vi.range = range;
-    VkBufferView view = VK_NULL_HANDLE;
-    check_vk(vkCreateBufferView(ctx_.device(), &vi, nullptr, &view), "vkCreateBufferView");
-    texel_views_.push_back(view);
-    return view;
+    BufferViewHandle view;
+    check_vk(vkCreateBufferView(ctx_.device(), &vi, nullptr, view.out(ctx_.device())), "vkCreateBufferView");
+    texel_views_.push_back(std::move(view));
+    return texel_views_.back().get();
 }
 
 void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
@@ -223,10 +211,10 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
     vkUpdateDescriptorSets(ctx_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
     track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
 
-    vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline);
-    vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout, 0, 1, &set, 0, nullptr);
+    vkCmdBindPipeline(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.pipeline.get());
+    vkCmdBindDescriptorSets(cmd_, VK_PIPELINE_BIND_POINT_COMPUTE, p.layout.get(), 0, 1, &set, 0, nullptr);
     if (push_bytes)
-        vkCmdPushConstants(cmd_, p.layout, VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
+        vkCmdPushConstants(cmd_, p.layout.get(), VK_SHADER_STAGE_COMPUTE_BIT, 0, push_bytes, push);
     vkCmdDispatch(cmd_, gx, gy, gz);
     ++dispatches_;
     dispatch_log_.push_back({in_node_ ? current_node_ : std::string(), p.desc.shader, p.desc.spec,
@@ -239,13 +227,13 @@ void Sequence::timestamp() {
         VkQueryPoolCreateInfo qi{VK_STRUCTURE_TYPE_QUERY_POOL_CREATE_INFO};
         qi.queryType = VK_QUERY_TYPE_TIMESTAMP;
         qi.queryCount = kQueriesPerPool;
-        VkQueryPool qp;
-        check_vk(vkCreateQueryPool(ctx_.device(), &qi, nullptr, &qp), "vkCreateQueryPool");
-        query_pools_.push_back(qp);
+        QueryPoolHandle qp;
+        check_vk(vkCreateQueryPool(ctx_.device(), &qi, nullptr, qp.out(ctx_.device())), "vkCreateQueryPool");
+        query_pools_.push_back(std::move(qp));
     }
     uint32_t q = queries_used_ % kQueriesPerPool;
-    if (q == 0) vkCmdResetQueryPool(cmd_, query_pools_[pool_index], 0, kQueriesPerPool);
-    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, query_pools_[pool_index], q);
+    if (q == 0) vkCmdResetQueryPool(cmd_, query_pools_[pool_index].get(), 0, kQueriesPerPool);
+    vkCmdWriteTimestamp(cmd_, VK_PIPELINE_STAGE_BOTTOM_OF_PIPE_BIT, query_pools_[pool_index].get(), q);
     ++queries_used_;
 }
 
@@ -279,9 +267,9 @@ void Sequence::submit_and_wait() {
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd_;
-    check_vk(vkResetFences(ctx_.device(), 1, &fence_), "vkResetFences");
-    check_vk(vkQueueSubmit(ctx_.queue(), 1, &si, fence_), "vkQueueSubmit");
-    VkResult r = vkWaitForFences(ctx_.device(), 1, &fence_, VK_TRUE, kSubmitTimeoutNs);
+    check_vk(vkResetFences(ctx_.device(), 1, fence_.ptr()), "vkResetFences");
+    check_vk(vkQueueSubmit(ctx_.queue(), 1, &si, fence_.get()), "vkQueueSubmit");
+    VkResult r = vkWaitForFences(ctx_.device(), 1, fence_.ptr(), VK_TRUE, kSubmitTimeoutNs);
     if (r == VK_TIMEOUT) throw Error("GPU work did not finish within 10 minutes");
     check_vk(r, "vkWaitForFences");
 }
@@ -292,7 +280,7 @@ std::vector<Sequence::NodeTime> Sequence::node_times() const {
     std::vector<uint64_t> ticks(queries_used_);
     for (size_t p = 0; p * kQueriesPerPool < queries_used_; ++p) {
         uint32_t n = std::min<uint32_t>(kQueriesPerPool, queries_used_ - uint32_t(p) * kQueriesPerPool);
-        check_vk(vkGetQueryPoolResults(ctx_.device(), query_pools_[p], 0, n, n * sizeof(uint64_t),
+        check_vk(vkGetQueryPoolResults(ctx_.device(), query_pools_[p].get(), 0, n, n * sizeof(uint64_t),
                                        ticks.data() + p * kQueriesPerPool, sizeof(uint64_t),
                                        VK_QUERY_RESULT_64_BIT | VK_QUERY_RESULT_WAIT_BIT),
                  "vkGetQueryPoolResults");

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "runtime/handle.h"
 #include "runtime/memory.h"
 
 namespace vtloc::rt {
@@ -86,11 +87,11 @@ private:
     bool profile_;
     bool recording_ = false;
     bool ended_ = false;
-    VkCommandPool pool_ = VK_NULL_HANDLE;
+    CommandPoolHandle pool_;
     VkCommandBuffer cmd_ = VK_NULL_HANDLE;
-    VkFence fence_ = VK_NULL_HANDLE;
-    std::vector<VkDescriptorPool> descriptor_pools_;
-    std::vector<VkBufferView> texel_views_;  // live until the next begin()
+    FenceHandle fence_;
+    std::vector<DescriptorPoolHandle> descriptor_pools_;
+    std::vector<BufferViewHandle> texel_views_;  // live until the next begin()
     size_t pools_used_ = 0;
 
     // Hazard tracking: what commands since the last barrier read and wrote.
@@ -102,7 +103,7 @@ private:
 
     // Profiling: two timestamps per node, in pools of kQueriesPerPool.
     static constexpr uint32_t kQueriesPerPool = 512;
-    std::vector<VkQueryPool> query_pools_;
+    std::vector<QueryPoolHandle> query_pools_;
     uint32_t queries_used_ = 0;
     std::vector<std::string> node_labels_;
     bool in_node_ = false;

@@ -17,7 +17,7 @@
 
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
-#include "engine/model/object_frame.h"
+#include "engine/ops/object_frame.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
 
@@ -50,9 +50,9 @@ void check_back_half(const std::string& dir, const std::string& name, uint64_t s
     WeightStore w = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
     test::Golden gold(test::require_golden_file(dir, name + ".golden.safetensors"));
     if (split_bytes) REQUIRE(split_weight_rows(w, "gma.weight", split_bytes).size() > 1);
-    const nlohmann::json& cfg = w.config();
-    const int64_t C = cfg.at("C").get<int64_t>();
-    const int iters = cfg.at("ilu").at("iters").get<int>(), K = cfg.at("K").get<int>();
+    const ModelConfig cfg = config_of(w);
+    const int64_t C = cfg.C;
+    const int iters = cfg.ilu_iters, K = int(cfg.K);
     HostTensor cloud = gold.f32("point.cloud"), cand_raw = gold.f32("input.candidates");
     HostTensor cand = normalise_candidates(gold.f32("input.cloud"), cand_raw);
     // Candidates are the cloud's points here: normalised, they must be point.cloud's xyz bit for bit.

@@ -3,7 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/batchnorm_fold.h"
 #include "tests/harness.h"
 

@@ -6,7 +6,7 @@
 // ~2e-5 on log beliefs of magnitude ~100, M = 1000, T = 5).
 #include <catch2/catch.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "tests/harness.h"
 
 using namespace vtloc;

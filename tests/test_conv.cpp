@@ -7,7 +7,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/conv2d.h"
 #include "tests/harness.h"
@@ -144,7 +144,7 @@ TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
                         Catch::Contains("residual [1, 4, 7, 7] does not match the output [1, 4, 6, 6]"));
 }
 
-TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool]") {
+TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool][max_pool2d]") {
     struct Case { Shape x; Params p; };
     for (const Case& c : {Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}}},
                           Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}, {"texel", 0}}},
@@ -162,7 +162,7 @@ TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool]") {
     REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}), Catch::Contains("needs a kernel size"));
 }
 
-TEST_CASE("global_avg_pool matches the CPU reference", "[op][pool]") {
+TEST_CASE("global_avg_pool matches the CPU reference", "[op][pool][global_avg_pool]") {
     for (const Shape& s : {Shape{1, 7, 5, 3}, Shape{2, 33, 7, 7}, Shape{1, 3, 56, 57}}) {
         Graph g;
         g.output(g.add1("global_avg_pool", {g.input("x", s)}), "y");

@@ -4,7 +4,7 @@
 // in fp32; measured max errors are ~1e-6 relative, see the report).
 #include <catch2/catch.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/gma.h"
 #include "engine/ops/common.h"
 #include "tests/harness.h"

@@ -2,7 +2,7 @@
 // writes, run on lavapipe and on the CPU references, with memory reuse.
 #include <catch2/catch.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/safetensors.h"
 #include "tests/harness.h"

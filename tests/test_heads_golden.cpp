@@ -21,7 +21,7 @@ struct HeadsCase {
 HeadsCase load_case(const std::string& name) {
     WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), name + ".safetensors"));
     test::Golden gold(test::require_golden_file(test::goldens_dir(), name + ".golden.safetensors"));
-    int64_t C = w.config().at("C").get<int64_t>();
+    int64_t C = config_of(w).C;
     HostTensor ft = gold.f32("tactile.feature"), fp = gold.f32("point.feature");
     REQUIRE(ft.shape == Shape{C});
     ft.shape = fp.shape = {1, C};
@@ -32,8 +32,9 @@ HeadsCase load_case(const std::string& name) {
 
 TEST_CASE("ILU iterations match the PyTorch golden (vtloc-tiny)", "[heads][golden]") {
     HeadsCase hc = load_case("vtloc-tiny");
-    int64_t C = hc.weights.config().at("C").get<int64_t>();
-    int iters = hc.weights.config().at("ilu").at("iters").get<int>();
+    const ModelConfig cfg = config_of(hc.weights);
+    int64_t C = cfg.C;
+    int iters = cfg.ilu_iters;
     REQUIRE(hc.golden.shape("ilu.c") == Shape{iters, 3});
     Graph& g = hc.graph;
     IluOutputs ilu = build_ilu(g, hc.weights, g.input("ft", {1, C}), g.input("fp", {1, C}),
@@ -56,9 +57,9 @@ TEST_CASE("ILU iteration count is bounded", "[heads]") {
 
 TEST_CASE("MCR head matches the PyTorch golden (vtloc-mcr-tiny)", "[heads][golden]") {
     HeadsCase hc = load_case("vtloc-mcr-tiny");
-    int64_t C = hc.weights.config().at("C").get<int64_t>();
+    int64_t C = config_of(hc.weights).C;
     Graph& g = hc.graph;
-    g.output(build_mcr(g, hc.weights, hc.weights.config(), g.input("ft", {1, C}), g.input("fp", {1, C})), "c");
+    g.output(build_mcr(g, hc.weights, config_of(hc.weights), g.input("ft", {1, C}), g.input("fp", {1, C})), "c");
     TensorMap out = test::run_gpu_and_compare(g, hc.weights, hc.inputs);
     hc.golden.compare("contact", HostTensor({3}, out.at("c").data));
 }

@@ -4,7 +4,7 @@
 // computed in fp32, measured max error ~1e-6 (see the report).
 #include <catch2/catch.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/heads.h"
 #include "tests/harness.h"
 
@@ -121,7 +121,7 @@ TEST_CASE("ilu rejects bad shapes and iteration counts", "[op][ilu]") {
     REQUIRE_THROWS_WITH(run_cpu(ig.g, w, ig.inputs), Catch::Contains("outside 0..4"));
 }
 
-TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and the fused ilu", "[op][ilu]") {
+TEST_CASE("ilu_step (one dispatch per iteration) matches its CPU reference and the fused ilu", "[op][ilu][ilu_step]") {
     // Stepped and fused differ only in where fp32 rounding happens (the CPU
     // stepped reference rounds h, gx and c to fp32 between steps like the
     // shader), so they are compared with the default tolerance too.

@@ -13,7 +13,7 @@
 #include <cmath>
 #include <random>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/normals.h"
 #include "engine/ops/point_grid.h"
 #include "tests/harness.h"
@@ -118,7 +118,7 @@ test::BothRuns run_op(const HostTensor& xyz, int k, int orient, std::array<doubl
 
 }  // namespace
 
-TEST_CASE("normal_estimate matches its CPU reference on odd clouds", "[op][normals]") {
+TEST_CASE("normal_estimate matches its CPU reference on odd clouds", "[op][normals][normal_estimate]") {
     struct Case {
         const char* name;
         Sample s;

@@ -2,10 +2,12 @@
 // shapes with fixed seeds. Tolerance: the fp32 default 1e-4 + 1e-4*|ref|; the
 // CPU GEMM accumulates in double, so this bounds the shader's fp32 rounding.
 #include <catch2/catch.hpp>
+#include <set>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/gemm_tiles.h"
+#include "engine/op.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -74,7 +76,7 @@ TEST_CASE("linear tiles fit the device and its subgroups", "[op][linear]") {
     CHECK(t.shared_bytes() <= 1024);
 }
 
-TEST_CASE("activations match the CPU reference", "[op][activation]") {
+TEST_CASE("activations match the CPU reference", "[op][activation][relu][leaky_relu][tanh][sigmoid]") {
     for (const char* op : {"relu", "leaky_relu", "tanh", "sigmoid"}) {
         check_unary(op, {1, 37}, 20, 3.0f);
         check_unary(op, {5, 127, 33}, 21, 3.0f);
@@ -82,7 +84,7 @@ TEST_CASE("activations match the CPU reference", "[op][activation]") {
     }
 }
 
-TEST_CASE("add, sub and mul match the CPU reference, with suffix broadcasting", "[op][binary]") {
+TEST_CASE("add, sub and mul match the CPU reference, with suffix broadcasting", "[op][binary][add][sub][mul]") {
     struct Case { Shape a, b; };
     for (const char* op : {"add", "sub", "mul"})
         for (const Case& c : {Case{{1, 37}, {1, 37}}, Case{{5, 127, 33}, {5, 127, 33}},
@@ -110,7 +112,7 @@ TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]"
         TensorMap inputs;
         std::vector<int> ids;
         for (size_t i = 0; i < c.in.size(); ++i) {
-            std::string name = "x" + std::to_string(i);
+            const std::string name = std::string("x").append(std::to_string(i));  // GCC 12 -Wrestrict: no "x" + ...
             ids.push_back(g.input(name, c.in[i]));
             inputs[name] = random_tensor(c.in[i], 40 + uint32_t(i));
         }
@@ -123,6 +125,30 @@ TEST_CASE("concat rejects mismatched leading dimensions", "[op][concat]") {
     Graph g;
     int a = g.input("a", {5, 7}), b = g.input("b", {4, 7});
     REQUIRE_THROWS_WITH(g.add1("concat", {a, b}), Catch::Contains("differ outside the last axis"));
+}
+
+TEST_CASE("flatten keeps the bytes and joins the trailing axes", "[op][flatten]") {
+    for (const Shape& s : {Shape{3, 5, 7, 9}, Shape{1, 1}, Shape{17}, Shape{2, 300, 1, 3}}) {
+        Graph g;
+        const int y = g.add1("flatten", {g.input("x", s)});
+        INFO(shape_str(s));
+        CHECK(g.value(y).shape == Shape{s[0], numel(s) / s[0]});
+        g.output(y, "y");
+        run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(s, 61)}});
+    }
+}
+
+TEST_CASE("every registered op has an [op] test tagged with its name", "[op][registry]") {
+    std::set<std::string> tagged;
+    for (const Catch::TestCase& t : Catch::getRegistryHub().getTestCaseRegistry().getAllTests()) {
+        const auto& tags = t.getTestCaseInfo().tags;
+        if (std::find(tags.begin(), tags.end(), "op") == tags.end()) continue;
+        tagged.insert(tags.begin(), tags.end());
+    }
+    for (std::string_view op : op_names()) {
+        INFO("op '" << op << "': add an [op][" << op << "] GPU-vs-CPU test");
+        CHECK(tagged.count(std::string(op)) == 1);
+    }
 }
 
 TEST_CASE("linear reports mismatched shapes with the node's name", "[op][linear]") {

@@ -8,7 +8,7 @@
 
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/point_encoder.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
@@ -29,7 +29,7 @@ Result run_golden(const std::string& dir, const std::string& name, bool fuse, bo
     test::Golden gold(test::require_golden_file(dir, name + ".golden.safetensors"));
     HostTensor cloud = gold.f32("point.cloud");
     Graph g;
-    PointEncoderOutputs p = build_point_encoder(g, w, w.config(), g.input("point.cloud", cloud.shape), {fuse});
+    PointEncoderOutputs p = build_point_encoder(g, w, config_of(w), g.input("point.cloud", cloud.shape), {fuse});
     for (auto& [n, id] : p.indices) g.output(id, n);
     g.output(p.feature, "point.feature");
     TensorMap in{{"point.cloud", cloud}};
@@ -78,7 +78,7 @@ TEST_CASE("point encoder matches the PyTorch golden (vtloc-r18, paper config)", 
 
 TEST_CASE("point encoder rejects bad clouds and configs", "[point]") {
     WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
-    const nlohmann::json& cfg = w.config();  // normals, sa1 samples 32 points
+    const ModelConfig cfg = config_of(w);  // normals, sa1 samples 32 points
     auto build_error = [&](Shape s) {
         Graph g;
         try {
@@ -104,12 +104,10 @@ TEST_CASE("point encoder rejects bad clouds and configs", "[point]") {
     CHECK_THROWS_WITH(check_point_cloud(test::random_tensor({40, 3}, 3), cfg), Catch::Contains("[N, 6]"));
     CHECK_THROWS_WITH(check_point_cloud(HostTensor({0, 6}), cfg), Catch::Contains("empty"));
 
-    nlohmann::json bad = cfg;
+    nlohmann::json bad = w.config();
     bad["point"]["sa"][0]["radii"] = {0.3, 0.5};
-    Graph g;
-    int x = g.input("c", {100, 6});
-    CHECK_THROWS_WITH(build_point_encoder(g, w, bad, x), Catch::Contains("one entry per scale"));
-    bad = cfg;
+    CHECK_THROWS_WITH(ModelConfig::parse(bad, "t"), Catch::Contains("one radius per nsample entry"));
+    bad = w.config();
     bad["point"].erase("group_all_mlp");
-    CHECK_THROWS_WITH(build_point_encoder(g, w, bad, x), Catch::Contains("missing \"group_all_mlp\""));
+    CHECK_THROWS_WITH(ModelConfig::parse(bad, "t"), Catch::Contains("'point.group_all_mlp' is missing"));
 }

@@ -11,7 +11,7 @@
 #include <unistd.h>
 #include <random>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 #include "engine/safetensors.h"
@@ -119,7 +119,7 @@ TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", 
     check_fps_and_balls(cloud_tensor(twice), 504, {{0.5, 9}, {0.25, 3}});
 }
 
-TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the CPU reference", "[op][group_linear]") {
+TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the CPU reference", "[op][group_linear][point_group][group_max]") {
     for (bool normals : {true, false}) {
         INFO("features " << normals);
         const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;

@@ -3,9 +3,10 @@
 #include <catch2/catch.hpp>
 #include <cstring>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
-#include "runtime/shader_registry.h"
+#include "runtime/spirv_reflect.h"
+#include "shaders/shader_registry.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -53,6 +54,42 @@ TEST_CASE("every shader is embedded and unknown ones are reported", "[runtime]")
     }
     REQUIRE_THROWS_WITH(ops::pipeline(test::gpu(), "not_a_shader", 1, 0, {64}),
                         Catch::Contains("no embedded shader named 'not_a_shader'"));
+}
+
+TEST_CASE("pipelines are checked against the shader's own bindings and push constants", "[runtime]") {
+    // Every embedded shader reflects: set 0 only, a push block of known layout.
+    for (const std::string& n : rt::embedded_shader_names()) {
+        INFO(n);
+        const rt::ShaderInterface s = rt::reflect_spirv(rt::find_spirv(n), n);
+        REQUIRE(!s.bindings.empty());
+        CHECK(s.bindings.back() != rt::BindingKind::Other);
+        CHECK(s.push_bytes % 4 == 0);
+    }
+    // The storage-buffer variant of conv2d leaves the vec4 views (6, 8) undeclared.
+    const rt::ShaderInterface ssbo = rt::reflect_spirv(rt::find_spirv("conv2d_ssbo"), "conv2d_ssbo");
+    REQUIRE(ssbo.bindings.size() == 8);
+    CHECK(ssbo.bindings[6] == rt::BindingKind::Other);
+    CHECK(ssbo.bindings[5] == rt::BindingKind::StorageBuffer);
+    // conv2d reads through texel buffers except its output (5) and workspace (7).
+    const rt::ShaderInterface conv = rt::reflect_spirv(rt::find_spirv("conv2d"), "conv2d");
+    REQUIRE(conv.bindings.size() == 9);
+    for (uint32_t i = 0; i < 9; ++i)
+        CHECK((conv.bindings[i] == rt::BindingKind::TexelBuffer) == (i != 5 && i != 7));
+    // activation: x, y and a push block (n, slope).
+    const rt::ShaderInterface act = rt::reflect_spirv(rt::find_spirv("activation"), "activation");
+    CHECK(act.bindings.size() == 2);
+    CHECK(act.push_bytes == 8);
+    // A description that disagrees with the shader is refused by name.
+    rt::Context& ctx = test::gpu();
+    REQUIRE_THROWS_WITH(ops::pipeline(ctx, "activation", 1, 8, {32, ops::kActRelu}),
+                        Catch::Contains("shader 'activation' declares 2 bindings; the op passes 1"));
+    REQUIRE_THROWS_WITH(ctx.pipelines().get(rt::PipelineDesc{"activation", 2, 8, {32, ops::kActRelu}, 0b01}),
+                        Catch::Contains("binding 0 is a storage buffer in the shader, but the op binds a texel buffer"));
+    REQUIRE_THROWS_WITH(ops::pipeline(ctx, "activation", 2, 16, {32, ops::kActRelu}),
+                        Catch::Contains("declares 8 bytes of push constants; the op pushes 16"));
+    REQUIRE_THROWS_WITH(rt::reflect_spirv(std::vector<uint32_t>{1, 2, 3, 4, 5, 6}, "junk"),
+                        Catch::Contains("shader 'junk': not a SPIR-V module"));
+    test::require_no_validation_messages();
 }
 
 TEST_CASE("pipelines are cached per shader and specialization", "[runtime]") {

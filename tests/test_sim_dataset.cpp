@@ -5,7 +5,7 @@
 #include <fstream>
 #include <sstream>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/dataset_builder.h"
 #include "tests/harness.h"

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <numeric>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/safetensors.h"
 #include "engine/sim/calibration.h"
 #include "engine/sim/primitives.h"

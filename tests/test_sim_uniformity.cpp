@@ -4,7 +4,7 @@
 #include <cmath>
 #include <limits>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/mesh.h"
 #include "engine/sim/uniformity.h"
 
@@ -16,14 +16,19 @@ namespace {
 io::TriangleMesh uv_sphere(float r, int seg, int rings) {
     io::TriangleMesh m;
     const double pi = std::acos(-1.0);
-    m.positions.insert(m.positions.end(), {0, 0, r});
+    // push_back, not insert of a braced list into the empty vector: GCC 12 -Wstringop-overflow false positive.
+    auto vertex = [&](double x, double y, double z) {
+        m.positions.push_back(float(x));
+        m.positions.push_back(float(y));
+        m.positions.push_back(float(z));
+    };
+    vertex(0, 0, r);
     for (int i = 1; i < rings; ++i)
         for (int j = 0; j < seg; ++j) {
             double th = pi * i / rings, ph = 2 * pi * j / seg;
-            m.positions.insert(m.positions.end(), {float(r * std::sin(th) * std::cos(ph)),
-                                                   float(r * std::sin(th) * std::sin(ph)), float(r * std::cos(th))});
+            vertex(r * std::sin(th) * std::cos(ph), r * std::sin(th) * std::sin(ph), r * std::cos(th));
         }
-    m.positions.insert(m.positions.end(), {0, 0, -r});
+    vertex(0, 0, -r);
     const uint32_t south = uint32_t(m.vertex_count() - 1);
     auto at = [&](int ring, int j) { return uint32_t(1 + (ring - 1) * seg + (j % seg)); };
     for (int j = 0; j < seg; ++j) {

@@ -14,7 +14,7 @@
 #include <catch2/catch.hpp>
 #include <set>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/tactile_encoder.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "tests/golden.h"
@@ -36,8 +36,8 @@ struct Branch {
 Branch build(WeightStore& w, int64_t h, int64_t wd) {
     Branch b;
     int img = b.graph.input("image", {h, wd, 3}, ElemType::I32);
-    b.input = add_tactile_preprocess(b.graph, w.config(), img);
-    b.feature = build_tactile_encoder(b.graph, w, w.config(), b.input);
+    b.input = add_tactile_preprocess(b.graph, config_of(w), img);
+    b.feature = build_tactile_encoder(b.graph, w, config_of(w), b.input);
     b.graph.output(b.input, "tactile.input");
     b.graph.output(b.feature, "tactile.feature");
     return b;
@@ -59,7 +59,7 @@ void check_against_golden(const std::string& dir, const std::string& name, bool 
     REQUIRE(img.shape.size() == 3);
     Branch b = build(w, img.shape[0], img.shape[1]);
     TensorMap in{{"image", ops::tactile_image_tensor(gold.file().bytes(img).data(), img.shape[0], img.shape[1])}};
-    const int64_t C = w.config().at("C").get<int64_t>();
+    const int64_t C = config_of(w).C;
 
     GpuExecutor exec(test::gpu(), b.graph, w);
     TensorMap got = exec.run(in);
@@ -97,14 +97,14 @@ TEST_CASE("the encoder fed the golden tactile.input gives the golden F^t (vtloc-
     test::Golden gold(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.golden.safetensors"));
     Graph g;
     int x = g.input("x", gold.shape("tactile.input"));
-    g.output(build_tactile_encoder(g, w, w.config(), x), "ft");
+    g.output(build_tactile_encoder(g, w, config_of(w), x), "ft");
     TensorMap out = test::run_gpu_and_compare(g, w, {{"x", gold.f32("tactile.input")}}, kFeatureTol);
     HostTensor ft = out.at("ft");
     ft.shape = {ft.size()};
     gold.compare("tactile.feature", ft, kFeatureTol);
 }
 
-TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile]") {
+TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile][golden]") {
     // The paper weight file holds exactly torchvision's resnet18 state_dict minus
     // fc under tactile.backbone. (module list written out by hand), and the graph
     // uses every one of its convolutions and BatchNorms (folded).
@@ -132,7 +132,7 @@ TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile]") {
 
     Graph g;
     int x = g.input("x", {1, 3, 224, 224});
-    build_tactile_encoder(g, w, w.config(), x);
+    build_tactile_encoder(g, w, config_of(w), x);
     std::set<std::string> used;
     for (const Value& v : g.values())
         if (v.kind == ValueKind::Weight) used.insert(v.name);
@@ -149,20 +149,20 @@ TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile]") {
 
 TEST_CASE("the tactile encoder names missing weights and bad configs", "[tactile]") {
     WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
-    nlohmann::json cfg = w.config();
+    const ModelConfig cfg = config_of(w);
     Graph g;
     int x = g.input("x", {1, 3, 40, 40});
-    nlohmann::json bad = cfg;
+    nlohmann::json bad = w.config();
     bad["tactile"]["widths"] = {8, 16, 16};
-    REQUIRE_THROWS_WITH(build_tactile_encoder(g, w, bad, x), Catch::Contains("tactile.widths"));
-    bad = cfg;
+    REQUIRE_THROWS_WITH(ModelConfig::parse(bad, "t"), Catch::Contains("tactile.widths"));
+    bad = w.config();
     bad["tactile"].erase("crop");
-    REQUIRE_THROWS_WITH(tactile_config(bad), Catch::Contains("missing \"crop\""));
+    REQUIRE_THROWS_WITH(ModelConfig::parse(bad, "t"), Catch::Contains("'tactile.crop' is missing"));
     REQUIRE_THROWS_WITH(build_tactile_encoder(g, w, cfg, g.input("y", {1, 3, 41, 41})),
                         Catch::Contains("[N, 3, 40, 40]"));
     // A weight file without one BatchNorm statistic.
     WeightStore partial;
-    partial.set_config(cfg);
+    partial.set_config(w.config());
     for (const std::string& n : w.names())
         if (n != "tactile.backbone.layer2.0.downsample.1.running_var") partial.add(n, w.get(n));
     REQUIRE_THROWS_WITH(build_tactile_encoder(g, partial, cfg, x),

@@ -12,7 +12,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "engine/io/image.h"
 #include "tests/harness.h"
@@ -76,7 +76,7 @@ TEST_CASE("centre crop offsets follow torchvision (round half to even, zero padd
     CHECK(ops::center_crop_start(120, 128) == -4);
 }
 
-TEST_CASE("tactile_preprocess matches the CPU reference at odd shapes", "[op][preprocess]") {
+TEST_CASE("tactile_preprocess matches the CPU reference at odd shapes", "[op][preprocess][tactile_preprocess]") {
     struct Case { int64_t h, w, crop, size; };
     for (const Case& c : {Case{9, 8, 16, 5},      // padded on both axes, downscale
                           Case{37, 53, 32, 32},   // cropped on both axes, no resize

@@ -4,7 +4,7 @@
 #include <catch2/catch.hpp>
 #include <cstring>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "runtime/memory.h"
 #include "runtime/pipeline.h"
 #include "runtime/sequence.h"

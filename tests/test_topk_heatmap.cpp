@@ -6,7 +6,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/post.h"
 #include "tests/run_both.h"
 

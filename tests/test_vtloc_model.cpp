@@ -9,7 +9,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/vtloc_runner.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "tests/golden.h"

@@ -6,7 +6,7 @@
 
 #include "apps/vtloc/eval.h"
 #include "apps/vtloc/report.h"
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::cli {
 

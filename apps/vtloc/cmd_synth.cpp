@@ -6,7 +6,7 @@
 #include <cstdio>
 
 #include "apps/vtloc/cli.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/dataset_builder.h"
 #include "engine/sim/reality_check.h"
 #include "engine/sim/shapes.h"

@@ -3,7 +3,7 @@
 #include <filesystem>
 
 #include "apps/vtloc/eval.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/sim/calibration.h"
 #include "engine/sim/point_filtering.h"

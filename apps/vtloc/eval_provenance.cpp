@@ -3,7 +3,7 @@
 #include <nlohmann/json.hpp>
 
 #include "apps/vtloc/eval.h"
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/safetensors.h"
 
 namespace vtloc::cli::eval {

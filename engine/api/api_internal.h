@@ -42,6 +42,11 @@ struct Model::Impl {
 // network needs); `info` is filled from it.
 WeightStore load_checked_weights(const std::string& path, ModelInfo& info);
 
+// The one conversion between the API's PointCloud and the engine's [N, 6]
+// (or [N, 3] when the cloud has no normals) tensor; object.cpp.
+HostTensor cloud_tensor(const PointCloud& cloud);
+PointCloud to_point_cloud(const HostTensor& t);
+
 DeviceInfo to_api(const rt::DeviceInfo& d);
 
 // Throws Error("<what> must be a finite number > 0, got <v>") unless it is.

@@ -6,7 +6,7 @@
 #include "engine/check/device_report.h"
 #include "engine/check/graph_check.h"
 #include "engine/check/op_selftest.h"
-#include "engine/ops/tactile_preprocess.h"
+#include "engine/model/tactile_encoder.h"
 
 namespace vtloc::api {
 
@@ -42,17 +42,6 @@ std::string stage_of(const std::string& node) {
     return b == std::string::npos ? node : node.substr(0, b);
 }
 
-HostTensor cloud_tensor(const PointCloud& pc) {
-    const int64_t n = int64_t(pc.size());
-    HostTensor t({n, 6});
-    for (int64_t i = 0; i < n; ++i)
-        for (int k = 0; k < 3; ++k) {
-            t.data[size_t(i * 6 + k)] = pc.xyz[size_t(i * 3 + k)];
-            t.data[size_t(i * 6 + 3 + k)] = pc.normals[size_t(i * 3 + k)];
-        }
-    return t;
-}
-
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
@@ -68,11 +57,9 @@ CheckResult check(Context& context, const CheckOptions& options) {
         VtlocRunner runner(load_checked_weights(options.model, info), &ctx);
         r.model_name = info.name;
         const TactileImage image = load_tactile_image(options.tactile);
-        if (image.height < ops::kMinTactileSide || image.width < ops::kMinTactileSide)
-            throw Error(options.tactile + ": the tactile image is too small");
         const HostTensor cloud = cloud_tensor(load_point_cloud(options.object, info.sample_points));
         VtlocRunner::Prepared p =
-            runner.prepare_once(ops::tactile_image_tensor(image.rgb.data(), image.height, image.width), cloud, nullptr);
+            runner.prepare_once(tactile_image_input(image.rgb.data(), image.rgb.size(), image.height, image.width), cloud, nullptr);
 
         const check::GraphCheck g = check::check_graph(ctx, p.graph, runner.weights(), p.inputs);
         r.device = device_of(ctx);

@@ -3,7 +3,7 @@
 #include <cmath>
 #include <unordered_map>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::api {
 

@@ -4,38 +4,27 @@
 #include <map>
 
 #include "engine/api/api_internal.h"
-#include "engine/ops/tactile_preprocess.h"
+#include "engine/model/tactile_encoder.h"
 
 namespace vtloc::api {
 
 namespace {
-
-constexpr int kMaxIters = 64;
-constexpr int kMaxTopK = 256;  // the top-K op's limit
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 HostTensor image_tensor(const TactileImage& im) {
-    if (im.height < ops::kMinTactileSide || im.width < ops::kMinTactileSide)
-        throw Error("the tactile image is " + std::to_string(im.width) + "x" + std::to_string(im.height) +
-                    "; the smallest accepted is " + std::to_string(ops::kMinTactileSide) + "x" +
-                    std::to_string(ops::kMinTactileSide));
-    if (im.rgb.size() != size_t(im.height) * size_t(im.width) * 3)
-        throw Error("the tactile image holds " + std::to_string(im.rgb.size()) + " bytes; " +
-                    std::to_string(im.width) + "x" + std::to_string(im.height) + " RGB needs " +
-                    std::to_string(size_t(im.height) * size_t(im.width) * 3));
-    return ops::tactile_image_tensor(im.rgb.data(), im.height, im.width);
+    return tactile_image_input(im.rgb.data(), im.rgb.size(), im.height, im.width);
 }
 
 TouchOptions touch_options(const ModelInfo& info, const Object::Impl& o, const LocalizeOptions& opt) {
-    if (opt.iters < -1 || opt.iters > kMaxIters)
-        throw Error("iters must be in 0.." + std::to_string(kMaxIters) + ", got " + std::to_string(opt.iters));
+    if (opt.iters < -1 || opt.iters > limits::kMaxIters)
+        throw Error("iters must be in 0.." + std::to_string(limits::kMaxIters) + ", got " + std::to_string(opt.iters));
     const int64_t m = int64_t(o.candidates.size() / 3);
     const int64_t k = opt.top_k > 0 ? opt.top_k : info.default_k;
-    if (opt.top_k < 0 || k > kMaxTopK)
-        throw Error("K must be in 1.." + std::to_string(kMaxTopK) + ", got " + std::to_string(opt.top_k));
+    if (opt.top_k < 0 || k > limits::kMaxTopK)
+        throw Error("K must be in 1.." + std::to_string(limits::kMaxTopK) + ", got " + std::to_string(opt.top_k));
     if (k > m)
         throw Error("K = " + std::to_string(k) + (opt.top_k > 0 ? "" : " (the model's default)") +
                     " is larger than the candidate set (" + std::to_string(m) + " candidates)");

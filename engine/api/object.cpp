@@ -12,20 +12,37 @@
 
 namespace vtloc::api {
 
-namespace {
-
 PointCloud to_point_cloud(const HostTensor& t) {
     PointCloud c;
-    const size_t n = size_t(t.shape[0]);
+    const size_t n = size_t(t.shape[0]), w = size_t(t.shape[1]);
     c.xyz.resize(n * 3);
-    c.normals.resize(n * 3);
+    if (w == 6) c.normals.resize(n * 3);
     for (size_t i = 0; i < n; ++i)
         for (size_t k = 0; k < 3; ++k) {
-            c.xyz[i * 3 + k] = t.data[i * 6 + k];
-            c.normals[i * 3 + k] = t.data[i * 6 + 3 + k];
+            c.xyz[i * 3 + k] = t.data[i * w + k];
+            if (w == 6) c.normals[i * 3 + k] = t.data[i * 6 + 3 + k];
         }
     return c;
 }
+
+HostTensor cloud_tensor(const PointCloud& cloud) {
+    const size_t n = cloud.size();
+    if (cloud.xyz.size() % 3 != 0) throw Error("the object cloud: xyz needs 3 floats per point");
+    const bool has_normals = !cloud.normals.empty();
+    if (has_normals && cloud.normals.size() != cloud.xyz.size())
+        throw Error("the object cloud has " + std::to_string(n) + " points but " +
+                    std::to_string(cloud.normals.size() / 3) + " normals");
+    const size_t w = has_normals ? 6 : 3;
+    HostTensor t({int64_t(n), int64_t(w)});
+    for (size_t i = 0; i < n; ++i)
+        for (size_t k = 0; k < 3; ++k) {
+            t.data[i * w + k] = cloud.xyz[i * 3 + k];
+            if (has_normals) t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
+        }
+    return t;
+}
+
+namespace {
 
 std::string where(const std::string& source) { return source.empty() ? "the object" : source; }
 
@@ -80,11 +97,7 @@ HostTensor candidate_tensor(const std::vector<float>& c, const std::string& what
 PointCloud load_point_cloud(const std::string& path, int64_t n_points, uint64_t seed) {
     return guarded([&] {
         if (n_points < 1) throw Error("load_point_cloud: n_points must be >= 1");
-        HostTensor t = io::load_object(path, n_points, seed);  // checked
-        if (t.shape[1] == 6) return to_point_cloud(t);
-        PointCloud c;  // no normals in the file: xyz only
-        c.xyz = t.data;
-        return c;
+        return to_point_cloud(io::load_object(path, n_points, seed));  // checked; xyz only without normals
     });
 }
 
@@ -140,20 +153,8 @@ Object Model::encode_object(const std::string& object_path, const std::string& c
 
 Object Model::encode_object(const PointCloud& cloud, const std::vector<float>& candidates, Backend backend) {
     return guarded([&] {
-        const size_t n = cloud.size();
-        if (cloud.xyz.size() % 3 != 0) throw Error("the object cloud: xyz needs 3 floats per point");
-        const bool has_normals = !cloud.normals.empty();
-        if (has_normals && cloud.normals.size() != cloud.xyz.size())
-            throw Error("the object cloud has " + std::to_string(n) + " points but " +
-                        std::to_string(cloud.normals.size() / 3) + " normals");
-        if (n == 0) throw Error("the object cloud is empty");
-        const int64_t w = has_normals ? 6 : 3;
-        HostTensor t({int64_t(n), w});
-        for (size_t i = 0; i < n; ++i)
-            for (size_t k = 0; k < 3; ++k) {
-                t.data[i * size_t(w) + k] = cloud.xyz[i * 3 + k];
-                if (has_normals) t.data[i * 6 + 3 + k] = cloud.normals[i * 3 + k];
-            }
+        HostTensor t = cloud_tensor(cloud);
+        if (cloud.size() == 0) throw Error("the object cloud is empty");
         io::check_cloud(t, "the object cloud");
         Object::Impl o;
         t = prepare_cloud(*impl_, std::move(t), backend, "", cloud.viewpoint, o);

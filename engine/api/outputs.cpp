@@ -14,17 +14,6 @@ namespace vtloc::api {
 
 namespace {
 
-HostTensor cloud_tensor(const PointCloud& c) {
-    const int64_t n = int64_t(c.size());
-    HostTensor t({n, 6});
-    for (size_t i = 0; i < size_t(n); ++i)
-        for (size_t k = 0; k < 3; ++k) {
-            t.data[i * 6 + k] = c.xyz[i * 3 + k];
-            t.data[i * 6 + 3 + k] = c.normals[i * 3 + k];
-        }
-    return t;
-}
-
 void check_heat(const Object& object, const std::vector<float>& heat) {
     if (heat.size() != object.cloud().size())
         throw Error("the heat-map has " + std::to_string(heat.size()) + " values for an object of " +

@@ -9,7 +9,7 @@
 #include <sstream>
 
 #include "engine/api/api_internal.h"
-#include "engine/ops/tactile_preprocess.h"
+#include "engine/model/model_config.h"
 
 namespace vtloc::api {
 
@@ -89,9 +89,9 @@ TactileImage rescale_frame(const TactileImage& image, double image_mm, double mo
                              num(image_mm) + " to " + num(model_mm) + " mm per pixel gives ";
     if (oh > kMaxRescaledSide || ow > kMaxRescaledSide)
         throw Error(what + "a frame over " + std::to_string(kMaxRescaledSide) + " pixels a side");
-    if (oh < ops::kMinTactileSide || ow < ops::kMinTactileSide)
+    if (oh < limits::kMinImageSide || ow < limits::kMinImageSide)
         throw Error(what + std::to_string(ow) + "x" + std::to_string(oh) + "; the smallest accepted is " +
-                    std::to_string(ops::kMinTactileSide) + "x" + std::to_string(ops::kMinTactileSide));
+                    std::to_string(limits::kMinImageSide) + "x" + std::to_string(limits::kMinImageSide));
 
     // Along each row (x) first, then along each column (y), as the reference.
     const auto tx = axis_taps(w, ow, f), ty = axis_taps(h, oh, f);

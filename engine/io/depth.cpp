@@ -1,6 +1,6 @@
 #include "engine/io/depth.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 
 #include <cmath>
 #include <vector>

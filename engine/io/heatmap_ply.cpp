@@ -1,6 +1,6 @@
 #include "engine/io/heatmap_ply.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/colormap.h"
 
 namespace vtloc::io {

@@ -12,7 +12,7 @@
 #include <filesystem>
 #include <limits>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/file_bytes.h"
 #include "engine/io/mesh_formats_detail.h"
 

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string_view>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/file_bytes.h"
 
 namespace vtloc::io {

@@ -7,7 +7,7 @@
 #include <opencv2/core.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/colormap.h"
 
 namespace vtloc::io {

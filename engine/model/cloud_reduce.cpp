@@ -4,7 +4,7 @@
 #include <cmath>
 #include <unordered_set>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/executor.h"
 #include "engine/graph.h"
 

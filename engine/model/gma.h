@@ -8,6 +8,7 @@
 #include <vector>
 
 #include "engine/graph.h"
+#include "engine/model/model_config.h"
 #include "engine/weights.h"
 
 namespace vtloc {
@@ -30,6 +31,6 @@ std::vector<std::string> weight_row_chunks(const WeightStore& w, const std::stri
 // P^d from F^t and F^p ([1, C] each): disentangle (with the chunks above),
 // decoder MLP gma.decoder.{0,2,..} with LeakyReLU(0.01), then xyz = tanh,
 // unit normals. Returns P^d as [1, N^d, 6] (the batch axis of F^t kept).
-int build_gma(Graph& g, const WeightStore& w, const nlohmann::json& config, int ft, int fp);
+int build_gma(Graph& g, const WeightStore& w, const ModelConfig& config, int ft, int fp);
 
 }  // namespace vtloc

@@ -1,6 +1,6 @@
 #include "engine/model/heads.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/layers.h"
 #include "engine/ops/common.h"
 
@@ -9,8 +9,9 @@ namespace vtloc {
 namespace {
 
 std::vector<int> ilu_inputs(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
-    if (max_iters < 0 || max_iters > 64)
-        throw Error("ILU iterations must be in 0..64, got " + std::to_string(max_iters));
+    if (max_iters < 0 || max_iters > limits::kMaxIters)
+        throw Error("ILU iterations must be in 0.." + std::to_string(limits::kMaxIters) + ", got " +
+                    std::to_string(max_iters));
     std::vector<int> in{ft, fp, iters};
     for (const char* gate : {"convz", "convr", "convq"})
         for (const char* part : {".weight", ".bias"}) {
@@ -49,9 +50,9 @@ HostTensor ilu_iters_input(int n, int max_iters) {
     return HostTensor::from_ints({1}, {n});
 }
 
-int build_mcr(Graph& g, const WeightStore& w, const nlohmann::json& config, int ft, int fp) {
+int build_mcr(Graph& g, const WeightStore& w, const ModelConfig& config, int ft, int fp) {
     int fused = g.add1("concat", {ft, fp}, {}, "mcr.fused");
-    int layers = int(config.at("mcr").at("hidden").size()) + 1;
+    int layers = int(config.mcr_hidden.size()) + 1;
     return add_mlp(g, w, "mcr.decoder", fused, layers, ops::kActTanh);
 }
 

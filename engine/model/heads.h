@@ -1,16 +1,16 @@
 #pragma once
 // The contact heads of SPEC section 2: ILU (GRU iterations) and MCR.
-#include <nlohmann/json.hpp>
 #include <vector>
 
 #include "engine/graph.h"
+#include "engine/model/model_config.h"
 #include "engine/weights.h"
 
 namespace vtloc {
 
 // ILU from F^t, F^p ([1, C] each), fused into one op (engine/ops/ilu.cpp).
 // `iters` is a graph value, I32 [1], holding N (0..max_iters) at run time, so N
-// changes without rebuilding; max_iters is 0..64. c: [max_iters, 3] = c_1..c_N
+// changes without rebuilding; max_iters is 0..limits::kMaxIters. c: [max_iters, 3] = c_1..c_N
 // then zero rows; contact: [3] = c^p = c_N (0 for N = 0).
 struct IluOutputs {
     int c = -1;
@@ -26,7 +26,7 @@ IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int
 // The run-time input for `iters`; throws unless 0 <= n <= max_iters.
 HostTensor ilu_iters_input(int n, int max_iters);
 
-// MCR: c^p = tanh(MLP([F^t, F^p])), hidden sizes from config["mcr"]["hidden"].
-int build_mcr(Graph& g, const WeightStore& w, const nlohmann::json& config, int ft, int fp);
+// MCR: c^p = tanh(MLP([F^t, F^p])), hidden sizes from config.mcr_hidden.
+int build_mcr(Graph& g, const WeightStore& w, const ModelConfig& config, int ft, int fp);
 
 }  // namespace vtloc

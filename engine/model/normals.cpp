@@ -2,10 +2,10 @@
 
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/executor.h"
 #include "engine/graph.h"
-#include "engine/model/object_frame.h"
+#include "engine/ops/object_frame.h"
 #include "engine/ops/point_grid.h"
 
 namespace vtloc {

@@ -2,7 +2,7 @@
 
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/batchnorm_fold.h"
 #include "engine/model/layers.h"
 #include "engine/ops/common.h"
@@ -11,70 +11,6 @@
 namespace vtloc {
 
 namespace {
-
-struct Stage {
-    int64_t npoint = 0;
-    std::vector<double> radii;
-    std::vector<int64_t> nsample;
-    std::vector<std::vector<int64_t>> mlps;
-};
-
-struct PointConfig {
-    bool normals = false;
-    std::vector<Stage> sa;
-    std::vector<int64_t> group_all, mlp;
-    int64_t C = 0;
-};
-
-const nlohmann::json& key(const nlohmann::json& j, const char* k, const std::string& where) {
-    if (!j.is_object() || !j.contains(k)) throw Error("config " + where + ": missing \"" + k + "\"");
-    return j[k];
-}
-
-int64_t pos_int(const nlohmann::json& j, const std::string& where) {
-    if (!j.is_number_integer() || j.get<int64_t>() <= 0) throw Error("config " + where + ": expected a positive integer");
-    return j.get<int64_t>();
-}
-
-std::vector<int64_t> pos_ints(const nlohmann::json& j, const std::string& where, bool nonempty) {
-    if (!j.is_array() || (nonempty && j.empty())) throw Error("config " + where + ": expected a list of positive integers");
-    std::vector<int64_t> v;
-    for (size_t i = 0; i < j.size(); ++i) v.push_back(pos_int(j[i], where + "[" + std::to_string(i) + "]"));
-    return v;
-}
-
-PointConfig point_config(const nlohmann::json& config) {
-    const nlohmann::json& p = key(config, "point", "");
-    PointConfig c;
-    const nlohmann::json& un = key(p, "use_normals", "point");
-    if (!un.is_boolean()) throw Error("config point.use_normals: expected true or false");
-    c.normals = un.get<bool>();
-    const nlohmann::json& sa = key(p, "sa", "point");
-    if (!sa.is_array() || sa.empty()) throw Error("config point.sa: expected a non-empty list of stages");
-    for (size_t i = 0; i < sa.size(); ++i) {
-        const std::string where = "point.sa[" + std::to_string(i) + "]";
-        Stage st;
-        st.npoint = pos_int(key(sa[i], "npoint", where), where + ".npoint");
-        const nlohmann::json& radii = key(sa[i], "radii", where);
-        if (!radii.is_array() || radii.empty()) throw Error("config " + where + ".radii: expected a list of radii");
-        for (const auto& r : radii) {
-            if (!r.is_number() || !(r.get<double>() > 0.0)) throw Error("config " + where + ".radii: expected positive numbers");
-            st.radii.push_back(r.get<double>());
-        }
-        st.nsample = pos_ints(key(sa[i], "nsample", where), where + ".nsample", true);
-        const nlohmann::json& mlps = key(sa[i], "mlps", where);
-        if (!mlps.is_array()) throw Error("config " + where + ".mlps: expected one list of widths per scale");
-        for (size_t s = 0; s < mlps.size(); ++s)
-            st.mlps.push_back(pos_ints(mlps[s], where + ".mlps[" + std::to_string(s) + "]", true));
-        if (st.nsample.size() != st.radii.size() || st.mlps.size() != st.radii.size())
-            throw Error("config " + where + ": radii, nsample and mlps must have one entry per scale");
-        c.sa.push_back(std::move(st));
-    }
-    c.group_all = pos_ints(key(p, "group_all_mlp", "point"), "point.group_all_mlp", true);
-    c.mlp = pos_ints(key(p, "mlp", "point"), "point.mlp", false);
-    c.C = pos_int(key(config, "C", ""), "C");
-    return c;
-}
 
 // A 1x1 Conv2d with its BatchNorm folded: the weight as [out, in] (linear's
 // layout) or, for group_linear, input-major [in, out]; and the bias.
@@ -97,27 +33,27 @@ const Params kRelu{{"act", double(ops::kActRelu)}};
 
 }  // namespace
 
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud) {
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud) {
     return build_point_encoder(g, w, config, cloud, PointEncoderOptions{});
 }
 
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud,
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud,
                                         const PointEncoderOptions& options) {
-    const PointConfig c = point_config(config);
+    const PointConfig& c = config.point;
     const Shape& cs = g.value(cloud).shape;
-    const int64_t width = c.normals ? 6 : 3;
+    const int64_t width = c.use_normals ? 6 : 3;
     if (cs.size() != 2 || cs[1] != width)
-        throw Error(std::string("the point cloud must be [N, ") + (c.normals ? "6] (xyz, normals)" : "3] (xyz)") +
+        throw Error(std::string("the point cloud must be [N, ") + (c.use_normals ? "6] (xyz, normals)" : "3] (xyz)") +
                     " for this config, got " + shape_str(cs));
     if (cs[0] == 0) throw Error("the point cloud is empty");
     if (g.value(cloud).type != ElemType::F32) throw Error("the point cloud must be F32");
 
     PointEncoderOutputs out;
     // Stage input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`.
-    int xyz = cloud, feat = c.normals ? cloud : -1;
-    int64_t feat_begin = c.normals ? 3 : 0, channels = c.normals ? 3 : 0, points = cs[0];
+    int xyz = cloud, feat = c.use_normals ? cloud : -1;
+    int64_t feat_begin = c.use_normals ? 3 : 0, channels = c.use_normals ? 3 : 0, points = cs[0];
     for (size_t i = 0; i < c.sa.size(); ++i) {
-        const Stage& st = c.sa[i];
+        const SaStageConfig& st = c.sa[i];
         const std::string pre = "point.sa" + std::to_string(i + 1);
         if (st.npoint > points)
             throw Error(pre + " samples " + std::to_string(st.npoint) + " points but gets only " + std::to_string(points) +
@@ -192,14 +128,14 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann
     }
     x = g.add1("group_max", {x}, {{"group", double(points)}, {"channel_major", options.fuse ? 1.0 : 0.0}}, pre + ".max");
     out.feature = add_mlp(g, w, "point.mlp", x, int(c.mlp.size()) + 1);
-    if (g.value(out.feature).shape != Shape{1, c.C})
-        throw Error("point.mlp gives " + shape_str(g.value(out.feature).shape) + ", expected [1, " + std::to_string(c.C) + "]");
+    if (g.value(out.feature).shape != Shape{1, config.C})
+        throw Error("point.mlp gives " + shape_str(g.value(out.feature).shape) + ", expected [1, " + std::to_string(config.C) + "]");
     return out;
 }
 
-void check_point_cloud(const HostTensor& cloud, const nlohmann::json& config) {
-    const PointConfig c = point_config(config);
-    const int64_t width = c.normals ? 6 : 3;
+void check_point_cloud(const HostTensor& cloud, const ModelConfig& config) {
+    const PointConfig& c = config.point;
+    const int64_t width = c.use_normals ? 6 : 3;
     if (cloud.shape.size() != 2 || cloud.shape[1] != width)
         throw Error("the point cloud must be [N, " + std::to_string(width) + "] for this config, got " +
                     shape_str(cloud.shape));

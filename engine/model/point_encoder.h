@@ -2,12 +2,12 @@
 // The point branch of SPEC section 2: PointNet++ set abstraction (MSG, or SSG
 // with one scale per stage), a group-all stage and the MLP head, giving F^p.
 // Every number comes from the config (weight-file metadata "point" and "C").
-#include <nlohmann/json.hpp>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "engine/graph.h"
+#include "engine/model/model_config.h"
 #include "engine/tensor.h"
 #include "engine/weights.h"
 
@@ -37,13 +37,13 @@ struct PointEncoderOptions {
 // [xyz, features] -> ... -> group_max; then the point.mlp head (linear).
 // Throws vtloc::Error on a config that does not fit the schema, a cloud of the
 // wrong width, or fewer points than a stage samples.
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud);
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int cloud,
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud);
+PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud,
                                         const PointEncoderOptions& options);
 
 // Host-side check of a network input cloud before a GPU run (shaders cannot
 // throw): [N, 6] or [N, 3] as the config wants, at least sa1's npoint points,
 // finite values. Throws vtloc::Error naming the problem.
-void check_point_cloud(const HostTensor& cloud, const nlohmann::json& config);
+void check_point_cloud(const HostTensor& cloud, const ModelConfig& config);
 
 }  // namespace vtloc

@@ -2,29 +2,15 @@
 
 #include <string>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/batchnorm_fold.h"
 #include "engine/ops/common.h"
 #include "engine/ops/conv2d.h"
+#include "engine/ops/tactile_preprocess.h"
 
 namespace vtloc {
 
 namespace {
-
-int64_t pos_int(const nlohmann::json& j, const std::string& where) {
-    if (!j.is_number_integer() || j.get<int64_t>() <= 0) throw Error("config " + where + ": expected a positive integer");
-    return j.get<int64_t>();
-}
-
-std::vector<int64_t> pos_ints(const nlohmann::json& j, const std::string& where, size_t min_len, size_t max_len) {
-    if (!j.is_array() || j.size() < min_len || j.size() > max_len)
-        throw Error("config " + where + ": expected a list of " +
-                    (min_len == max_len ? std::to_string(min_len) : ">= " + std::to_string(min_len)) +
-                    " positive integers");
-    std::vector<int64_t> out;
-    for (size_t i = 0; i < j.size(); ++i) out.push_back(pos_int(j[i], where + "[" + std::to_string(i) + "]"));
-    return out;
-}
 
 // conv (+ folded BatchNorm) + optional residual + optional ReLU, torchvision names.
 int conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string& bn, int x, int64_t stride,
@@ -45,31 +31,26 @@ int conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string
 
 }  // namespace
 
-TactileConfig tactile_config(const nlohmann::json& config) {
-    if (!config.is_object() || !config.contains("tactile") || !config["tactile"].is_object())
-        throw Error("config: missing the \"tactile\" object");
-    if (!config.contains("C")) throw Error("config: missing \"C\"");
-    const nlohmann::json& t = config["tactile"];
-    for (const char* k : {"crop", "in_size", "widths", "blocks", "mlp"})
-        if (!t.contains(k)) throw Error(std::string("config tactile: missing \"") + k + "\"");
-    TactileConfig c;
-    c.crop = pos_int(t["crop"], "tactile.crop");
-    c.in_size = pos_int(t["in_size"], "tactile.in_size");
-    c.widths = pos_ints(t["widths"], "tactile.widths", 4, 4);
-    c.blocks = pos_ints(t["blocks"], "tactile.blocks", 4, 4);
-    c.mlp = pos_ints(t["mlp"], "tactile.mlp", 0, 64);
-    c.C = pos_int(config["C"], "C");
-    return c;
+HostTensor tactile_image_input(const uint8_t* rgb, size_t bytes, int64_t height, int64_t width) {
+    const int64_t lo = limits::kMinImageSide;
+    if (height < lo || width < lo)
+        throw Error("the tactile image is " + std::to_string(width) + "x" + std::to_string(height) +
+                    "; the smallest accepted is " + std::to_string(lo) + "x" + std::to_string(lo));
+    const size_t need = size_t(height) * size_t(width) * 3;
+    if (bytes != need)
+        throw Error("the tactile image holds " + std::to_string(bytes) + " bytes; " + std::to_string(width) + "x" +
+                    std::to_string(height) + " RGB needs " + std::to_string(need));
+    return ops::tactile_image_tensor(rgb, height, width);
 }
 
-int add_tactile_preprocess(Graph& g, const nlohmann::json& config, int image) {
-    TactileConfig c = tactile_config(config);
+int add_tactile_preprocess(Graph& g, const ModelConfig& config, int image) {
+    const TactileConfig& c = config.tactile;
     return g.add1("tactile_preprocess", {image}, {{"crop", double(c.crop)}, {"size", double(c.in_size)}},
                   "tactile.input");
 }
 
-int build_tactile_encoder(Graph& g, WeightStore& w, const nlohmann::json& config, int input) {
-    TactileConfig c = tactile_config(config);
+int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int input) {
+    const TactileConfig& c = config.tactile;
     const Shape& xs = g.value(input).shape;
     if (xs.size() != 4 || xs[1] != 3 || xs[2] != c.in_size || xs[3] != c.in_size)
         throw Error("tactile encoder input must be [N, 3, " + std::to_string(c.in_size) + ", " +

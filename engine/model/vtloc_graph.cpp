@@ -1,6 +1,6 @@
 #include "engine/model/vtloc_graph.h"
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
 #include "engine/model/point_encoder.h"
@@ -10,16 +10,15 @@ namespace vtloc {
 
 std::string touch_suffix(int64_t b, int64_t batch) {
     std::string s;
-    if (batch != 1) s = "/" + std::to_string(b);
+    if (batch != 1) s.append("/").append(std::to_string(b));  // not "/" + ...: GCC 12 -Wrestrict false positive
     return s;
 }
 
-Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec) {
-    const nlohmann::json& cfg = w.config();
-    const int64_t C = cfg.at("C").get<int64_t>();
-    const bool normals = cfg.at("point").at("use_normals").get<bool>();
-    const bool ilu_head = cfg.at("head").get<std::string>() == "ilu";
-    const bool gma = spec.gma && cfg.contains("gma") && !cfg.at("gma").is_null();
+Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraphSpec& spec) {
+    const int64_t C = cfg.C;
+    const bool normals = cfg.point.use_normals;
+    const bool ilu_head = cfg.head == Head::Ilu;
+    const bool gma = spec.gma && cfg.gma.has_value();
     const bool touches = spec.image_height > 0;
     if (spec.batch < 1) throw Error("a batch holds at least one touch");
     if (spec.n_points <= 0) throw Error("the object cloud is empty");
@@ -42,7 +41,7 @@ Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec) {
     int iters = ilu_head ? g.input("ilu.iters", {1}, ElemType::I32) : -1;
     int candidates = spec.n_candidates > 0 ? g.input("candidates", {spec.n_candidates, 3}) : -1;
     int symmetry = spec.symmetry_order > 1 ? g.input("symmetry", {spec.symmetry_order, 12}) : -1;
-    const int64_t k = spec.k > 0 ? spec.k : cfg.at("K").get<int64_t>();
+    const int64_t k = spec.k > 0 ? spec.k : cfg.K;
 
     for (int64_t b = 0; b < spec.batch; ++b) {
         const std::string s = touch_suffix(b, spec.batch);

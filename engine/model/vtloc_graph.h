@@ -20,6 +20,7 @@
 #include <string>
 
 #include "engine/graph.h"
+#include "engine/model/model_config.h"
 #include "engine/weights.h"
 
 namespace vtloc {
@@ -32,13 +33,13 @@ struct VtlocGraphSpec {
     int64_t n_candidates = 0;                   // 0: no retrieval
     int64_t k = 0;                              // top-K size; 0: the config's K
     bool gma = true;                            // run GMA (if the model has it)
-    int max_iters = 64;                         // ILU: N may be 0..max_iters per run
+    int max_iters = limits::kMaxIters;                        // ILU: N may be 0..max_iters per run
     int symmetry_order = 0;                     // > 1: heat-map with the symmetry prior
     bool ilu_stepped = false;                   // bench: one dispatch per ILU iteration (build_ilu_stepped)
 };
 
 // Builds the graph; BN folding and W^d chunking add prepared tensors to `w`.
-Graph build_vtloc_graph(WeightStore& w, const VtlocGraphSpec& spec);
+Graph build_vtloc_graph(const ModelConfig& config, WeightStore& w, const VtlocGraphSpec& spec);
 
 // The per-touch name suffix for touch b of a batch of `batch`.
 std::string touch_suffix(int64_t b, int64_t batch);

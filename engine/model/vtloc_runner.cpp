@@ -3,7 +3,7 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
 #include "engine/model/post.h"
@@ -13,7 +13,7 @@ namespace vtloc {
 
 namespace {
 
-constexpr int kMaxIters = 64;  // one recorded graph serves every N in 0..64
+constexpr int kMaxIters = limits::kMaxIters;  // one recorded graph serves every N in 0..64
 
 std::string spec_key(const VtlocGraphSpec& s, bool profile) {
     return std::to_string(s.image_height) + "x" + std::to_string(s.image_width) + "/b" + std::to_string(s.batch) +
@@ -21,8 +21,6 @@ std::string spec_key(const VtlocGraphSpec& s, bool profile) {
            std::to_string(s.n_candidates) + "/k" + std::to_string(s.k) + "/g" + std::to_string(s.gma) + "/i" +
            std::to_string(s.max_iters) + "/s" + std::to_string(s.symmetry_order) + "/p" + std::to_string(profile);
 }
-
-bool has_gma(const nlohmann::json& cfg) { return cfg.contains("gma") && !cfg.at("gma").is_null(); }
 
 }  // namespace
 
@@ -32,11 +30,9 @@ struct VtlocRunner::Compiled {
     std::vector<NodeMs> cpu_times;
 };
 
-VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu) : weights_(std::move(weights)), gpu_(gpu) {
-    const nlohmann::json& cfg = weights_.config();
-    for (const char* key : {"C", "K", "head", "tactile", "point"})
-        if (!cfg.contains(key)) throw Error(weights_.source() + ": the model config has no '" + key + "'");
-    if (has_gma(cfg)) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
+VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu)
+    : weights_(std::move(weights)), config_(ModelConfig::parse(weights_.config(), weights_.source())), gpu_(gpu) {
+    if (config_.gma) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
 }
 
 VtlocRunner::~VtlocRunner() = default;
@@ -45,7 +41,7 @@ TensorMap VtlocRunner::run(const VtlocGraphSpec& spec_in, const TensorMap& input
     VtlocGraphSpec spec = spec_in;
     spec.ilu_stepped = ilu_stepped_ && spec.image_height > 0 && spec.max_iters > 0;
     return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : ""),
-                     [&] { return build_vtloc_graph(weights_, spec); }, inputs);
+                     [&] { return build_vtloc_graph(config_, weights_, spec); }, inputs);
 }
 
 TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs) {
@@ -84,17 +80,17 @@ VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
 }
 
 EncodedObject VtlocRunner::prepare_object(const HostTensor& cloud, const HostTensor* candidates) const {
-    const nlohmann::json& cfg = config();
+    const ModelConfig& cfg = config();
     if (cloud.shape.size() != 2 || cloud.shape[1] != 6)
         throw Error("the object cloud must be [N, 6] (xyz and normals), got " + shape_str(cloud.shape));
     require_finite(cloud, "the object cloud");
-    const int64_t need = cfg.at("point").at("sa").at(0).at("npoint").get<int64_t>();
+    const int64_t need = cfg.point.min_points();
     if (cloud.shape[0] < need)
         throw Error("the object cloud has " + std::to_string(cloud.shape[0]) + " points; this model samples " +
                     std::to_string(need) + " in its first stage and needs at least that many");
     EncodedObject o;
     o.frame = object_frame(cloud);
-    const bool normals = cfg.at("point").at("use_normals").get<bool>();
+    const bool normals = cfg.point.use_normals;
     o.target = to_frame(cloud, o.frame, 6);
     o.cloud = normals ? o.target : to_frame(cloud, o.frame, 3);
     if (candidates) {
@@ -128,7 +124,7 @@ struct TouchRun {
 };
 
 // The graph shape and inputs shared by the cached and one-shot paths.
-TouchRun touch_run(const nlohmann::json& cfg, const EncodedObject& o, const std::vector<HostTensor>& images,
+TouchRun touch_run(const ModelConfig& cfg, const EncodedObject& o, const std::vector<HostTensor>& images,
                    const TouchOptions& opt) {
     if (images.empty()) throw Error("no tactile images given");
     TouchRun r;
@@ -140,19 +136,19 @@ TouchRun touch_run(const nlohmann::json& cfg, const EncodedObject& o, const std:
             throw Error("all tactile images of a batch must have one size; got " + shape_str(s0) + " and " +
                         shape_str(im.shape));
     }
-    const bool ilu = cfg.at("head").get<std::string>() == "ilu";
-    r.iters = !ilu ? 0 : opt.iters >= 0 ? opt.iters : cfg.at("ilu").at("iters").get<int>();
+    const bool ilu = cfg.head == Head::Ilu;
+    r.iters = !ilu ? 0 : opt.iters >= 0 ? opt.iters : cfg.ilu_iters;
     r.spec.image_height = s0[0];
     r.spec.image_width = s0[1];
     r.spec.batch = int64_t(images.size());
     r.spec.n_points = o.cloud.shape[0];
     r.spec.n_candidates = o.candidates.shape[0];
     r.spec.k = opt.k;
-    r.spec.gma = opt.gma && has_gma(cfg);
+    r.spec.gma = opt.gma && cfg.gma.has_value();
     r.spec.max_iters = kMaxIters;
     r.inputs["point.cloud"] = o.cloud;
     r.inputs["candidates"] = o.candidates;
-    if (r.spec.gma && !cfg.at("point").at("use_normals").get<bool>()) r.inputs["gma.target"] = o.target;
+    if (r.spec.gma && !cfg.point.use_normals) r.inputs["gma.target"] = o.target;
     if (ilu) r.inputs["ilu.iters"] = ilu_iters_input(r.iters, kMaxIters);
     if (opt.symmetry && opt.symmetry->order > 1) {
         const Symmetry& sym = *opt.symmetry;
@@ -221,7 +217,7 @@ VtlocRunner::Prepared VtlocRunner::prepare_once(const HostTensor& image, const H
     EncodedObject o = prepare_object(cloud, candidates);
     TouchRun r = touch_run(config(), o, {image}, options);
     r.spec.encode_object = true;
-    return {build_vtloc_graph(weights_, r.spec), std::move(r.inputs)};
+    return {build_vtloc_graph(config_, weights_, r.spec), std::move(r.inputs)};
 }
 
 SequenceResult VtlocRunner::localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,

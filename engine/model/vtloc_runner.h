@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "engine/executor.h"
-#include "engine/model/object_frame.h"
+#include "engine/ops/object_frame.h"
 #include "engine/model/vtloc_graph.h"
 #include "engine/weights.h"
 
@@ -77,7 +77,7 @@ public:
     VtlocRunner(WeightStore weights, rt::Context* gpu);
     ~VtlocRunner();
 
-    const nlohmann::json& config() const { return weights_.config(); }
+    const ModelConfig& config() const { return config_; }
     const WeightStore& weights() const { return weights_; }
     bool on_gpu() const { return gpu_ != nullptr; }
 
@@ -135,6 +135,7 @@ private:
     TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
 
     WeightStore weights_;
+    ModelConfig config_;  // parsed from weights_ once
     rt::Context* gpu_;
     bool profile_ = false;
     bool ilu_stepped_ = false;

@@ -1,5 +1,5 @@
 // Elementwise activations: relu, leaky_relu(slope), tanh, sigmoid -> shaders/activation.comp
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 

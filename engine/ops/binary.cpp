@@ -2,7 +2,7 @@
 // (b repeats, as a bias does) -> shaders/binary.comp
 #include <algorithm>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 

@@ -10,9 +10,9 @@
 #include <algorithm>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
-#include "engine/model/object_frame.h"
+#include "engine/ops/object_frame.h"
 #include "engine/ops/ops.h"
 #include "engine/ops/point_common.h"
 

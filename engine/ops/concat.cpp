@@ -1,5 +1,5 @@
 // Concatenation along the last axis -> shaders/concat.comp (one dispatch per input).
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 

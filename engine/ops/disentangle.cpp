@@ -6,7 +6,7 @@
 // chunk, each adding its partial sum. Params: act (Act, default none), slope.
 #include <algorithm>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 

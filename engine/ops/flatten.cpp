@@ -1,6 +1,6 @@
 // flatten: [N, d1, d2, ...] -> [N, d1 * d2 * ...] (torch.flatten(x, 1)); the
 // bytes do not move, so the GPU side is one buffer copy and no shader.
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 

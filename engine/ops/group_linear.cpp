@@ -16,7 +16,7 @@
 #include <algorithm>
 #include <limits>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 #include "engine/ops/point_common.h"

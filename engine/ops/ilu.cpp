@@ -9,7 +9,7 @@
 // the shader clamps it (the host checks N before a run, see engine/model/heads.h).
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ilu_math.h"
 #include "engine/ops/ops.h"

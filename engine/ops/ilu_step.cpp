@@ -10,7 +10,7 @@
 // The state is fp32 between steps (the fused op keeps h in fp32 too).
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ilu_math.h"
 #include "engine/ops/ops.h"

@@ -1,7 +1,7 @@
 // linear: y = act(x W^T + b), W stored [N, K] as PyTorch does; x [..., K] is
 // flattened to M rows. -> shaders/gemm.comp (tiled, fused bias + activation).
 // Params: act (see Act, default none), slope (leaky, default 0.01).
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/gemm_tiles.h"
 #include "engine/ops/ops.h"

@@ -1,8 +1,14 @@
 #pragma once
 // Every op the engine has; registry.cpp lists them by name.
+#include <cstdint>
+
 #include "engine/op.h"
 
 namespace vtloc::ops {
+
+// The top-K op sorts at most this many keys per chunk pass (shared-memory bound).
+inline constexpr int64_t kMaxTopK = 256;
+
 extern const OpDef op_linear;      // linear.cpp
 extern const OpDef op_add;         // binary.cpp
 extern const OpDef op_mul;         // binary.cpp

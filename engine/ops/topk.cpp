@@ -8,14 +8,13 @@
 #include <cmath>
 #include <numeric>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 
 namespace vtloc::ops {
 namespace {
 
-constexpr int64_t kMaxK = 256;
 constexpr int64_t kRegionAlign = 256;  // the largest minStorageBufferOffsetAlignment Vulkan allows
 
 int64_t pow2_at_least(int64_t v) {
@@ -47,8 +46,8 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     if (c.size() != 2 || c[1] != 3) throw Error("candidates must be [M, 3], got " + shape_str(c));
     if (c[0] == 0) throw Error("the candidate set is empty");
     const double k = p.get("k", 0);
-    if (!(k >= 1 && k <= double(kMaxK)) || k != std::floor(k))
-        throw Error("K must be an integer in 1.." + std::to_string(kMaxK) + ", got " + std::to_string(k));
+    if (!(k >= 1 && k <= double(kMaxTopK)) || k != std::floor(k))
+        throw Error("K must be an integer in 1.." + std::to_string(kMaxTopK) + ", got " + std::to_string(k));
     if (int64_t(k) > c[0])
         throw Error("K = " + std::to_string(int64_t(k)) + " exceeds the " + std::to_string(c[0]) + " candidates");
     to_u32(c[0] * 3, "candidate array size");

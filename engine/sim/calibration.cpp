@@ -8,7 +8,7 @@
 #include <filesystem>
 #include <system_error>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/safetensors.h"
 
 #ifndef VTLOC_SOURCE_DIR

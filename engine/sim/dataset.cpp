@@ -9,7 +9,7 @@
 #include <nlohmann/json.hpp>
 #include <sstream>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -185,8 +185,9 @@ ObjectRecord read_object(const fs::path& root, const json& entry, const fs::path
         }
         for (int a = 0; a < 3; ++a)
             for (int b = 0; b < 3; ++b) {
-                std::string rn = "r" + std::to_string(a) + std::to_string(b);
-                std::string qn = "q" + std::to_string(a) + std::to_string(b);
+                // Appended, not "r" + ...: GCC 12's -Wrestrict false positive on literal + string.
+                const std::string ab = std::to_string(a).append(std::to_string(b));
+                const std::string rn = std::string("r").append(ab), qn = std::string("q").append(ab);
                 t.R[size_t(a * 3 + b)] = num(r, rn.c_str(), a == b ? 1 : 0);
                 t.rel_R[size_t(a * 3 + b)] = num(r, qn.c_str(), a == b ? 1 : 0);
             }
@@ -270,7 +271,10 @@ void write_object_json(const std::string& path, const ObjectRecord& o) {
 void write_points_csv(const std::string& path, const HostTensor& p) {
     std::string s = "x,y,z,nx,ny,nz\n";
     for (int64_t i = 0; i < p.shape[0]; ++i) {
-        for (int k = 0; k < 6; ++k) s += (k ? "," : "") + fmt(p.data[size_t(i) * 6 + size_t(k)]);
+        for (int k = 0; k < 6; ++k) {
+            if (k) s += ',';
+            s += fmt(p.data[size_t(i) * 6 + size_t(k)]);
+        }
         s += "\n";
     }
     write_file_atomic(path, s);
@@ -278,7 +282,10 @@ void write_points_csv(const std::string& path, const HostTensor& p) {
 
 void write_touches_csv(const std::string& path, const std::vector<TouchRecord>& touches) {
     std::string s;
-    for (size_t i = 0; i < std::size(kTouchColumns); ++i) s += (i ? "," : "") + std::string(kTouchColumns[i]);
+    for (size_t i = 0; i < std::size(kTouchColumns); ++i) {
+        if (i) s += ',';
+        s += kTouchColumns[i];
+    }
     s += "\n";
     for (const auto& t : touches) {
         std::vector<std::string> v = {std::to_string(t.id), t.split, std::to_string(t.order), t.image};

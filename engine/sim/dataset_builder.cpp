@@ -15,7 +15,7 @@
 #include <sstream>
 #include <thread>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/splitmix64.h"
 #include "engine/sim/partial_view.h"

@@ -11,7 +11,7 @@
 #include <limits>
 #include <string>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::sim::detail {
 

@@ -5,7 +5,7 @@
 #include <map>
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::sim::mesh {
 

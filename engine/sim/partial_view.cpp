@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/io/file_bytes.h"
 #include "engine/io/splitmix64.h"
 #include "engine/model/cloud_reduce.h"

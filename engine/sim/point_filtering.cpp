@@ -6,7 +6,7 @@
 #include <numeric>
 #include <opencv2/imgproc.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/touch_renderer.h"
 
 namespace vtloc::sim {

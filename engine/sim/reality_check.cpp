@@ -11,7 +11,7 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/primitives.h"
 #include "engine/sim/touch_renderer.h"
 

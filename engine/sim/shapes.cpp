@@ -8,7 +8,7 @@
 #include <cmath>
 #include <functional>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/mesh_builder.h"
 
 namespace vtloc::sim {

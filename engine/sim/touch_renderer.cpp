@@ -9,7 +9,7 @@
 #include <limits>
 #include <string>
 
-#include "engine/error.h"
+#include "base/error.h"
 #include "engine/sim/gel_shading.h"
 #include "engine/sim/height_field.h"
 

@@ -8,7 +8,7 @@
 #include <limits>
 #include <vector>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc::sim {
 

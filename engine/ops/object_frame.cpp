@@ -1,8 +1,8 @@
-#include "engine/model/object_frame.h"
+#include "engine/ops/object_frame.h"
 
 #include <cmath>
 
-#include "engine/error.h"
+#include "base/error.h"
 
 namespace vtloc {
 

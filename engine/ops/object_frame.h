@@ -1,5 +1,6 @@
 #pragma once
-// The normalised frame of SPEC section 1: centre = mean(xyz), scale = max
+// The normalised frame of SPEC section 1 (the model's host normalisation and
+// the cloud_normalize op's CPU oracle): centre = mean(xyz), scale = max
 // ||p - centre||. Computed on the host in double and rounded once to float,
 // exactly as the PyTorch reference does, so FPS and ball query see bit-equal
 // coordinates and pick the same indices.

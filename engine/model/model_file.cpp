@@ -1,0 +1,56 @@
+#include "engine/model/model_file.h"
+
+#include <filesystem>
+#include <optional>
+
+#include "base/error.h"
+#include "engine/model/gma.h"
+#include "engine/model/vtloc_graph.h"
+#include "engine/safetensors.h"
+
+namespace vtloc {
+
+namespace {
+
+// Builds the whole network once (on a copy: building adds folded tensors) and
+// reads every weight it names with the shape the graph expects.
+void check_tensors(const ModelConfig& cfg, const WeightStore& weights) {
+    WeightStore w = weights;
+    if (cfg.gma) split_weight_rows(w, "gma.weight", kPortableBindingBytes);
+    VtlocGraphSpec spec;
+    spec.image_height = spec.image_width = limits::kMinImageSide;
+    spec.n_points = cfg.point.min_points();
+    spec.n_candidates = cfg.K;
+    spec.gma = cfg.gma.has_value();
+    Graph g = build_vtloc_graph(cfg, w, spec);
+    for (const Value& v : g.values())
+        if (v.kind == ValueKind::Weight) w.get(v.name, v.shape);
+}
+
+}  // namespace
+
+ModelFile load_model_file(const std::string& path) {
+    if (!std::filesystem::exists(path)) throw Error(path + ": no such file");
+    if (std::filesystem::is_directory(path)) throw Error(path + ": is a directory, not a weight file");
+    std::optional<SafetensorsFile> loaded;
+    try {
+        loaded.emplace(SafetensorsFile::load(path));
+    } catch (const Error& e) {
+        throw Error(std::string(e.what()) + " (not a safetensors weight file?)");
+    }
+    ModelFile m{WeightStore::from_file(*loaded), {}, {}, std::filesystem::file_size(path)};
+    m.config = ModelConfig::parse(m.weights.config(), path);
+    try {
+        check_tensors(m.config, m.weights);
+    } catch (const Error& e) {
+        std::string msg = e.what();
+        if (msg.rfind(path + ": ", 0) == 0) msg = msg.substr(path.size() + 2);  // WeightStore names the file
+        throw Error(path + ": " + msg + " (the tensors do not fit the file's config '" + m.config.name + "')");
+    }
+    for (const TensorInfo& t : loaded->tensors())
+        m.tensors.push_back(
+            {t.name, dtype_name(t.dtype), t.shape, t.dtype == DType::F32 || t.dtype == DType::F16 || t.dtype == DType::BF16});
+    return m;
+}
+
+}  // namespace vtloc
