@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <exception>
+#include <filesystem>
 #include <thread>
 
 #include "engine/io/candidates.h"
@@ -159,6 +160,24 @@ TEST_CASE("api: batches of mixed sizes, sequences and the CPU backend", "[api]")
     CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, same, {}); }), Catch::Contains("needs 2 motions"));
     CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, images, {{0, 0, 0}, {0, 0, 0}}); }),
                Catch::Contains("one size"));
+    test::require_no_validation(ctx);
+}
+
+TEST_CASE("api: a weight file changed on disk after load does not change the loaded model", "[api]") {
+    namespace fs = std::filesystem;
+    const fs::path copy = fs::temp_directory_path() / "vtloc-test-changed-model.safetensors";
+    fs::copy_file(test::tiny_model(), copy, fs::copy_options::overwrite_existing);
+    api::Context ctx(test::validated());
+    api::Model model(ctx, copy.string());
+    api::Object obj = model.encode_object(test::source_path("examples/mug.glb"),
+                                          test::source_path("examples/mug_candidates.csv"));
+    const api::TouchResult before = model.localize(obj, example_image(1));
+    fs::resize_file(copy, fs::file_size(copy) / 2);  // truncated under the running model
+    check_same(model.localize(obj, example_image(1)), before, 0);
+    api::LocalizeOptions cpu;
+    cpu.backend = api::Backend::Cpu;  // built on first use: from memory, not the file
+    check_same(model.localize(obj, example_image(1), cpu), before, 2e-3);
+    fs::remove(copy);
     test::require_no_validation(ctx);
 }
 

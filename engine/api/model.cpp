@@ -47,10 +47,9 @@ VtlocRunner& Model::Impl::runner(Backend b) {
         if (!gpu_runner) throw Error("this model was loaded without a GPU context; use Backend::Cpu");
         return *gpu_runner;
     }
-    if (!cpu_runner) {
-        ModelInfo again;
-        cpu_runner = std::make_unique<VtlocRunner>(load_checked_weights(info.path, again), nullptr);
-    }
+    // From the weights loaded with the model, never the file again: it may have
+    // changed on disk since.
+    if (!cpu_runner) cpu_runner = std::make_unique<VtlocRunner>(gpu_runner->weights(), nullptr);
     return *cpu_runner;
 }
 
