@@ -1,5 +1,6 @@
 #include "engine/model/model_file.h"
 
+#include <cmath>
 #include <filesystem>
 #include <optional>
 
@@ -27,6 +28,16 @@ void check_tensors(const ModelConfig& cfg, const WeightStore& weights) {
         if (v.kind == ValueKind::Weight) w.get(v.name, v.shape);
 }
 
+// A NaN or inf weight would flow silently into every output: refuse the file.
+void check_finite(const WeightStore& w) {
+    for (const std::string& name : w.names()) {
+        const HostTensor& t = w.get(name);
+        for (size_t i = 0; i < t.data.size(); ++i)
+            if (!std::isfinite(t.data[i]))
+                throw Error("tensor '" + name + "' holds NaN or inf at element " + std::to_string(i));
+    }
+}
+
 }  // namespace
 
 ModelFile load_model_file(const std::string& path) {
@@ -40,6 +51,11 @@ ModelFile load_model_file(const std::string& path) {
     }
     ModelFile m{WeightStore::from_file(*loaded), {}, {}, std::filesystem::file_size(path)};
     m.config = ModelConfig::parse(m.weights.config(), path);
+    try {
+        check_finite(m.weights);
+    } catch (const Error& e) {
+        throw Error(path + ": " + e.what());
+    }
     try {
         check_tensors(m.config, m.weights);
     } catch (const Error& e) {
