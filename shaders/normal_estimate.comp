@@ -50,6 +50,11 @@ vec3 smallest_eigenvector(mat3 A) {
     float p2 = (A[0][0] - q) * (A[0][0] - q) + (A[1][1] - q) * (A[1][1] - q) + (A[2][2] - q) * (A[2][2] - q) + 2.0 * p1;
     float pp = sqrt(p2 / 6.0);
     if (!(pp > 0.0)) return vec3(uintBitsToFloat(0x7fc00000u));
+    // A line: as the .cpp, by the principal 2x2 minors (acos near 1 is coarse in fp32).
+    float tr = A[0][0] + A[1][1] + A[2][2];
+    float m2 = A[0][0] * A[1][1] - A[0][1] * A[0][1] + A[0][0] * A[2][2] - A[0][2] * A[0][2] + A[1][1] * A[2][2] -
+               A[1][2] * A[1][2];
+    if (!(m2 > 1e-4 * tr * tr)) return vec3(uintBitsToFloat(0x7fc00000u));
     mat3 B = (A - q * mat3(1.0)) / pp;
     float phi = acos(clamp(determinant(B) / 2.0, -1.0, 1.0)) / 3.0;
     float big = q + 2.0 * pp * cos(phi);

@@ -190,6 +190,28 @@ TEST_CASE("the point grid indexes every point once, in its cell", "[normals]") {
         }
 }
 
+TEST_CASE("a point with a degenerate neighbourhood takes its nearest valid neighbour's normal", "[normals]") {
+    // A 12 x 12 grid in z = 0 and a straight wire of 40 points rising from its corner:
+    // the wire's upper points see only the wire (collinear), the grid's see a plane.
+    HostTensor c({144 + 40, 3});
+    for (int64_t i = 0; i < 144; ++i) {
+        c.data[size_t(i * 3)] = float(i % 12);
+        c.data[size_t(i * 3 + 1)] = float(i / 12);
+    }
+    for (int64_t i = 0; i < 40; ++i) c.data[size_t((144 + i) * 3 + 2)] = float(i + 1) * 0.5f - 30.0f;
+    for (rt::Context* ctx : {&test::gpu(), static_cast<rt::Context*>(nullptr)}) {
+        const HostTensor n = estimate_normals(ctx, c);
+        for (int64_t i = 0; i < n.shape[0]; ++i) {
+            INFO("point " << i);
+            const float* v = &n.data[size_t(i * 6 + 3)];
+            REQUIRE(std::isfinite(v[0]));
+            CHECK(std::abs(std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]) - 1.0f) < 1e-4f);
+        }
+        // The wire's far end borrows the plane's normal (+-z) from the grid corner, its nearest valid point.
+        CHECK(std::abs(n.data[size_t((144 + 39) * 6 + 5)]) > 0.99f);
+    }
+}
+
 TEST_CASE("normal estimation refuses what it cannot do, naming the problem", "[normals]") {
     HostTensor few({5, 3});
     CHECK_THROWS_WITH(estimate_normals(nullptr, few), Catch::Contains("at least 16 points"));

@@ -155,7 +155,11 @@ MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options&
             row.job = ji;
             row.touch = t;
             row.contact = pred;
-            row.m = sim::touch_metrics(job.geom, pred, t->contact, std::move(ranking), heat, job.topk);
+            // A view cloud is another point set than the dataset's: MPE is then scored on the
+            // dataset cloud from the top-K (the same heat-map rule), so every --cloud compares.
+            const bool other_points = opt.cloud == "view";
+            row.m = sim::touch_metrics(job.geom, pred, t->contact, std::move(ranking),
+                                       other_points ? std::vector<float>{} : heat, job.topk);
             row.heat = std::move(heat);
             res.scores[ji].push_back(sim::score(row.m));
             res.rows.push_back(std::move(row));

@@ -1,6 +1,7 @@
 #include "engine/model/normals.h"
 
 #include <cmath>
+#include <vector>
 
 #include "base/error.h"
 #include "engine/executor.h"
@@ -38,14 +39,30 @@ HostTensor estimate_normals(rt::Context* ctx, const HostTensor& xyz, const Norma
     const HostTensor n = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("normals")
                              : run_cpu(g, WeightStore{}, in).at("normals");
     HostTensor out({N, 6});
+    std::vector<int64_t> valid, degenerate;
     for (int64_t i = 0; i < N; ++i) {
-        if (!std::isfinite(n.data[size_t(i * 3)]))
-            throw Error("normal estimation: point " + std::to_string(i) + " has no normal: its " + std::to_string(o.k) +
-                        " nearest points are collinear or identical");
+        (std::isfinite(n.data[size_t(i * 3)]) ? valid : degenerate).push_back(i);
         for (int a = 0; a < 3; ++a) {
             out.data[size_t(i * 6 + a)] = xyz.data[size_t(i * D + a)];
             out.data[size_t(i * 6 + 3 + a)] = n.data[size_t(i * 3 + a)];
         }
+    }
+    if (valid.empty())
+        throw Error("normal estimation: no point has a normal: every point's " + std::to_string(o.k) +
+                    " nearest points are collinear or identical (a line, or one point repeated)");
+    // A degenerate neighbourhood (a thin wire, one scan line of a depth view) takes
+    // the normal of the nearest point that has one (lowest index on a tie).
+    for (int64_t i : degenerate) {
+        const float* p = &xyz.data[size_t(i * D)];
+        int64_t best = valid[0];
+        double best_d = INFINITY;
+        for (int64_t j : valid) {
+            const float* q = &xyz.data[size_t(j * D)];
+            const double d = double(p[0] - q[0]) * (p[0] - q[0]) + double(p[1] - q[1]) * (p[1] - q[1]) +
+                             double(p[2] - q[2]) * (p[2] - q[2]);
+            if (d < best_d) best_d = d, best = j;
+        }
+        for (int a = 0; a < 3; ++a) out.data[size_t(i * 6 + 3 + a)] = n.data[size_t(best * 3 + a)];
     }
     return out;
 }

@@ -1,8 +1,10 @@
 #pragma once
 // Normals for a cloud that has none (an RGB-D view, a PLY/PCD/XYZ without
 // nx ny nz): the normal_estimate op on the GPU (or its CPU reference), with
-// the grid built on the host. A degenerate neighbourhood is an error naming
-// the point.
+// the grid built on the host. A point whose neighbourhood is degenerate
+// (collinear or identical: a thin wire, one scan line of a depth view) takes
+// the normal of the nearest point that has one; a cloud where no point has one
+// (a line, one point repeated) is an error.
 #include <array>
 #include <optional>
 

@@ -107,6 +107,13 @@ std::array<double, 3> smallest_eigenvector(const double A[3][3]) {
     const double p2 = (A[0][0] - q) * (A[0][0] - q) + (A[1][1] - q) * (A[1][1] - q) + (A[2][2] - q) * (A[2][2] - q) + 2 * p1;
     const double p = std::sqrt(p2 / 6.0);
     if (!(p > 0)) return {nan, nan, nan};  // isotropic (or all points identical)
+    // A line (or a strip over 100x longer than wide): the two smallest eigenvalues
+    // vanish against the largest. Measured by the principal 2x2 minors (= ab + bc + ca),
+    // not by the eigenvalues below: acos near 1 is too coarse in fp32 on some devices.
+    const double tr = A[0][0] + A[1][1] + A[2][2];
+    const double m2 = A[0][0] * A[1][1] - A[0][1] * A[0][1] + A[0][0] * A[2][2] - A[0][2] * A[0][2] +
+                      A[1][1] * A[2][2] - A[1][2] * A[1][2];
+    if (!(m2 > 1e-4 * tr * tr)) return {nan, nan, nan};
     double B[3][3];
     for (int r = 0; r < 3; ++r)
         for (int c = 0; c < 3; ++c) B[r][c] = (A[r][c] - (r == c ? q : 0.0)) / p;
@@ -128,7 +135,7 @@ std::array<double, 3> smallest_eigenvector(const double A[3][3]) {
             if (n > bestn) bestn = n, bestv = v;
         }
     // |cross| is the product of the other two eigenvalues' distances from lambda:
-    // tiny against big^2 means a line (or a point): no normal.
+    // tiny against big^2: the smallest eigenvalue is not separated.
     if (!(std::sqrt(bestn) > 1e-6 * big * big)) return {nan, nan, nan};
     const double inv = 1.0 / std::sqrt(bestn);
     return {bestv[0] * inv, bestv[1] * inv, bestv[2] * inv};
