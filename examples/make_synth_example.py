@@ -48,6 +48,7 @@ def main(root, obj_name, touch_id, name):
         "frame": f"simulated by vtloc synth (dataset seed {ds.seed}) on the ObjectFolder 2.0 GelSight "
                  "calibration (CC BY 4.0)",
         "press_mm": round(float(touch.press_mm), 4), "spin_deg": round(float(touch.spin_deg), 3),
+        "object_diameter_mm": round(float(src["diameter_mm"]), 4),
     }
     with open(os.path.join(HERE, f"{name}.json"), "w") as f:
         json.dump(info, f, indent=2)

@@ -14,13 +14,14 @@ namespace {
 const char* kHelp =
     "usage: vtloc demo [--example N] [--out DIR] [--model M] [--mm-per-px MM]\n"
     "\n"
-    "Runs the shipped default model (models/, RANDOM weights: no trained model exists\n"
-    "yet) on a shipped example (examples/mug.glb and examples/touch_0N.png with its\n"
-    "ground truth in touch_0N.json), prints the predicted and the true contact, and\n"
-    "writes a heat-map picture (PNG) and point cloud (PLY).\n"
+    "Runs the shipped default model (models/vtloc-lite.safetensors, trained on the\n"
+    "synthetic benchmark; docs/results.md) on a shipped example: by default a test touch\n"
+    "of the benchmark it never trained on (examples/cone_test0.json), or one of the mug\n"
+    "touches (real GelSight frames, not taken on the mug). Prints the predicted and the\n"
+    "true contact and the error, and writes a heat-map picture (PNG) and cloud (PLY).\n"
     "\n"
     "  --example E   which example: 1..3 (examples/touch_0E.json) or a name\n"
-    "                (examples/E.json; default: the shipped model's own example)\n"
+    "                (examples/E.json; default: cone_test0)\n"
     "  --out DIR     where to write heatmap.png and heatmap.ply\n"
     "                (default: <temp dir>/vtloc-demo)\n"
     "  --model M     another weight file, e.g. your trained export\n"
@@ -31,6 +32,7 @@ struct Example {
     fs::path object, tactile, candidates;  // candidates: empty = the cloud's own points
     std::array<double, 3> contact{};
     std::string where;
+    double diameter_mm = 0;  // the object's size, when the example records it (ND = error / size)
 };
 
 Example read_example(const fs::path& json_path) {
@@ -44,6 +46,7 @@ Example read_example(const fs::path& json_path) {
         if (j.contains("candidates")) e.candidates = json_path.parent_path() / j.at("candidates").get<std::string>();
         for (size_t i = 0; i < 3; ++i) e.contact[i] = j.at("contact").at(i).get<double>();
         e.where = j.value("where", "");
+        e.diameter_mm = j.value("object_diameter_mm", 0.0);
         return e;
     } catch (const nlohmann::json::exception& x) {
         throw api::Error(json_path.string() + ": not a VTLoc example (" + std::string(x.what()) + ")");
@@ -89,8 +92,10 @@ int cmd_demo(Session& s, int argc, char** argv) {
 
     std::printf("predicted %s mm\n", point_str(r.contact, 1).c_str());
     std::printf("true      %s mm (%s)\n", point_str(ex.contact, 1).c_str(), ex.where.c_str());
-    std::printf("error     %.1f mm%s\n", distance(r.contact, ex.contact),
-                random ? " (untrained weights: expect nothing better than chance)" : "");
+    const double err = distance(r.contact, ex.contact);
+    std::printf("error     %.1f mm", err);
+    if (ex.diameter_mm > 0) std::printf(" = %.1f %% of the object's %.0f mm (ND)", 100 * err / ex.diameter_mm, ex.diameter_mm);
+    std::printf("%s\n", random ? " (untrained weights: expect nothing better than chance)" : "");
     if (r.alignment) std::printf("alignment %.4g (GMA chamfer; lower = better)\n", double(*r.alignment));
 
     make_folder(out.string());

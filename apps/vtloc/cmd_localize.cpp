@@ -14,7 +14,7 @@ const char* kHelp =
     "Localises one touch: where on the object the tactile image was taken, with a\n"
     "heat-map over the object's points.\n"
     "\n"
-    "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
+    "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
     "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
     "%s"
     "  --candidates F            candidate contact points (.ply, or x,y,z text rows);\n"

@@ -17,7 +17,7 @@ const char* kHelp =
     "Multi-contact localisation (SPEC section 6): touches on one object, in order, with the\n"
     "sensor's motion between them, give a belief over the candidate contact points.\n"
     "\n"
-    "  --model M                 weight file (default: the shipped model, RANDOM weights)\n"
+    "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
     "%s"
     "  --touch IMG[,dx,dy,dz]    one touch (repeat, in order); dx,dy,dz = the sensor's\n"
     "                            displacement since the previous touch, object units\n"

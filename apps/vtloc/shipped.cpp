@@ -50,9 +50,9 @@ fs::path shipped_dir() {
 
 std::string default_model_path() { return (shipped_dir() / kDefaultModel).string(); }
 
-// By name: a copy of the shipped file is just as untrained.
+// By name: a copy of the shipped random file is just as untrained.
 bool is_shipped_random_model(const std::string& path) {
-    return fs::path(path).filename() == fs::path(kDefaultModel).filename();
+    return fs::path(path).filename() == fs::path(kRandomModel).filename();
 }
 
 }  // namespace vtloc::cli
