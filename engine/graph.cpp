@@ -35,6 +35,13 @@ std::vector<int> Graph::add(const std::string& op, const std::vector<int>& input
                             const std::string& name) {
     const OpDef& def = find_op(op);
     std::string label = name.empty() ? op + "_" + std::to_string(nodes_.size()) : name;
+    for (const std::string& k : params.keys())
+        if (std::find(def.params.begin(), def.params.end(), k) == def.params.end()) {
+            std::string known;
+            for (std::string_view n : def.params) known.append(known.empty() ? "" : ", ").append(n);
+            throw Error("node '" + label + "' (" + op + "): unknown parameter '" + k + "' (" +
+                        (known.empty() ? std::string("it takes none") : "it takes " + known) + ")");
+        }
     std::vector<TensorDesc> in_descs;
     for (int id : inputs) {
         if (id < 0 || size_t(id) >= values_.size())

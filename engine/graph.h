@@ -21,6 +21,11 @@ public:
         return it == values_.end() ? fallback : it->second;
     }
     bool has(const std::string& k) const { return values_.count(k) != 0; }
+    std::vector<std::string> keys() const {
+        std::vector<std::string> k;
+        for (const auto& [name, v] : values_) k.push_back(name);
+        return k;
+    }
 
 private:
     std::map<std::string, double> values_;

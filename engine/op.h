@@ -40,6 +40,10 @@ struct OpDef {
     // Bit i set: output i is a workspace whose contents are unspecified (the
     // GPU's scratch), so checks of a node's outputs skip it (engine/check/).
     uint32_t workspace_outputs = 0;
+    // Every parameter the op reads: Graph::add refuses any other name, so a
+    // misspelt one is an error, not a silent default (engine/ops/build.h
+    // makes it a compile error for typed callers).
+    std::vector<std::string_view> params;
 };
 
 const OpDef& find_op(std::string_view name);

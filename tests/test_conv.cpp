@@ -8,6 +8,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/conv2d.h"
 #include "tests/harness.h"
@@ -25,10 +26,12 @@ struct ConvCase {
     bool bias, residual;
     uint32_t act;
     uint32_t layout;
-    bool texel = true;  // false: the storage-buffer fallback
 };
 
+// Every case on every binding path (texel buffers and the storage-buffer fallback
+// that runs when a tensor exceeds the device's maxTexelBufferElements).
 void check_conv(const ConvCase& c, uint32_t seed) {
+  for (ops::BufferPath path : ops::kBufferPaths) {
     const int64_t cin = c.x[1];
     const int64_t oh = (c.x[2] + 2 * c.ph - c.kh) / c.sh + 1, ow = (c.x[3] + 2 * c.pw - c.kw) / c.sw + 1;
     // PyTorch-like init bound keeps outputs O(1).
@@ -39,22 +42,16 @@ void check_conv(const ConvCase& c, uint32_t seed) {
     ws.add("w", w);
     ws.add("b", random_tensor({c.cout}, seed + 2, -0.5f, 0.5f));
     Graph g;
-    std::vector<int> in{g.input("x", c.x), g.weight("w", w.shape)};
-    if (c.bias) in.push_back(g.weight("b", {c.cout}));
+    const int x = g.input("x", c.x), wv = g.weight("w", w.shape), bv = c.bias ? g.weight("b", {c.cout}) : -1;
     TensorMap inputs{{"x", random_tensor(c.x, seed, -2.0f, 2.0f)}};
-    if (c.residual) {
-        Shape rs{c.x[0], c.cout, oh, ow};
-        in.push_back(g.input("res", rs));
-        inputs["res"] = random_tensor(rs, seed + 3);
-    }
-    Params p{{"stride_h", double(c.sh)}, {"stride_w", double(c.sw)}, {"pad_h", double(c.ph)},
-             {"pad_w", double(c.pw)}, {"act", double(c.act)}, {"slope", 0.1},
-             {"residual", c.residual ? 1.0 : 0.0}, {"weight_layout", double(c.layout)},
-             {"texel", c.texel ? 1.0 : 0.0}};
-    g.output(g.add1("conv2d", in, p), "y");
+    const Shape rs{c.x[0], c.cout, oh, ow};
+    const int res = c.residual ? g.input("res", rs) : -1;
+    if (c.residual) inputs["res"] = random_tensor(rs, seed + 3);
+    g.output(ops::conv2d(g, x, wv, bv, res, ops::Conv2d{c.sh, c.sw, c.ph, c.pw, c.layout, ops::Act(c.act), 0.1, path}),
+             "y");
     INFO("conv x" << shape_str(c.x) << " -> " << c.cout << " k" << c.kh << "x" << c.kw << " s" << c.sh << "," << c.sw
                   << " p" << c.ph << "," << c.pw << " layout " << c.layout << " bias " << c.bias << " res "
-                  << c.residual << " texel " << c.texel);
+                  << c.residual << " " << ops::path_name(path));
     TensorMap got = run_gpu_and_compare(g, ws, inputs);
     const TensorMap cpu_out = run_cpu(g, ws, inputs);
     const HostTensor& want = cpu_out.at("y");
@@ -63,11 +60,12 @@ void check_conv(const ConvCase& c, uint32_t seed) {
         worst = std::max(worst, double(std::abs(got.at("y").data[i] - want.data[i])));
     INFO("max |gpu - cpu| " << worst);
     CHECK(worst < 1e-4);  // the default tolerance's absolute part; shown with -s
+  }
 }
 
 }  // namespace
 
-TEST_CASE("conv2d matches the CPU reference at odd shapes", "[op][conv2d]") {
+TEST_CASE("conv2d matches the CPU reference at odd shapes, on every binding path", "[op][conv2d]") {
     using ops::kConvIHWO, ops::kConvOIHW;
     // The ResNet stem's geometry on an odd image: 7x7, stride 2, pad 3.
     check_conv({{1, 3, 37, 53}, 10, 7, 7, 2, 2, 3, 3, true, false, ops::kActRelu, kConvOIHW}, 1);
@@ -88,14 +86,6 @@ TEST_CASE("conv2d matches the CPU reference at odd shapes", "[op][conv2d]") {
     // offset mod 4 (the shader's XSHIFT path; the shapes above take the per-row one).
     check_conv({{1, 7, 12, 16}, 8, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO}, 9);
     check_conv({{1, 4, 16, 16}, 8, 3, 3, 2, 2, 1, 1, true, false, ops::kActNone, kConvIHWO}, 10);
-}
-
-TEST_CASE("conv2d's storage-buffer fallback matches the CPU reference", "[op][conv2d]") {
-    using ops::kConvIHWO, ops::kConvOIHW;
-    // What runs when a tensor exceeds the device's maxTexelBufferElements.
-    check_conv({{1, 3, 37, 53}, 10, 7, 7, 2, 2, 3, 3, true, false, ops::kActRelu, kConvOIHW, false}, 11);
-    check_conv({{1, 6, 13, 10}, 12, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO, false}, 12);
-    check_conv({{2, 13, 17, 19}, 6, 1, 1, 2, 2, 0, 0, false, true, ops::kActNone, kConvIHWO, false}, 13);
 }
 
 TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
@@ -145,17 +135,17 @@ TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
 }
 
 TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool][max_pool2d]") {
-    struct Case { Shape x; Params p; };
-    for (const Case& c : {Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}}},
-                          Case{{1, 5, 37, 53}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}, {"texel", 0}}},
-                          Case{{2, 3, 8, 9}, {{"kernel", 2}}},
-                          Case{{1, 4, 11, 7}, {{"kernel_h", 3}, {"kernel_w", 2}, {"stride_h", 1}, {"stride_w", 2},
-                                               {"pad_h", 1}}}}) {
-        Graph g;
-        g.output(g.add1("max_pool2d", {g.input("x", c.x)}, c.p), "y");
-        INFO("max_pool2d " << shape_str(c.x));
-        run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(c.x, 50, -3.0f, 3.0f)}}, {0.0, 0.0});
-    }
+    struct Case { Shape x; ops::Pool2d p; };
+    for (const Case& c : {Case{{1, 5, 37, 53}, {3, 3, 2, 2, 1, 1}}, Case{{2, 3, 8, 9}, {2, 2, 2, 2, 0, 0}},
+                          Case{{1, 4, 11, 7}, {3, 2, 1, 2, 1, 0}}})
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            Graph g;
+            ops::Pool2d p = c.p;
+            p.path = path;
+            g.output(ops::max_pool2d(g, g.input("x", c.x), p), "y");
+            INFO("max_pool2d " << shape_str(c.x) << " " << ops::path_name(path));
+            run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(c.x, 50, -3.0f, 3.0f)}}, {0.0, 0.0});
+        }
     Graph g;
     int x = g.input("x", {1, 1, 4, 4});
     REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}, {{"kernel", 3}, {"pad", 2}}), Catch::Contains("at most half"));

@@ -151,6 +151,16 @@ TEST_CASE("every registered op has an [op] test tagged with its name", "[op][reg
     }
 }
 
+TEST_CASE("a misspelt or foreign parameter is refused with the node's name", "[op][linear]") {
+    Graph g;
+    int x = g.input("x", {4, 10});
+    int w = g.weight("fc.weight", {8, 10});
+    REQUIRE_THROWS_WITH(g.add1("linear", {x, w}, {{"slop", 0.1}}, "fc1"),
+                        Catch::Contains("node 'fc1' (linear): unknown parameter 'slop' (it takes act, slope)"));
+    REQUIRE_THROWS_WITH(g.add1("concat", {x, x}, {{"axis", 0}}, "cat"),
+                        Catch::Contains("unknown parameter 'axis' (it takes none)"));
+}
+
 TEST_CASE("linear reports mismatched shapes with the node's name", "[op][linear]") {
     Graph g;
     int x = g.input("x", {4, 10});

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 #include "engine/safetensors.h"
@@ -120,8 +121,9 @@ TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", 
 }
 
 TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the CPU reference", "[op][group_linear][point_group][group_max]") {
-    for (bool normals : {true, false}) {
-        INFO("features " << normals);
+    for (bool normals : {true, false})
+      for (ops::BufferPath path : ops::kBufferPaths) {
+        INFO("features " << normals << ", " << ops::path_name(path));
         const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
         const int64_t K = normals ? 6 : 3;
         WeightStore w;
@@ -138,38 +140,37 @@ TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the 
         add("b3", {C3}, 16, 0.2f);
         Graph g;
         int x = g.input("cloud", {N, 6});
-        std::vector<int> f = g.add("fps", {x}, {{"npoint", double(S)}});
-        int ball = g.add1("ball_query", {x, f[1]}, {{"radius", 0.6}, {"nsample", double(ns)}});
+        std::vector<int> f = ops::fps(g, x, S);
+        int ball = ops::ball_query(g, x, f[1], 0.6, ns);
         int w1 = g.weight("w1", {C1, K}), b1 = g.weight("b1", {C1}), w2 = g.weight("w2", {C2, C1}), b2 = g.weight("b2", {C2});
         int w1t = g.weight("w1t", {K, C1}), w2t = g.weight("w2t", {C1, C2}), w3 = g.weight("w3", {C3, 3 + C1}),
             w3t = g.weight("w3t", {3 + C1, C3}), b3 = g.weight("b3", {C3});
-        const double relu = ops::kActRelu;
+        const ops::Act relu = ops::kActRelu;
         std::vector<int> gin{x, f[1], ball};
         if (normals) gin.push_back(x);
         // Unfused: point_group, linear, linear, group_max.
-        int grouped = g.add1("point_group", gin, {{"feat_begin", 3}});
+        int grouped = ops::point_group(g, gin, 3);
         g.output(grouped, "grouped");
-        int h = g.add1("linear", {grouped, w1, b1}, {{"act", relu}});
-        int y = g.add1("linear", {h, w2, b2}, {{"act", relu}});
-        g.output(g.add1("group_max", {y}, {{"group", double(ns)}}), "unfused");
+        int h = ops::linear(g, grouped, w1, b1, relu);
+        int y = ops::linear(g, h, w2, b2, relu);
+        g.output(ops::group_max(g, y, ns, false), "unfused");
         // Fused: gather in the first layer, max in the last; and both in one layer.
+        using In = ops::GroupLinear::Input;
         std::vector<int> fin{x, f[1], ball, w1t, b1};
         if (normals) fin.push_back(x);
-        int fh = g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}});
+        int fh = ops::group_linear(g, fin, ops::GroupLinear{In::Gather, 3, false, 1, relu, 0.01, path});
         g.output(fh, "first");  // channel-major [C1, S * ns]
-        g.output(g.add1("group_max", {fh}, {{"group", double(ns)}, {"channel_major", 1}}), "max_cm");
-        g.output(g.add1("group_max", {h}, {{"group", double(ns)}}), "max_pm");
-        g.output(g.add1("group_linear", {fh, w2t, b2}, {{"max", 1}, {"group", double(ns)}, {"act", relu}}), "fused");
-        int one = g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu}});
+        g.output(ops::group_max(g, fh, ns, true), "max_cm");
+        g.output(ops::group_max(g, h, ns, false), "max_pm");
+        g.output(ops::group_linear(g, {fh, w2t, b2}, ops::GroupLinear{In::Rows, 0, true, ns, relu, 0.01, path}), "fused");
+        int one = ops::group_linear(g, fin, ops::GroupLinear{In::Gather, 3, true, 1, relu, 0.01, path});
         g.output(one, "one_layer");
-        g.output(g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu}, {"texel", 0}}),
-                 "one_layer_ssbo");
         // Group all: [xyz, features] -> layer -> max over all S rows, fused and not.
-        g.output(g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)}}), "all");
-        g.output(g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)}, {"texel", 0}}),
-                 "all_ssbo");
-        int cat = g.add1("concat", {f[1], one});
-        g.output(g.add1("group_max", {g.add1("linear", {cat, w3, b3})}, {{"group", double(S)}}), "all_unfused");
+        g.output(ops::group_linear(g, {f[1], w3t, b3, one},
+                                   ops::GroupLinear{In::GroupAll, 0, true, S, ops::kActNone, 0.01, path}),
+                 "all");
+        int cat = ops::concat(g, {f[1], one});
+        g.output(ops::group_max(g, ops::linear(g, cat, w3, b3), S, false), "all_unfused");
         TensorMap out = test::run_gpu_and_compare(g, w, {{"cloud", random_cloud(N, 21, 6)}});
         test::require_close(out.at("fused"), out.at("unfused"), {}, "fused = unfused");
         test::require_close(out.at("all"), out.at("all_unfused"), {}, "group all fused = unfused");
@@ -193,13 +194,15 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         Graph g;
         int x = g.input("x", {c.K, c.M});
         int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
-        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}, {"act", ops::kActRelu}}),
-                 "max_relu");
-        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}}), "max");  // negative maxima
-        g.output(g.add1("group_linear", {x, wv, bv}, {{"act", ops::kActLeaky}, {"slope", 0.1}}), "plain");
-        // The storage-buffer variant (devices whose texel-buffer limit the tensors exceed).
-        g.output(g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(c.group)}, {"texel", 0}}), "max_ssbo");
-        g.output(g.add1("group_linear", {x, wv, bv}, {{"texel", 0}}), "plain_ssbo");
+        using In = ops::GroupLinear::Input;
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            const std::string on = std::string(".") + ops::path_name(path);
+            g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path}),
+                     "max_relu" + on);
+            g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path}),
+                     "max" + on);  // negative maxima
+            g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path}), "plain" + on);
+        }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
     }

@@ -4,6 +4,7 @@
 
 #include "engine/check/op_selftest.h"
 #include "engine/ops/common.h"
+#include "engine/ops/build.h"
 
 namespace vtloc::check {
 
@@ -14,10 +15,10 @@ OpCase linear_case(const Shape& x, int64_t out, bool bias, uint32_t act, uint32_
                            (act ? ", act " + std::to_string(act) : ""));
     const int64_t in = x.back();
     const float bound = 1.0f / std::sqrt(float(std::max<int64_t>(1, in)));
-    std::vector<int> ins{c.input("x", random_tensor(x, seed, -2.0f, 2.0f)),
-                         c.weight("w", random_tensor({out, in}, seed + 1, -bound, bound))};
-    if (bias) ins.push_back(c.weight("b", random_tensor({out}, seed + 2, -bound, bound)));
-    c.output(c.g.add1("linear", ins, {{"act", double(act)}, {"slope", 0.2}}), "y");
+    const int xv = c.input("x", random_tensor(x, seed, -2.0f, 2.0f));
+    const int wv = c.weight("w", random_tensor({out, in}, seed + 1, -bound, bound));
+    const int bv = bias ? c.weight("b", random_tensor({out}, seed + 2, -bound, bound)) : -1;
+    c.output(ops::linear(c.g, xv, wv, bv, ops::Act(act), 0.2), "y");
     return c;
 }
 

@@ -9,6 +9,7 @@
 #include "engine/model/heads.h"
 #include "engine/model/post.h"
 #include "engine/ops/common.h"
+#include "engine/ops/build.h"
 
 namespace vtloc::check {
 
@@ -23,7 +24,7 @@ OpCase disentangle_case(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t c
     std::vector<int> in{c.input("x", random_tensor({rows, K}, seed, -2.0f, 2.0f))};
     for (const std::string& n : split_weight_rows(c.w, "wd", uint64_t(chunk_rows * J * L * 4)))
         in.push_back(c.g.weight(n, c.w.get(n).shape));
-    c.output(c.g.add1("disentangle", in, {{"act", double(ops::kActLeaky)}, {"slope", 0.01}}), "y");
+    c.output(ops::disentangle(c.g, in, ops::kActLeaky, 0.01), "y");
     return c;
 }
 
@@ -52,7 +53,7 @@ OpCase ilu_case(int64_t C, int64_t H, int iters, bool stepped, double lanes) {
         for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
                               "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
             in.push_back(c.g.weight(n, c.w.get(n).shape));
-        c.output(c.g.add("ilu", in, {{"max_iters", double(iters)}, {"lanes", lanes}})[0], "c");
+        c.output(ops::ilu(c.g, in, iters, "", int(lanes))[0], "c");
         return c;
     }
     IluOutputs o = (stepped ? build_ilu_stepped : build_ilu)(c.g, c.w, ft, fp, iters_in, iters);
@@ -97,7 +98,7 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
             if (ties)
                 for (float& x : cand.data) x = std::round(x) / 4.0f;
             HostTensor centre = ties ? HostTensor({1, 3}, {0, 0, 0}) : HostTensor({3}, {0.1f, -0.2f, 0.05f});
-            std::vector<int> out = c.g.add("topk", {c.input("c", centre), c.input("cand", cand)}, {{"k", double(k)}});
+            std::vector<int> out = ops::topk(c.g, c.input("c", centre), c.input("cand", cand), k);
             c.output(out[0], "index");
             c.output(out[1], "score");
             c.tol = {0.0, 0.0};  // same fp32 roundings on both sides
@@ -120,10 +121,10 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
     for (Belief k : {Belief{37, 1, 4}, Belief{37, 6, 4}, Belief{1000, 3, 0}}) {
         OpCase c("belief", std::to_string(k.M) + " candidates, " + std::to_string(k.T) + " touches, window " +
                                std::to_string(int(k.window)));
-        std::vector<int> o2 = c.g.add("belief", {c.input("cand", random_tensor({k.M, 3}, uint32_t(k.M))),
-                                                 c.input("cp", random_tensor({k.T, 3}, uint32_t(k.T) + 5, -0.8f, 0.8f)),
-                                                 c.input("d", random_tensor({k.T - 1, 3}, 9, -0.1f, 0.1f))},
-                                      {{"window", k.window}, {"sigma", 0.2}, {"sigma_m", 0.05}});
+        std::vector<int> o2 = ops::belief(c.g, c.input("cand", random_tensor({k.M, 3}, uint32_t(k.M))),
+                                          c.input("cp", random_tensor({k.T, 3}, uint32_t(k.T) + 5, -0.8f, 0.8f)),
+                                          c.input("d", random_tensor({k.T - 1, 3}, 9, -0.1f, 0.1f)),
+                                          ops::Belief{0.2, 0.05, int(k.window)});
         c.output(o2[0], "belief");
         c.output(o2[1], "log");
         v.push_back(std::move(c));

@@ -5,6 +5,7 @@
 #include <cmath>
 
 #include "engine/check/op_selftest.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 #include "engine/ops/point_grid.h"
@@ -18,12 +19,10 @@ OpCase fps_case(int64_t n, int64_t d, int64_t npoint, double radius, int64_t nsa
     OpCase c("fps", why + ": " + std::to_string(n) + " points [N, " + std::to_string(d) + "] -> " +
                         std::to_string(npoint));
     int x = c.input("cloud", random_tensor({n, d}, uint32_t(n)));
-    Params p{{"npoint", double(npoint)}};
-    if (no_registers) p.set("no_registers", 1);
-    std::vector<int> f = c.g.add("fps", {x}, p);
+    std::vector<int> f = ops::fps(c.g, x, npoint, "", no_registers);
     c.output(f[0], "fps");
     c.output(f[1], "centres");
-    if (nsample > 0) c.output(c.g.add1("ball_query", {x, f[1]}, {{"radius", radius}, {"nsample", double(nsample)}}), "ball");
+    if (nsample > 0) c.output(ops::ball_query(c.g, x, f[1], radius, nsample), "ball");
     return c;
 }
 
@@ -42,12 +41,12 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
 
     // A PointNet++ stage: grouping, fused layers, neighbour max (ReLU).
     const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
-    const double relu = ops::kActRelu;
-    auto stage = [&](const std::string& op, const std::string& why) {
+    const ops::Act relu = ops::kActRelu;
+    auto stage = [&](const std::string& op, const std::string& why, ops::BufferPath path) {
         OpCase c(op, why);
         int x = c.input("cloud", random_tensor({N, 6}, 21));
-        std::vector<int> f = c.g.add("fps", {x}, {{"npoint", double(S)}});
-        int ball = c.g.add1("ball_query", {x, f[1]}, {{"radius", 0.6}, {"nsample", double(ns)}});
+        std::vector<int> f = ops::fps(c.g, x, S);
+        int ball = ops::ball_query(c.g, x, f[1], 0.6, ns);
         HostTensor w1 = random_tensor({C1, 6}, 11, -0.5f, 0.5f), w2 = random_tensor({C2, C1}, 13, -0.3f, 0.3f);
         HostTensor w3 = random_tensor({C3, 3 + C1}, 15, -0.3f, 0.3f);
         int b1 = c.weight("b1", random_tensor({C1}, 12, -0.2f, 0.2f)), b2 = c.weight("b2", random_tensor({C2}, 14, -0.2f, 0.2f));
@@ -56,34 +55,38 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         int w3t = c.weight("w3t", ops::point_weight_kn(w3));
         int w1v = c.weight("w1", w1), w2v = c.weight("w2", w2);
         std::vector<int> fin{x, f[1], ball, w1t, b1, x};
+        using In = ops::GroupLinear::Input;
+        // gather (first layer), plain rows with the fused max, gather + max, group-all + max
+        const ops::GroupLinear gather{In::Gather, 3, false, 1, relu, 0.01, path};
+        const ops::GroupLinear rows_max{In::Rows, 0, true, ns, relu, 0.01, path};
+        const ops::GroupLinear gather_max{In::Gather, 3, true, 1, relu, 0.01, path};
+        const ops::GroupLinear all_max{In::GroupAll, 0, true, S, ops::kActNone, 0.01, path};
         if (op == "point_group") {
-            int grouped = c.g.add1("point_group", {x, f[1], ball, x}, {{"feat_begin", 3}});
+            int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
             c.output(grouped, "grouped");
-            int h = c.g.add1("linear", {grouped, w1v, b1}, {{"act", relu}});
-            c.output(c.g.add1("linear", {h, w2v, b2}, {{"act", relu}}), "y");
+            int h = ops::linear(c.g, grouped, w1v, b1, relu);
+            c.output(ops::linear(c.g, h, w2v, b2, relu), "y");
         } else if (op == "group_max") {
-            int fh = c.g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}});
-            c.output(c.g.add1("group_max", {fh}, {{"group", double(ns)}, {"channel_major", 1}}), "max_cm");
-            int grouped = c.g.add1("point_group", {x, f[1], ball, x}, {{"feat_begin", 3}});
-            int h = c.g.add1("linear", {grouped, w1v, b1}, {{"act", relu}});
-            c.output(c.g.add1("group_max", {h}, {{"group", double(ns)}}), "max_pm");
+            int fh = ops::group_linear(c.g, fin, gather);
+            c.output(ops::group_max(c.g, fh, ns, true), "max_cm");
+            int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
+            int h = ops::linear(c.g, grouped, w1v, b1, relu);
+            c.output(ops::group_max(c.g, h, ns, false), "max_pm");
         } else {
-            const bool texel = why.find("storage") == std::string::npos;
-            int fh = c.g.add1("group_linear", fin, {{"in", 1}, {"feat_begin", 3}, {"act", relu}, {"texel", double(texel)}});
+            int fh = ops::group_linear(c.g, fin, gather);
             c.output(fh, "first");
-            c.output(c.g.add1("group_linear", {fh, w2t, b2}, {{"max", 1}, {"group", double(ns)}, {"act", relu},
-                                                               {"texel", double(texel)}}), "fused");
-            int one = c.g.add1("group_linear", fin, {{"in", 1}, {"max", 1}, {"feat_begin", 3}, {"act", relu},
-                                                    {"texel", double(texel)}});
-            c.output(c.g.add1("group_linear", {f[1], w3t, b3, one}, {{"in", 2}, {"max", 1}, {"group", double(S)},
-                                                                     {"texel", double(texel)}}), "all");
+            c.output(ops::group_linear(c.g, {fh, w2t, b2}, rows_max), "fused");
+            int one = ops::group_linear(c.g, fin, gather_max);
+            c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
         }
         return c;
     };
-    v.push_back(stage("point_group", "gather 37 groups of 12 from 300 points [N, 6], then two layers"));
-    v.push_back(stage("group_max", "channel-major and point-major, groups of 12"));
-    v.push_back(stage("group_linear", "gather, fused max, group-all; texel path"));
-    v.push_back(stage("group_linear", "gather, fused max, group-all; storage-buffer path"));
+    v.push_back(stage("point_group", "gather 37 groups of 12 from 300 points [N, 6], then two layers",
+                      ops::BufferPath::Texel));
+    v.push_back(stage("group_max", "channel-major and point-major, groups of 12", ops::BufferPath::Texel));
+    for (ops::BufferPath path : ops::kBufferPaths)
+        v.push_back(stage("group_linear", std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path",
+                          path));
     struct Wide { int64_t M, K, Nout, group; };
     for (Wide k : {Wide{20 * 128, 131, 96, 128}, Wide{1001, 37, 37, 13}}) {
         OpCase c("group_linear", "plain input [" + std::to_string(k.K) + ", " + std::to_string(k.M) + "] -> " +
@@ -91,14 +94,20 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         int x = c.input("x", random_tensor({k.K, k.M}, 33));
         int wv = c.weight("w", random_tensor({k.K, k.Nout}, 31, -0.15f, 0.15f));
         int bv = c.weight("b", random_tensor({k.Nout}, 32, -0.1f, 0.1f));
-        c.output(c.g.add1("group_linear", {x, wv, bv}, {{"max", 1}, {"group", double(k.group)}}), "max");
-        c.output(c.g.add1("group_linear", {x, wv, bv}, {{"act", double(ops::kActLeaky)}, {"slope", 0.1}}), "plain");
+        ops::GroupLinear max;
+        max.max = true;
+        max.group = k.group;
+        c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max");
+        ops::GroupLinear plain;
+        plain.act = ops::kActLeaky;
+        plain.slope = 0.1;
+        c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain");
         v.push_back(std::move(c));
     }
 
     for (int64_t n : {2, 4097}) {
         OpCase c("cloud_normalize", std::to_string(n) + " points, coordinates in -50..80");
-        auto o = c.g.add("cloud_normalize", {c.input("c", random_tensor({n, 6}, uint32_t(40 + n), -50.0f, 80.0f))});
+        auto o = ops::cloud_normalize(c.g, c.input("c", random_tensor({n, 6}, uint32_t(40 + n), -50.0f, 80.0f)));
         c.output(o[0], "cloud");
         c.output(o[1], "frame");
         c.tol = {2e-4, 1e-4};  // the fp32 mean of coordinates up to 80 (as tests/test_point_ops.cpp)
@@ -114,10 +123,8 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
             for (int a = 0; a < 3; ++a) p[a] = 20.0f * p[a] / l;
         }
         const ops::PointGrid grid = ops::build_point_grid(xyz, k);
-        Params p{{"k", double(k)}, {"orient", 1}};
-        ops::set_grid_params(p, grid);
         const int x = c.input("points", xyz), o = c.input("order", grid.order), s0 = c.input("cell_start", grid.cell_start);
-        c.output(c.g.add1("normal_estimate", {x, o, s0}, p), "normals");
+        c.output(ops::normal_estimate(c.g, x, o, s0, grid, k, 1, {0, 0, 0}), "normals");
         c.tol = {2e-3, 0};  // fp32 PCA in the shader, double in the reference (tests/test_normals.cpp)
         v.push_back(std::move(c));
     }

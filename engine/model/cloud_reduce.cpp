@@ -7,6 +7,7 @@
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/graph.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -37,7 +38,7 @@ std::vector<int64_t> farthest_points(rt::Context* ctx, const HostTensor& cloud, 
     }
     Graph g;
     const int x = g.input("cloud", cloud.shape);
-    const std::vector<int> f = g.add("fps", {x}, {{"npoint", double(n)}}, "fps");
+    const std::vector<int> f = ops::fps(g, x, n, "fps");
     g.output(f[0], "index");
     const TensorMap in{{"cloud", cloud}};
     const HostTensor idx = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("index")

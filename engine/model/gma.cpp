@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "engine/model/layers.h"
 #include "engine/ops/common.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -52,18 +53,17 @@ std::vector<std::string> weight_row_chunks(const WeightStore& w, const std::stri
 int build_gma(Graph& g, const WeightStore& w, const ModelConfig& config, int ft, int fp) {
     if (!config.gma) throw Error("the config has no GMA");
     const int64_t nd = config.gma->n_points, cd = config.gma->channels;
-    std::vector<int> in{g.add1("concat", {ft, fp}, {}, "gma.fused")};
+    std::vector<int> in{ops::concat(g, {ft, fp}, "gma.fused")};
     for (const std::string& n : weight_row_chunks(w, "gma.weight")) in.push_back(g.weight(n, w.get(n).shape));
     const Shape& first = g.value(in[1]).shape;
     if (first.size() != 3 || first[1] != nd || first[2] != cd)
         throw Error("gma.weight chunks are " + shape_str(first) + ", expected [rows, " + std::to_string(nd) + ", " +
                     std::to_string(cd) + "]");
-    int x = g.add1("disentangle", in, {{"act", double(ops::kActLeaky)}, {"slope", 0.01}}, "gma.disentangle");
+    int x = ops::disentangle(g, in, ops::kActLeaky, 0.01, "gma.disentangle");
     const int layers = int(config.gma->decoder.size()) + 1;
     for (int i = 0; i < layers; ++i)
         x = add_linear(g, w, "gma.decoder." + std::to_string(2 * i), x, i + 1 < layers ? ops::kActLeaky : ops::kActNone, 0.01);
-    int cloud = g.add1("gma_decode", {x}, {}, "gma.cloud");
-    return cloud;
+    return ops::gma_decode(g, x, "gma.cloud");
 }
 
 }  // namespace vtloc

@@ -3,6 +3,7 @@
 #include "base/error.h"
 #include "engine/model/layers.h"
 #include "engine/ops/common.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -27,7 +28,7 @@ std::vector<int> ilu_inputs(Graph& g, const WeightStore& w, int ft, int fp, int 
 
 IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
     std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);
-    std::vector<int> out = g.add("ilu", in, {{"max_iters", double(max_iters)}}, "ilu");
+    std::vector<int> out = ops::ilu(g, in, max_iters, "ilu");
     return {out[0], out[1]};
 }
 
@@ -37,8 +38,7 @@ IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int
     in.push_back(ft);  // step 0 reads no state; F^t fills the slot
     std::vector<int> out;
     for (int k = 0; k < max_iters; ++k) {
-        out = g.add("ilu_step", in, {{"max_iters", double(max_iters)}, {"step", double(k)}},
-                    "ilu.step" + std::to_string(k));
+        out = ops::ilu_step(g, in, max_iters, k, "ilu.step" + std::to_string(k));
         in.back() = out[0];
     }
     return {out[1], out[2]};
@@ -51,7 +51,7 @@ HostTensor ilu_iters_input(int n, int max_iters) {
 }
 
 int build_mcr(Graph& g, const WeightStore& w, const ModelConfig& config, int ft, int fp) {
-    int fused = g.add1("concat", {ft, fp}, {}, "mcr.fused");
+    int fused = ops::concat(g, {ft, fp}, "mcr.fused");
     int layers = int(config.mcr_hidden.size()) + 1;
     return add_mlp(g, w, "mcr.decoder", fused, layers, ops::kActTanh);
 }

@@ -1,14 +1,14 @@
 #include "engine/model/layers.h"
 
 #include "engine/ops/common.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
 int add_linear(Graph& g, const WeightStore& w, const std::string& prefix, int x, uint32_t act, double slope) {
     const HostTensor& weight = w.get(prefix + ".weight");
-    std::vector<int> in{x, g.weight(prefix + ".weight", weight.shape)};
-    if (w.has(prefix + ".bias")) in.push_back(g.weight(prefix + ".bias", {weight.shape.at(0)}));
-    return g.add1("linear", in, {{"act", double(act)}, {"slope", slope}}, prefix);
+    const int bias = w.has(prefix + ".bias") ? g.weight(prefix + ".bias", {weight.shape.at(0)}) : -1;
+    return ops::linear(g, x, g.weight(prefix + ".weight", weight.shape), bias, ops::Act(act), slope, prefix);
 }
 
 int add_mlp(Graph& g, const WeightStore& w, const std::string& prefix, int x, int layers, uint32_t final_act) {

@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/graph.h"
+#include "engine/ops/build.h"
 #include "engine/ops/object_frame.h"
 #include "engine/ops/point_grid.h"
 
@@ -19,22 +20,14 @@ HostTensor estimate_normals(rt::Context* ctx, const HostTensor& xyz, const Norma
         throw Error("normal estimation needs at least " + std::to_string(o.k) + " points (its neighbourhood size), got " +
                     std::to_string(N));
     const ops::PointGrid grid = ops::build_point_grid(xyz, o.k);  // also checks the points are finite
-    Params p{{"k", double(o.k)}};
-    ops::set_grid_params(p, grid);
-    std::array<double, 3> ref{0, 0, 0};
-    if (o.towards) {
-        ref = *o.towards;
-        p.set("orient", 2);
-    } else {
-        ref = object_frame(xyz, "normal estimation").centre;  // the centroid, as SPEC 1's frame has it
-        p.set("orient", 1);
-    }
-    p.set("rx", ref[0]).set("ry", ref[1]).set("rz", ref[2]);
+    // Towards the camera when one is given, else away from the centroid (as SPEC 1's frame has it).
+    const int orient = o.towards ? 2 : 1;
+    const std::array<double, 3> ref = o.towards ? *o.towards : object_frame(xyz, "normal estimation").centre;
     Graph g;
     const int x = g.input("points", xyz.shape);
     const int order = g.input("order", grid.order.shape, ElemType::I32);
     const int start = g.input("cell_start", grid.cell_start.shape, ElemType::I32);
-    g.output(g.add1("normal_estimate", {x, order, start}, p, "normals"), "normals");
+    g.output(ops::normal_estimate(g, x, order, start, grid, o.k, orient, ref, "normals"), "normals");
     const TensorMap in{{"points", xyz}, {"order", grid.order}, {"cell_start", grid.cell_start}};
     const HostTensor n = ctx ? GpuExecutor(*ctx, g, WeightStore{}).run(in).at("normals")
                              : run_cpu(g, WeightStore{}, in).at("normals");

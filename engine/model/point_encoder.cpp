@@ -5,6 +5,7 @@
 #include "base/error.h"
 #include "engine/model/batchnorm_fold.h"
 #include "engine/model/layers.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 
@@ -28,8 +29,6 @@ std::pair<int, int> conv_bn(Graph& g, WeightStore& w, const std::string& conv, c
     }
     return {input_major ? g.weight(wkn, {in, out}) : g.weight(w2d, {out, in}), g.weight(bname, {out})};
 }
-
-const Params kRelu{{"act", double(ops::kActRelu)}};
 
 }  // namespace
 
@@ -58,22 +57,22 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelCon
         if (st.npoint > points)
             throw Error(pre + " samples " + std::to_string(st.npoint) + " points but gets only " + std::to_string(points) +
                         (i == 0 ? " (the cloud is too small for this model)" : ""));
-        std::vector<int> fps = g.add("fps", {xyz}, {{"npoint", double(st.npoint)}}, pre + ".fps");
+        std::vector<int> fps = ops::fps(g, xyz, st.npoint, pre + ".fps");
         out.indices.push_back({pre + ".fps", fps[0]});
         const int centres = fps[1];
         std::vector<int> scales;
         int64_t next_channels = 0;
         for (size_t s = 0; s < st.radii.size(); ++s) {
             const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
-            const double ns = double(st.nsample[s]);
-            int ball = g.add1("ball_query", {xyz, centres}, {{"radius", st.radii[s]}, {"nsample", ns}}, ball_name);
+            const int64_t ns = st.nsample[s];
+            int ball = ops::ball_query(g, xyz, centres, st.radii[s], ns, ball_name);
             out.indices.push_back({ball_name, ball});
             std::vector<int> gather_in{xyz, centres, ball};
             const int64_t fb = feat_begin;
             int x = -1;
             if (!options.fuse) {
                 if (feat >= 0) gather_in.push_back(feat);
-                x = g.add1("point_group", gather_in, {{"feat_begin", double(fb)}}, pre + ".group." + si);
+                x = ops::point_group(g, gather_in, fb, pre + ".group." + si);
             }
             int64_t in = channels + 3;
             const std::vector<int64_t>& widths = st.mlps[s];
@@ -83,50 +82,54 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelCon
                                         options.fuse);
                 in = widths[l];
                 if (!options.fuse) {
-                    x = g.add1("linear", {x, wv, bv}, kRelu, node);
+                    x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
                     continue;
                 }
                 // Fused: the first layer gathers its rows from the cloud, the last
                 // one keeps only the max over each centre's neighbours.
-                Params p = kRelu;
+                ops::GroupLinear gl;
+                gl.act = ops::kActRelu;
                 std::vector<int> ins{x};
                 if (l == 0) {
                     ins = gather_in;
-                    p.set("in", 1).set("feat_begin", double(fb));
+                    gl.input = ops::GroupLinear::Input::Gather;
+                    gl.feat_begin = fb;
                 }
                 ins.insert(ins.end(), {wv, bv});
                 if (l == 0 && feat >= 0) ins.push_back(feat);
-                if (l + 1 == widths.size()) p.set("max", 1).set("group", ns);
-                x = g.add1("group_linear", ins, p, node);
+                gl.max = l + 1 == widths.size();
+                gl.group = ns;
+                x = ops::group_linear(g, ins, gl, node);
             }
-            if (!options.fuse) x = g.add1("group_max", {x}, {{"group", ns}}, pre + ".max." + si);
+            if (!options.fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);
             scales.push_back(x);
             next_channels += widths.back();
         }
-        feat = scales.size() == 1 ? scales[0] : g.add1("concat", scales, {}, pre + ".concat");
+        feat = scales.size() == 1 ? scales[0] : ops::concat(g, scales, pre + ".concat");
         xyz = centres, feat_begin = 0, channels = next_channels, points = st.npoint;
     }
 
     // Group all: one group of every point, input [xyz, features] (xyz first, not centred).
     const std::string pre = "point.sa" + std::to_string(c.sa.size() + 1);
-    int x = options.fuse ? -1 : g.add1("concat", {xyz, feat}, {}, pre + ".input");
+    int x = options.fuse ? -1 : ops::concat(g, {xyz, feat}, pre + ".input");
     int64_t in = channels + 3;
     for (size_t l = 0; l < c.group_all.size(); ++l) {
         const std::string node = pre + ".mlp_convs." + std::to_string(l);
         auto [wv, bv] = conv_bn(g, w, node, pre + ".mlp_bns." + std::to_string(l), in, c.group_all[l], options.fuse);
         in = c.group_all[l];
         if (!options.fuse) {
-            x = g.add1("linear", {x, wv, bv}, kRelu, node);
+            x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
             continue;
         }
         // Not fused with the max: one group leaves too few invocations for the
         // fused layer's group-per-invocation max; a separate max is cheap.
-        Params p = kRelu;
+        ops::GroupLinear gl;
+        gl.act = ops::kActRelu;
+        if (l == 0) gl.input = ops::GroupLinear::Input::GroupAll;
         std::vector<int> ins = l == 0 ? std::vector<int>{xyz, wv, bv, feat} : std::vector<int>{x, wv, bv};
-        if (l == 0) p.set("in", 2);
-        x = g.add1("group_linear", ins, p, node);
+        x = ops::group_linear(g, ins, gl, node);
     }
-    x = g.add1("group_max", {x}, {{"group", double(points)}, {"channel_major", options.fuse ? 1.0 : 0.0}}, pre + ".max");
+    x = ops::group_max(g, x, points, options.fuse, pre + ".max");
     out.feature = add_mlp(g, w, "point.mlp", x, int(c.mlp.size()) + 1);
     if (g.value(out.feature).shape != Shape{1, config.C})
         throw Error("point.mlp gives " + shape_str(g.value(out.feature).shape) + ", expected [1, " + std::to_string(config.C) + "]");

@@ -7,6 +7,7 @@
 #include "engine/ops/common.h"
 #include "engine/ops/conv2d.h"
 #include "engine/ops/tactile_preprocess.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -22,11 +23,12 @@ int conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string
         if (f.bias != bname) throw Error("unexpected folded bias name '" + f.bias + "'");
     }
     const HostTensor& wt = w.get(wname);
-    std::vector<int> in{x, g.weight(wname, wt.shape), g.weight(bname, {wt.shape[3]})};
-    if (residual >= 0) in.push_back(residual);
-    Params p{{"stride", double(stride)}, {"pad", double(pad)}, {"weight_layout", double(ops::kConvIHWO)},
-             {"act", double(relu ? ops::kActRelu : ops::kActNone)}, {"residual", residual >= 0 ? 1.0 : 0.0}};
-    return g.add1("conv2d", in, p, conv);
+    ops::Conv2d c;
+    c.stride_h = c.stride_w = stride;
+    c.pad_h = c.pad_w = pad;
+    c.layout = ops::kConvIHWO;
+    c.act = relu ? ops::kActRelu : ops::kActNone;
+    return ops::conv2d(g, x, g.weight(wname, wt.shape), g.weight(bname, {wt.shape[3]}), residual, c, conv);
 }
 
 }  // namespace
@@ -45,8 +47,7 @@ HostTensor tactile_image_input(const uint8_t* rgb, size_t bytes, int64_t height,
 
 int add_tactile_preprocess(Graph& g, const ModelConfig& config, int image) {
     const TactileConfig& c = config.tactile;
-    return g.add1("tactile_preprocess", {image}, {{"crop", double(c.crop)}, {"size", double(c.in_size)}},
-                  "tactile.input");
+    return ops::tactile_preprocess(g, image, c.crop, c.in_size, "tactile.input");
 }
 
 int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int input) {
@@ -58,7 +59,7 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
     const std::string p = "tactile.backbone.";
     // Stem: conv 7x7/2 + BN + ReLU, max-pool 3x3/2 pad 1.
     int x = conv_bn(g, w, p + "conv1", p + "bn1", input, 2, 3, true);
-    x = g.add1("max_pool2d", {x}, {{"kernel", 3}, {"stride", 2}, {"pad", 1}}, p + "maxpool");
+    x = ops::max_pool2d(g, x, ops::Pool2d{3, 3, 2, 2, 1, 1}, p + "maxpool");
     int64_t inplanes = c.widths[0];
     for (size_t s = 0; s < 4; ++s)
         for (int64_t b = 0; b < c.blocks[s]; ++b) {
@@ -73,7 +74,7 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
             x = conv_bn(g, w, m + "conv2", m + "bn2", y, 1, 1, true, skip);
             inplanes = c.widths[s];
         }
-    x = g.add1("global_avg_pool", {x}, {}, p + "avgpool");  // [N, C, 1, 1]
+    x = ops::global_avg_pool(g, x, p + "avgpool");  // [N, C, 1, 1]
     // The head's Linear layers run as 1x1 convolutions on the pooled [N, C, 1, 1]:
     // same arithmetic, and on CPU devices far faster than the shared-memory GEMM
     // of `linear` for one row (lavapipe: ~0.1 ms instead of ~11 ms).
@@ -84,13 +85,13 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
         if (lw.shape.size() != 2) throw Error("weight '" + m + ".weight' must be [out, in], got " + shape_str(lw.shape));
         if (!w.has(m + ".weight#ihwo"))
             w.add(m + ".weight#ihwo", ops::conv_weight_to_ihwo(HostTensor(Shape{lw.shape[0], lw.shape[1], 1, 1}, lw.data)));
-        std::vector<int> in{x, g.weight(m + ".weight#ihwo", {lw.shape[1], 1, 1, lw.shape[0]})};
-        if (w.has(m + ".bias")) in.push_back(g.weight(m + ".bias", {lw.shape[0]}));
-        const bool relu = i + 1 < layers;
-        x = g.add1("conv2d", in,
-                   {{"weight_layout", double(ops::kConvIHWO)}, {"act", double(relu ? ops::kActRelu : ops::kActNone)}}, m);
+        const int bias = w.has(m + ".bias") ? g.weight(m + ".bias", {lw.shape[0]}) : -1;
+        ops::Conv2d head;
+        head.layout = ops::kConvIHWO;
+        head.act = i + 1 < layers ? ops::kActRelu : ops::kActNone;
+        x = ops::conv2d(g, x, g.weight(m + ".weight#ihwo", {lw.shape[1], 1, 1, lw.shape[0]}), bias, -1, head, m);
     }
-    return g.add1("flatten", {x}, {}, "tactile.feature");
+    return ops::flatten(g, x, "tactile.feature");
 }
 
 }  // namespace vtloc

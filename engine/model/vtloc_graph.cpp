@@ -5,6 +5,7 @@
 #include "engine/model/heads.h"
 #include "engine/model/point_encoder.h"
 #include "engine/model/tactile_encoder.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -53,7 +54,7 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
         if (gma) {
             int pd = build_gma(g, w, cfg, ft, fp);
             g.output(pd, "gma.cloud" + s);
-            g.output(g.add("chamfer", {pd, gma_target}, {}, "gma.chamfer" + s).at(0), "gma.chamfer" + s);
+            g.output(ops::chamfer(g, pd, gma_target, "gma.chamfer" + s).at(0), "gma.chamfer" + s);
         }
         int contact;
         if (ilu_head) {
@@ -66,12 +67,10 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
         }
         g.output(contact, "contact" + s);
         if (candidates < 0) continue;
-        auto top = g.add("topk", {contact, candidates}, {{"k", double(k)}}, "topk" + s);
+        auto top = ops::topk(g, contact, candidates, k, "topk" + s);
         g.output(top.at(0), "topk.index" + s);
         g.output(top.at(1), "topk.score" + s);
-        std::vector<int> hin{cloud, candidates, top.at(0)};
-        if (symmetry >= 0) hin.push_back(symmetry);
-        g.output(g.add1("heatmap", hin, {}, "heatmap" + s), "heatmap" + s);
+        g.output(ops::heatmap(g, cloud, candidates, top.at(0), symmetry, "heatmap" + s), "heatmap" + s);
     }
     return g;
 }

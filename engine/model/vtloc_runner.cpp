@@ -8,6 +8,7 @@
 #include "engine/model/heads.h"
 #include "engine/model/post.h"
 #include "runtime/context.h"
+#include "engine/ops/build.h"
 
 namespace vtloc {
 
@@ -241,13 +242,13 @@ SequenceResult VtlocRunner::localize_sequence(const EncodedObject& object, const
             moves.data[size_t(t * 3 + i)] = float(d / object.frame.scale);
         }
     const int64_t M = object.candidates.shape[0];
-    const Params params{{"sigma", belief.sigma}, {"sigma_m", belief.sigma_m}, {"window", double(belief.window)}};
     std::string key = "belief/m" + std::to_string(M) + "/t" + std::to_string(T) + "/" + std::to_string(belief.sigma) +
                       "/" + std::to_string(belief.sigma_m) + "/" + std::to_string(belief.window);
     TensorMap out = run_graph(key, [&] {
         Graph g;
         int c = g.input("candidates", {M, 3});
-        auto b = g.add("belief", {c, g.input("contacts", {T, 3}), g.input("motions", {T - 1, 3})}, params, "belief");
+        auto b = ops::belief(g, c, g.input("contacts", {T, 3}), g.input("motions", {T - 1, 3}),
+                             ops::Belief{belief.sigma, belief.sigma_m, belief.window}, "belief");
         g.output(b.at(0), "belief");
         return g;
     }, {{"candidates", object.candidates}, {"contacts", contacts}, {"motions", moves}});

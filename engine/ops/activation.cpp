@@ -32,9 +32,9 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_relu{"relu", infer, cpu<kActRelu>, gpu<kActRelu>};
-const OpDef op_leaky_relu{"leaky_relu", infer, cpu<kActLeaky>, gpu<kActLeaky>};
-const OpDef op_tanh{"tanh", infer, cpu<kActTanh>, gpu<kActTanh>};
-const OpDef op_sigmoid{"sigmoid", infer, cpu<kActSigmoid>, gpu<kActSigmoid>};
+const OpDef op_relu{"relu", infer, cpu<kActRelu>, gpu<kActRelu>, 0, {"slope"}};
+const OpDef op_leaky_relu{"leaky_relu", infer, cpu<kActLeaky>, gpu<kActLeaky>, 0, {"slope"}};
+const OpDef op_tanh{"tanh", infer, cpu<kActTanh>, gpu<kActTanh>, 0, {"slope"}};
+const OpDef op_sigmoid{"sigmoid", infer, cpu<kActSigmoid>, gpu<kActSigmoid>, 0, {"slope"}};
 
 }  // namespace vtloc::ops

@@ -76,6 +76,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_ball_query{"ball_query", infer, cpu, gpu};
+const OpDef op_ball_query{"ball_query", infer, cpu, gpu, 0, {"radius", "nsample"}};
 
 }  // namespace vtloc::ops

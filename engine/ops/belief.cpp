@@ -122,6 +122,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_belief{"belief", infer, cpu, gpu};
+const OpDef op_belief{"belief", infer, cpu, gpu, 0, {"sigma", "sigma_m", "window"}};
 
 }  // namespace vtloc::ops

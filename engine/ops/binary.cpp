@@ -46,8 +46,8 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_add{"add", infer, cpu<0>, gpu<0>};
-const OpDef op_mul{"mul", infer, cpu<1>, gpu<1>};
-const OpDef op_sub{"sub", infer, cpu<2>, gpu<2>};
+const OpDef op_add{"add", infer, cpu<0>, gpu<0>, 0, {}};
+const OpDef op_mul{"mul", infer, cpu<1>, gpu<1>, 0, {}};
+const OpDef op_sub{"sub", infer, cpu<2>, gpu<2>, 0, {}};
 
 }  // namespace vtloc::ops

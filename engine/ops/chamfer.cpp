@@ -92,6 +92,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_chamfer{"chamfer", infer, cpu, gpu};
+const OpDef op_chamfer{"chamfer", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

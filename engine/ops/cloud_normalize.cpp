@@ -55,6 +55,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_cloud_normalize{"cloud_normalize", infer, cpu, gpu};
+const OpDef op_cloud_normalize{"cloud_normalize", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

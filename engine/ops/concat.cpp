@@ -55,6 +55,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_concat{"concat", infer, cpu, gpu};
+const OpDef op_concat{"concat", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

@@ -182,6 +182,7 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_conv2d{"conv2d", infer, cpu, gpu};
+const OpDef op_conv2d{"conv2d", infer, cpu, gpu, 0,
+                        {"stride", "stride_h", "stride_w", "pad", "pad_h", "pad_w", "weight_layout", "act", "slope", "residual", "texel"}};
 
 }  // namespace vtloc::ops

@@ -91,6 +91,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_disentangle{"disentangle", infer, cpu, gpu};
+const OpDef op_disentangle{"disentangle", infer, cpu, gpu, 0, {"act", "slope"}};
 
 }  // namespace vtloc::ops

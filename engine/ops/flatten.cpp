@@ -24,6 +24,6 @@ void gpu(const GpuOpArgs& a) { a.seq.copy(a.in[0].view, a.out[0].view); }
 
 }  // namespace
 
-const OpDef op_flatten{"flatten", infer, cpu, gpu};
+const OpDef op_flatten{"flatten", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

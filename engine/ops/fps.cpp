@@ -70,6 +70,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2};  // output 2: the workspace
+const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2, {"npoint", "no_registers"}};  // output 2: the workspace
 
 }  // namespace vtloc::ops

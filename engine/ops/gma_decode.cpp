@@ -42,6 +42,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_gma_decode{"gma_decode", infer, cpu, gpu};
+const OpDef op_gma_decode{"gma_decode", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

@@ -166,7 +166,8 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_group_linear{"group_linear", infer, cpu, gpu};
+const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
+                        {"in", "feat_begin", "max", "group", "act", "slope", "texel"}};
 
 // W [N, K] (PyTorch Linear / squeezed 1x1 conv) -> W^T [K, N], group_linear's layout.
 HostTensor point_weight_kn(const HostTensor& w) {

@@ -97,6 +97,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_heatmap{"heatmap", infer, cpu, gpu};
+const OpDef op_heatmap{"heatmap", infer, cpu, gpu, 0, {}};
 
 }  // namespace vtloc::ops

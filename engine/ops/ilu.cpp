@@ -53,6 +53,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_ilu{"ilu", infer, cpu, gpu};
+const OpDef op_ilu{"ilu", infer, cpu, gpu, 0, {"max_iters", "lanes"}};
 
 }  // namespace vtloc::ops

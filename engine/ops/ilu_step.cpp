@@ -75,6 +75,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_ilu_step{"ilu_step", infer, cpu, gpu};
+const OpDef op_ilu_step{"ilu_step", infer, cpu, gpu, 0, {"max_iters", "step", "lanes"}};
 
 }  // namespace vtloc::ops

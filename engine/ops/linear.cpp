@@ -84,6 +84,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_linear{"linear", infer, cpu, gpu};
+const OpDef op_linear{"linear", infer, cpu, gpu, 0, {"act", "slope"}};
 
 }  // namespace vtloc::ops

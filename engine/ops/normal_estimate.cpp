@@ -193,6 +193,7 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_normal_estimate{"normal_estimate", infer, cpu, gpu};
+const OpDef op_normal_estimate{"normal_estimate", infer, cpu, gpu, 0,
+                        {"k", "orient", "rx", "ry", "rz", "cell", "gx", "gy", "gz", "ox", "oy", "oz"}};
 
 }  // namespace vtloc::ops

@@ -91,7 +91,7 @@ void max_gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_point_group{"point_group", group_infer, group_cpu, group_gpu};
-const OpDef op_group_max{"group_max", max_infer, max_cpu, max_gpu};
+const OpDef op_point_group{"point_group", group_infer, group_cpu, group_gpu, 0, {"feat_begin"}};
+const OpDef op_group_max{"group_max", max_infer, max_cpu, max_gpu, 0, {"group", "channel_major"}};
 
 }  // namespace vtloc::ops

@@ -125,7 +125,8 @@ void avg_gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_max_pool2d{"max_pool2d", max_infer, max_cpu, max_gpu};
-const OpDef op_global_avg_pool{"global_avg_pool", avg_infer, avg_cpu, avg_gpu};
+const OpDef op_max_pool2d{"max_pool2d", max_infer, max_cpu, max_gpu, 0,
+                        {"kernel", "kernel_h", "kernel_w", "stride", "stride_h", "stride_w", "pad", "pad_h", "pad_w", "texel"}};
+const OpDef op_global_avg_pool{"global_avg_pool", avg_infer, avg_cpu, avg_gpu, 0, {}};
 
 }  // namespace vtloc::ops

@@ -109,6 +109,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_tactile_preprocess{"tactile_preprocess", infer, cpu, gpu};
+const OpDef op_tactile_preprocess{"tactile_preprocess", infer, cpu, gpu, 0, {"crop", "size"}};
 
 }  // namespace vtloc::ops

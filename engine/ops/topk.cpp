@@ -122,6 +122,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_topk{"topk", infer, cpu, gpu, 1u << 2};  // output 2: the workspace
+const OpDef op_topk{"topk", infer, cpu, gpu, 1u << 2, {"k"}};  // output 2: the workspace
 
 }  // namespace vtloc::ops

@@ -1,0 +1,133 @@
+#include "engine/ops/build.h"
+
+#include "base/error.h"
+
+namespace vtloc::ops {
+
+namespace {
+
+double flag(bool b) { return b ? 1.0 : 0.0; }
+double d(int64_t v) { return double(v); }
+
+}  // namespace
+
+const char* path_name(BufferPath p) { return p == BufferPath::Texel ? "texel" : "storage-buffer"; }
+
+int linear(Graph& g, int x, int w, int bias, Act act, double slope, const std::string& name) {
+    std::vector<int> in{x, w};
+    if (bias >= 0) in.push_back(bias);
+    return g.add1("linear", in, {{"act", double(act)}, {"slope", slope}}, name);
+}
+
+int activation(Graph& g, Act act, int x, double slope, const std::string& name) {
+    const char* op = act == kActRelu ? "relu" : act == kActLeaky ? "leaky_relu" : act == kActTanh ? "tanh"
+                   : act == kActSigmoid ? "sigmoid" : nullptr;
+    if (!op) throw Error("activation: no op for activation code " + std::to_string(act));
+    return g.add1(op, {x}, act == kActLeaky ? Params{{"slope", slope}} : Params{}, name);
+}
+
+int concat(Graph& g, const std::vector<int>& xs, const std::string& name) { return g.add1("concat", xs, {}, name); }
+int flatten(Graph& g, int x, const std::string& name) { return g.add1("flatten", {x}, {}, name); }
+
+int binary(Graph& g, Binary op, int a, int b, const std::string& name) {
+    return g.add1(op == Binary::Add ? "add" : op == Binary::Sub ? "sub" : "mul", {a, b}, {}, name);
+}
+
+std::vector<int> cloud_normalize(Graph& g, int cloud, const std::string& name) {
+    return g.add("cloud_normalize", {cloud}, {}, name);
+}
+
+int conv2d(Graph& g, int x, int w, int bias, int residual, const Conv2d& c, const std::string& name) {
+    std::vector<int> in{x, w};
+    if (bias >= 0) in.push_back(bias);
+    if (residual >= 0) in.push_back(residual);
+    return g.add1("conv2d", in,
+                  {{"stride_h", d(c.stride_h)}, {"stride_w", d(c.stride_w)}, {"pad_h", d(c.pad_h)},
+                   {"pad_w", d(c.pad_w)}, {"weight_layout", double(c.layout)}, {"act", double(c.act)},
+                   {"slope", c.slope}, {"residual", flag(residual >= 0)},
+                   {"texel", flag(c.path == BufferPath::Texel)}},
+                  name);
+}
+
+int max_pool2d(Graph& g, int x, const Pool2d& p, const std::string& name) {
+    return g.add1("max_pool2d", {x},
+                  {{"kernel_h", d(p.kernel_h)}, {"kernel_w", d(p.kernel_w)}, {"stride_h", d(p.stride_h)},
+                   {"stride_w", d(p.stride_w)}, {"pad_h", d(p.pad_h)}, {"pad_w", d(p.pad_w)},
+                   {"texel", flag(p.path == BufferPath::Texel)}},
+                  name);
+}
+
+int global_avg_pool(Graph& g, int x, const std::string& name) { return g.add1("global_avg_pool", {x}, {}, name); }
+
+int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name) {
+    return g.add1("tactile_preprocess", {image}, {{"crop", d(crop)}, {"size", d(size)}}, name);
+}
+
+int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name) {
+    return g.add1("disentangle", in, {{"act", double(act)}, {"slope", slope}}, name);
+}
+
+int gma_decode(Graph& g, int x, const std::string& name) { return g.add1("gma_decode", {x}, {}, name); }
+
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name) { return g.add("chamfer", {a, b}, {}, name); }
+
+std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name, int lanes) {
+    Params p{{"max_iters", double(max_iters)}};
+    if (lanes > 0) p.set("lanes", double(lanes));
+    return g.add("ilu", in, p, name);
+}
+
+std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, int step, const std::string& name) {
+    return g.add("ilu_step", in, {{"max_iters", double(max_iters)}, {"step", double(step)}}, name);
+}
+
+std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name) {
+    return g.add("topk", {contact, candidates}, {{"k", d(k)}}, name);
+}
+
+int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name) {
+    std::vector<int> in{cloud, candidates, index};
+    if (symmetry >= 0) in.push_back(symmetry);
+    return g.add1("heatmap", in, {}, name);
+}
+
+std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name) {
+    return g.add("belief", {candidates, contacts, motions},
+                 {{"sigma", b.sigma}, {"sigma_m", b.sigma_m}, {"window", double(b.window)}}, name);
+}
+
+std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace) {
+    Params p{{"npoint", d(npoint)}};
+    if (force_workspace) p.set("no_registers", 1);
+    return g.add("fps", {xyz}, p, name);
+}
+
+int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name) {
+    return g.add1("ball_query", {xyz, centres}, {{"radius", radius}, {"nsample", d(nsample)}}, name);
+}
+
+int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name) {
+    return g.add1("point_group", in, {{"feat_begin", d(feat_begin)}}, name);
+}
+
+int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::string& name) {
+    return g.add1("group_max", {x}, {{"group", d(group)}, {"channel_major", flag(channel_major)}}, name);
+}
+
+int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name) {
+    Params p{{"in", double(l.input)}, {"act", double(l.act)}, {"slope", l.slope},
+             {"texel", flag(l.path == BufferPath::Texel)}};
+    if (l.input == GroupLinear::Input::Gather) p.set("feat_begin", d(l.feat_begin));
+    if (l.max) p.set("max", 1);
+    if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls
+    return g.add1("group_linear", in, p, name);
+}
+
+int normal_estimate(Graph& g, int points, int order, int cell_start, const PointGrid& grid, int64_t k, int orient,
+                    const std::array<double, 3>& ref, const std::string& name) {
+    Params p{{"k", d(k)}, {"orient", double(orient)}, {"rx", ref[0]}, {"ry", ref[1]}, {"rz", ref[2]}};
+    set_grid_params(p, grid);
+    return g.add1("normal_estimate", {points, order, cell_start}, p, name);
+}
+
+}  // namespace vtloc::ops

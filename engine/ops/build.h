@@ -1,0 +1,94 @@
+#pragma once
+// Typed op constructors: every op's parameters as C++ arguments or a struct,
+// so a misspelt or wrongly typed parameter is a compile error. They add the
+// node through Graph::add, which also refuses unknown names at run time for
+// callers that still pass Params. Each returns the node's outputs.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/graph.h"
+#include "engine/ops/common.h"
+#include "engine/ops/conv2d.h"
+#include "engine/ops/point_grid.h"
+
+namespace vtloc::ops {
+
+// How an op reads its read-only inputs: uniform texel buffers (a gather on CPU
+// devices; the op falls back by itself past maxTexelBufferElements) or plain
+// storage buffers. Tests and the device self-test sweep every path.
+enum class BufferPath { Texel, Storage };
+inline constexpr BufferPath kBufferPaths[] = {BufferPath::Texel, BufferPath::Storage};
+const char* path_name(BufferPath p);
+
+// Dense and elementwise.
+int linear(Graph& g, int x, int w, int bias, Act act = kActNone, double slope = 0.01, const std::string& name = "");
+int activation(Graph& g, Act act, int x, double slope = 0.01, const std::string& name = "");  // relu, leaky_relu, ...
+int concat(Graph& g, const std::vector<int>& xs, const std::string& name = "");
+// Elementwise with suffix broadcasting.
+enum class Binary { Add, Sub, Mul };
+int binary(Graph& g, Binary op, int a, int b, const std::string& name = "");
+int flatten(Graph& g, int x, const std::string& name = "");
+
+// Image.
+struct Conv2d {
+    int64_t stride_h = 1, stride_w = 1, pad_h = 0, pad_w = 0;
+    uint32_t layout = kConvOIHW;  // kConvOIHW or kConvIHWO (conv_weight_to_ihwo)
+    Act act = kActNone;
+    double slope = 0.01;
+    BufferPath path = BufferPath::Texel;
+};
+// bias, residual: -1 for none.
+int conv2d(Graph& g, int x, int w, int bias, int residual, const Conv2d& c, const std::string& name = "");
+struct Pool2d {
+    int64_t kernel_h = 1, kernel_w = 1, stride_h = 1, stride_w = 1, pad_h = 0, pad_w = 0;
+    BufferPath path = BufferPath::Texel;
+};
+int max_pool2d(Graph& g, int x, const Pool2d& p, const std::string& name = "");
+int global_avg_pool(Graph& g, int x, const std::string& name = "");
+int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name = "");
+
+// GMA and heads.
+int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name = "");
+int gma_decode(Graph& g, int x, const std::string& name = "");
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "");
+// lanes: lanes per row of the fused GRU (0: the op's default).
+std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name = "", int lanes = 0);
+std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, int step, const std::string& name = "");
+std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "");
+// symmetry: -1 for none.
+int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name = "");
+struct Belief {
+    double sigma = 0.2, sigma_m = 0.05;
+    int window = 4;
+};
+// candidates [M, 3], the touches' contacts [T, 3], the motions between them [T - 1, 3].
+std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name = "");
+
+// Point cloud.
+// force_workspace: the shared-memory/workspace path even where the registers
+// path would fit (tests and the self-test cover both).
+// The normalised frame on the GPU: outputs the cloud and the frame [4].
+std::vector<int> cloud_normalize(Graph& g, int cloud, const std::string& name = "");
+std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name = "", bool force_workspace = false);
+int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name = "");
+// in: points, centres, ball indices (+ features); feat_begin: first feature column.
+int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name = "");
+int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::string& name = "");
+struct GroupLinear {
+    enum class Input { Rows = 0, Gather = 1, GroupAll = 2 } input = Input::Rows;
+    int64_t feat_begin = 0;  // Gather: first feature column
+    bool max = false;        // keep only the max over each group of `group` rows
+    int64_t group = 1;
+    Act act = kActNone;
+    double slope = 0.01;
+    BufferPath path = BufferPath::Texel;
+};
+int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
+// Normals from the k nearest points found through `grid` (point_grid.h);
+// orient: 0 as computed, 1 away from `ref` (a centroid), 2 towards it (a camera).
+int normal_estimate(Graph& g, int points, int order, int cell_start, const PointGrid& grid, int64_t k, int orient,
+                    const std::array<double, 3>& ref, const std::string& name = "");
+
+}  // namespace vtloc::ops
