@@ -1,5 +1,6 @@
 // The dataset builder behind `vtloc synth` (docs/dataset.md).
 #include "engine/sim/dataset_builder.h"
+#include "engine/sim/object_builder.h"
 
 #include <algorithm>
 #include <atomic>
@@ -31,7 +32,6 @@ namespace vtloc::sim {
 
 namespace {
 
-constexpr double kPi = 3.14159265358979323846;
 
 std::string trim(const std::string& s) {
     size_t a = s.find_first_not_of(" \t\r\n"), b = s.find_last_not_of(" \t\r\n");
@@ -43,68 +43,6 @@ std::string object_name(const std::string& source) {
     return fs::path(source).stem().string();
 }
 
-// Mesh scaled so its largest bounding-box side is scale_mm, centred on its box.
-io::TriangleMesh scaled(io::TriangleMesh m, double scale_mm) {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (size_t i = 0; i < m.vertex_count(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], double(m.positions[i * 3 + size_t(k)]));
-            hi[k] = std::max(hi[k], double(m.positions[i * 3 + size_t(k)]));
-        }
-    double side = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
-    double f = scale_mm / side;
-    for (size_t i = 0; i < m.vertex_count(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            float& v = m.positions[i * 3 + size_t(k)];
-            v = float((v - 0.5 * (lo[k] + hi[k])) * f);
-        }
-    return m;
-}
-
-double diameter(const HostTensor& p) {
-    double best = 0;
-    for (int64_t i = 0; i < p.shape[0]; ++i)
-        for (int64_t j = i + 1; j < p.shape[0]; ++j) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) {
-                double d = double(p.data[size_t(i) * 6 + size_t(k)]) - p.data[size_t(j) * 6 + size_t(k)];
-                s += d * d;
-            }
-            best = std::max(best, s);
-        }
-    return std::sqrt(best);
-}
-
-double dist(const Vec3& a, const Vec3& b) {
-    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
-}
-
-double uniform(io::SplitMix64& rng, double lo, double hi) { return lo + (hi - lo) * rng.uniform(); }
-
-Appearance random_look(io::SplitMix64& rng) {
-    Appearance a;
-    a.brightness = uniform(rng, -20, 20);
-    for (auto& g : a.gain) g = uniform(rng, 0.85, 1.15);
-    a.blur_sigma_px = uniform(rng, 0, 1.0);
-    a.noise_sigma = uniform(rng, 1.0, 4.0);
-    return a;
-}
-
-// Relative motion: pose b in pose a's frame (R_a^T R_b, R_a^T (t_b - t_a)).
-void relative(const SensorPose& a, const SensorPose& b, TouchRecord& t) {
-    for (int i = 0; i < 3; ++i) {
-        for (int j = 0; j < 3; ++j) {
-            double s = 0;
-            for (int k = 0; k < 3; ++k) s += a.R[size_t(k * 3 + i)] * b.R[size_t(k * 3 + j)];
-            t.rel_R[size_t(i * 3 + j)] = s;
-        }
-        double s = 0;
-        for (int k = 0; k < 3; ++k) s += a.R[size_t(k * 3 + i)] * (b.t[size_t(k)] - a.t[size_t(k)]);
-        t.rel_t[size_t(i)] = s;
-        t.motion[size_t(i)] = b.t[size_t(i)] - a.t[size_t(i)];
-    }
-}
-
 std::string options_json(const BuildOptions& o) {
     json j = {{"seed", o.seed},           {"contacts", o.contacts},         {"test_fraction", o.test_fraction},
               {"extra", o.extra},         {"n_points", o.n_points},         {"max_tilt_deg", o.max_tilt_deg},
@@ -113,230 +51,6 @@ std::string options_json(const BuildOptions& o) {
               {"randomize_train_look", o.randomize_train_look}, {"calibration", o.calibration},
               {"background", o.background}, {"mm_per_px", o.mm_per_px ? *o.mm_per_px : 0.0}};
     return j.dump();
-}
-
-struct Job {
-    int index = 0;
-    ObjectSource src;
-    std::string name;
-};
-
-struct Shared {
-    const BuildOptions& opt;
-    const Calibration& calib;
-    std::vector<float> background;  // user's empty frame, stored order; empty = calibration's
-    std::atomic<long> touches{0}, rejected{0};
-    std::mutex mu;
-    std::vector<std::string> notes;
-};
-
-TouchRecord record(const Touch& t, int id, const std::string& split, const TouchParams& p) {
-    TouchRecord r;
-    r.id = id;
-    r.split = split;
-    char name[32];
-    std::snprintf(name, sizeof name, "touches/%04d.png", id);
-    r.image = name;
-    r.contact = t.contact;
-    r.normal = t.normal;
-    r.R = t.pose.R;
-    r.t = t.pose.t;
-    r.press_mm = p.press_mm;
-    r.spin_deg = p.spin_deg;
-    r.tilt_deg = p.tilt_deg;
-    return r;
-}
-
-void write_png(const fs::path& p, const std::vector<uint8_t>& img, int h, int w) {
-    cv::Mat m(h, w, CV_8UC3, const_cast<uint8_t*>(img.data()));
-    if (!cv::imwrite(p.string(), m)) throw Error(p.string() + ": cannot write the PNG");
-}
-
-// Builds one object into objects/<name>.tmp, then renames it into place.
-ObjectRecord build_object(const Job& job, Shared& sh) {
-    const BuildOptions& opt = sh.opt;
-    io::SplitMix64 rng(opt.seed * 0x9E3779B97F4A7C15ull + uint64_t(job.index) * 0xD1B54A32D192ED03ull + 1);
-    io::TriangleMesh mesh;
-    double scale;
-    if (job.src.source.rfind("shape:", 0) == 0) {
-        mesh = make_shape(job.name);
-        scale = job.src.scale_mm ? *job.src.scale_mm : shape_scale_mm(job.name);
-    } else {
-        mesh = io::load_mesh(job.src.source);
-        scale = job.src.scale_mm ? *job.src.scale_mm : uniform(rng, 50, 250);
-    }
-    if (!(scale >= 1 && scale <= 10000))
-        throw Error(job.src.source + ": scale " + std::to_string(scale) + " mm is outside 1..10000");
-    mesh = scaled(std::move(mesh), scale);
-
-    ObjectRecord o;
-    o.name = job.name;
-    o.source = job.src.source.rfind("shape:", 0) == 0 ? job.src.source : fs::path(job.src.source).filename().string();
-    o.scale_mm = scale;
-    o.n_points = opt.n_points;
-    o.sample_seed = rng.next_u64() >> 11;
-    o.points = io::sample_surface(mesh, opt.n_points, o.sample_seed, job.src.source);
-    Uniformity u = measure_uniformity(o.points);
-    o.dn_share = u.share_below;
-    o.subset = u.uniform ? "uniform" : "non-uniform";
-    o.diameter_mm = diameter(o.points);
-
-    TouchRenderer renderer(sh.calib, mesh, opt.mm_per_px);
-    Appearance plain;
-    if (!sh.background.empty()) plain.background = sh.background;
-
-    // Contact draws: area-weighted surface samples, in batches, each rendered
-    // with its own spin/tilt/press; unreachable or too-close ones are skipped.
-    struct Accepted {
-        Touch touch;
-        TouchParams params;
-        Vec3 point, normal;  // the draw (the contact is its projection)
-    };
-    std::vector<Accepted> acc;
-    const int want = opt.contacts;
-    const int max_draws = 50 * std::max(want, 1) + 200;
-    int draws = 0;
-    uint64_t draw_seed = rng.next_u64();
-    HostTensor pool;
-    int64_t pool_at = 0;
-    auto next_point = [&](Vec3& p, Vec3& n) {
-        if (pool_at >= (pool.shape.empty() ? 0 : pool.shape[0])) {
-            pool = io::sample_surface(mesh, 256, draw_seed++, job.src.source);
-            pool_at = 0;
-        }
-        const float* q = &pool.data[size_t(pool_at++) * 6];
-        p = {q[0], q[1], q[2]};
-        n = {q[3], q[4], q[5]};
-    };
-    auto draw_params = [&]() {
-        TouchParams tp;
-        tp.press_mm = uniform(rng, opt.press_min_mm, opt.press_max_mm);
-        tp.spin_deg = uniform(rng, 0, 360);
-        tp.tilt_deg = uniform(rng, 0, opt.max_tilt_deg);
-        tp.tilt_dir_deg = uniform(rng, 0, 360);
-        return tp;
-    };
-    while (int(acc.size()) < want && draws < max_draws) {
-        ++draws;
-        Vec3 p, n;
-        next_point(p, n);
-        TouchParams tp = draw_params();
-        Touch t = renderer.render(p, n, tp, plain, rng.next_u64());
-        if (!t.ok) {
-            sh.rejected++;
-            continue;
-        }
-        bool close = false;
-        for (const auto& a : acc) close = close || dist(a.touch.contact, t.contact) < opt.min_separation_mm;
-        if (close) continue;
-        acc.push_back({std::move(t), tp, p, n});
-    }
-    if (acc.size() < 2)
-        throw Error(job.src.source + ": no reachable contacts found (" + std::to_string(draws) + " draws)");
-    if (int(acc.size()) < want) {
-        std::lock_guard<std::mutex> lock(sh.mu);
-        sh.notes.push_back(job.name + ": " + std::to_string(acc.size()) + " of " + std::to_string(want) +
-                           " contacts (the rest unreachable or too close)");
-    }
-
-    // 7:3 split (a seeded shuffle), test contacts first in id order.
-    std::vector<size_t> perm(acc.size());
-    std::iota(perm.begin(), perm.end(), 0);
-    for (size_t i = perm.size(); i > 1; --i) std::swap(perm[i - 1], perm[size_t(rng.next_u64() % i)]);
-    size_t n_test = std::max<size_t>(1, size_t(std::lround(opt.test_fraction * double(acc.size()))));
-    n_test = std::min(n_test, acc.size() - 1);
-
-    fs::path final_dir = fs::path(opt.out) / "objects" / job.name;
-    fs::path dir = fs::path(opt.out) / "objects" / (job.name + ".tmp");
-    fs::remove_all(dir);
-    fs::create_directories(dir / "touches");
-
-    std::vector<TouchRecord> recs;
-    std::vector<SensorPose> poses;
-    const int H = sh.calib.height, W = sh.calib.width;
-    for (size_t k = 0; k < perm.size(); ++k) {
-        Accepted& a = acc[perm[k]];
-        bool test = k < n_test;
-        if (!test && opt.randomize_train_look) {
-            // Re-render the train touch with a randomised sensor look.
-            Appearance look = random_look(rng);
-            if (!sh.background.empty()) look.background = sh.background;
-            Touch t = renderer.render(a.point, a.normal, a.params, look, rng.next_u64());
-            if (t.ok) a.touch = std::move(t);
-        }
-        TouchRecord r = record(a.touch, int(k), test ? "test" : "train", a.params);
-        write_png(dir / r.image, a.touch.image, H, W);
-        recs.push_back(r);
-        poses.push_back(a.touch.pose);
-    }
-    sh.touches += long(recs.size());
-
-    // Collection order: a nearest-neighbour path over the surface through all
-    // train and test contacts, from a random start.
-    {
-        std::vector<bool> used(recs.size(), false);
-        size_t cur = size_t(rng.next_u64() % recs.size());
-        for (size_t step = 0; step < recs.size(); ++step) {
-            used[cur] = true;
-            recs[cur].order = int(step);
-            size_t best = cur;
-            double bd = 1e300;
-            for (size_t j = 0; j < recs.size(); ++j)
-                if (!used[j] && dist(recs[cur].contact, recs[j].contact) < bd) {
-                    bd = dist(recs[cur].contact, recs[j].contact);
-                    best = j;
-                }
-            cur = best;
-        }
-        std::vector<size_t> by_order(recs.size());
-        for (size_t i = 0; i < recs.size(); ++i) by_order[size_t(recs[i].order)] = i;
-        for (size_t s = 1; s < by_order.size(); ++s)
-            relative(poses[by_order[s - 1]], poses[by_order[s]], recs[by_order[s]]);
-    }
-
-    // Extra training touches: new contacts, never within 2 mm of a test contact.
-    int extra_done = 0, extra_draws = 0;
-    while (extra_done < opt.extra && extra_draws < 50 * opt.extra + 200) {
-        ++extra_draws;
-        Vec3 p, n;
-        next_point(p, n);
-        TouchParams tp = draw_params();
-        Appearance look = opt.randomize_train_look ? random_look(rng) : Appearance{};
-        if (!sh.background.empty()) look.background = sh.background;
-        Touch t = renderer.render(p, n, tp, look, rng.next_u64());
-        if (!t.ok) {
-            sh.rejected++;
-            continue;
-        }
-        bool near_test = false;
-        for (size_t k = 0; k < n_test; ++k) near_test = near_test || dist(recs[k].contact, t.contact) < 2.0;
-        if (near_test) continue;
-        TouchRecord r = record(t, int(recs.size()), "extra", tp);
-        write_png(dir / r.image, t.image, H, W);
-        recs.push_back(r);
-        ++extra_done;
-        sh.touches++;
-    }
-
-    write_png(dir / "background.png", renderer.background_frame(plain), H, W);
-    io::save_mesh_ply((dir / "mesh.ply").string(), mesh);
-    write_points_csv((dir / "points.csv").string(), o.points);
-    write_touches_csv((dir / "touches.csv").string(), recs);
-    write_object_json((dir / "object.json").string(), o);
-    fs::remove_all(final_dir);
-    fs::rename(dir, final_dir);
-    return o;
-}
-
-ObjectRecord read_built_object(const fs::path& dir) {
-    std::ifstream f(dir / "object.json");
-    json j = json::parse(f, nullptr, false);
-    if (j.is_discarded()) throw Error((dir / "object.json").string() + ": not valid JSON (delete the folder to rebuild)");
-    ObjectRecord o;
-    o.name = j.value("name", "");
-    o.subset = j.value("subset", "");
-    o.dn_share = j.value("dn_share", 0.0);
-    return o;
 }
 
 }  // namespace
@@ -371,41 +85,50 @@ std::vector<ObjectSource> read_object_list(const std::string& path, const std::s
     return out;
 }
 
-BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildOptions& opt) {
-    auto t0 = std::chrono::steady_clock::now();
+namespace {
+
+void check_options(const std::vector<ObjectSource>& objects, const BuildOptions& opt) {
     if (objects.empty()) throw Error("synth: no objects given");
     if (opt.contacts < 2) throw Error("synth: --contacts must be at least 2 (train and test)");
     if (opt.n_points < 1) throw Error("synth: --n-points must be positive");
     if (opt.max_tilt_deg < 0 || opt.max_tilt_deg > 10) throw Error("synth: tilt must be within 0..10 degrees");
     if (!(opt.press_min_mm > 0) || opt.press_max_mm < opt.press_min_mm)
         throw Error("synth: press depth range must be positive and ordered");
+}
 
-    Calibration calib = load_calibration(opt.calibration.empty() ? default_calibration_path() : opt.calibration);
+// The user's empty sensor frame, resized to the calibration's, in stored (BGR)
+// order; empty without one.
+std::vector<float> user_background(const BuildOptions& opt, const Calibration& calib) {
     std::vector<float> background;
-    if (!opt.background.empty()) {
-        cv::Mat bg = cv::imread(opt.background, cv::IMREAD_COLOR);
-        if (bg.empty()) throw Error(opt.background + ": cannot read the background image");
-        if (bg.rows != calib.height || bg.cols != calib.width)
-            cv::resize(bg, bg, cv::Size(calib.width, calib.height), 0, 0, cv::INTER_AREA);
-        background.assign(size_t(calib.height) * size_t(calib.width) * 3, 0);
-        for (int y = 0; y < bg.rows; ++y)
-            for (int x = 0; x < bg.cols; ++x)
-                for (int c = 0; c < 3; ++c)
-                    background[(size_t(y) * size_t(bg.cols) + size_t(x)) * 3 + size_t(c)] = bg.at<cv::Vec3b>(y, x)[c];
-    }
+    if (opt.background.empty()) return background;
+    cv::Mat bg = cv::imread(opt.background, cv::IMREAD_COLOR);
+    if (bg.empty()) throw Error(opt.background + ": cannot read the background image");
+    if (bg.rows != calib.height || bg.cols != calib.width)
+        cv::resize(bg, bg, cv::Size(calib.width, calib.height), 0, 0, cv::INTER_AREA);
+    background.assign(size_t(calib.height) * size_t(calib.width) * 3, 0);
+    for (int y = 0; y < bg.rows; ++y)
+        for (int x = 0; x < bg.cols; ++x)
+            for (int c = 0; c < 3; ++c)
+                background[(size_t(y) * size_t(bg.cols) + size_t(x)) * 3 + size_t(c)] = bg.at<cv::Vec3b>(y, x)[c];
+    return background;
+}
 
+// build.json records the options: a folder is only ever resumed with the same ones.
+void check_stamp(const BuildOptions& opt) {
     fs::create_directories(fs::path(opt.out) / "objects");
-    fs::path stamp = fs::path(opt.out) / "build.json";
-    std::string want_opts = options_json(opt);
+    const fs::path stamp = fs::path(opt.out) / "build.json";
+    const std::string want = options_json(opt);
     if (fs::exists(stamp)) {
         std::ifstream f(stamp);
         std::string have((std::istreambuf_iterator<char>(f)), {});
-        if (trim(have) != want_opts)
+        if (trim(have) != want)
             throw Error(opt.out + ": was built with other options (build.json); use another folder or delete it");
     } else {
-        write_file_atomic(stamp.string(), want_opts + "\n");
+        write_file_atomic(stamp.string(), want + "\n");
     }
+}
 
+std::vector<Job> make_jobs(const std::vector<ObjectSource>& objects) {
     std::vector<Job> jobs;
     std::map<std::string, int> seen_names;
     for (size_t i = 0; i < objects.size(); ++i) {
@@ -414,8 +137,12 @@ BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildO
         if (seen_names[j.name]++) j.name += "_" + std::to_string(seen_names[j.name]);
         jobs.push_back(j);
     }
+    return jobs;
+}
 
-    Shared sh{opt, calib, background};
+// Every object built (or read back when already built) on opt.threads threads.
+std::vector<ObjectRecord> build_all(const std::vector<Job>& jobs, Shared& sh, int& resumed_count) {
+    const BuildOptions& opt = sh.opt;
     std::vector<ObjectRecord> built(jobs.size());
     std::vector<std::string> errors(jobs.size());
     std::atomic<int> next{0}, done{0}, resumed{0};
@@ -454,16 +181,12 @@ BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildO
     for (auto& t : pool) t.join();
     for (const auto& e : errors)
         if (!e.empty()) throw Error(e);
+    resumed_count = resumed;
+    return built;
+}
 
-    // Object-level 7:3 split, stratified by subset, from the dataset seed.
-    Dataset d;
-    d.root = opt.out;
-    d.seed = opt.seed;
-    d.n_points = opt.n_points;
-    d.sensor.height = calib.height;
-    d.sensor.width = calib.width;
-    d.sensor.mm_per_px = opt.mm_per_px ? *opt.mm_per_px : calib.mm_per_px;
-    d.sensor.calibration = opt.calibration.empty() ? "objectfolder_gelsight_calib" : fs::path(opt.calibration).stem().string();
+// Object-level 7:3 split, stratified by subset, from the dataset seed.
+void split_objects(std::vector<ObjectRecord>& built, const BuildOptions& opt) {
     io::SplitMix64 split_rng(opt.seed ^ 0x5EEDull);
     for (const char* subset : {"non-uniform", "uniform"}) {
         std::vector<size_t> idx;
@@ -475,6 +198,30 @@ BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildO
         else n_unseen = 0;
         for (size_t k = 0; k < idx.size(); ++k) built[idx[k]].object_split = k < n_unseen ? "unseen" : "seen";
     }
+}
+
+}  // namespace
+
+BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildOptions& opt) {
+    auto t0 = std::chrono::steady_clock::now();
+    check_options(objects, opt);
+    Calibration calib = load_calibration(opt.calibration.empty() ? default_calibration_path() : opt.calibration);
+    std::vector<float> background = user_background(opt, calib);
+    check_stamp(opt);
+    const std::vector<Job> jobs = make_jobs(objects);
+    Shared sh{opt, calib, background};
+    int resumed = 0;
+    std::vector<ObjectRecord> built = build_all(jobs, sh, resumed);
+    split_objects(built, opt);
+
+    Dataset d;
+    d.root = opt.out;
+    d.seed = opt.seed;
+    d.n_points = opt.n_points;
+    d.sensor.height = calib.height;
+    d.sensor.width = calib.width;
+    d.sensor.mm_per_px = opt.mm_per_px ? *opt.mm_per_px : calib.mm_per_px;
+    d.sensor.calibration = opt.calibration.empty() ? "objectfolder_gelsight_calib" : fs::path(opt.calibration).stem().string();
     for (auto& o : built) {
         ObjectRecord e;
         e.name = o.name;
