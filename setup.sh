@@ -15,6 +15,11 @@ packages=(
   pybind11-dev python3-dev
 )
 
+# --dev: also what the fuzzers and sanitizer builds need (CI; tests/fuzz/run.sh).
+if [ "${1:-}" = "--dev" ]; then
+  packages+=(clang libclang-rt-14-dev)
+fi
+
 missing=()
 for p in "${packages[@]}"; do
   dpkg-query -W -f='${Status}' "$p" 2>/dev/null | grep -q "install ok installed" || missing+=("$p")

@@ -103,7 +103,8 @@ SafetensorsFile SafetensorsFile::parse(std::vector<uint8_t> bytes, const std::st
             }
             continue;
         }
-        auto tfail = [&](const std::string& msg) { return fail("tensor '" + key + "': " + msg); };
+        const std::string& name = key;  // clang before 16 cannot capture a structured binding
+        auto tfail = [&](const std::string& msg) { return fail("tensor '" + name + "': " + msg); };
         if (!val.is_object()) throw tfail("entry is not a JSON object");
         if (!val.contains("dtype") || !val["dtype"].is_string()) throw tfail("missing or non-string dtype");
         if (!val.contains("shape") || !val["shape"].is_array()) throw tfail("missing or non-array shape");

@@ -79,6 +79,10 @@ TEST_CASE("cloud file errors name the file and the problem", "[io]") {
     require_error([] { load_object(write_temp("short.pcd", kPcdHead3 + "DATA binary\n\x01\x02"), 10); },
                   {"short.pcd", "ends before its 3 points"});
     require_error([] { load_object(write_temp("nodata.pcd", kPcdHead3), 10); }, {"nodata.pcd", "no DATA line"});
+    // Fuzzer finding (tests/fuzz, fuzz_points): a binary PCD whose DATA line ends the file
+    // without a newline read past the end of the buffer.
+    require_error([] { load_object(write_temp("eof.pcd", kPcdHead3 + "DATA binary\t\xff\xff"), 10); },
+                  {"eof.pcd", "ends before its 3 points"});
     require_error([] { load_object(write_temp("noxyz.pcd", "FIELDS a b\nSIZE 4 4\nTYPE F F\nPOINTS 1\nDATA ascii\n1 2\n"), 10); },
                   {"noxyz.pcd", "no x y z fields"});
     require_error([] { load_object(write_temp("badsize.pcd", "FIELDS x y z\nSIZE 4 4\n"), 10); },

@@ -107,6 +107,14 @@ TEST_CASE("dataset: reader errors name the file", "[sim]") {
     write_file_atomic(tc.string(), t);
     require_error([&] { read_dataset(root.string()); }, {"touches.csv:2", "cy", "abc"});
 
+    // Fuzzer finding (tests/fuzz, fuzz_dataset): an optional field of the wrong type
+    // escaped as the JSON library's exception instead of a one-line error.
+    root = write_small_dataset("ds_seed_object");
+    j = slurp(root / "dataset.json");
+    j.replace(j.find("\"seed\""), 6, "\"seed\": {}, \"_seed\"");
+    write_file_atomic((root / "dataset.json").string(), j);
+    require_error([&] { read_dataset(root.string()); }, {"dataset.json", "field 'seed' has the wrong type"});
+
     root = write_small_dataset("ds_missing_points");
     fs::remove(root / "objects/cube/points.csv");
     require_error([&] { read_dataset(root.string()); }, {"points.csv", "cannot read"});

@@ -55,7 +55,7 @@ HostTensor load_pcd(const std::string& path) {
         size_t nl = pos;
         while (nl < bytes.size() && bytes[nl] != '\n') ++nl;
         std::string line(bytes.begin() + std::ptrdiff_t(pos), bytes.begin() + std::ptrdiff_t(nl));
-        pos = nl + 1;
+        pos = nl < bytes.size() ? nl + 1 : nl;  // a last line without '\n' (the fuzzer's DATA line) ends the file
         ++line_no;
         if (line.empty() || line[0] == '#') continue;
         std::istringstream ss(line);

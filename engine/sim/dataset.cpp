@@ -44,6 +44,14 @@ T field(const json& j, const char* key, const fs::path& p) {
     }
 }
 
+// An optional field: `fallback` when absent, one-line error when of the wrong type
+// (json::value would throw its own exception type past the readers' callers).
+template <class T>
+T optional_field(const json& j, const char* key, T fallback, const fs::path& p) {
+    if (!j.is_object() || !j.contains(key)) return fallback;
+    return field<T>(j, key, p);
+}
+
 std::vector<std::string> split_commas(const std::string& line) {
     std::vector<std::string> out;
     std::string cur;
@@ -121,19 +129,19 @@ ObjectRecord read_object(const fs::path& root, const json& entry, const fs::path
     fs::path oj = dir / "object.json";
     json j = read_json(oj);
     if (field<std::string>(j, "name", oj) != o.name) throw Error(oj.string() + ": name does not match its folder");
-    o.source = j.value("source", "");
+    o.source = optional_field<std::string>(j, "source", std::string(), oj);
     o.subset = field<std::string>(entry, "subset", index_path);
     if (o.subset != "uniform" && o.subset != "non-uniform")
         throw Error(index_path.string() + ": object '" + o.name + "' has subset '" + o.subset +
                     "' (uniform or non-uniform)");
-    o.dn_share = entry.value("dn_share", j.value("dn_share", 0.0));
+    o.dn_share = optional_field<double>(entry, "dn_share", optional_field<double>(j, "dn_share", 0.0, oj), index_path);
     o.object_split = field<std::string>(entry, "object_split", index_path);
     if (o.object_split != "seen" && o.object_split != "unseen")
         throw Error(index_path.string() + ": object '" + o.name + "' has object_split '" + o.object_split +
                     "' (seen or unseen)");
-    o.scale_mm = j.value("scale_mm", 0.0);
-    o.diameter_mm = j.value("diameter_mm", 0.0);
-    o.sample_seed = j.value("sample_seed", uint64_t(0));
+    o.scale_mm = optional_field<double>(j, "scale_mm", 0.0, oj);
+    o.diameter_mm = optional_field<double>(j, "diameter_mm", 0.0, oj);
+    o.sample_seed = optional_field<uint64_t>(j, "sample_seed", uint64_t(0), oj);
 
     fs::path pp = dir / "points.csv";
     Csv pc = read_csv(pp);
@@ -233,13 +241,13 @@ Dataset read_dataset(const std::string& root_arg) {
         throw Error(index.string() + ": format '" + format + "', this engine reads '" + kDatasetFormat + "'");
     Dataset d;
     d.root = root_arg;
-    d.seed = j.value("seed", uint64_t(0));
+    d.seed = optional_field<uint64_t>(j, "seed", uint64_t(0), index);
     d.n_points = field<int>(j, "n_points", index);
     json s = field<json>(j, "sensor", index);
     d.sensor.height = field<int>(s, "height", index);
     d.sensor.width = field<int>(s, "width", index);
     d.sensor.mm_per_px = field<double>(s, "mm_per_px", index);
-    d.sensor.calibration = s.value("calibration", "");
+    d.sensor.calibration = optional_field<std::string>(s, "calibration", std::string(), index);
     if (d.sensor.height <= 0 || d.sensor.width <= 0 || !(d.sensor.mm_per_px > 0))
         throw Error(index.string() + ": sensor size and mm_per_px must be positive");
     json objs = field<json>(j, "objects", index);

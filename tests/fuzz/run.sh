@@ -1,0 +1,39 @@
+#!/usr/bin/env bash
+# Builds the libFuzzer targets (clang; ASan + UBSan + coverage, in build-fuzz/)
+# and runs each for SECONDS on a working copy of its seed corpus
+# (tests/fuzz/corpus/<target>, grown in build-fuzz/corpus/<target>). A crash,
+# a leak, an uncaught exception other than vtloc::Error, or a 10 s hang fails
+# the run and leaves the input in build-fuzz/findings/<target>/.
+#   bash tests/fuzz/run.sh [SECONDS] [TARGET ...]     (default: 30 s, every target)
+set -euo pipefail
+root="$(cd "$(dirname "$0")/../.." && pwd)"
+seconds="${1:-30}"
+shift || true
+targets=("$@")
+[ ${#targets[@]} -gt 0 ] || targets=(safetensors config mesh points image dataset)
+build="$root/build-fuzz"
+if [ ! -f "$build/CMakeCache.txt" ]; then
+  CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DVTLOC_FUZZ=ON -DVTLOC_BUILD_TESTS=OFF \
+    -DVTLOC_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
+fi
+cmake --build "$build" -j"$(nproc)" --target "${targets[@]/#/fuzz_}" > /dev/null
+status=0
+for t in "${targets[@]}"; do
+  corpus="$build/corpus/$t" findings="$build/findings/$t"
+  mkdir -p "$corpus" "$findings"
+  cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/"
+  log="$build/fuzz_$t.log"
+  # Leaks are findings too; the OpenCV decoders' thread pool is not ours: one thread.
+  if OPENCV_FOR_THREADS_NUM=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+      "$build/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+      -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1; then
+    result=ok
+  else
+    result="FINDING (see $log and $findings/)"
+    status=1
+  fi
+  execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
+  cov=$(grep -o 'cov: [0-9]*' "$log" | tail -1 | grep -o '[0-9]*' || echo "?")
+  printf '%-12s %4s s  %10s executions  %6s edges  %s\n' "$t" "$seconds" "$execs" "$cov" "$result"
+done
+exit $status
