@@ -230,6 +230,13 @@ Context::Context(const ContextOptions& options) {
     bool validation = options.validation < 0 ? env_flag("VTLOC_VALIDATION") : options.validation == 1;
     std::string want = options.device;
     if (want.empty() && std::getenv("VTLOC_DEVICE")) want = std::getenv("VTLOC_DEVICE");
+    budget_ = options.memory_budget;
+    if (const char* mib = std::getenv("VTLOC_MEMORY_BUDGET_MIB"); !budget_ && mib && *mib) {
+        char* end = nullptr;
+        const double v = std::strtod(mib, &end);
+        if (*end || !(v > 0)) throw Error(std::string("VTLOC_MEMORY_BUDGET_MIB='") + mib + "' is not a positive number");
+        budget_ = uint64_t(v * 1024 * 1024);
+    }
 
     instance_ = make_instance(validation);
     try {
@@ -276,6 +283,23 @@ Context::Context(const ContextOptions& options) {
 }
 
 Context::~Context() { release(); }
+
+void Context::reserve_memory(uint64_t bytes) {
+    const uint64_t before = in_use_.fetch_add(bytes);
+    if (budget_ && before + bytes > budget_) {
+        in_use_ -= bytes;
+        auto mib = [](uint64_t b) { return std::to_string((b + (1 << 20) - 1) >> 20); };
+        throw Error("out of device memory: a " + mib(bytes) + " MiB buffer would bring this context to " +
+                    mib(before + bytes) + " MiB, over its budget of " + mib(budget_) +
+                    " MiB (ContextOptions::memory_budget / VTLOC_MEMORY_BUDGET_MIB)");
+    }
+}
+
+void Context::check_not_lost() const {
+    if (lost_)
+        throw Error("the GPU device of this context was lost (VK_ERROR_DEVICE_LOST) earlier: it refuses further work; "
+                    "create a new context");
+}
 
 void Context::release() {
     pipelines_.reset();

@@ -3,6 +3,8 @@
 // Vulkan 1.1 core only; no device extension is required.
 #include <vulkan/vulkan.h>
 
+#include <atomic>
+
 #include <array>
 #include <cstdint>
 #include <functional>
@@ -48,6 +50,10 @@ struct ContextOptions {
     int validation = -1;  // -1 from env, 0 off, 1 on
     // Empty: VTLOC_DEVICE decides; otherwise a device index or a name substring.
     std::string device;
+    // Bytes of buffers (device and staging) this context may hold at once; 0:
+    // VTLOC_MEMORY_BUDGET_MIB if set, else no limit beyond the device's own. Past
+    // it an allocation fails as out-of-device-memory would, with a clear error.
+    uint64_t memory_budget = 0;
 };
 
 // A message from the validation layer (warnings and errors only).
@@ -86,6 +92,22 @@ public:
     // Called by the debug messenger; public only for the C callback.
     void on_validation_message(const ValidationMessage& m);
 
+    // Buffer bookkeeping against the memory budget (memory.cpp): reserve throws
+    // vtloc::Error when `bytes` more would pass it.
+    void reserve_memory(uint64_t bytes);
+    void release_memory(uint64_t bytes) { in_use_ -= bytes; }
+    uint64_t memory_in_use() const { return in_use_; }
+    uint64_t memory_budget() const { return budget_; }
+
+    // After VK_ERROR_DEVICE_LOST (real, or simulated by testing::lose_device)
+    // the context refuses all further GPU work with a clear error.
+    void mark_lost() { lost_ = true; }
+    bool lost() const { return lost_; }
+    void check_not_lost() const;
+    // Test hook: the next submit fails with VK_ERROR_DEVICE_LOST instead of running.
+    void simulate_device_loss() { simulate_loss_ = true; }
+    bool take_simulated_loss() { return simulate_loss_.exchange(false); }
+
 private:
     void release();  // destroys the Vulkan objects; safe on a half-built context
 
@@ -100,6 +122,9 @@ private:
     std::unique_ptr<PipelineCache> pipelines_;
     mutable std::mutex messages_mutex_;
     std::vector<ValidationMessage> messages_;
+    uint64_t budget_ = 0;
+    std::atomic<uint64_t> in_use_{0};
+    std::atomic<bool> lost_{false}, simulate_loss_{false};
 };
 
 // Throws vtloc::Error naming the call when r is not VK_SUCCESS.

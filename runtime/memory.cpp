@@ -31,6 +31,9 @@ Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) {
     VkMemoryAllocateInfo ai{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO};
     ai.allocationSize = req.size;
     ai.memoryTypeIndex = ctx.memory_type(req.memoryTypeBits, required, preferred);
+    ctx.reserve_memory(req.size);  // throws past the context's budget; released with the buffer
+    ctx_ = &ctx;
+    reserved_ = req.size;
     VkResult r = vkAllocateMemory(dev, &ai, nullptr, memory_.out(dev));
     if (r == VK_ERROR_OUT_OF_DEVICE_MEMORY || r == VK_ERROR_OUT_OF_HOST_MEMORY)
         throw Error("out of memory allocating a " + std::to_string(size_ >> 20) + " MiB Vulkan buffer");
@@ -38,6 +41,12 @@ Buffer::Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind) {
     check_vk(vkBindBufferMemory(dev, buffer_.get(), memory_.get(), 0), "vkBindBufferMemory");
     if (kind == MemoryKind::Staging)
         check_vk(vkMapMemory(dev, memory_.get(), 0, VK_WHOLE_SIZE, 0, &mapped_), "vkMapMemory");
+}
+
+void Buffer::unreserve() {
+    if (ctx_) ctx_->release_memory(reserved_);
+    ctx_ = nullptr;
+    reserved_ = 0;
 }
 
 ChunkedBuffers::Slot ChunkedBuffers::reserve(VkDeviceSize size) {

@@ -26,13 +26,18 @@ public:
     Buffer(Context& ctx, VkDeviceSize size, MemoryKind kind);
     Buffer(Buffer&& o) noexcept { *this = std::move(o); }
     Buffer& operator=(Buffer&& o) noexcept {
+        if (this == &o) return *this;
+        unreserve();
         buffer_ = std::move(o.buffer_);  // the buffer goes before its memory
         memory_ = std::move(o.memory_);
+        ctx_ = std::exchange(o.ctx_, nullptr);
+        reserved_ = std::exchange(o.reserved_, 0);
         size_ = std::exchange(o.size_, 0);
         mapped_ = std::exchange(o.mapped_, nullptr);
         return *this;
     }
 
+    ~Buffer() { unreserve(); }
     VkBuffer handle() const { return buffer_.get(); }
     VkDeviceSize size() const { return size_; }
     // Non-null for staging buffers (persistently mapped).
@@ -41,8 +46,11 @@ public:
 private:
     // The memory outlives the buffer bound to it (members go in reverse order);
     // freeing it unmaps it.
+    void unreserve();
     MemoryHandle memory_;
     BufferHandle buffer_;
+    Context* ctx_ = nullptr;  // whose memory budget holds reserved_ bytes
+    uint64_t reserved_ = 0;
     VkDeviceSize size_ = 0;
     void* mapped_ = nullptr;
 };

@@ -35,6 +35,7 @@ void Sequence::check_recording(const char* what) const {
 }
 
 void Sequence::begin() {
+    ctx_.check_not_lost();
     check_vk(vkResetCommandBuffer(cmd_, 0), "vkResetCommandBuffer");
     for (auto& p : descriptor_pools_) vkResetDescriptorPool(ctx_.device(), p.get(), 0);
     pools_used_ = 0;
@@ -267,11 +268,17 @@ void Sequence::submit_and_wait() {
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd_;
+    ctx_.check_not_lost();
     check_vk(vkResetFences(ctx_.device(), 1, fence_.ptr()), "vkResetFences");
-    check_vk(vkQueueSubmit(ctx_.queue(), 1, &si, fence_.get()), "vkQueueSubmit");
-    VkResult r = vkWaitForFences(ctx_.device(), 1, fence_.ptr(), VK_TRUE, kSubmitTimeoutNs);
+    VkResult r = ctx_.take_simulated_loss() ? VK_ERROR_DEVICE_LOST : vkQueueSubmit(ctx_.queue(), 1, &si, fence_.get());
+    if (r == VK_SUCCESS) r = vkWaitForFences(ctx_.device(), 1, fence_.ptr(), VK_TRUE, kSubmitTimeoutNs);
     if (r == VK_TIMEOUT) throw Error("GPU work did not finish within 10 minutes");
-    check_vk(r, "vkWaitForFences");
+    if (r == VK_ERROR_DEVICE_LOST) {
+        ctx_.mark_lost();
+        throw Error("the GPU device was lost during a submit (VK_ERROR_DEVICE_LOST): a driver reset, a hang or a "
+                    "removed GPU; this context refuses further work: create a new context");
+    }
+    check_vk(r, "vkQueueSubmit / vkWaitForFences");
 }
 
 std::vector<Sequence::NodeTime> Sequence::node_times() const {

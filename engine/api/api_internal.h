@@ -11,10 +11,20 @@
 
 namespace vtloc::api {
 
+// TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a
+// driver reset would (the tests include this internal header; users cannot).
+namespace testing {
+void simulate_device_loss(Context& c);
+}  // namespace testing
+
 struct Context::Impl {
     rt::Context ctx;
     DeviceInfo device;
     explicit Impl(const rt::ContextOptions& o) : ctx(o) {}
+};
+
+struct ContextAccess {
+    static rt::Context& rt(Context& c) { return c.impl_->ctx; }
 };
 
 struct Object::Impl {

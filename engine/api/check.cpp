@@ -10,10 +10,6 @@
 
 namespace vtloc::api {
 
-struct ContextAccess {
-    static rt::Context& rt(Context& c) { return c.impl_->ctx; }
-};
-
 namespace {
 
 CheckError to_api(const check::Comparison& c) {

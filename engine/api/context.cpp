@@ -60,6 +60,7 @@ Context::Context(const ContextOptions& options) {
         rt::ContextOptions o;
         o.device = options.device;
         o.validation = options.validation == Validation::Environment ? -1 : options.validation == Validation::On ? 1 : 0;
+        o.memory_budget = options.memory_budget;
         auto impl = std::make_unique<Impl>(o);
         impl->device = to_api(impl->ctx.info());
         return impl;
@@ -73,6 +74,10 @@ Context& Context::operator=(Context&&) noexcept = default;
 const DeviceInfo& Context::device() const { return impl_->device; }
 
 bool Context::validation_enabled() const { return impl_->ctx.validation_enabled(); }
+
+uint64_t Context::memory_in_use() const { return impl_->ctx.memory_in_use(); }
+
+void testing::simulate_device_loss(Context& c) { ContextAccess::rt(c).simulate_device_loss(); }
 
 std::vector<std::string> Context::take_validation_messages() {
     std::vector<std::string> out;

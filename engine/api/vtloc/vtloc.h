@@ -85,6 +85,11 @@ struct ContextOptions {
     // a case-insensitive substring of the device name.
     std::string device;
     Validation validation = Validation::Environment;
+    // Bytes of GPU buffers this context may hold at once (0: the environment's
+    // VTLOC_MEMORY_BUDGET_MIB, else no limit): past it, work fails with a clear
+    // out-of-device-memory error and the context stays usable. For robots that
+    // share a GPU, and for testing how a program handles the failure.
+    uint64_t memory_budget = 0;
 };
 
 class Context {
@@ -98,6 +103,9 @@ public:
     bool validation_enabled() const;
     // Validation-layer warnings and errors since the last call (one string each).
     std::vector<std::string> take_validation_messages();
+    // Bytes of GPU buffers (device and staging) this context holds now: weights,
+    // activations and staging of every model run on it.
+    uint64_t memory_in_use() const;
 
     struct Impl;
 
