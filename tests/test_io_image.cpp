@@ -80,6 +80,24 @@ TEST_CASE("image errors name the file and the problem", "[io]") {
     require_error([] { load_tactile_image(write_temp("empty.png", "")); }, {"empty.png", "empty"});
     require_error([] { load_tactile_image(write_temp("text.png", "hello, I am not a picture\n")); },
                   {"text.png", "not an image"});
+    // Fuzzer finding (tests/fuzz, fuzz_image): OpenCV decodes by content, and Debian's reads
+    // DICOM through GDCM; a ".png" with a DICOM body asked for 2.6 GB. Only PNG, JPEG and BMP
+    // reach the decoder, and a header claiming a huge image is refused before it.
+    std::string dicom(128, '\0');
+    dicom += "DICM";
+    require_error([&] { load_tactile_image(write_temp("dicom.png", dicom)); }, {"dicom.png", "not an image this engine reads"});
+    {
+        cv::Mat tiny(9, 9, CV_8UC3, cv::Scalar(5, 6, 7));
+        std::vector<uint8_t> png;
+        REQUIRE(cv::imencode(".png", tiny, png));
+        png[16] = 0x7F;  // IHDR width -> ~2.1 billion
+        require_error([&] { load_tactile_image(write_temp("huge.png", std::string(png.begin(), png.end()))); },
+                      {"huge.png", "the image header says", "at most 8192 a side"});
+        std::vector<uint8_t> tif;
+        REQUIRE(cv::imencode(".tiff", tiny, tif));
+        require_error([&] { load_tactile_image(write_temp("frame.tiff", std::string(tif.begin(), tif.end()))); },
+                      {"frame.tiff", "PNG, JPEG or BMP"});
+    }
     cv::Mat small(4, 6, CV_8UC3, cv::Scalar(1, 2, 3));
     REQUIRE(cv::imwrite(temp_path("small.png"), small));
     require_error([] { load_tactile_image(temp_path("small.png")); },

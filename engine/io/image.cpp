@@ -22,11 +22,50 @@ void quiet_opencv() {
     (void)once;
 }
 
-// Decodes any image file as stored (depth, channels), or throws naming the file.
+uint32_t be16(const uint8_t* p) { return uint32_t(p[0]) << 8 | p[1]; }
+uint32_t be32(const uint8_t* p) { return be16(p) << 16 | be16(p + 2); }
+uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
+
+// The largest side accepted: far above any tactile frame or depth camera, far
+// below what would let a forged header allocate gigabytes.
+constexpr uint32_t kMaxImageSide = 8192;
+
+// OpenCV picks a decoder by content, and Debian's also reads DICOM, NITF and
+// more through GDCM and GDAL (a fuzzer led a ".png" into a 2.6 GB DICOM
+// allocation): only PNG, JPEG and BMP reach it, with their size checked first.
+void check_format(const std::vector<uint8_t>& b, const std::string& path) {
+    const size_t n = b.size();
+    uint32_t w = 0, h = 0;
+    if (n >= 24 && std::memcmp(b.data(), "\x89PNG\r\n\x1a\n", 8) == 0 && std::memcmp(&b[12], "IHDR", 4) == 0) {
+        w = be32(&b[16]), h = be32(&b[20]);
+    } else if (n >= 26 && b[0] == 'B' && b[1] == 'M') {
+        w = le32(&b[18]);
+        const int32_t sh = int32_t(le32(&b[22]));  // negative: rows stored top-down
+        h = sh < 0 ? uint32_t(-int64_t(sh)) : uint32_t(sh);
+    } else if (n >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF) {
+        for (size_t i = 2; i + 9 < n && !w;) {  // segments until a start-of-frame marker
+            if (b[i] != 0xFF) fail(path, "JPEG data is corrupt (no marker where one belongs)");
+            const uint8_t m = b[i + 1];
+            if (m == 0xFF) { ++i; continue; }
+            if (m == 0xDA || m == 0xD9) break;  // scan data or end before any frame header
+            if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC) h = be16(&b[i + 5]), w = be16(&b[i + 7]);
+            i += 2 + be16(&b[i + 2]);
+        }
+        if (!w || !h) fail(path, "JPEG data is corrupt (no frame header with the image size)");
+    } else {
+        fail(path, "not an image this engine reads (PNG, JPEG or BMP; other formats are refused)");
+    }
+    if (w == 0 || h == 0 || w > kMaxImageSide || h > kMaxImageSide)
+        fail(path, "the image header says " + std::to_string(w) + "x" + std::to_string(h) + " pixels; at most " +
+                       std::to_string(kMaxImageSide) + " a side is read");
+}
+
+// Decodes a PNG, JPEG or BMP file as stored (depth, channels), or throws naming the file.
 cv::Mat decode(const std::string& path) {
     quiet_opencv();
     std::vector<uint8_t> bytes = read_file_bytes(path);
     if (bytes.empty()) fail(path, "file is empty, not an image");
+    check_format(bytes, path);
     cv::Mat raw;
     try {
         // IMREAD_UNCHANGED keeps grey/alpha/16-bit visible to us and skips EXIF rotation.
