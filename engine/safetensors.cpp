@@ -7,6 +7,7 @@
 #include <limits>
 #include <nlohmann/json.hpp>
 
+#include "base/atomic_write.h"
 #include "base/error.h"
 
 static_assert(std::endian::native == std::endian::little, "safetensors I/O assumes a little-endian host");
@@ -258,13 +259,10 @@ void write_safetensors(const std::string& path, const std::vector<TensorBlob>& t
     std::string text = header.dump();
     text.append((8 - text.size() % 8) % 8, ' ');
     uint64_t len = text.size();
-    std::ofstream out(path, std::ios::binary | std::ios::trunc);
-    if (!out) throw Error(path + ": cannot open for writing");
-    out.write(reinterpret_cast<const char*>(&len), 8);
-    out.write(text.data(), std::streamsize(text.size()));
-    for (const TensorBlob& t : tensors)
-        out.write(reinterpret_cast<const char*>(t.bytes.data()), std::streamsize(t.bytes.size()));
-    if (!out) throw Error(path + ": write failed");
+    std::string bytes(reinterpret_cast<const char*>(&len), 8);
+    bytes += text;
+    for (const TensorBlob& t : tensors) bytes.append(reinterpret_cast<const char*>(t.bytes.data()), t.bytes.size());
+    write_file_atomic(path, bytes);
 }
 
 }  // namespace vtloc

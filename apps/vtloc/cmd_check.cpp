@@ -7,6 +7,7 @@
 
 #include "apps/vtloc/check_json.h"
 #include "apps/vtloc/cli.h"
+#include "base/atomic_write.h"
 
 namespace vtloc::cli {
 
@@ -67,8 +68,11 @@ void print_device(const api::CheckDevice& d, bool limits) {
 }
 
 void write_json(const std::string& path, const nlohmann::json& j) {
-    std::ofstream out(path);
-    if (!out || !(out << j.dump(2) << "\n")) throw api::Error(path + ": cannot write");
+    try {
+        write_file_atomic(path, j.dump(2) + "\n");
+    } catch (const vtloc::Error& e) {
+        throw api::Error(e.what());
+    }
 }
 
 std::string indices_str(const api::CheckError& e) {

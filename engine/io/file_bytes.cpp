@@ -37,14 +37,6 @@ void write_file_bytes(const std::string& path, const void* data, size_t size) {
     if (!out) fail(path, "write error (disk full?)");
 }
 
-void write_file_atomic(const std::string& path, const void* data, size_t size) {
-    const std::string tmp = path + ".tmp";
-    write_file_bytes(tmp, data, size);
-    std::error_code ec;
-    std::filesystem::rename(tmp, path, ec);
-    if (ec) fail(path, "cannot be replaced (" + ec.message() + ")");
-}
-
 std::string extension_of(const std::string& path) {
     std::string ext = std::filesystem::path(path).extension().string();
     if (!ext.empty()) ext.erase(0, 1);

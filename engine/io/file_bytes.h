@@ -3,6 +3,8 @@
 // engine/io shares, so that a user always learns which file was wrong.
 #include <cstdint>
 #include <string>
+
+#include "base/atomic_write.h"
 #include <vector>
 
 namespace vtloc::io {
@@ -16,8 +18,7 @@ std::vector<uint8_t> read_file_bytes(const std::string& path);
 
 // Writes bytes to path (replacing it); throws naming the path when it cannot.
 void write_file_bytes(const std::string& path, const void* data, size_t size);
-// The same through "<path>.tmp" and a rename, so a reader never sees half a file.
-void write_file_atomic(const std::string& path, const void* data, size_t size);
+using vtloc::write_file_atomic;  // base/atomic_write.h: temporary name, then rename
 
 // Lower-case extension without the dot ("PLY" -> "ply", none -> "").
 std::string extension_of(const std::string& path);

@@ -143,7 +143,7 @@ void save_png(const std::string& path, const RgbImage& image) {
     cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
     std::vector<uint8_t> png;
     if (!cv::imencode(".png", bgr, png)) fail(path, "PNG encoding failed");
-    write_file_bytes(path, png.data(), png.size());
+    write_file_atomic(path, png.data(), png.size());
 }
 
 }  // namespace vtloc::io

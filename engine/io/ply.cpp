@@ -356,7 +356,7 @@ void write_ply(const std::string& path, const HostTensor& points, const PlyWrite
             if (!o.rgb.empty()) s.append(reinterpret_cast<const char*>(&o.rgb[3 * i]), 3);
         }
     }
-    write_file_bytes(path, s.data(), s.size());
+    write_file_atomic(path, s.data(), s.size());
 }
 
 }  // namespace vtloc::io

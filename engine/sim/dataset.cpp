@@ -256,19 +256,6 @@ Dataset read_dataset(const std::string& root_arg) {
     return d;
 }
 
-void write_file_atomic(const std::string& path, const std::string& bytes) {
-    std::string tmp = path + ".tmp";
-    {
-        std::ofstream f(tmp, std::ios::binary | std::ios::trunc);
-        if (!f) throw Error(tmp + ": cannot write");
-        f.write(bytes.data(), std::streamsize(bytes.size()));
-        if (!f) throw Error(tmp + ": write failed (disk full?)");
-    }
-    std::error_code ec;
-    fs::rename(tmp, path, ec);
-    if (ec) throw Error(path + ": cannot rename the temporary file (" + ec.message() + ")");
-}
-
 void write_object_json(const std::string& path, const ObjectRecord& o) {
     json j = {{"name", o.name},         {"source", o.source},         {"scale_mm", o.scale_mm},
               {"diameter_mm", o.diameter_mm}, {"subset", o.subset},   {"dn_share", o.dn_share},

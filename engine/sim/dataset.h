@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "base/atomic_write.h"
 #include "engine/tensor.h"
 
 namespace vtloc::sim {
@@ -72,7 +73,6 @@ void write_points_csv(const std::string& path, const HostTensor& points);
 void write_touches_csv(const std::string& path, const std::vector<TouchRecord>& touches);
 void write_dataset_json(const std::string& path, const Dataset& d);
 
-// Writes `bytes` to `path` atomically (temporary file, then rename).
-void write_file_atomic(const std::string& path, const std::string& bytes);
+using vtloc::write_file_atomic;  // base/atomic_write.h
 
 }  // namespace vtloc::sim
