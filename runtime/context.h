@@ -108,6 +108,10 @@ public:
     void simulate_device_loss() { simulate_loss_ = true; }
     bool take_simulated_loss() { return simulate_loss_.exchange(false); }
 
+    // vkQueueSubmit needs the queue externally synchronised: every submit on this
+    // context (from any thread: models, normal estimation) holds this lock.
+    std::mutex& queue_mutex() { return queue_mutex_; }
+
 private:
     void release();  // destroys the Vulkan objects; safe on a half-built context
 
@@ -125,6 +129,7 @@ private:
     uint64_t budget_ = 0;
     std::atomic<uint64_t> in_use_{0};
     std::atomic<bool> lost_{false}, simulate_loss_{false};
+    std::mutex queue_mutex_;
 };
 
 // Throws vtloc::Error naming the call when r is not VK_SUCCESS.

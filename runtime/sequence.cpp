@@ -268,6 +268,7 @@ void Sequence::submit_and_wait() {
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd_;
+    std::lock_guard<std::mutex> queue_lock(ctx_.queue_mutex());
     ctx_.check_not_lost();
     check_vk(vkResetFences(ctx_.device(), 1, fence_.ptr()), "vkResetFences");
     VkResult r = ctx_.take_simulated_loss() ? VK_ERROR_DEVICE_LOST : vkQueueSubmit(ctx_.queue(), 1, &si, fence_.get());

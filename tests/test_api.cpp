@@ -4,6 +4,7 @@
 #include <cmath>
 #include <exception>
 #include <filesystem>
+#include <optional>
 #include <thread>
 
 #include "engine/io/candidates.h"
@@ -131,6 +132,57 @@ TEST_CASE("api: two threads with a context each give the results of one", "[api]
             CHECK(got.alignment == ref.alignment);
         }
     }
+}
+
+TEST_CASE("api: four threads, a context each or one shared Model and Object, give the results of one", "[api][threads]") {
+    const std::string mug = test::source_path("examples/mug.glb");
+    const std::vector<api::TactileImage> images{example_image(1), example_image(2), example_image(3)};
+    std::vector<api::TouchResult> want;
+    api::Context shared_ctx(test::validated());
+    api::Model shared_model(shared_ctx, test::tiny_model());
+    const api::Object shared_obj = shared_model.encode_object(mug);
+    for (auto& im : images) want.push_back(shared_model.localize(shared_obj, im));
+
+    for (bool own_context : {true, false}) {
+        INFO((own_context ? "a context per thread" : "one Model and Object shared by all threads"));
+        std::vector<std::vector<api::TouchResult>> results(4);
+        std::vector<std::exception_ptr> errors(4);
+        std::vector<std::thread> threads;
+        for (int t = 0; t < 4; ++t)
+            threads.emplace_back([&, t] {
+                try {
+                    std::optional<api::Context> ctx;
+                    std::optional<api::Model> model;
+                    std::optional<api::Object> obj;
+                    if (own_context) {
+                        ctx.emplace(test::validated());
+                        model.emplace(*ctx, test::tiny_model());
+                        obj.emplace(model->encode_object(mug));
+                    }
+                    api::Model& m = own_context ? *model : shared_model;
+                    const api::Object& o = own_context ? *obj : shared_obj;
+                    for (int round = 0; round < 3; ++round)
+                        for (size_t i = 0; i < images.size(); ++i)
+                            results[size_t(t)].push_back(m.localize(o, images[(i + size_t(t)) % images.size()]));
+                    if (own_context) CHECK(ctx->take_validation_messages().empty());
+                } catch (...) {
+                    errors[size_t(t)] = std::current_exception();
+                }
+            });
+        for (auto& th : threads) th.join();
+        for (int t = 0; t < 4; ++t) {
+            if (errors[size_t(t)]) std::rethrow_exception(errors[size_t(t)]);
+            REQUIRE(results[size_t(t)].size() == 9);
+            for (size_t k = 0; k < 9; ++k) {
+                const api::TouchResult& got = results[size_t(t)][k];
+                const api::TouchResult& ref = want[(k % 3 + size_t(t)) % 3];
+                CHECK(got.contact == ref.contact);  // same device, same pipelines: bit for bit
+                CHECK(got.topk_index == ref.topk_index);
+                CHECK(got.heatmap == ref.heatmap);
+            }
+        }
+    }
+    test::require_no_validation(shared_ctx);
 }
 
 TEST_CASE("api: batches of mixed sizes, sequences and the CPU backend", "[api]") {

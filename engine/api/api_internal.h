@@ -1,4 +1,5 @@
 #pragma once
+#include <mutex>
 // What the public API's pimpl classes hold, and the one place where engine
 // exceptions become vtloc::api::Error. Private to engine/api/*.cpp.
 #include <memory>
@@ -44,6 +45,9 @@ struct Model::Impl {
     std::string key;                      // identifies the weights an Object was encoded with
     rt::Context* gpu = nullptr;           // null: CPU-only model
     std::unique_ptr<VtlocRunner> gpu_runner, cpu_runner;
+    // A Model may be shared between threads: its runners (cached graphs, last
+    // timings) serve one call at a time.
+    std::mutex mu;
 
     VtlocRunner& runner(Backend b);
 };

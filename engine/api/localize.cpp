@@ -161,6 +161,7 @@ std::vector<TouchResult> Model::localize(const Object& object, const std::vector
         TouchOptions topt = touch_options(impl_->info, o, options);
         const std::vector<TactileImage> scaled = model_frames(impl_->info, images, options);
         const std::vector<TactileImage>& frames = scaled.empty() ? images : scaled;
+        std::lock_guard<std::mutex> lock(impl_->mu);
         VtlocRunner& runner = impl_->runner(options.backend);
         runner.set_profiling(options.profile);
         // One run per image size (a graph has one input shape), in first-seen order.
@@ -207,6 +208,7 @@ SequenceResult Model::localize_sequence(const Object& object, const std::vector<
         const std::vector<TactileImage> scaled = model_frames(impl_->info, images, options);
         std::vector<HostTensor> batch;
         for (const TactileImage& im : scaled.empty() ? images : scaled) batch.push_back(image_tensor(im));
+        std::lock_guard<std::mutex> lock(impl_->mu);
         VtlocRunner& runner = impl_->runner(options.backend);
         runner.set_profiling(options.profile);
         auto t0 = std::chrono::steady_clock::now();

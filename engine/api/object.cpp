@@ -130,6 +130,7 @@ std::shared_ptr<const Object::Impl> encode(Model::Impl& m, Object::Impl o, Backe
     if (!o.own_candidates && o.candidates.empty())
         throw Error(where(o.source) + ": the candidate set is empty");
     HostTensor cand = candidate_tensor(o.candidates, where(o.source));
+    std::lock_guard<std::mutex> lock(m.mu);
     o.encoded = m.runner(backend).encode_object(o.raw_cloud, o.own_candidates ? nullptr : &cand);
     o.model_key = m.key;
     return std::make_shared<const Object::Impl>(std::move(o));

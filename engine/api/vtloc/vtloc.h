@@ -20,10 +20,11 @@
 // Thread-safety:
 // - No global state: every resource hangs off a Context (its own Vulkan
 //   instance, device and queue) or a Model.
-// - A Context and the Models made on it are NOT thread-safe: use them from one
-//   thread at a time. For parallel work make one Context (and Model) per
-//   thread; contexts share nothing, and concurrent contexts on one device give
-//   bit-identical results to a single one.
+// - A Model (and its Context) may be shared between threads: the calls on one
+//   Model run one at a time (encode_object, localize, localize_sequence), and
+//   the Context serialises its queue. For parallel work make one Context (and
+//   Model) per thread; contexts share nothing, and concurrent contexts on one
+//   device give bit-identical results to a single one (both tested, 4 threads).
 // - An Object is immutable once made: it may be read from any thread and used
 //   by any Model loaded from the same weight file (another file's Model
 //   refuses it).
