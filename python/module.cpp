@@ -67,7 +67,7 @@ PYBIND11_MODULE(vtloc, m) {
         return python::image_array(im);
     }, py::arg("path"), "A tactile image file as an H x W x 3 uint8 RGB array.");
 
-    py::class_<api::Context>(m, "Context", "A Vulkan device and queue. Use from one thread at a time.")
+    py::class_<api::Context>(m, "Context", "A Vulkan device and queue. Models made on it may be shared between threads (a Model's calls run one at a time); for parallel work use one context per thread.")
         .def(py::init([](const std::string& device, const py::object& validation) {
                  api::ContextOptions o;
                  o.device = device;
