@@ -125,8 +125,8 @@ std::vector<OptionSpec> touch_option_specs() {
 
 api::LocalizeOptions touch_options(const Args& a) {
     api::LocalizeOptions o;
-    o.top_k = a.integer("--topk", 0, 1, 256);
-    o.iters = a.integer("--iters", -1, 0, 64);
+    o.top_k = a.integer("--topk", 0, 1, api::kMaxTopK);
+    o.iters = a.integer("--iters", -1, 0, api::kMaxIterations);
     o.gma = !a.flag("--no-gma");
     std::string backend = a.get("--backend").value_or("gpu");
     if (backend != "gpu" && backend != "cpu") throw UsageError("--backend must be gpu or cpu, got '" + backend + "'");

@@ -80,8 +80,8 @@ eval::Options parse(const Args& a) {
     o.model = a.get("--model").value_or("");
     o.split = one_of(a, "--split", "test", {"test", "train", "all"});
     o.objects = one_of(a, "--objects", "all", {"all", "known", "unknown"});
-    o.iters = a.integer("--iters", -1, 0, 64);
-    o.topk = a.integer("--topk", 5, 1, 256);
+    o.iters = a.integer("--iters", -1, 0, api::kMaxIterations);
+    o.topk = a.integer("--topk", 5, 1, api::kMaxTopK);
     o.sequence = a.integer("--sequence", 1, 1, 64);
     o.cloud = one_of(a, "--cloud", "full", {"full", "xyz", "view"});
     o.json = a.get("--json");

@@ -8,6 +8,9 @@
 
 namespace vtloc::api {
 
+static_assert(kMaxIterations == limits::kMaxIters && kMaxTopK == limits::kMaxTopK,
+              "the public limits mirror engine/model/model_config.h");
+
 namespace {
 
 double ms_since(std::chrono::steady_clock::time_point t0) {

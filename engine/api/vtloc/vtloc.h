@@ -45,6 +45,11 @@ namespace vtloc::api {
 // Library version (the CMake project version).
 const char* version();
 
+// Run-time limits of every model (the engine's own, engine/model/model_config.h;
+// checked equal at build time): ILU iterations and top-K size.
+inline constexpr int kMaxIterations = 64;
+inline constexpr int kMaxTopK = 256;
+
 // The one exception type of the API.
 class Error : public std::runtime_error {
 public:
