@@ -1,6 +1,7 @@
 // The renderer against the 49 real ball presses of the shipped calibration
 // (engine/sim/reality_check.h).
 #include <catch2/catch.hpp>
+#include <cmath>
 #include <filesystem>
 
 #include "engine/sim/calibration.h"
@@ -55,6 +56,19 @@ TEST_CASE("sim: rendered ball presses match the real frames", "[sim]") {
     }
     CHECK(rep.median_radius_err < 0.08);
     CHECK(rep.median_centre_dist < 3.5);
+    // Why 3 px on every frame cannot be reached from the annotations: the
+    // offsets left after their best quadratic fit in the press position
+    // (in-sample, so optimistic) still reach 3.6 px. Frames 6 and 24 share one
+    // annotation, (110, 82) r 17, yet their real contacts are detected 1.7 px
+    // apart: any renderer draws both the same. If the floor ever falls below
+    // 3 px (new calibration data), the goal becomes reachable and this fails.
+    CHECK(rep.floor_max_centre_dist > 3.0);
+    CHECK(rep.floor_median_centre_dist < rep.median_centre_dist);
+    const RealityFrame &f6 = rep.frames[6], &f24 = rep.frames[24];
+    CHECK(f6.annotated_cx == f24.annotated_cx);
+    CHECK(f6.annotated_cy == f24.annotated_cy);
+    CHECK(std::hypot(f6.real.cx - f24.real.cx, f6.real.cy - f24.real.cy) > 1.0);
+    CHECK(std::hypot(f6.sim.cx - f24.sim.cx, f6.sim.cy - f24.sim.cy) < 1e-9);
     // The README's undeformed, no-blur baseline: 14.5 inside, 5.0 outside.
     CHECK(rep.mean_drgb_inside < 14.5);
     CHECK(rep.mean_drgb_outside < 4.5);

@@ -58,6 +58,9 @@ int check_sensor(const std::string& out) {
     std::printf("%d real ball presses vs rendered (one contact detector on both):\n", int(r.frames.size()));
     std::printf("  radius error   median %.1f %%, max %.1f %%\n", 100 * r.median_radius_err, 100 * r.max_radius_err);
     std::printf("  centre offset  median %.2f px, max %.2f px\n", r.median_centre_dist, r.max_centre_dist);
+    std::printf("  floor          median %.2f px, max %.2f px, %d frames over 3 px: left after the best fit of the\n"
+                "                 offsets by a quadratic in the press position (scatter the annotations do not carry)\n",
+                r.floor_median_centre_dist, r.floor_max_centre_dist, r.floor_frames_over_3px);
     std::printf("  mean |dRGB|    inside the contact %.2f (max %.2f), outside %.2f (max %.2f)\n",
                 r.mean_drgb_inside, r.max_drgb_inside, r.mean_drgb_outside, r.max_drgb_outside);
     std::printf("wrote %s (rows: real | rendered | difference)\n", out.c_str());

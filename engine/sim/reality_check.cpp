@@ -104,6 +104,28 @@ void write_side_by_side(const std::string& path, const Calibration& c, const Rea
     if (!ok) throw Error(path + ": cannot write the reality-check picture");
 }
 
+// Residual offsets after the best quadratic-in-position fit (RealityReport).
+void position_floor(RealityReport& rep) {
+    const int n = int(rep.frames.size());
+    if (n < 6) return;
+    cv::Mat A(n, 6, CV_64F), b(n, 2, CV_64F);
+    for (int i = 0; i < n; ++i) {
+        const RealityFrame& f = rep.frames[i];
+        const double x = f.annotated_cx, y = f.annotated_cy, row[6] = {x, y, x * x, y * y, x * y, 1};
+        for (int k = 0; k < 6; ++k) A.at<double>(i, k) = row[k];
+        b.at<double>(i, 0) = f.real.cx - f.sim.cx;
+        b.at<double>(i, 1) = f.real.cy - f.sim.cy;
+    }
+    cv::Mat coef;
+    cv::solve(A, b, coef, cv::DECOMP_SVD);
+    cv::Mat r = b - A * coef;
+    std::vector<double> d(n);
+    for (int i = 0; i < n; ++i) d[i] = std::hypot(r.at<double>(i, 0), r.at<double>(i, 1));
+    rep.floor_median_centre_dist = median(d);
+    rep.floor_max_centre_dist = *std::max_element(d.begin(), d.end());
+    rep.floor_frames_over_3px = int(std::count_if(d.begin(), d.end(), [](double v) { return v > 3; }));
+}
+
 }  // namespace
 
 RealityReport reality_check(const Calibration& c, const RealityOptions& o) {
@@ -183,6 +205,7 @@ RealityReport reality_check(const Calibration& c, const RealityOptions& o) {
     rep.max_radius_err = *std::max_element(rerr.begin(), rerr.end());
     rep.median_centre_dist = median(cd);
     rep.max_centre_dist = *std::max_element(cd.begin(), cd.end());
+    position_floor(rep);
     if (!o.png_path.empty()) write_side_by_side(o.png_path, c, rep, rendered, o);
     return rep;
 }
