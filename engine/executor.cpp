@@ -141,7 +141,8 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
         uint64_t at = 0;
         for (auto& [id, t] : used) {
             rt::BufferView dst = weights_.view(weight_slots_[id]);
-            std::memcpy(static_cast<char*>(staging.mapped()) + at, t->data.data(), t->data.size() * 4);
+            if (!t->data.empty())
+                std::memcpy(static_cast<char*>(staging.mapped()) + at, t->data.data(), t->data.size() * 4);
             seq_->copy({staging.handle(), at, dst.size}, dst);
             at += dst.size;
         }
@@ -211,22 +212,25 @@ HostTensor GpuExecutor::value(int id) const {
     if (!staging_all_.mapped()) throw Error("GpuExecutor::value needs an executor made with keep_all");
     if (v.kind == ValueKind::Weight) throw Error("GpuExecutor::value: '" + v.name + "' is a weight");
     HostTensor t(v.shape, v.type);
-    std::memcpy(t.data.data(), static_cast<const char*>(staging_all_.mapped()) + plan_.offset[size_t(id)],
-                t.data.size() * 4);
+    if (!t.data.empty())
+        std::memcpy(t.data.data(), static_cast<const char*>(staging_all_.mapped()) + plan_.offset[size_t(id)],
+                    t.data.size() * 4);
     return t;
 }
 
 TensorMap GpuExecutor::run(const TensorMap& inputs) {
     check_inputs(graph_, inputs);
     for (auto& [name, t] : inputs)
-        std::memcpy(static_cast<char*>(staging_in_.mapped()) + in_offsets_.at(name), t.data.data(),
-                    t.data.size() * 4);
+        if (!t.data.empty())  // an empty vector's data() may be null: not for memcpy
+            std::memcpy(static_cast<char*>(staging_in_.mapped()) + in_offsets_.at(name), t.data.data(),
+                        t.data.size() * 4);
     seq_->submit_and_wait();
     TensorMap out;
     for (auto& [name, id] : graph_.outputs()) {
         HostTensor t(graph_.value(id).shape, graph_.value(id).type);
-        std::memcpy(t.data.data(), static_cast<const char*>(staging_out_.mapped()) + out_offsets_.at(name),
-                    t.data.size() * 4);
+        if (!t.data.empty())
+            std::memcpy(t.data.data(), static_cast<const char*>(staging_out_.mapped()) + out_offsets_.at(name),
+                        t.data.size() * 4);
         out[name] = std::move(t);
     }
     return out;

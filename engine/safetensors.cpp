@@ -183,7 +183,7 @@ std::vector<float> SafetensorsFile::to_f32(const TensorInfo& t) const {
     size_t n = size_t(numel(t.shape));
     std::vector<float> out(n);
     switch (t.dtype) {
-        case DType::F32: std::memcpy(out.data(), b.data(), n * 4); break;
+        case DType::F32: if (n) std::memcpy(out.data(), b.data(), n * 4); break;
         case DType::F16:
             for (size_t i = 0; i < n; ++i) {
                 uint16_t h;
@@ -232,14 +232,14 @@ std::vector<int32_t> SafetensorsFile::to_i32(const TensorInfo& t) const {
 TensorBlob TensorBlob::f32(std::string name, Shape shape, const std::vector<float>& v) {
     TensorBlob b{std::move(name), DType::F32, std::move(shape), {}};
     b.bytes.resize(v.size() * 4);
-    std::memcpy(b.bytes.data(), v.data(), b.bytes.size());
+    if (!v.empty()) std::memcpy(b.bytes.data(), v.data(), b.bytes.size());  // data() of empty: maybe null
     return b;
 }
 
 TensorBlob TensorBlob::i32(std::string name, Shape shape, const std::vector<int32_t>& v) {
     TensorBlob b{std::move(name), DType::I32, std::move(shape), {}};
     b.bytes.resize(v.size() * 4);
-    std::memcpy(b.bytes.data(), v.data(), b.bytes.size());
+    if (!v.empty()) std::memcpy(b.bytes.data(), v.data(), b.bytes.size());
     return b;
 }
 

@@ -47,7 +47,7 @@ struct HostTensor {
     HostTensor(Shape s, std::vector<float> d) : shape(std::move(s)), data(std::move(d)) {}
     static HostTensor from_ints(Shape s, const std::vector<int32_t>& v) {
         HostTensor t(std::move(s), ElemType::I32);
-        std::memcpy(t.data.data(), v.data(), v.size() * 4);
+        if (!v.empty()) std::memcpy(t.data.data(), v.data(), v.size() * 4);  // data() of empty: maybe null
         return t;
     }
     int64_t size() const { return int64_t(data.size()); }
@@ -59,7 +59,7 @@ struct HostTensor {
     void set_int(size_t i, int32_t v) { std::memcpy(&data[i], &v, 4); }
     std::vector<int32_t> ints() const {
         std::vector<int32_t> v(data.size());
-        std::memcpy(v.data(), data.data(), data.size() * 4);
+        if (!data.empty()) std::memcpy(v.data(), data.data(), data.size() * 4);
         return v;
     }
 };

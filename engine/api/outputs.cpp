@@ -57,7 +57,8 @@ void render_heatmap_png(const std::string& path, const Object& object, const std
             tactile = io::RgbImage(options.tactile->height, options.tactile->width);
             if (options.tactile->rgb.size() != tactile.pixels.size())
                 throw Error("RenderOptions::tactile: the image's size does not match its pixels");
-            std::memcpy(tactile.pixels.data(), options.tactile->rgb.data(), tactile.pixels.size());
+            if (!tactile.pixels.empty())
+                std::memcpy(tactile.pixels.data(), options.tactile->rgb.data(), tactile.pixels.size());
             ro.tactile = &tactile;
         }
         io::save_png(path, io::render_heatmap(display, display_heat, ro));

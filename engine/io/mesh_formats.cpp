@@ -210,7 +210,7 @@ void save_mesh_ply(const std::string& path, const TriangleMesh& mesh) {
     const size_t header = s.size();
     s.resize(header + nv * 12 + nt * 13);
     char* p = s.data() + header;
-    std::memcpy(p, mesh.positions.data(), nv * 12);
+    if (nv) std::memcpy(p, mesh.positions.data(), nv * 12);
     p += nv * 12;
     for (size_t t = 0; t < nt; ++t) {
         *p++ = 3;

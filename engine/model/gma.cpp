@@ -36,7 +36,8 @@ std::vector<std::string> split_weight_rows(WeightStore& w, const std::string& na
         Shape s = t.shape;
         s[0] = plan[i];
         HostTensor chunk(s);
-        std::memcpy(chunk.data.data(), t.data.data() + r0 * row_elems, size_t(plan[i] * row_elems) * 4);
+        if (!chunk.data.empty())
+            std::memcpy(chunk.data.data(), t.data.data() + r0 * row_elems, size_t(plan[i] * row_elems) * 4);
         names.push_back(name + "#" + std::to_string(i));
         r0 += plan[i];
         w.add(names.back(), std::move(chunk));  // `t` stays valid: the store is a std::map
