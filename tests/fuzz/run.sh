@@ -23,8 +23,8 @@ for t in "${targets[@]}"; do
   mkdir -p "$corpus" "$findings"
   cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/"
   log="$build/fuzz_$t.log"
-  # Leaks are findings too; the OpenCV decoders' thread pool is not ours: one thread.
-  if OPENCV_FOR_THREADS_NUM=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1 \
+  # Leaks and undefined behaviour (UBSan halts) are findings too; the OpenCV decoders' thread pool is not ours: one thread.
+  if OPENCV_FOR_THREADS_NUM=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
       "$build/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
       -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1; then
     result=ok
