@@ -1,0 +1,274 @@
+// vtloc-soak: thousands of localisations on one context through the public
+// API, mixing objects, image sizes, batch sizes, N, K, symmetry and
+// sequences. Every output must be bit-identical to the first run of the same
+// case; host RSS and the context's GPU memory are sampled after every run and
+// must stay flat after the warm-up (each case's first run builds its graph).
+//   vtloc-soak [--model M] [--runs 10000] [--warmup W] [--json FILE]
+//              [--png FILE] [--max-drift-mib 1]
+// The warm-up (default: the larger of one pass over the cases and a tenth of
+// the runs) is left out of the flatness checks: glibc's heap takes a few
+// steps of 1-6 MiB in the first ~200 runs as it settles, then stays put.
+// Exit 0 when outputs repeat exactly, GPU memory does not move after the
+// warm-up and host RSS drifts less than --max-drift-mib over the run.
+#include <algorithm>
+#include <chrono>
+#include <cmath>
+#include <cstdio>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+#include <unistd.h>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+#include <vtloc/vtloc.h>
+
+#include "base/atomic_write.h"
+#include "bench/soak_plot.h"
+
+namespace api = vtloc::api;
+
+namespace {
+
+// One input combination, run again and again.
+struct Case {
+    std::string name;
+    int object = 0;
+    std::vector<int> images;  // indices into the image set; >1 = a batch
+    bool sequence = false;
+    api::LocalizeOptions opt;
+};
+
+double rss_mib() {
+    std::ifstream f("/proc/self/statm");
+    long pages_total = 0, pages_rss = 0;
+    f >> pages_total >> pages_rss;
+    return double(pages_rss) * double(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+// FNV-1a over every output byte that a user reads.
+struct Hash {
+    uint64_t h = 1469598103934665603ull;
+    void bytes(const void* p, size_t n) {
+        auto* b = static_cast<const uint8_t*>(p);
+        for (size_t i = 0; i < n; ++i) h = (h ^ b[i]) * 1099511628211ull;
+    }
+    template <class T> void vec(const std::vector<T>& v) { bytes(v.data(), v.size() * sizeof(T)); }
+    void touch(const api::TouchResult& r) {
+        bytes(r.contact.data(), sizeof r.contact);
+        for (const auto& c : r.iterates) bytes(c.data(), sizeof c);
+        vec(r.topk_index);
+        vec(r.topk_score);
+        vec(r.heatmap);
+        if (r.alignment) bytes(&*r.alignment, sizeof(float));
+    }
+};
+
+api::PointCloud sphere_cloud(int n, double radius) {
+    api::PointCloud c;
+    const double golden = M_PI * (3 - std::sqrt(5.0));
+    for (int i = 0; i < n; ++i) {
+        double z = 1 - 2 * (i + 0.5) / n, r = std::sqrt(1 - z * z), a = golden * i;
+        double p[3] = {r * std::cos(a), r * std::sin(a), z};
+        for (double v : p) c.xyz.push_back(float(radius * v)), c.normals.push_back(float(v));
+    }
+    return c;
+}
+
+// A box's faces, sampled on a grid (no normals: estimated at encode).
+api::PointCloud box_cloud(int per_face, double a, double b, double c) {
+    api::PointCloud out;
+    const int g = std::max(2, int(std::sqrt(double(per_face))));
+    const double half[3] = {a / 2, b / 2, c / 2};
+    for (int axis = 0; axis < 3; ++axis)
+        for (int side = -1; side <= 1; side += 2)
+            for (int i = 0; i < g; ++i)
+                for (int j = 0; j < g; ++j) {
+                    double p[3];
+                    p[axis] = side * half[axis];
+                    p[(axis + 1) % 3] = (2.0 * (i + 0.5) / g - 1) * half[(axis + 1) % 3];
+                    p[(axis + 2) % 3] = (2.0 * (j + 0.5) / g - 1) * half[(axis + 2) % 3];
+                    for (double v : p) out.xyz.push_back(float(v));
+                }
+    return out;
+}
+
+// The shipped touches, and resized/cropped copies of them (other sensors' sizes).
+std::vector<api::TactileImage> image_set(const std::string& dir) {
+    std::vector<api::TactileImage> out;
+    for (const char* f : {"cone_test0_touch.png", "touch_01.png", "touch_02.png", "touch_03.png"})
+        out.push_back(api::load_tactile_image(dir + "/" + f));
+    out.push_back(api::rescale_tactile_image(out[0], 0.1245, 0.0622));  // 2x: a finer sensor
+    out.push_back(api::rescale_tactile_image(out[1], 0.1, 0.13));       // smaller frame
+    api::TactileImage crop;  // a square crop of the first touch
+    crop.height = crop.width = 96;
+    for (int y = 0; y < 96; ++y)
+        for (int x = 0; x < 96; ++x)
+            for (int k = 0; k < 3; ++k)
+                crop.rgb.push_back(out[0].rgb[(size_t(y + 12) * out[0].width + x + 32) * 3 + k]);
+    out.push_back(crop);
+    return out;
+}
+
+std::vector<Case> make_cases(int n_objects, int n_images) {
+    std::vector<Case> cases;
+    const int iters[] = {0, 4, 16, 32}, topk[] = {1, 5, 8};
+    int k = 0;
+    for (int o = 0; o < n_objects; ++o)
+        for (int v = 0; v < 6; ++v, ++k) {
+            Case c;
+            c.object = o;
+            c.opt.iters = iters[k % 4];
+            c.opt.top_k = topk[k % 3];
+            c.opt.gma = k % 5 != 0;
+            if (k % 4 == 1) c.opt.symmetry = api::Symmetry{{0, 0, 0}, {0, 0, 1}, 3 + k % 3};
+            const int first = k % n_images;
+            if (v == 0 || v == 3) c.images = {first};
+            else if (v == 1) c.images = {first, (first + 1) % n_images};  // mixed sizes: two runs
+            else if (v == 2) c.images = {0, 1, 2, 3};                      // one size: one batch
+            else if (v == 4) c.images = {1, 2, 3, 1, 2, 3, 1, 2, 3, 1, 2, 3, 1, 2, 3, 1};  // batch 16
+            else c.images = {1, 2, 3}, c.sequence = true;
+            char name[96];
+            std::snprintf(name, sizeof name, "obj%d/%s%zu/N%d/K%d%s%s", o, c.sequence ? "seq" : "batch",
+                          c.images.size(), c.opt.iters, c.opt.top_k, c.opt.gma ? "" : "/nogma",
+                          c.opt.symmetry ? "/sym" : "");
+            c.name = name;
+            cases.push_back(c);
+        }
+    return cases;
+}
+
+uint64_t run_case(api::Model& model, const std::vector<api::Object>& objects,
+                  const std::vector<api::TactileImage>& images, const Case& c, size_t& touches) {
+    std::vector<api::TactileImage> batch;
+    for (int i : c.images) batch.push_back(images[size_t(i)]);
+    Hash h;
+    if (c.sequence) {
+        std::vector<std::array<double, 3>> motions(batch.size() - 1, {1.5, -0.5, 0.25});
+        api::SequenceResult s = model.localize_sequence(objects[size_t(c.object)], batch, motions, c.opt);
+        for (const auto& t : s.touches) h.touch(t);
+        h.vec(s.belief);
+        h.vec(s.heatmap);
+        h.bytes(&s.best, sizeof s.best);
+    } else {
+        for (const auto& t : model.localize(objects[size_t(c.object)], batch, c.opt)) h.touch(t);
+    }
+    touches += batch.size();
+    return h.h;
+}
+
+struct Fit {
+    double slope = 0, drift = 0;  // MiB per run; slope * runs after the warm-up
+};
+Fit line_fit(const std::vector<double>& y, size_t from) {
+    Fit f;
+    const size_t n = y.size() - std::min(from, y.size());
+    if (n < 2) return f;
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = from; i < y.size(); ++i) {
+        double x = double(i);
+        sx += x, sy += y[i], sxx += x * x, sxy += x * y[i];
+    }
+    const double d = double(n) * sxx - sx * sx;
+    f.slope = d > 0 ? (double(n) * sxy - sx * sy) / d : 0;
+    f.drift = f.slope * double(n);
+    return f;
+}
+
+int usage() {
+    std::fprintf(stderr, "usage: vtloc-soak [--model M] [--runs N] [--warmup W] [--json FILE] [--png FILE] [--max-drift-mib X]\n");
+    return 2;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    std::string model_path = std::string(VTLOC_SOURCE_DIR) + "/models/vtloc-lite.safetensors";
+    std::string json_path, png_path;
+    long runs = 10000, warmup_arg = -1;
+    double max_drift = 1.0;
+    for (int i = 1; i < argc; ++i) {
+        std::string a = argv[i];
+        if (i + 1 >= argc) return usage();
+        if (a == "--model") model_path = argv[++i];
+        else if (a == "--runs") runs = std::atol(argv[++i]);
+        else if (a == "--warmup") warmup_arg = std::atol(argv[++i]);
+        else if (a == "--json") json_path = argv[++i];
+        else if (a == "--png") png_path = argv[++i];
+        else if (a == "--max-drift-mib") max_drift = std::atof(argv[++i]);
+        else return usage();
+    }
+    if (runs < 1) return usage();
+    try {
+        api::Context ctx;
+        api::Model model(ctx, model_path);
+        const std::string ex = std::string(VTLOC_SOURCE_DIR) + "/examples";
+        std::vector<api::Object> objects;
+        objects.push_back(model.encode_object(ex + "/cone_test0.ply", ex + "/cone_test0_candidates.csv"));
+        objects.push_back(model.encode_object(ex + "/mug.glb", ex + "/mug_candidates.csv"));
+        objects.push_back(model.encode_object(sphere_cloud(1500, 30)));
+        objects.push_back(model.encode_object(box_cloud(400, 80, 40, 20)));
+        const std::vector<api::TactileImage> images = image_set(ex);
+        const std::vector<Case> cases = make_cases(int(objects.size()), int(images.size()));
+
+        std::vector<uint64_t> first(cases.size(), 0);
+        std::vector<double> rss, gpu;
+        size_t touches = 0, mismatches = 0;
+        // Every case's first run builds its graph: always inside the warm-up.
+        const size_t warmup = std::max<size_t>(cases.size(), warmup_arg >= 0 ? size_t(warmup_arg) : size_t(runs) / 10);
+        if (warmup + 2 > size_t(runs)) throw std::runtime_error("--runs must exceed the warm-up (" + std::to_string(warmup) + " runs) by 2");
+        uint64_t order = 0x9e3779b97f4a7c15ull;
+        const auto t0 = std::chrono::steady_clock::now();
+        for (long r = 0; r < runs; ++r) {
+            // First pass in order (warm-up), then a fixed pseudo-random order.
+            size_t ci = size_t(r);
+            if (size_t(r) >= cases.size()) {
+                order ^= order << 13, order ^= order >> 7, order ^= order << 17;
+                ci = size_t(order % cases.size());
+            }
+            const uint64_t h = run_case(model, objects, images, cases[ci], touches);
+            if (size_t(r) < cases.size()) first[ci] = h;
+            else if (h != first[ci]) {
+                if (++mismatches <= 5) std::fprintf(stderr, "run %ld: %s differs from its first run\n", r, cases[ci].name.c_str());
+            }
+            rss.push_back(rss_mib());
+            gpu.push_back(double(ctx.memory_in_use()) / (1024.0 * 1024.0));
+            if (r % 1000 == 999) std::fprintf(stderr, "%ld runs, RSS %.1f MiB, GPU %.1f MiB\n", r + 1, rss.back(), gpu.back());
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - t0).count();
+        const auto validation = ctx.take_validation_messages();
+
+        const Fit rf = line_fit(rss, warmup), gf = line_fit(gpu, warmup);
+        double gpu_moved = 0, rss_lo = 1e300, rss_hi = 0;
+        for (size_t i = std::min(warmup, gpu.size()); i < gpu.size(); ++i) {
+            gpu_moved = std::max(gpu_moved, std::abs(gpu[i] - gpu[warmup]));
+            rss_lo = std::min(rss_lo, rss[i]), rss_hi = std::max(rss_hi, rss[i]);
+        }
+        const bool ok = mismatches == 0 && gpu_moved == 0 && std::abs(rf.drift) < max_drift && validation.empty();
+        std::printf("vtloc-soak: %ld runs (%zu touches) of %zu cases on %s, model %s, %.1f s\n", runs, touches,
+                    cases.size(), ctx.device().name.c_str(), model.info().name.c_str(), seconds);
+        std::printf("  outputs bit-identical to each case's first run: %s (%zu differ)\n", mismatches ? "NO" : "yes",
+                    mismatches);
+        std::printf("  host RSS: %.2f MiB at the start, %.2f at the end of the warm-up (run %zu); after it %.2f .. %.2f MiB,\n"
+                    "            slope %.3g MiB per 1000 runs, drift %.3f MiB over %zu runs (allowed %.2f)\n",
+                    rss.front(), rss[warmup], warmup, rss_lo, rss_hi, 1000 * rf.slope, rf.drift, rss.size() - warmup, max_drift);
+        std::printf("  GPU memory after warm-up: %.2f MiB, moved %.3f MiB\n", gpu.empty() ? 0 : gpu.back(), gpu_moved);
+        std::printf("  validation messages: %zu\n", validation.size());
+        std::printf("%s\n", ok ? "PASS" : "FAIL");
+        if (!json_path.empty()) {
+            nlohmann::json j = {{"runs", runs}, {"touches", touches}, {"cases", cases.size()}, {"seconds", seconds},
+                                {"device", ctx.device().name}, {"model", model.info().name}, {"warmup_runs", warmup},
+                                {"mismatches", mismatches}, {"rss_mib", rss}, {"gpu_mib", gpu},
+                                {"rss_slope_mib_per_run", rf.slope}, {"rss_drift_mib", rf.drift},
+                                {"gpu_slope_mib_per_run", gf.slope}, {"gpu_moved_mib", gpu_moved},
+                                {"validation_messages", validation.size()}, {"pass", ok}};
+            vtloc::write_file_atomic(json_path, j.dump() + "\n");
+        }
+        if (!png_path.empty()) vtloc::bench::plot_soak(png_path, rss, gpu, warmup, rf.slope);
+        return ok ? 0 : 1;
+    } catch (const std::exception& e) {  // api::Error, or a file the soak writes
+        std::fprintf(stderr, "vtloc-soak: %s\n", e.what());
+        return 1;
+    }
+}
