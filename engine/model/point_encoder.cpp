@@ -152,20 +152,19 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelCon
     return out;
 }
 
-void check_point_cloud(const HostTensor& cloud, const ModelConfig& config) {
-    const PointConfig& c = config.point;
-    const int64_t width = c.use_normals ? 6 : 3;
+void check_object_cloud(const HostTensor& cloud, const ModelConfig& config) {
+    constexpr int64_t width = 6;
     if (cloud.shape.size() != 2 || cloud.shape[1] != width)
-        throw Error("the point cloud must be [N, " + std::to_string(width) + "] for this config, got " +
-                    shape_str(cloud.shape));
-    if (cloud.shape[0] == 0) throw Error("the point cloud is empty");
-    if (!c.sa.empty() && cloud.shape[0] < c.sa[0].npoint)
-        throw Error("the point cloud has " + std::to_string(cloud.shape[0]) + " points, fewer than the " +
-                    std::to_string(c.sa[0].npoint) + " that point.sa1 samples");
+        throw Error("the object cloud must be [N, 6] (xyz and normals), got " + shape_str(cloud.shape));
     for (size_t i = 0; i < cloud.data.size(); ++i)
         if (!std::isfinite(cloud.data[i]))
-            throw Error("the point cloud has a NaN or infinite value at point " + std::to_string(int64_t(i) / width) +
+            throw Error("the object cloud has a NaN or infinite value at point " + std::to_string(int64_t(i) / width) +
                         ", column " + std::to_string(int64_t(i) % width));
+    if (cloud.shape[0] == 0) throw Error("the object cloud is empty");
+    const int64_t need = config.point.min_points();
+    if (cloud.shape[0] < need)
+        throw Error("the object cloud has " + std::to_string(cloud.shape[0]) + " points, fewer than the " +
+                    std::to_string(need) + " that point.sa1 samples; the model needs at least that many");
 }
 
 }  // namespace vtloc
