@@ -212,14 +212,14 @@ json ratios(const json& gpu, const json& cpu) {
 }
 
 // The GPU measurement, with the peak probe around it when --probe asks.
-void measure_gpu(json& report, const Args& a, const WeightStore& weights, bench::ModelBenchInputs& in,
-                 rt::Context& ctx) {
+void measure_gpu(json& report, const Args& a, const WeightStore& weights, const ModelConfig& cfg,
+                 bench::ModelBenchInputs& in, rt::Context& ctx) {
     report["device"] = device_json(ctx.info());
     if (a.probe) {
         const double before = bench::peak_gflops(ctx);
         report["probe"] = {{"before", before}, {"dispatch_overhead_us", bench::dispatch_overhead_us(ctx)}};
     }
-    VtlocRunner runner(weights, &ctx);
+    VtlocRunner runner(weights, cfg, &ctx);
     in.probe_gflops = a.probe ? report["probe"]["before"].get<double>() : 0.0;
     report["gpu"] = bench::measure_model(runner, in, a.opt);
     if (a.probe) {  // the higher of before/after: a busy machine cannot flatter the fractions
@@ -237,13 +237,14 @@ void measure_gpu(json& report, const Args& a, const WeightStore& weights, bench:
     }
 }
 
-void measure_cpu(json& report, const Args& a, const WeightStore& weights, bench::ModelBenchInputs& in) {
+void measure_cpu(json& report, const Args& a, const WeightStore& weights, const ModelConfig& cfg,
+                 bench::ModelBenchInputs& in) {
     bench::ModelBenchOptions c = a.opt;
     c.reps = a.cpu_reps;
     c.warmup = 0;  // nothing to compile or upload
     c.profile_reps = 1;
     c.stepped_iters = 0;  // per-iteration node times come from the sweep's ILU node
-    VtlocRunner runner(weights, nullptr);
+    VtlocRunner runner(weights, cfg, nullptr);
     in.probe_gflops = 0;  // the probe measures the GPU, not this
     report["cpu"] = bench::measure_model(runner, in, c);
     if (report.contains("gpu")) report["cpu_over_gpu"] = ratios(report["gpu"], report["cpu"]);
@@ -308,9 +309,9 @@ int run(int argc, char** argv) {
     std::unique_ptr<rt::Context> ctx;
     if (a.backend != "cpu") {
         ctx = std::make_unique<rt::Context>();
-        measure_gpu(report, a, weights, in, *ctx);
+        measure_gpu(report, a, weights, cfg, in, *ctx);
     }
-    if (a.backend != "gpu") measure_cpu(report, a, weights, in);
+    if (a.backend != "gpu") measure_cpu(report, a, weights, cfg, in);
 
     if (a.vs_pytorch) {
         const char* env = std::getenv("VTLOC_PYTHON");

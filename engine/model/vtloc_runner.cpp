@@ -32,8 +32,17 @@ struct VtlocRunner::Compiled {
     std::vector<NodeMs> cpu_times;
 };
 
+VtlocRunner::VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu)
+    : weights_(std::move(weights)), config_(std::move(config)), gpu_(gpu) {
+    split_gma_rows();
+}
+
 VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu)
-    : weights_(std::move(weights)), config_(ModelConfig::parse(weights_.config(), weights_.source())), gpu_(gpu) {
+    : weights_(std::move(weights)), config_(config_of(weights_)), gpu_(gpu) {
+    split_gma_rows();
+}
+
+void VtlocRunner::split_gma_rows() {
     if (config_.gma) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
 }
 
