@@ -211,6 +211,59 @@ json ratios(const json& gpu, const json& cpu) {
     return r;
 }
 
+// The GPU measurement, with the peak probe around it when --probe asks.
+void measure_gpu(json& report, const Args& a, const WeightStore& weights, const ModelConfig& cfg,
+                 bench::ModelBenchInputs& in, rt::Context& ctx) {
+    report["device"] = device_json(ctx.info());
+    if (a.probe) {
+        const double before = bench::peak_gflops(ctx);
+        report["probe"] = {{"before", before}, {"dispatch_overhead_us", bench::dispatch_overhead_us(ctx)}};
+    }
+    VtlocRunner runner(weights, cfg, &ctx);
+    in.probe_gflops = a.probe ? report["probe"]["before"].get<double>() : 0.0;
+    report["gpu"] = bench::measure_model(runner, in, a.opt);
+    if (a.probe) {  // the higher of before/after: a busy machine cannot flatter the fractions
+        const double after = bench::peak_gflops(ctx);
+        report["probe"]["after"] = after;
+        const double peak = std::max(in.probe_gflops, after);
+        report["probe"]["gflops"] = peak;
+        auto refresh = [&](json& e) {
+            e["fraction_of_peak"] = e["gflops"].get<double>() / peak;
+        };
+        refresh(report["gpu"]["efficiency"]["conv"]);
+        refresh(report["gpu"]["efficiency"]["mlp"]);
+        if (report["gpu"].contains("points"))
+            for (json& row : report["gpu"]["points"]) refresh(row["mlp"]);
+    }
+}
+
+void measure_cpu(json& report, const Args& a, const WeightStore& weights, const ModelConfig& cfg,
+                 bench::ModelBenchInputs& in) {
+    bench::ModelBenchOptions c = a.opt;
+    c.reps = a.cpu_reps;
+    c.warmup = 0;  // nothing to compile or upload
+    c.profile_reps = 1;
+    c.stepped_iters = 0;  // per-iteration node times come from the sweep's ILU node
+    VtlocRunner runner(weights, cfg, nullptr);
+    in.probe_gflops = 0;  // the probe measures the GPU, not this
+    report["cpu"] = bench::measure_model(runner, in, c);
+    if (report.contains("gpu")) report["cpu_over_gpu"] = ratios(report["gpu"], report["cpu"]);
+}
+
+// The report, then --json and --plot.
+void write_report(const json& report, const Args& a) {
+    bench::print_report(report, stdout);
+    if (!a.json_path.empty()) {
+        std::ofstream f(a.json_path);
+        if (!(f << report.dump(2) << "\n")) throw Error("cannot write " + a.json_path);
+        std::printf("\nJSON: %s\n", a.json_path.c_str());
+    }
+    if (!a.plot_path.empty()) {
+        bench::draw_plot(report, a.plot_path);
+        std::printf("plot: %s\n", a.plot_path.c_str());
+    }
+}
+
 int run(int argc, char** argv) {
     Args a = parse(argc, argv);
     std::string weights_path = !a.weights.empty() ? a.weights
@@ -256,39 +309,9 @@ int run(int argc, char** argv) {
     std::unique_ptr<rt::Context> ctx;
     if (a.backend != "cpu") {
         ctx = std::make_unique<rt::Context>();
-        report["device"] = device_json(ctx->info());
-        if (a.probe) {
-            const double before = bench::peak_gflops(*ctx);
-            report["probe"] = {{"before", before}, {"dispatch_overhead_us", bench::dispatch_overhead_us(*ctx)}};
-        }
-        VtlocRunner runner(weights, ctx.get());
-        in.probe_gflops = a.probe ? report["probe"]["before"].get<double>() : 0.0;
-        report["gpu"] = bench::measure_model(runner, in, a.opt);
-        if (a.probe) {  // the higher of before/after: a busy machine cannot flatter the fractions
-            const double after = bench::peak_gflops(*ctx);
-            report["probe"]["after"] = after;
-            const double peak = std::max(in.probe_gflops, after);
-            report["probe"]["gflops"] = peak;
-            auto refresh = [&](json& e) {
-                e["fraction_of_peak"] = e["gflops"].get<double>() / peak;
-            };
-            refresh(report["gpu"]["efficiency"]["conv"]);
-            refresh(report["gpu"]["efficiency"]["mlp"]);
-            if (report["gpu"].contains("points"))
-                for (json& row : report["gpu"]["points"]) refresh(row["mlp"]);
-        }
+        measure_gpu(report, a, weights, cfg, in, *ctx);
     }
-    if (a.backend != "gpu") {
-        bench::ModelBenchOptions c = a.opt;
-        c.reps = a.cpu_reps;
-        c.warmup = 0;  // nothing to compile or upload
-        c.profile_reps = 1;
-        c.stepped_iters = 0;  // per-iteration node times come from the sweep's ILU node
-        VtlocRunner runner(weights, nullptr);
-        in.probe_gflops = 0;  // the probe measures the GPU, not this
-        report["cpu"] = bench::measure_model(runner, in, c);
-        if (report.contains("gpu")) report["cpu_over_gpu"] = ratios(report["gpu"], report["cpu"]);
-    }
+    if (a.backend != "gpu") measure_cpu(report, a, weights, cfg, in);
 
     if (a.vs_pytorch) {
         const char* env = std::getenv("VTLOC_PYTHON");
@@ -304,16 +327,7 @@ int run(int argc, char** argv) {
         for (const auto& m : msgs) std::fprintf(stderr, "vtloc-bench: validation layer: %s: %s\n", m.severity.c_str(), m.text.c_str());
         if (!msgs.empty()) throw Error(std::to_string(msgs.size()) + " validation message(s); the numbers are not trusted");
     }
-    bench::print_report(report, stdout);
-    if (!a.json_path.empty()) {
-        std::ofstream f(a.json_path);
-        if (!(f << report.dump(2) << "\n")) throw Error("cannot write " + a.json_path);
-        std::printf("\nJSON: %s\n", a.json_path.c_str());
-    }
-    if (!a.plot_path.empty()) {
-        bench::draw_plot(report, a.plot_path);
-        std::printf("plot: %s\n", a.plot_path.c_str());
-    }
+    write_report(report, a);
     return 0;
 }
 

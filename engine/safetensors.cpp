@@ -70,6 +70,69 @@ SafetensorsFile SafetensorsFile::load(const std::string& path) {
     return parse(std::move(bytes), path);
 }
 
+namespace {
+
+// One tensor's header entry, checked against the data area's size.
+TensorInfo tensor_entry(const std::string& source, const std::string& name, const nlohmann::json& val,
+                        uint64_t data_size) {
+    auto tfail = [&](const std::string& msg) { return Error(source + ": tensor '" + name + "': " + msg); };
+    if (!val.is_object()) throw tfail("entry is not a JSON object");
+    if (!val.contains("dtype") || !val["dtype"].is_string()) throw tfail("missing or non-string dtype");
+    if (!val.contains("shape") || !val["shape"].is_array()) throw tfail("missing or non-array shape");
+    if (!val.contains("data_offsets") || !val["data_offsets"].is_array() || val["data_offsets"].size() != 2)
+        throw tfail("data_offsets must be an array of two integers");
+    TensorInfo t;
+    t.name = name;
+    std::string dt = val["dtype"].get<std::string>();
+    auto parsed = parse_dtype(dt);
+    if (!parsed) throw tfail("unknown dtype '" + dt + "'");
+    t.dtype = *parsed;
+    uint64_t count = 1;
+    for (auto& d : val["shape"]) {
+        if (!d.is_number_unsigned() && !(d.is_number_integer() && d.get<int64_t>() >= 0))
+            throw tfail("shape entries must be non-negative integers");
+        uint64_t v = d.get<uint64_t>();
+        if (v != 0 && count > std::numeric_limits<uint64_t>::max() / 16 / v)
+            throw tfail("shape is too large");
+        count *= v;
+        t.shape.push_back(int64_t(v));
+    }
+    for (auto& o : val["data_offsets"])
+        if (!o.is_number_unsigned() && !(o.is_number_integer() && o.get<int64_t>() >= 0))
+            throw tfail("data_offsets must be non-negative integers");
+    t.begin = val["data_offsets"][0].get<uint64_t>();
+    t.end = val["data_offsets"][1].get<uint64_t>();
+    if (t.end < t.begin) throw tfail("data_offsets end before they begin");
+    uint64_t need = count * dtype_size(t.dtype);
+    if (need != t.end - t.begin)
+        throw tfail("shape " + shape_str(t.shape) + " of " + dt + " needs " + std::to_string(need) +
+                    " bytes but data_offsets span " + std::to_string(t.end - t.begin));
+    if (t.end > data_size)
+        throw tfail("data_offsets [" + std::to_string(t.begin) + ", " + std::to_string(t.end) +
+                    "] run past the end of the data area (" + std::to_string(data_size) + " bytes)");
+    return t;
+}
+
+// The tensors, sorted by offset, must tile the data area: no overlap, no gap, nothing after.
+void check_tiling(const std::string& source, const std::vector<TensorInfo>& tensors, uint64_t data_size) {
+    auto fail = [&](const std::string& msg) { return Error(source + ": " + msg); };
+    uint64_t cursor = 0;
+    const TensorInfo* prev = nullptr;
+    for (const TensorInfo& t : tensors) {
+        if (t.begin < cursor)
+            throw fail("tensors '" + prev->name + "' and '" + t.name + "' overlap");
+        if (t.begin > cursor)
+            throw fail("gap of " + std::to_string(t.begin - cursor) + " bytes before tensor '" + t.name + "'");
+        cursor = t.end;
+        if (t.end > t.begin) prev = &t;
+    }
+    if (cursor != data_size)
+        throw fail(std::to_string(data_size - cursor) +
+                   " bytes after the last tensor are not covered by any tensor");
+}
+
+}  // namespace
+
 SafetensorsFile SafetensorsFile::parse(std::vector<uint8_t> bytes, const std::string& source) {
     auto fail = [&](const std::string& msg) { return Error(source + ": " + msg); };
     SafetensorsFile f;
@@ -104,61 +167,13 @@ SafetensorsFile SafetensorsFile::parse(std::vector<uint8_t> bytes, const std::st
             }
             continue;
         }
-        const std::string& name = key;  // clang before 16 cannot capture a structured binding
-        auto tfail = [&](const std::string& msg) { return fail("tensor '" + name + "': " + msg); };
-        if (!val.is_object()) throw tfail("entry is not a JSON object");
-        if (!val.contains("dtype") || !val["dtype"].is_string()) throw tfail("missing or non-string dtype");
-        if (!val.contains("shape") || !val["shape"].is_array()) throw tfail("missing or non-array shape");
-        if (!val.contains("data_offsets") || !val["data_offsets"].is_array() || val["data_offsets"].size() != 2)
-            throw tfail("data_offsets must be an array of two integers");
-        TensorInfo t;
-        t.name = key;
-        std::string dt = val["dtype"].get<std::string>();
-        auto parsed = parse_dtype(dt);
-        if (!parsed) throw tfail("unknown dtype '" + dt + "'");
-        t.dtype = *parsed;
-        uint64_t count = 1;
-        for (auto& d : val["shape"]) {
-            if (!d.is_number_unsigned() && !(d.is_number_integer() && d.get<int64_t>() >= 0))
-                throw tfail("shape entries must be non-negative integers");
-            uint64_t v = d.get<uint64_t>();
-            if (v != 0 && count > std::numeric_limits<uint64_t>::max() / 16 / v)
-                throw tfail("shape is too large");
-            count *= v;
-            t.shape.push_back(int64_t(v));
-        }
-        for (auto& o : val["data_offsets"])
-            if (!o.is_number_unsigned() && !(o.is_number_integer() && o.get<int64_t>() >= 0))
-                throw tfail("data_offsets must be non-negative integers");
-        t.begin = val["data_offsets"][0].get<uint64_t>();
-        t.end = val["data_offsets"][1].get<uint64_t>();
-        if (t.end < t.begin) throw tfail("data_offsets end before they begin");
-        uint64_t need = count * dtype_size(t.dtype);
-        if (need != t.end - t.begin)
-            throw tfail("shape " + shape_str(t.shape) + " of " + dt + " needs " + std::to_string(need) +
-                        " bytes but data_offsets span " + std::to_string(t.end - t.begin));
-        if (t.end > data_size)
-            throw tfail("data_offsets [" + std::to_string(t.begin) + ", " + std::to_string(t.end) +
-                        "] run past the end of the data area (" + std::to_string(data_size) + " bytes)");
-        f.tensors_.push_back(std::move(t));
+        f.tensors_.push_back(tensor_entry(source, key, val, data_size));
     }
 
     std::sort(f.tensors_.begin(), f.tensors_.end(), [](const TensorInfo& a, const TensorInfo& b) {
         return a.begin != b.begin ? a.begin < b.begin : a.end < b.end;
     });
-    uint64_t cursor = 0;
-    const TensorInfo* prev = nullptr;
-    for (const TensorInfo& t : f.tensors_) {
-        if (t.begin < cursor)
-            throw fail("tensors '" + prev->name + "' and '" + t.name + "' overlap");
-        if (t.begin > cursor)
-            throw fail("gap of " + std::to_string(t.begin - cursor) + " bytes before tensor '" + t.name + "'");
-        cursor = t.end;
-        if (t.end > t.begin) prev = &t;
-    }
-    if (cursor != data_size)
-        throw fail(std::to_string(data_size - cursor) +
-                   " bytes after the last tensor are not covered by any tensor");
+    check_tiling(source, f.tensors_, data_size);
     f.file_ = std::move(bytes);
     return f;
 }

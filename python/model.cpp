@@ -97,6 +97,45 @@ api::Object encode(api::Model& m, const py::object& source, const py::object& ca
     return m.encode_object(cloud, cands, b);
 }
 
+api::Object encode_depth(api::Model& mo, const std::string& depth, const py::object& intrinsics,
+                         const py::object& mask, double unit_mm, const py::object& candidates,
+                         const std::string& backend) {
+    std::vector<double> k;
+    try {
+        k = intrinsics.cast<std::vector<double>>();
+    } catch (const py::cast_error&) {
+    }
+    if (k.size() != 4) throw api::Error("intrinsics: expected 4 numbers fx, fy, cx, cy");
+    const std::string m = mask.is_none() ? std::string() : mask.cast<std::string>();
+    std::vector<float> cands = py::isinstance<py::str>(candidates)
+                                   ? api::load_candidates(candidates.cast<std::string>())
+                                   : to_points3(candidates, "candidates");
+    const api::Backend b = backend_of(backend);
+    py::gil_scoped_release release;
+    api::PointCloud cloud = api::load_depth_cloud(depth, {k[0], k[1], k[2], k[3]}, m, unit_mm);
+    return mo.encode_object(cloud, cands, b);
+}
+
+void render_png(const std::string& path, const api::Object& obj, const py::object& heat, int width, int height,
+                const py::object& contact, const py::object& ground_truth, const py::object& up,
+                const std::string& caption, const py::object& tactile, int display_points) {
+    auto h = to_floats(heat, "heat");
+    api::RenderOptions o;
+    o.width = width;
+    o.height = height;
+    o.contact = optional_triple(contact, "contact");
+    o.ground_truth = optional_triple(ground_truth, "ground_truth");
+    const auto u = triple(up, "up");
+    o.up = {float(u[0]), float(u[1]), float(u[2])};
+    o.caption = caption;
+    o.display_points = display_points;
+    std::optional<api::TactileImage> frame;
+    if (!tactile.is_none()) frame = to_image(tactile, "tactile");
+    o.tactile = frame ? &*frame : nullptr;
+    py::gil_scoped_release release;
+    api::render_heatmap_png(path, obj, h, o);
+}
+
 const char* kLocalizeDoc =
     "Localises one touch (image: H x W x 3 uint8 RGB array or a path) -> TouchResult,\n"
     "or a batch (a list of them) -> list of TouchResult; frames of one size run in one submit.\n"
@@ -105,9 +144,7 @@ const char* kLocalizeDoc =
     "keep_tensors: every intermediate in result.tensors; profile: per-node GPU times;\n"
     "mm_per_px: the frames' pixel size, rescaled to the model's sensor before the crop.";
 
-}  // namespace
-
-void bind_model(py::module_& m) {
+void bind_symmetry(py::module_& m) {
     py::class_<api::Symmetry>(m, "Symmetry", "An M-fold rotational symmetry prior (object units).")
         .def(py::init([](const py::object& point, const py::object& direction, int order) {
                  return api::Symmetry{triple(point, "axis_point"), triple(direction, "axis_dir"), order};
@@ -116,7 +153,9 @@ void bind_model(py::module_& m) {
         .def_property_readonly("axis_point", [](const api::Symmetry& s) { return vec3(s.axis_point); })
         .def_property_readonly("axis_dir", [](const api::Symmetry& s) { return vec3(s.axis_dir); })
         .def_readonly("order", &api::Symmetry::order);
+}
 
+void bind_object(py::module_& m) {
     py::class_<api::Object>(m, "Object", "An encoded object (immutable; Model.encode_object makes one).")
         .def_property_readonly("source", &api::Object::source)
         .def_property_readonly("cloud", [](const api::Object& o) { return cloud_array(o.cloud()); },
@@ -133,7 +172,9 @@ void bind_model(py::module_& m) {
                                "True when the input had no normals and cloud holds estimated ones")
         .def_property_readonly("source_points", &api::Object::source_points,
                                "points in the input (a cloud of >= 100,000 is reduced to the model's count)");
+}
 
+void bind_model_class(py::module_& m) {
     py::class_<api::Model>(m, "Model", "A weight file loaded on a Context (or CPU-only without one).")
         .def(py::init([](api::Context& ctx, const std::string& path) {
                  py::gil_scoped_release release;
@@ -153,24 +194,7 @@ void bind_model(py::module_& m) {
              "without normals gets estimated ones (object.normals_estimated); candidates: None\n"
              "(the cloud's own points), an M x 3 float array or a file; viewpoint: estimated\n"
              "normals of an array face this point (a camera), else away from the centroid.")
-        .def("encode_depth",
-             [](api::Model& mo, const std::string& depth, const py::object& intrinsics, const py::object& mask,
-                double unit_mm, const py::object& candidates, const std::string& backend) {
-                 std::vector<double> k;
-                 try {
-                     k = intrinsics.cast<std::vector<double>>();
-                 } catch (const py::cast_error&) {
-                 }
-                 if (k.size() != 4) throw api::Error("intrinsics: expected 4 numbers fx, fy, cx, cy");
-                 const std::string m = mask.is_none() ? std::string() : mask.cast<std::string>();
-                 std::vector<float> cands = py::isinstance<py::str>(candidates)
-                                                ? api::load_candidates(candidates.cast<std::string>())
-                                                : to_points3(candidates, "candidates");
-                 const api::Backend b = backend_of(backend);
-                 py::gil_scoped_release release;
-                 api::PointCloud cloud = api::load_depth_cloud(depth, {k[0], k[1], k[2], k[3]}, m, unit_mm);
-                 return mo.encode_object(cloud, cands, b);
-             },
+        .def("encode_depth", &encode_depth,
              py::arg("depth"), py::arg("intrinsics"), py::arg("mask") = py::none(), py::arg("unit_mm") = 1.0,
              py::arg("candidates") = py::none(), py::arg("backend") = "gpu",
              "A depth camera's view as the object: a 16-bit depth PNG (value * unit_mm = mm, 0 = none),\n"
@@ -214,7 +238,9 @@ void bind_model(py::module_& m) {
              py::arg("sigma_m") = 0.05, py::arg("window") = 4,
              "Multi-touch belief (SPEC section 6): images, a list of T frames; motions, a (T-1) x 3\n"
              "array of the sensor's displacement between touches (object units).");
+}
 
+void bind_outputs(py::module_& m) {
     m.def("write_heatmap_ply",
           [](const std::string& path, const api::Object& obj, const py::object& heat) {
               auto h = to_floats(heat, "heat");
@@ -223,30 +249,20 @@ void bind_model(py::module_& m) {
           },
           py::arg("path"), py::arg("object"), py::arg("heat"),
           "PLY of the object's points with contact_prob and an RGB colour per point.");
-    m.def("render_heatmap_png",
-          [](const std::string& path, const api::Object& obj, const py::object& heat, int width, int height,
-             const py::object& contact, const py::object& ground_truth, const py::object& up, const std::string& caption,
-             const py::object& tactile, int display_points) {
-              auto h = to_floats(heat, "heat");
-              api::RenderOptions o;
-              o.width = width;
-              o.height = height;
-              o.contact = optional_triple(contact, "contact");
-              o.ground_truth = optional_triple(ground_truth, "ground_truth");
-              const auto u = triple(up, "up");
-              o.up = {float(u[0]), float(u[1]), float(u[2])};
-              o.caption = caption;
-              o.display_points = display_points;
-              std::optional<api::TactileImage> frame;
-              if (!tactile.is_none()) frame = to_image(tactile, "tactile");
-              o.tactile = frame ? &*frame : nullptr;
-              py::gil_scoped_release release;
-              api::render_heatmap_png(path, obj, h, o);
-          },
+    m.def("render_heatmap_png", &render_png,
           py::arg("path"), py::arg("object"), py::arg("heat"), py::arg("width") = 1280, py::arg("height") = 720,
           py::arg("contact") = py::none(), py::arg("ground_truth") = py::none(), py::arg("up") = py::make_tuple(0, 1, 0),
           py::arg("caption") = "", py::arg("tactile") = py::none(), py::arg("display_points") = 30000,
           "PNG picture of a heat-map over the object from two sides.");
+}
+
+}  // namespace
+
+void bind_model(py::module_& m) {
+    bind_symmetry(m);
+    bind_object(m);
+    bind_model_class(m);
+    bind_outputs(m);
 }
 
 }  // namespace vtloc::python

@@ -17,6 +17,7 @@
 
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
+#include "engine/ops/build.h"
 #include "engine/ops/object_frame.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
@@ -64,15 +65,15 @@ void check_back_half(const std::string& dir, const std::string& name, uint64_t s
     int cd = g.input("cand", cand.shape), gc = g.input("golden_contact", {3});
     int pd = build_gma(g, w, cfg, ft, fp);
     g.output(pd, "gma.cloud");
-    g.output(g.add("chamfer", {pd, pc})[0], "gma.chamfer");
+    g.output(ops::chamfer(g, pd, pc)[0], "gma.chamfer");
     IluOutputs ilu = build_ilu(g, w, ft, fp, g.input("iters", {1}, ElemType::I32), iters);
     g.output(ilu.c, "ilu.c");
     g.output(ilu.contact, "contact");
-    std::vector<int> top = g.add("topk", {ilu.contact, cd}, {{"k", double(K)}});
+    std::vector<int> top = ops::topk(g, ilu.contact, cd, K);
     g.output(top[0], "topk.index");
     g.output(top[1], "topk.score");
-    g.output(g.add1("heatmap", {pc, cd, top[0]}), "heatmap");
-    std::vector<int> top_g = g.add("topk", {gc, cd}, {{"k", double(K)}});
+    g.output(ops::heatmap(g, pc, cd, top[0], -1), "heatmap");
+    std::vector<int> top_g = ops::topk(g, gc, cd, K);
     g.output(top_g[0], "topk.index (golden contact)");
     g.output(top_g[1], "topk.score (golden contact)");
 

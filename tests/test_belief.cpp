@@ -7,6 +7,7 @@
 #include <catch2/catch.hpp>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -14,10 +15,9 @@ using vtloc::test::random_tensor;
 
 namespace {
 
-Graph belief_graph(int64_t M, int64_t T, Params p) {
+Graph belief_graph(int64_t M, int64_t T, const ops::Belief& b) {
     Graph g;
-    std::vector<int> o = g.add("belief", {g.input("cand", {M, 3}), g.input("cp", {T, 3}), g.input("d", {T - 1, 3})},
-                               std::move(p));
+    std::vector<int> o = ops::belief(g, g.input("cand", {M, 3}), g.input("cp", {T, 3}), g.input("d", {T - 1, 3}), b);
     g.output(o[0], "belief");
     g.output(o[1], "log");
     return g;
@@ -41,14 +41,14 @@ int argmax(const HostTensor& t) { return int(std::max_element(t.data.begin(), t.
 }  // namespace
 
 TEST_CASE("belief matches the CPU reference on random sequences", "[op][belief]") {
-    struct Case { int64_t M, T; double window; };
+    struct Case { int64_t M, T; int window; };
     for (Case c : {Case{1, 1, 4}, Case{37, 1, 4}, Case{37, 2, 4}, Case{37, 6, 4}, Case{37, 5, 0}, Case{1000, 3, 4},
                    Case{301, 4, 2}}) {
         INFO("M " << c.M << " T " << c.T << " window " << c.window);
         HostTensor cand = random_tensor({c.M, 3}, uint32_t(c.M));
         HostTensor cp = random_tensor({c.T, 3}, uint32_t(c.T) + 5, -0.8f, 0.8f);
         HostTensor d = random_tensor({c.T - 1, 3}, 9, -0.1f, 0.1f);
-        compare(belief_graph(c.M, c.T, {{"window", c.window}, {"sigma", 0.2}, {"sigma_m", 0.05}}),
+        compare(belief_graph(c.M, c.T, {0.2, 0.05, c.window}),
                 {{"cand", cand}, {"cp", cp}, {"d", d}});
     }
 }
@@ -60,7 +60,7 @@ TEST_CASE("a touch sequence resolves what one touch leaves ambiguous", "[op][bel
     HostTensor cp({2, 3}, {0, 0, 0, -.2f, .6f, 0});
     HostTensor d({1, 3}, {0, .4f, 0});
     // One touch (window 1): candidates 2 and 4 tie.
-    HostTensor one = compare(belief_graph(7, 2, {{"window", 1}}), {{"cand", cand}, {"cp", cp}, {"d", d}}).at("belief");
+    HostTensor one = compare(belief_graph(7, 2, {.window = 1}), {{"cand", cand}, {"cp", cp}, {"d", d}}).at("belief");
     CHECK(std::abs(one.data[2] - one.data[4]) < 1e-6f);
     CHECK(one.data[2] > 0.3f);
     // The sequence: candidate 2 (A') holds nearly all the belief.
@@ -83,8 +83,9 @@ TEST_CASE("belief rejects bad inputs", "[op][belief]") {
     Graph g;
     int cand = g.input("cand", {5, 3}), cp = g.input("cp", {3, 3}), d = g.input("d", {3, 3}), d2 = g.input("d2", {2, 3});
     int empty = g.input("e", {0, 3});
-    REQUIRE_THROWS_WITH(g.add("belief", {cand, cp, d}), Catch::Contains("motions must be [T - 1, 3] = [2, 3]"));
-    REQUIRE_THROWS_WITH(g.add("belief", {empty, cp, d2}), Catch::Contains("candidates must be [M > 0, 3]"));
+    REQUIRE_THROWS_WITH(ops::belief(g, cand, cp, d, {}), Catch::Contains("motions must be [T - 1, 3] = [2, 3]"));
+    REQUIRE_THROWS_WITH(ops::belief(g, empty, cp, d2, {}), Catch::Contains("candidates must be [M > 0, 3]"));
+    // Raw Params on purpose: Graph::add must refuse bad values, whoever builds the node.
     REQUIRE_THROWS_WITH(g.add("belief", {cand, cp, d2}, {{"sigma", 0}}), Catch::Contains("positive"));
     REQUIRE_THROWS_WITH(g.add("belief", {cand, cp, d2}, {{"window", -1}}), Catch::Contains("window"));
     Graph g2 = belief_graph(2, 1, {});

@@ -8,6 +8,7 @@
 #include "engine/check/fault_injection.h"
 #include "engine/executor.h"
 #include "engine/op.h"
+#include "engine/ops/build.h"
 #include "tests/api_test_util.h"
 #include "tests/harness.h"
 
@@ -129,9 +130,9 @@ TEST_CASE("check: the op self-test covers every registered op and passes", "[che
 TEST_CASE("executor keep_all: every value readable, outputs unchanged", "[check]") {
     Graph g;
     int x = g.input("x", {7, 5});
-    int a = g.add1("relu", {x}, {}, "a");
-    int b = g.add1("tanh", {a}, {}, "b");
-    g.output(g.add1("add", {a, b}, {}, "c"), "y");
+    int a = ops::activation(g, ops::kActRelu, x, 0.01, "a");
+    int b = ops::activation(g, ops::kActTanh, a, 0.01, "b");
+    g.output(ops::binary(g, ops::Binary::Add, a, b, "c"), "y");
     TensorMap in{{"x", test::random_tensor({7, 5}, 3)}};
     GpuExecutor plain(test::gpu(), g, WeightStore{}), kept(test::gpu(), g, WeightStore{}, false, true);
     CHECK(kept.memory_plan().arena_bytes == kept.memory_plan().total_bytes);  // nothing shares bytes

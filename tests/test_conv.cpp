@@ -123,14 +123,15 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
 TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
     Graph g;
     int x = g.input("x", {1, 3, 8, 8});
-    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, g.weight("w4", {4, 2, 3, 3})}, {}, "c1"),
+    REQUIRE_THROWS_WITH(ops::conv2d(g, x, g.weight("w4", {4, 2, 3, 3}), -1, -1, {}, "c1"),
                         Catch::Contains("c1") && Catch::Contains("3 channels") && Catch::Contains("expects 2"));
     int w = g.weight("w", {4, 3, 3, 3});
+    // Raw Params on purpose: the shorthand "stride" with a bad value must be refused.
     REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w}, {{"stride", 0}}), Catch::Contains("stride_h must be an integer >= 1"));
-    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, g.weight("w9", {4, 3, 9, 9})}),
+    REQUIRE_THROWS_WITH(ops::conv2d(g, x, g.weight("w9", {4, 3, 9, 9}), -1, -1, {}),
                         Catch::Contains("kernel 9x9 is larger than the padded input 8x8"));
-    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w, g.weight("b", {5})}), Catch::Contains("bias [5]"));
-    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w, g.input("r", {1, 4, 7, 7})}, {{"residual", 1}}),
+    REQUIRE_THROWS_WITH(ops::conv2d(g, x, w, g.weight("b", {5}), -1, {}), Catch::Contains("bias [5]"));
+    REQUIRE_THROWS_WITH(ops::conv2d(g, x, w, -1, g.input("r", {1, 4, 7, 7}), {}),
                         Catch::Contains("residual [1, 4, 7, 7] does not match the output [1, 4, 6, 6]"));
 }
 
@@ -148,6 +149,7 @@ TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool][max_
         }
     Graph g;
     int x = g.input("x", {1, 1, 4, 4});
+    // Raw Params on purpose: bad or missing values must be refused at Graph::add.
     REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}, {{"kernel", 3}, {"pad", 2}}), Catch::Contains("at most half"));
     REQUIRE_THROWS_WITH(g.add1("max_pool2d", {x}), Catch::Contains("needs a kernel size"));
 }
@@ -155,7 +157,7 @@ TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool][max_
 TEST_CASE("global_avg_pool matches the CPU reference", "[op][pool][global_avg_pool]") {
     for (const Shape& s : {Shape{1, 7, 5, 3}, Shape{2, 33, 7, 7}, Shape{1, 3, 56, 57}}) {
         Graph g;
-        g.output(g.add1("global_avg_pool", {g.input("x", s)}), "y");
+        g.output(ops::global_avg_pool(g, g.input("x", s)), "y");
         INFO("global_avg_pool " << shape_str(s));
         run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(s, 60, -2.0f, 2.0f)}}, {1e-6, 1e-5});
     }

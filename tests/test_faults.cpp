@@ -9,6 +9,7 @@
 #include "base/error.h"
 #include "engine/api/api_internal.h"
 #include "engine/executor.h"
+#include "engine/ops/build.h"
 #include "runtime/context.h"
 #include "tests/api_test_util.h"
 #include "tests/harness.h"
@@ -61,7 +62,7 @@ TEST_CASE("an allocation failing in the middle of a graph build frees what was a
     w.add("fc.weight", test::random_tensor({512, 512}, 1));
     Graph g;
     int x = g.input("x", {512, 512});
-    g.output(g.add1("linear", {x, g.weight("fc.weight", {512, 512})}), "y");
+    g.output(ops::linear(g, x, g.weight("fc.weight", {512, 512}), -1), "y");
     CHECK_THROWS_WITH(GpuExecutor(ctx, g, w), Contains("out of device memory") && Contains("budget of 2 MiB"));
     CHECK(ctx.memory_in_use() == 0);
     CHECK(ctx.take_validation_messages().empty());

@@ -6,6 +6,7 @@
 
 #include "base/error.h"
 #include "engine/model/gma.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "tests/harness.h"
 
@@ -24,7 +25,7 @@ void check_disentangle(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t ch
     Graph g;
     std::vector<int> in{g.input("x", {rows, K})};
     for (const std::string& n : names) in.push_back(g.weight(n, w.get(n).shape));
-    g.output(g.add1("disentangle", in, {{"act", double(ops::kActLeaky)}, {"slope", 0.01}}), "y");
+    g.output(ops::disentangle(g, in, ops::kActLeaky, 0.01), "y");
     REQUIRE(g.value(g.outputs()[0].second).shape == Shape{rows, J, L});
     INFO("disentangle " << rows << "x" << K << " by [" << K << ", " << J << ", " << L << "] in " << names.size() << " chunks");
     run_gpu_and_compare(g, w, {{"x", random_tensor({rows, K}, seed, -2.0f, 2.0f)}});
@@ -60,8 +61,8 @@ TEST_CASE("disentangle rejects mismatched chunks", "[op][disentangle]") {
     Graph g;
     int x = g.input("x", {1, 10});
     int a = g.weight("a", {6, 4, 2}), b = g.weight("b", {3, 4, 2}), c = g.weight("c", {4, 4, 3});
-    REQUIRE_THROWS_WITH(g.add1("disentangle", {x, a, b}), Catch::Contains("hold 9 rows"));
-    REQUIRE_THROWS_WITH(g.add1("disentangle", {x, a, c}), Catch::Contains("differ after the first axis"));
+    REQUIRE_THROWS_WITH(ops::disentangle(g, {x, a, b}, ops::kActNone, 0.01), Catch::Contains("hold 9 rows"));
+    REQUIRE_THROWS_WITH(ops::disentangle(g, {x, a, c}, ops::kActNone, 0.01), Catch::Contains("differ after the first axis"));
 }
 
 TEST_CASE("gma_decode matches the CPU reference", "[op][gma_decode]") {
@@ -69,7 +70,7 @@ TEST_CASE("gma_decode matches the CPU reference", "[op][gma_decode]") {
     for (int c = 3; c < 6; ++c) o.data[size_t(6 * 5 + c)] = 0.0f;  // a zero normal stays zero
     for (int c = 3; c < 6; ++c) o.data[size_t(6 * 6 + c)] = c == 3 ? 1e-8f : 0.0f;  // below the 1e-6 clamp
     Graph g;
-    g.output(g.add1("gma_decode", {g.input("o", o.shape)}), "y");
+    g.output(ops::gma_decode(g, g.input("o", o.shape)), "y");
     TensorMap out = run_gpu_and_compare(g, WeightStore{}, {{"o", o}});
     const float* r = &out.at("y").data[6 * 9];
     CHECK(std::abs(r[3] * r[3] + r[4] * r[4] + r[5] * r[5] - 1.0f) < 1e-5f);
@@ -81,7 +82,7 @@ namespace {
 
 TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed) {
     Graph g;
-    std::vector<int> out = g.add("chamfer", {g.input("a", a), g.input("b", b)});
+    std::vector<int> out = ops::chamfer(g, g.input("a", a), g.input("b", b));
     g.output(out[0], "chamfer");
     g.output(out[1], "mins");
     INFO("chamfer " << shape_str(a) << " vs " << shape_str(b));
@@ -101,7 +102,7 @@ TEST_CASE("chamfer matches the CPU reference at odd sizes, widths 3 and 6", "[op
 TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
     // a = {0}, b = {1, 2} on the x axis: 1 + (1 + 4) / 2
     Graph g;
-    g.output(g.add("chamfer", {g.input("a", {1, 3}), g.input("b", {2, 3})})[0], "d");
+    g.output(ops::chamfer(g, g.input("a", {1, 3}), g.input("b", {2, 3}))[0], "d");
     GpuExecutor exec(test::gpu(), g, WeightStore{});
     TensorMap out = exec.run({{"a", HostTensor({1, 3}, {0, 0, 0})}, {"b", HostTensor({2, 3}, {1, 0, 0, 2, 0, 0})}});
     test::require_no_validation_messages();
@@ -109,7 +110,7 @@ TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
     CHECK(out.at("d").data[0] == 3.5f);
     HostTensor same = random_tensor({77, 6}, 9);
     Graph g2;
-    g2.output(g2.add("chamfer", {g2.input("a", {77, 6}), g2.input("b", {77, 6})})[0], "d");
+    g2.output(ops::chamfer(g2, g2.input("a", {77, 6}), g2.input("b", {77, 6}))[0], "d");
     CHECK(GpuExecutor(test::gpu(), g2, WeightStore{}).run({{"a", same}, {"b", same}}).at("d").data[0] == 0.0f);
     test::require_no_validation_messages();
 }
@@ -121,11 +122,11 @@ TEST_CASE("chamfer at 16384 x 16384", "[op][chamfer]") {
 TEST_CASE("chamfer rejects empty sets, bad and mismatched widths, NaN", "[op][chamfer]") {
     Graph g;
     int a3 = g.input("a3", {5, 3}), b6 = g.input("b6", {4, 6}), e = g.input("e", {0, 3}), w4 = g.input("w4", {2, 4});
-    REQUIRE_THROWS_WITH(g.add("chamfer", {a3, b6}), Catch::Contains("different widths"));
-    REQUIRE_THROWS_WITH(g.add("chamfer", {a3, e}), Catch::Contains("B is empty"));
-    REQUIRE_THROWS_WITH(g.add("chamfer", {w4, w4}), Catch::Contains("width 3 or 6"));
+    REQUIRE_THROWS_WITH(ops::chamfer(g, a3, b6), Catch::Contains("different widths"));
+    REQUIRE_THROWS_WITH(ops::chamfer(g, a3, e), Catch::Contains("B is empty"));
+    REQUIRE_THROWS_WITH(ops::chamfer(g, w4, w4), Catch::Contains("width 3 or 6"));
     Graph g2;
-    g2.output(g2.add("chamfer", {g2.input("a", {2, 3}), g2.input("b", {2, 3})})[0], "d");
+    g2.output(ops::chamfer(g2, g2.input("a", {2, 3}), g2.input("b", {2, 3}))[0], "d");
     HostTensor bad({2, 3}, {0, 0, 0, 1, std::nanf(""), 0});
     REQUIRE_THROWS_WITH(run_cpu(g2, WeightStore{}, {{"a", bad}, {"b", bad}}), Catch::Contains("NaN"));
     // The GPU cannot throw: it reports NaN instead of a number that looks valid.

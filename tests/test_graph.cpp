@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/safetensors.h"
 #include "tests/harness.h"
@@ -17,16 +18,17 @@ namespace {
 Graph mlp_graph(int64_t batch) {
     Graph g;
     int x = g.input("x", {batch, 24});
-    int h1 = g.add1("linear", {x, g.weight("mlp.0.weight", {64, 24}), g.weight("mlp.0.bias", {64})}, {}, "fc0");
-    int a1 = g.add1("relu", {h1}, {}, "relu0");
-    int h2 = g.add1("linear", {a1, g.weight("mlp.2.weight", {48, 64}), g.weight("mlp.2.bias", {48})}, {}, "fc2");
-    int a2 = g.add1("leaky_relu", {h2}, {{"slope", 0.01}}, "leaky2");
-    int cat = g.add1("concat", {a2, x}, {}, "cat");
-    int h3 = g.add1("linear", {cat, g.weight("mlp.4.weight", {10, 72}), g.weight("mlp.4.bias", {10})}, {}, "fc4");
-    int y = g.add1("tanh", {h3}, {}, "tanh4");
-    int gate = g.add1("sigmoid", {h3}, {}, "gate");
-    int mixed = g.add1("mul", {y, gate}, {}, "mix");
-    g.output(g.add1("add", {mixed, g.weight("mlp.4.bias", {10})}, {}, "out"), "y");
+    using ops::kActNone;
+    int h1 = ops::linear(g, x, g.weight("mlp.0.weight", {64, 24}), g.weight("mlp.0.bias", {64}), kActNone, 0.01, "fc0");
+    int a1 = ops::activation(g, ops::kActRelu, h1, 0.01, "relu0");
+    int h2 = ops::linear(g, a1, g.weight("mlp.2.weight", {48, 64}), g.weight("mlp.2.bias", {48}), kActNone, 0.01, "fc2");
+    int a2 = ops::activation(g, ops::kActLeaky, h2, 0.01, "leaky2");
+    int cat = ops::concat(g, {a2, x}, "cat");
+    int h3 = ops::linear(g, cat, g.weight("mlp.4.weight", {10, 72}), g.weight("mlp.4.bias", {10}), kActNone, 0.01, "fc4");
+    int y = ops::activation(g, ops::kActTanh, h3, 0.01, "tanh4");
+    int gate = ops::activation(g, ops::kActSigmoid, h3, 0.01, "gate");
+    int mixed = ops::binary(g, ops::Binary::Mul, y, gate, "mix");
+    g.output(ops::binary(g, ops::Binary::Add, mixed, g.weight("mlp.4.bias", {10}), "out"), "y");
     g.output(a1, "hidden");
     return g;
 }
@@ -138,6 +140,6 @@ TEST_CASE("graph inputs are checked by name and shape", "[graph]") {
 
 TEST_CASE("a weight missing from the file is named", "[graph]") {
     Graph g;
-    g.output(g.add1("linear", {g.input("x", {1, 3}), g.weight("nope.weight", {2, 3})}), "y");
+    g.output(ops::linear(g, g.input("x", {1, 3}), g.weight("nope.weight", {2, 3}), -1), "y");
     REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, WeightStore{}), Catch::Contains("'nope.weight' is missing"));
 }

@@ -6,6 +6,7 @@
 
 #include "base/error.h"
 #include "engine/model/heads.h"
+#include "engine/ops/build.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -62,14 +63,14 @@ TEST_CASE("ilu matches the CPU reference with 1, 4 and 16 lanes per row", "[op][
     // The shader's row groups: 1 lane (no partial sums) up to 16 (coalesced rows).
     const int64_t C = 37, H = 19;
     WeightStore w = random_ilu(C, H, 11);
-    for (double lanes : {1.0, 4.0, 16.0}) {
+    for (int lanes : {1, 4, 16}) {
         INFO("lanes " << lanes);
         Graph g;
         std::vector<int> in{g.input("ft", {1, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
         for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
                               "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
             in.push_back(g.weight(n, w.get(n).shape));
-        std::vector<int> out = g.add("ilu", in, {{"max_iters", 5}, {"lanes", lanes}});
+        std::vector<int> out = ops::ilu(g, in, 5, "", lanes);
         g.output(out[0], "c");
         test::run_gpu_and_compare(g, w, {{"ft", random_tensor({1, C}, 1, -2.0f, 2.0f)},
                                          {"fp", random_tensor({1, C}, 2, -2.0f, 2.0f)}, {"iters", ilu_iters_input(5, 5)}});
@@ -149,8 +150,9 @@ TEST_CASE("ilu_step rejects a missing state and steps out of range", "[op][ilu]"
     WeightStore w = random_ilu(8, 4, 1);
     IluGraph ig = ilu_graph(w, 8, 3, 2, true);
     std::vector<int> in = ig.g.nodes().back().inputs;
+    // Raw Params on purpose: Graph::add must refuse a step out of range.
     REQUIRE_THROWS_WITH(ig.g.add("ilu_step", in, {{"max_iters", 3}, {"step", 3}}), Catch::Contains("step must be"));
     in.back() = in[0];  // F^t where step 1 needs the state of step 0
-    REQUIRE_THROWS_WITH(ig.g.add("ilu_step", in, {{"max_iters", 3}, {"step", 1}}), Catch::Contains("state of step 0"));
+    REQUIRE_THROWS_WITH(ops::ilu_step(ig.g, in, 3, 1), Catch::Contains("state of step 0"));
     REQUIRE_THROWS_WITH(build_ilu_stepped(ig.g, w, in[0], in[1], in[2], 0), Catch::Contains("max_iters >= 1"));
 }

@@ -15,6 +15,7 @@
 
 #include "base/error.h"
 #include "engine/model/normals.h"
+#include "engine/ops/build.h"
 #include "engine/ops/point_grid.h"
 #include "tests/harness.h"
 #include "tests/run_both.h"
@@ -106,13 +107,11 @@ double percentile(std::vector<double> v, double q) {
 
 test::BothRuns run_op(const HostTensor& xyz, int k, int orient, std::array<double, 3> ref) {
     const ops::PointGrid grid = ops::build_point_grid(xyz, k);
-    Params p{{"k", double(k)}, {"orient", double(orient)}, {"rx", ref[0]}, {"ry", ref[1]}, {"rz", ref[2]}};
-    ops::set_grid_params(p, grid);
     Graph g;
     const int x = g.input("points", xyz.shape);
     const int o = g.input("order", grid.order.shape, ElemType::I32);
     const int c = g.input("cell_start", grid.cell_start.shape, ElemType::I32);
-    g.output(g.add1("normal_estimate", {x, o, c}, p, "n"), "n");
+    g.output(ops::normal_estimate(g, x, o, c, grid, k, orient, ref, "n"), "n");
     return test::run_both(g, WeightStore{}, {{"points", xyz}, {"order", grid.order}, {"cell_start", grid.cell_start}});
 }
 

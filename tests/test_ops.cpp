@@ -5,6 +5,7 @@
 #include <set>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/gemm_tiles.h"
 #include "engine/op.h"
@@ -25,16 +26,15 @@ void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, ui
     w.add("fc.weight", random_tensor({out, in}, seed + 1, -bound, bound));
     w.add("fc.bias", random_tensor({out}, seed + 2, -bound, bound));
     int x = g.input("x", x_shape);
-    std::vector<int> ins{x, g.weight("fc.weight", {out, in})};
-    if (bias) ins.push_back(g.weight("fc.bias", {out}));
-    g.output(g.add1("linear", ins, {{"act", double(act)}, {"slope", 0.2}}), "y");
+    const int b = bias ? g.weight("fc.bias", {out}) : -1;
+    g.output(ops::linear(g, x, g.weight("fc.weight", {out, in}), b, ops::Act(act), 0.2), "y");
     INFO("linear x" << shape_str(x_shape) << " -> " << out << " bias " << bias << " act " << act);
     run_gpu_and_compare(g, w, {{"x", random_tensor(x_shape, seed, -2.0f, 2.0f)}});
 }
 
-void check_unary(const std::string& op, const Shape& shape, uint32_t seed, float range) {
+void check_unary(const std::string& op, ops::Act act, const Shape& shape, uint32_t seed, float range) {
     Graph g;
-    g.output(g.add1(op, {g.input("x", shape)}, {{"slope", 0.05}}), "y");
+    g.output(ops::activation(g, act, g.input("x", shape), 0.05), "y");
     INFO(op << " " << shape_str(shape) << " range " << range);
     run_gpu_and_compare(g, WeightStore{}, {{"x", random_tensor(shape, seed, -range, range)}});
 }
@@ -77,20 +77,24 @@ TEST_CASE("linear tiles fit the device and its subgroups", "[op][linear]") {
 }
 
 TEST_CASE("activations match the CPU reference", "[op][activation][relu][leaky_relu][tanh][sigmoid]") {
-    for (const char* op : {"relu", "leaky_relu", "tanh", "sigmoid"}) {
-        check_unary(op, {1, 37}, 20, 3.0f);
-        check_unary(op, {5, 127, 33}, 21, 3.0f);
-        check_unary(op, {1000}, 22, 60.0f);  // saturation: tanh/sigmoid must not overflow to NaN
+    const std::pair<const char*, ops::Act> acts[] = {
+        {"relu", ops::kActRelu}, {"leaky_relu", ops::kActLeaky}, {"tanh", ops::kActTanh}, {"sigmoid", ops::kActSigmoid}};
+    for (const auto& [op, act] : acts) {
+        check_unary(op, act, {1, 37}, 20, 3.0f);
+        check_unary(op, act, {5, 127, 33}, 21, 3.0f);
+        check_unary(op, act, {1000}, 22, 60.0f);  // saturation: tanh/sigmoid must not overflow to NaN
     }
 }
 
 TEST_CASE("add, sub and mul match the CPU reference, with suffix broadcasting", "[op][binary][add][sub][mul]") {
     struct Case { Shape a, b; };
-    for (const char* op : {"add", "sub", "mul"})
+    const std::pair<const char*, ops::Binary> binaries[] = {
+        {"add", ops::Binary::Add}, {"sub", ops::Binary::Sub}, {"mul", ops::Binary::Mul}};
+    for (const auto& [op, kind] : binaries)
         for (const Case& c : {Case{{1, 37}, {1, 37}}, Case{{5, 127, 33}, {5, 127, 33}},
                               Case{{5, 127, 33}, {33}}, Case{{5, 127, 33}, {127, 33}}}) {
             Graph g;
-            g.output(g.add1(op, {g.input("a", c.a), g.input("b", c.b)}), "y");
+            g.output(ops::binary(g, kind, g.input("a", c.a), g.input("b", c.b)), "y");
             INFO(op << " " << shape_str(c.a) << " with " << shape_str(c.b));
             run_gpu_and_compare(g, WeightStore{},
                                 {{"a", random_tensor(c.a, 30)}, {"b", random_tensor(c.b, 31)}});
@@ -100,7 +104,7 @@ TEST_CASE("add, sub and mul match the CPU reference, with suffix broadcasting", 
 TEST_CASE("binary ops reject shapes that do not broadcast", "[op][binary]") {
     Graph g;
     int a = g.input("a", {5, 7}), b = g.input("b", {5});
-    REQUIRE_THROWS_WITH(g.add1("add", {a, b}, {}, "bad_add"),
+    REQUIRE_THROWS_WITH(ops::binary(g, ops::Binary::Add, a, b, "bad_add"),
                         Catch::Contains("bad_add") && Catch::Contains("do not broadcast"));
 }
 
@@ -116,7 +120,7 @@ TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]"
             ids.push_back(g.input(name, c.in[i]));
             inputs[name] = random_tensor(c.in[i], 40 + uint32_t(i));
         }
-        g.output(g.add1("concat", ids), "y");
+        g.output(ops::concat(g, ids), "y");
         run_gpu_and_compare(g, WeightStore{}, inputs);
     }
 }
@@ -124,13 +128,13 @@ TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]"
 TEST_CASE("concat rejects mismatched leading dimensions", "[op][concat]") {
     Graph g;
     int a = g.input("a", {5, 7}), b = g.input("b", {4, 7});
-    REQUIRE_THROWS_WITH(g.add1("concat", {a, b}), Catch::Contains("differ outside the last axis"));
+    REQUIRE_THROWS_WITH(ops::concat(g, {a, b}), Catch::Contains("differ outside the last axis"));
 }
 
 TEST_CASE("flatten keeps the bytes and joins the trailing axes", "[op][flatten]") {
     for (const Shape& s : {Shape{3, 5, 7, 9}, Shape{1, 1}, Shape{17}, Shape{2, 300, 1, 3}}) {
         Graph g;
-        const int y = g.add1("flatten", {g.input("x", s)});
+        const int y = ops::flatten(g, g.input("x", s));
         INFO(shape_str(s));
         CHECK(g.value(y).shape == Shape{s[0], numel(s) / s[0]});
         g.output(y, "y");
@@ -165,6 +169,6 @@ TEST_CASE("linear reports mismatched shapes with the node's name", "[op][linear]
     Graph g;
     int x = g.input("x", {4, 10});
     int w = g.weight("fc.weight", {8, 11});
-    REQUIRE_THROWS_WITH(g.add1("linear", {x, w}, {}, "fc1"),
+    REQUIRE_THROWS_WITH(ops::linear(g, x, w, -1, ops::kActNone, 0.01, "fc1"),
                         Catch::Contains("fc1") && Catch::Contains("expects 11"));
 }

@@ -95,14 +95,14 @@ TEST_CASE("point encoder rejects bad clouds and configs", "[point]") {
     CHECK(build_error({32, 6}) == "no error");
 
     HostTensor c = test::random_tensor({40, 6}, 3);
-    CHECK_NOTHROW(check_point_cloud(c, cfg));
+    CHECK_NOTHROW(check_object_cloud(c, cfg));
     c.data[6 * 7 + 1] = std::nanf("");
-    CHECK_THROWS_WITH(check_point_cloud(c, cfg), Catch::Contains("NaN or infinite value at point 7"));
+    CHECK_THROWS_WITH(check_object_cloud(c, cfg), Catch::Contains("NaN or infinite value at point 7"));
     c.data[6 * 7 + 1] = -INFINITY;
-    CHECK_THROWS_WITH(check_point_cloud(c, cfg), Catch::Contains("NaN or infinite"));
-    CHECK_THROWS_WITH(check_point_cloud(test::random_tensor({20, 6}, 3), cfg), Catch::Contains("fewer than the 32"));
-    CHECK_THROWS_WITH(check_point_cloud(test::random_tensor({40, 3}, 3), cfg), Catch::Contains("[N, 6]"));
-    CHECK_THROWS_WITH(check_point_cloud(HostTensor({0, 6}), cfg), Catch::Contains("empty"));
+    CHECK_THROWS_WITH(check_object_cloud(c, cfg), Catch::Contains("NaN or infinite"));
+    CHECK_THROWS_WITH(check_object_cloud(test::random_tensor({20, 6}, 3), cfg), Catch::Contains("fewer than the 32"));
+    CHECK_THROWS_WITH(check_object_cloud(test::random_tensor({40, 3}, 3), cfg), Catch::Contains("[N, 6]"));
+    CHECK_THROWS_WITH(check_object_cloud(HostTensor({0, 6}), cfg), Catch::Contains("empty"));
 
     nlohmann::json bad = w.config();
     bad["point"]["sa"][0]["radii"] = {0.3, 0.5};

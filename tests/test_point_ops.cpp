@@ -45,14 +45,11 @@ test::BothRuns fps_and_balls(const HostTensor& cloud, int64_t npoint, const std:
                              bool no_registers = false) {
     Graph g;
     int x = g.input("cloud", cloud.shape);
-    Params fp{{"npoint", double(npoint)}};
-    if (no_registers) fp.set("no_registers", 1);
-    std::vector<int> f = g.add("fps", {x}, fp, "fps");
+    std::vector<int> f = ops::fps(g, x, npoint, "fps", no_registers);
     g.output(f[0], "fps");
     g.output(f[1], "centres");
     for (size_t s = 0; s < scales.size(); ++s)
-        g.output(g.add1("ball_query", {x, f[1]}, {{"radius", scales[s].radius}, {"nsample", double(scales[s].nsample)}}),
-                 "ball." + std::to_string(s));
+        g.output(ops::ball_query(g, x, f[1], scales[s].radius, scales[s].nsample), "ball." + std::to_string(s));
     return test::run_both(g, WeightStore{}, {{"cloud", cloud}});
 }
 
@@ -213,7 +210,7 @@ TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize
         HostTensor c = test::random_tensor({N, 6}, uint32_t(40 + N), -50.0f, 80.0f);
         if (N == 1) c.data[0] += 1.0f;  // one point: scale 0 -> the CPU reference throws; tested below
         Graph g;
-        auto o = g.add("cloud_normalize", {g.input("c", {N, 6})});
+        auto o = ops::cloud_normalize(g, g.input("c", {N, 6}));
         g.output(o[0], "cloud");
         g.output(o[1], "frame");
         INFO("N " << N);
@@ -262,7 +259,7 @@ TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query
         HostTensor c = random_cloud(50, 7);
         c.data[31] = bad;
         Graph g;
-        std::vector<int> f = g.add("fps", {g.input("c", {50, 3})}, {{"npoint", 5}});
+        std::vector<int> f = ops::fps(g, g.input("c", {50, 3}), 5);
         g.output(f[0], "i");
         REQUIRE_THROWS_WITH(run_cpu(g, WeightStore{}, {{"c", c}}), Catch::Contains("point 10 has a NaN or infinite"));
     }

@@ -4,6 +4,7 @@
 #include <cstring>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "runtime/spirv_reflect.h"
 #include "shaders/shader_registry.h"
@@ -156,8 +157,8 @@ TEST_CASE("profiling records a GPU time per node", "[runtime]") {
     }
     Graph g;
     int x = g.input("x", {64, 64});
-    int h = g.add1("linear", {x, g.weight("w", {64, 64})}, {}, "fc");
-    g.output(g.add1("relu", {h}, {}, "act"), "y");
+    int h = ops::linear(g, x, g.weight("w", {64, 64}), -1, ops::kActNone, 0.01, "fc");
+    g.output(ops::activation(g, ops::kActRelu, h, 0.01, "act"), "y");
     WeightStore w;
     w.add("w", test::random_tensor({64, 64}, 1));
     GpuExecutor exec(ctx, g, w, /*profile=*/true);

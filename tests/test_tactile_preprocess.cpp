@@ -13,6 +13,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "engine/io/image.h"
 #include "tests/harness.h"
@@ -26,7 +27,7 @@ const test::Tolerance kPrepTol{1e-5, 1e-5};
 Graph prep_graph(int64_t h, int64_t w, int64_t crop, int64_t size) {
     Graph g;
     int img = g.input("image", {h, w, 3}, ElemType::I32);
-    g.output(g.add1("tactile_preprocess", {img}, {{"crop", double(crop)}, {"size", double(size)}}), "x");
+    g.output(ops::tactile_preprocess(g, img, crop, size), "x");
     return g;
 }
 
@@ -105,12 +106,13 @@ TEST_CASE("tactile_preprocess on real GelSight frames and 480x640 / 240x320 fram
 
 TEST_CASE("tactile_preprocess rejects bad images and parameters", "[op][preprocess]") {
     Graph g;
-    REQUIRE_THROWS_WITH(g.add1("tactile_preprocess", {g.input("a", {7, 9, 3}, ElemType::I32)}, {{"crop", 8}, {"size", 8}}),
+    REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("a", {7, 9, 3}, ElemType::I32), 8, 8),
                         Catch::Contains("smaller than 8x8"));
-    REQUIRE_THROWS_WITH(g.add1("tactile_preprocess", {g.input("b", {9, 9, 4}, ElemType::I32)}, {{"crop", 8}, {"size", 8}}),
+    REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("b", {9, 9, 4}, ElemType::I32), 8, 8),
                         Catch::Contains("must be [H, W, 3]"));
-    REQUIRE_THROWS_WITH(g.add1("tactile_preprocess", {g.input("c", {9, 9, 3})}, {{"crop", 8}, {"size", 8}}),
+    REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("c", {9, 9, 3}), 8, 8),
                         Catch::Contains("must be I32"));
+    // Raw Params on purpose: a missing size must be refused at Graph::add.
     REQUIRE_THROWS_WITH(g.add1("tactile_preprocess", {g.input("d", {9, 9, 3}, ElemType::I32)}, {{"crop", 8}}),
                         Catch::Contains("param size"));
     // A 5x5 frame converts, and the graph built for it names the problem.

@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "engine/model/post.h"
+#include "engine/ops/build.h"
 #include "tests/run_both.h"
 
 using namespace vtloc;
@@ -24,7 +25,7 @@ HostTensor grid_candidates(int64_t M, uint32_t seed) {
 
 test::BothRuns run_topk(const HostTensor& contact, const HostTensor& cand, int k) {
     Graph g;
-    std::vector<int> o = g.add("topk", {g.input("c", contact.shape), g.input("cand", cand.shape)}, {{"k", double(k)}});
+    std::vector<int> o = ops::topk(g, g.input("c", contact.shape), g.input("cand", cand.shape), k);
     g.output(o[0], "index");
     g.output(o[1], "score");
     test::BothRuns r = test::run_both(g, WeightStore{}, {{"c", contact}, {"cand", cand}});
@@ -61,13 +62,14 @@ TEST_CASE("topk breaks ties to the lower index (test_post.py hand case)", "[op][
 TEST_CASE("topk rejects K out of range, empty sets and NaN", "[op][topk]") {
     Graph g;
     int c = g.input("c", {3}), cand = g.input("cand", {4, 3}), empty = g.input("e", {0, 3}), bad = g.input("b", {4, 2});
-    REQUIRE_THROWS_WITH(g.add("topk", {c, cand}, {{"k", 5}}), Catch::Contains("K = 5 exceeds the 4 candidates"));
+    REQUIRE_THROWS_WITH(ops::topk(g, c, cand, 5), Catch::Contains("K = 5 exceeds the 4 candidates"));
+    // Raw Params on purpose: a bad or missing K must be refused at Graph::add.
     REQUIRE_THROWS_WITH(g.add("topk", {c, cand}, {{"k", 0}}), Catch::Contains("K must be"));
     REQUIRE_THROWS_WITH(g.add("topk", {c, cand}), Catch::Contains("K must be"));
-    REQUIRE_THROWS_WITH(g.add("topk", {c, empty}, {{"k", 1}}), Catch::Contains("empty"));
-    REQUIRE_THROWS_WITH(g.add("topk", {c, bad}, {{"k", 1}}), Catch::Contains("[M, 3]"));
+    REQUIRE_THROWS_WITH(ops::topk(g, c, empty, 1), Catch::Contains("empty"));
+    REQUIRE_THROWS_WITH(ops::topk(g, c, bad, 1), Catch::Contains("[M, 3]"));
     Graph g2;
-    g2.output(g2.add("topk", {g2.input("c", {3}), g2.input("cand", {2, 3})}, {{"k", 1}})[0], "i");
+    g2.output(ops::topk(g2, g2.input("c", {3}), g2.input("cand", {2, 3}), 1)[0], "i");
     REQUIRE_THROWS_WITH(run_cpu(g2, WeightStore{}, {{"c", HostTensor({3}, {0, 0, 0})},
                                                     {"cand", HostTensor({2, 3}, {0, 0, 0, NAN, 0, 0})}}),
                         Catch::Contains("candidate 1 holds NaN"));
@@ -78,14 +80,15 @@ namespace {
 HostTensor run_heatmap(const HostTensor& cloud, const HostTensor& cand, const std::vector<int32_t>& index,
                        const HostTensor* sym = nullptr) {
     Graph g;
-    std::vector<int> in{g.input("cloud", cloud.shape), g.input("cand", cand.shape),
-                        g.input("index", {int64_t(index.size())}, ElemType::I32)};
+    const int pc = g.input("cloud", cloud.shape), cd = g.input("cand", cand.shape);
+    const int idx = g.input("index", {int64_t(index.size())}, ElemType::I32);
     TensorMap inputs{{"cloud", cloud}, {"cand", cand}, {"index", HostTensor::from_ints({int64_t(index.size())}, index)}};
+    int symmetry = -1;
     if (sym) {
-        in.push_back(g.input("sym", sym->shape));
+        symmetry = g.input("sym", sym->shape);
         inputs["sym"] = *sym;
     }
-    g.output(g.add1("heatmap", in), "heat");
+    g.output(ops::heatmap(g, pc, cd, idx, symmetry), "heat");
     return test::run_gpu_and_compare(g, WeightStore{}, inputs).at("heat");
 }
 
@@ -160,11 +163,11 @@ TEST_CASE("heatmap rejects bad inputs", "[op][heatmap]") {
     Graph g;
     int cloud = g.input("cloud", {5, 2}), c3 = g.input("c3", {5, 3}), idx = g.input("i", {2}, ElemType::I32);
     int fidx = g.input("f", {2}), sym = g.input("s", {2, 9});
-    REQUIRE_THROWS_WITH(g.add("heatmap", {cloud, c3, idx}), Catch::Contains("[P, D >= 3]"));
-    REQUIRE_THROWS_WITH(g.add("heatmap", {c3, c3, fidx}), Catch::Contains("must be I32"));
-    REQUIRE_THROWS_WITH(g.add("heatmap", {c3, c3, idx, sym}), Catch::Contains("[T > 0, 12]"));
+    REQUIRE_THROWS_WITH(ops::heatmap(g, cloud, c3, idx, -1), Catch::Contains("[P, D >= 3]"));
+    REQUIRE_THROWS_WITH(ops::heatmap(g, c3, c3, fidx, -1), Catch::Contains("must be I32"));
+    REQUIRE_THROWS_WITH(ops::heatmap(g, c3, c3, idx, sym), Catch::Contains("[T > 0, 12]"));
     Graph g2;
-    g2.output(g2.add1("heatmap", {g2.input("p", {2, 3}), g2.input("c", {2, 3}), g2.input("i", {1}, ElemType::I32)}), "h");
+    g2.output(ops::heatmap(g2, g2.input("p", {2, 3}), g2.input("c", {2, 3}), g2.input("i", {1}, ElemType::I32), -1), "h");
     REQUIRE_THROWS_WITH(run_cpu(g2, WeightStore{}, {{"p", HostTensor({2, 3})}, {"c", HostTensor({2, 3})},
                                                     {"i", HostTensor::from_ints({1}, {2})}}),
                         Catch::Contains("index 2 is outside 0..1"));

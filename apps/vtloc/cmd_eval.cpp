@@ -192,6 +192,57 @@ void render_extremes(const eval::Options& opt, const eval::MethodResult& model, 
     for (size_t k = 0; k < n_best; ++k) render(order[k], "best", k);
 }
 
+// The frames' pixel size: --mm-per-px, else the dataset's when the model records another.
+void frames_pixel_size(eval::Options& opt, const api::ModelInfo& info, const sim::Dataset& d) {
+    if (opt.mm_per_px) {
+        if (!info.sensor)
+            throw api::Error(opt.model + " has no sensor pixel size in its config; cannot rescale (--mm-per-px)");
+        if (*opt.mm_per_px != info.sensor->mm_per_px) opt.frames_mm_per_px = opt.mm_per_px;
+    } else if (info.sensor && d.sensor.mm_per_px != info.sensor->mm_per_px) {
+        opt.frames_mm_per_px = d.sensor.mm_per_px;
+    }
+}
+
+// Objects this run calls unknown that the weight file says it was trained on.
+void warn_trained_unseen(const eval::Options& opt, const std::vector<eval::Job>& jobs, const std::string& index,
+                         std::vector<std::string>& warnings) {
+    if (auto trained = eval::trained_objects(opt.model)) {
+        const std::set<std::string> names(trained->begin(), trained->end());
+        for (const eval::Job& j : jobs)
+            if (j.rec->object_split == "unseen" && names.count(j.rec->name))
+                warnings.push_back("warning: '" + j.rec->name + "' is an unknown object (object_split unseen) of " +
+                                   index + " but " + opt.model + " was trained on it (vtloc.provenance)");
+    }
+}
+
+// The model's rows, then the baselines' (unless --no-baselines), and their notes.
+void add_methods(eval::Report& rep, const eval::MethodResult& result, const sim::Dataset& d,
+                 const std::vector<eval::Job>& jobs) {
+    std::vector<eval::MethodResult> methods{result};
+    if (rep.opt.baselines) {
+        methods.push_back(eval::run_chance(jobs));
+        methods.push_back(eval::run_point_filtering(d, jobs));
+    }
+    for (const eval::MethodResult& m : methods) {
+        for (eval::Row& r : eval::make_rows(m, jobs)) rep.rows.push_back(r);
+        if (m.skipped) rep.notes.push_back(m.method + " " + m.note);
+        else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (README)");
+    }
+}
+
+void print_run_lines(const Session& s, const eval::Options& opt, const eval::Report& rep, size_t objects,
+                     const api::ModelInfo& info) {
+    std::printf("data      %s: %zu objects, %d %s touches%s\n", opt.data.c_str(), objects, rep.touches_run,
+                opt.split.c_str(), opt.objects == "all" ? "" : (" (" + opt.objects + " objects)").c_str());
+    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
+    if (opt.frames_mm_per_px)
+        std::printf("rescale   frames of %g mm per pixel (%s) to the model's %g before the crop\n",
+                    *opt.frames_mm_per_px, opt.mm_per_px ? "--mm-per-px" : "the dataset's sensor",
+                    info.sensor->mm_per_px);
+    if (opt.sequence > 1)
+        std::printf("sequence  %d touches per belief window (SPEC section 6, sigma 0.2, sigma_m 0.05)\n", opt.sequence);
+}
+
 }  // namespace
 
 namespace eval {
@@ -221,14 +272,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
         throw api::Error(opt.model + ": the model takes " + std::to_string(info.sample_points) +
                          " points per object (point.n_points), " + index + " has n_points " + std::to_string(d.n_points));
 
-    // The frames' pixel size: --mm-per-px, else the dataset's when the model records another.
-    if (opt.mm_per_px) {
-        if (!info.sensor)
-            throw api::Error(opt.model + " has no sensor pixel size in its config; cannot rescale (--mm-per-px)");
-        if (*opt.mm_per_px != info.sensor->mm_per_px) opt.frames_mm_per_px = opt.mm_per_px;
-    } else if (info.sensor && d.sensor.mm_per_px != info.sensor->mm_per_px) {
-        opt.frames_mm_per_px = d.sensor.mm_per_px;
-    }
+    frames_pixel_size(opt, info, d);
 
     eval::Report rep;
     rep.opt = opt;
@@ -239,15 +283,8 @@ int cmd_eval(Session& s, int argc, char** argv) {
     size_t selected = rep.skips.size();
     for (const eval::Job& j : jobs) selected += j.touches.size();
 
-    // Objects this run calls unknown that the weight file says it was trained on.
     std::vector<std::string>& warnings = rep.warnings;
-    if (auto trained = eval::trained_objects(opt.model)) {
-        const std::set<std::string> names(trained->begin(), trained->end());
-        for (const eval::Job& j : jobs)
-            if (j.rec->object_split == "unseen" && names.count(j.rec->name))
-                warnings.push_back("warning: '" + j.rec->name + "' is an unknown object (object_split unseen) of " +
-                                   index + " but " + opt.model + " was trained on it (vtloc.provenance)");
-    }
+    warn_trained_unseen(opt, jobs, index, warnings);
 
     const bool random = is_shipped_random_model(opt.model);
     print_model(info, random);
@@ -261,26 +298,9 @@ int cmd_eval(Session& s, int argc, char** argv) {
     rep.touches_run = int(result.rows.size());
     rep.time_per_touch_ms = engine_ms / double(result.rows.size());
 
-    std::vector<eval::MethodResult> methods{result};
-    if (opt.baselines) {
-        methods.push_back(eval::run_chance(jobs));
-        methods.push_back(eval::run_point_filtering(d, jobs));
-    }
-    for (const eval::MethodResult& m : methods) {
-        for (eval::Row& r : eval::make_rows(m, jobs)) rep.rows.push_back(r);
-        if (m.skipped) rep.notes.push_back(m.method + " " + m.note);
-        else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (README)");
-    }
+    add_methods(rep, result, d, jobs);
 
-    std::printf("data      %s: %zu objects, %d %s touches%s\n", opt.data.c_str(), jobs.size(), rep.touches_run,
-                opt.split.c_str(), opt.objects == "all" ? "" : (" (" + opt.objects + " objects)").c_str());
-    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
-    if (opt.frames_mm_per_px)
-        std::printf("rescale   frames of %g mm per pixel (%s) to the model's %g before the crop\n",
-                    *opt.frames_mm_per_px, opt.mm_per_px ? "--mm-per-px" : "the dataset's sensor",
-                    info.sensor->mm_per_px);
-    if (opt.sequence > 1)
-        std::printf("sequence  %d touches per belief window (SPEC section 6, sigma 0.2, sigma_m 0.05)\n", opt.sequence);
+    print_run_lines(s, opt, rep, jobs.size(), info);
     if (!rep.skips.empty()) rep.notes.insert(rep.notes.begin(), skip_summary(rep.skips, selected));
     std::printf("\n");
     eval::print_table(rep);

@@ -43,6 +43,81 @@ std::string golden_command(const std::string& model, const std::string& tactile,
     return cmd + " -o " + out;
 }
 
+// What the outputs and the report need of one localize run.
+struct Run {
+    const Args& a;
+    const std::string &tactile_path, &object_path, &candidates, &model_file;
+    const api::TactileImage& image;
+    const api::ModelInfo& info;
+    const api::Object& object;
+    const api::TouchResult& r;
+    api::Backend backend;
+    double encode_ms;
+};
+
+// --heatmap, --render and --dump; `golden` gets the cross-check command of a dump.
+nlohmann::json write_outputs(const Run& run, std::string& golden) {
+    const Args& a = run.a;
+    nlohmann::json outputs = nlohmann::json::object();
+    if (auto p = a.get("--heatmap")) {
+        api::write_heatmap_ply(*p, run.object, run.r.heatmap);
+        outputs["heatmap"] = *p;
+    }
+    if (auto p = a.get("--render")) {
+        api::RenderOptions ro;
+        ro.contact = run.r.contact;
+        ro.tactile = &run.image;
+        ro.caption = run.info.name + (is_shipped_random_model(run.model_file) ? " (RANDOM weights)" : "") + ": " +
+                     run.tactile_path + " on " + run.object_path;
+        api::render_heatmap_png(*p, run.object, run.r.heatmap, ro);
+        outputs["render"] = *p;
+    }
+    if (const auto dump = a.get("--dump")) {
+        make_folder(*dump);
+        const std::string tensors = (std::filesystem::path(*dump) / "tensors.safetensors").string();
+        const std::string cloud = (std::filesystem::path(*dump) / "cloud.ply").string();
+        api::save_tensors(tensors, run.r.tensors, run.info.config_json);
+        api::write_heatmap_ply(cloud, run.object, run.r.heatmap);
+        golden = golden_command(run.model_file, run.tactile_path, cloud, a,
+                                (std::filesystem::path(*dump) / "golden.safetensors").string());
+        outputs["dump"] = {{"tensors", tensors}, {"cloud", cloud}, {"golden_command", golden}};
+    }
+    return outputs;
+}
+
+void print_json(const Session& s, const Run& run, const nlohmann::json& outputs) {
+    const bool random = is_shipped_random_model(run.model_file);
+    nlohmann::json j{{"model", model_json(run.info, random)},
+                     {"backend", run.backend == api::Backend::Gpu ? "gpu" : "cpu"},
+                     {"object", object_json(run.object, run.candidates)},
+                     {"tactile", {{"path", run.tactile_path}, {"width", run.image.width}, {"height", run.image.height}}},
+                     {"outputs", outputs}};
+    if (s.context) j["device"] = s.context->device().name;
+    j.update(touch_json(run.r));
+    j["timings_ms"]["encode_ms"] = run.encode_ms;
+    std::printf("%s\n", j.dump(2).c_str());
+}
+
+void print_text(const Session& s, const Run& run, const nlohmann::json& outputs, const std::string& golden) {
+    const api::Object& object = run.object;
+    print_model(run.info, is_shipped_random_model(run.model_file));
+    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
+    std::printf("object    %s: %zu points%s, %zu candidates%s\n", run.object_path.c_str(), object.cloud().size(),
+                object.normals_estimated() ? " (normals estimated)" : "", object.candidate_count(),
+                run.candidates.empty() ? " (its points)" : (" from " + run.candidates).c_str());
+    std::printf("tactile   %s (%dx%d)\n", run.tactile_path.c_str(), run.image.width, run.image.height);
+    print_touch(run.r);
+    std::printf("time      encode object %.1f ms, touch %.1f ms%s\n", run.encode_ms, run.r.timings.wall_ms,
+                s.context ? " (a first run of a shape includes shader compilation)" : "");
+    for (auto& [what, path] : outputs.items())
+        if (what != "dump") std::printf("wrote     %s\n", path.get<std::string>().c_str());
+    if (outputs.contains("dump")) {
+        std::printf("wrote     %s\n          %s\n", outputs["dump"]["tensors"].get<std::string>().c_str(),
+                    outputs["dump"]["cloud"].get<std::string>().c_str());
+        std::printf("cross-check with the PyTorch reference:\n  %s\n", golden.c_str());
+    }
+}
+
 }  // namespace
 
 int cmd_localize(Session& s, int argc, char** argv) {
@@ -61,8 +136,7 @@ int cmd_localize(Session& s, int argc, char** argv) {
     const std::string candidates = a.get("--candidates").value_or("");
     api::LocalizeOptions opt = touch_options(a);
     opt.profile = a.flag("--profile");
-    const auto dump = a.get("--dump");
-    opt.keep_tensors = dump.has_value();
+    opt.keep_tensors = a.get("--dump").has_value();
     const bool json_out = a.flag("--json");
     const std::string model_path = a.get("--model").value_or("");
 
@@ -76,61 +150,11 @@ int cmd_localize(Session& s, int argc, char** argv) {
     double encode_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
     api::TouchResult r = model.localize(object, image, opt);
 
-    nlohmann::json outputs = nlohmann::json::object();
-    if (auto p = a.get("--heatmap")) {
-        api::write_heatmap_ply(*p, object, r.heatmap);
-        outputs["heatmap"] = *p;
-    }
-    if (auto p = a.get("--render")) {
-        api::RenderOptions ro;
-        ro.contact = r.contact;
-        ro.tactile = &image;
-        ro.caption = info.name + (is_shipped_random_model(model_file) ? " (RANDOM weights)" : "") + ": " +
-                     tactile_path + " on " + object_path;
-        api::render_heatmap_png(*p, object, r.heatmap, ro);
-        outputs["render"] = *p;
-    }
+    const Run run{a, tactile_path, object_path, candidates, model_file, image, info, object, r, opt.backend, encode_ms};
     std::string golden;
-    if (dump) {
-        make_folder(*dump);
-        const std::string tensors = (std::filesystem::path(*dump) / "tensors.safetensors").string();
-        const std::string cloud = (std::filesystem::path(*dump) / "cloud.ply").string();
-        api::save_tensors(tensors, r.tensors, info.config_json);
-        api::write_heatmap_ply(cloud, object, r.heatmap);
-        golden = golden_command(model_file, tactile_path, cloud, a,
-                                (std::filesystem::path(*dump) / "golden.safetensors").string());
-        outputs["dump"] = {{"tensors", tensors}, {"cloud", cloud}, {"golden_command", golden}};
-    }
-
-    const bool random = is_shipped_random_model(model_file);
-    if (json_out) {
-        nlohmann::json j{{"model", model_json(info, random)},
-                         {"backend", opt.backend == api::Backend::Gpu ? "gpu" : "cpu"},
-                         {"object", object_json(object, candidates)},
-                         {"tactile", {{"path", tactile_path}, {"width", image.width}, {"height", image.height}}},
-                         {"outputs", outputs}};
-        if (s.context) j["device"] = s.context->device().name;
-        j.update(touch_json(r));
-        j["timings_ms"]["encode_ms"] = encode_ms;
-        std::printf("%s\n", j.dump(2).c_str());
-        return 0;
-    }
-    print_model(info, random);
-    std::printf("device    %s\n", s.context ? s.context->device().name.c_str() : "CPU reference (--backend cpu)");
-    std::printf("object    %s: %zu points%s, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
-                object.normals_estimated() ? " (normals estimated)" : "", object.candidate_count(),
-                candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
-    std::printf("tactile   %s (%dx%d)\n", tactile_path.c_str(), image.width, image.height);
-    print_touch(r);
-    std::printf("time      encode object %.1f ms, touch %.1f ms%s\n", encode_ms, r.timings.wall_ms,
-                s.context ? " (a first run of a shape includes shader compilation)" : "");
-    for (auto& [what, path] : outputs.items())
-        if (what != "dump") std::printf("wrote     %s\n", path.get<std::string>().c_str());
-    if (dump) {
-        std::printf("wrote     %s\n          %s\n", outputs["dump"]["tensors"].get<std::string>().c_str(),
-                    outputs["dump"]["cloud"].get<std::string>().c_str());
-        std::printf("cross-check with the PyTorch reference:\n  %s\n", golden.c_str());
-    }
+    const nlohmann::json outputs = write_outputs(run, golden);
+    if (json_out) print_json(s, run, outputs);
+    else print_text(s, run, outputs, golden);
     return 0;
 }
 

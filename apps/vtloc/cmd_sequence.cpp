@@ -82,6 +82,105 @@ std::vector<Touch> read_touch_file(const std::string& path) {
     return out;
 }
 
+// --touches FILE.json or the --touch options, in order.
+std::vector<Touch> gather_touches(const Args& a) {
+    std::vector<Touch> touches;
+    if (a.get("--touches") && a.flag("--touch")) throw UsageError("give --touch or --touches, not both");
+    if (auto file = a.get("--touches")) touches = read_touch_file(*file);
+    for (const std::string& t : a.all("--touch")) touches.push_back(parse_touch(t));
+    if (touches.empty()) throw UsageError("no touches: give --touch IMG[,dx,dy,dz] or --touches FILE.json");
+    if (touches[0].motion) throw api::Error("the first touch has no previous one to move from; drop its motion");
+    return touches;
+}
+
+// What the outputs and the report need of one sequence run.
+struct Run {
+    const std::vector<Touch>& touches;
+    const std::vector<std::array<double, 3>>& motions;
+    const api::ModelInfo& info;
+    const api::Object& object;
+    const api::SequenceResult& r;
+    const std::string &object_path, &candidates;
+    bool random;
+    std::vector<size_t> order;  // the most believed candidates, best first (argmax included)
+    size_t shown;               // how many of them the report shows
+
+    std::array<double, 3> candidate(size_t i) const {
+        const std::vector<float>& c = object.candidates();
+        return std::array<double, 3>{c[i * 3], c[i * 3 + 1], c[i * 3 + 2]};
+    }
+};
+
+void rank_candidates(Run& run) {
+    const std::vector<float>& belief = run.r.belief;
+    run.order.resize(belief.size());
+    std::iota(run.order.begin(), run.order.end(), size_t(0));
+    run.shown = std::min<size_t>(5, run.order.size());
+    std::partial_sort(run.order.begin(), run.order.begin() + long(run.shown), run.order.end(),
+                      [&](size_t x, size_t y) { return belief[x] > belief[y] || (belief[x] == belief[y] && x < y); });
+}
+
+nlohmann::json write_outputs(const Args& a, const Run& run) {
+    nlohmann::json outputs = nlohmann::json::object();
+    if (auto p = a.get("--heatmap")) {
+        api::write_heatmap_ply(*p, run.object, run.r.heatmap);
+        outputs["heatmap"] = *p;
+    }
+    if (auto p = a.get("--render")) {
+        api::RenderOptions ro;
+        ro.contact = run.r.best_point;
+        ro.caption = run.info.name + (run.random ? " (RANDOM weights)" : "") + ": belief after " +
+                     std::to_string(run.touches.size()) + " touches on " + run.object_path;
+        api::render_heatmap_png(*p, run.object, run.r.heatmap, ro);
+        outputs["render"] = *p;
+    }
+    return outputs;
+}
+
+void print_json(const Session& s, const Run& run, const nlohmann::json& outputs) {
+    const api::SequenceResult& r = run.r;
+    nlohmann::json jt = nlohmann::json::array();
+    for (size_t i = 0; i < run.touches.size(); ++i) {
+        nlohmann::json t = touch_json(r.touches[i]);
+        t["tactile"] = run.touches[i].image;
+        t["motion"] = i == 0 ? nlohmann::json(nullptr) : point_json(run.motions[i - 1]);
+        jt.push_back(t);
+    }
+    nlohmann::json top = nlohmann::json::array();
+    for (size_t k = 0; k < run.shown; ++k)
+        top.push_back({{"index", run.order[k]}, {"belief", r.belief[run.order[k]]},
+                       {"point", point_json(run.candidate(run.order[k]))}});
+    nlohmann::json j{{"model", model_json(run.info, run.random)},
+                     {"object", object_json(run.object, run.candidates)},
+                     {"touches", jt},
+                     {"belief", {{"best", r.best}, {"best_point", point_json(r.best_point)}, {"top", top},
+                                 {"values", r.belief}}},
+                     {"timings_ms", timings_json(r.timings)},
+                     {"outputs", outputs}};
+    if (s.context) j["device"] = s.context->device().name;
+    std::printf("%s\n", j.dump(2).c_str());
+}
+
+void print_text(const Run& run, const nlohmann::json& outputs) {
+    const api::SequenceResult& r = run.r;
+    print_model(run.info, run.random);
+    std::printf("object    %s: %zu points, %zu candidates%s\n", run.object_path.c_str(), run.object.cloud().size(),
+                run.object.candidate_count(),
+                run.candidates.empty() ? " (its points)" : (" from " + run.candidates).c_str());
+    for (size_t i = 0; i < run.touches.size(); ++i) {
+        std::printf("touch %zu   %s", i + 1, run.touches[i].image.c_str());
+        if (i > 0) std::printf(", moved %s", point_str(run.motions[i - 1]).c_str());
+        std::printf("\n          contact %s\n", point_str(r.touches[i].contact).c_str());
+    }
+    std::printf("belief    argmax: candidate %d at %s (belief %.3g)\n", r.best, point_str(r.best_point).c_str(),
+                double(r.belief[size_t(r.best)]));
+    for (size_t k = 1; k < run.shown; ++k)
+        std::printf("          then candidate %zu at %s (%.3g)\n", run.order[k],
+                    point_str(run.candidate(run.order[k])).c_str(), double(r.belief[run.order[k]]));
+    std::printf("time      %.1f ms for the %zu touches and the belief\n", r.timings.wall_ms, run.touches.size());
+    for (auto& [what, path] : outputs.items()) std::printf("wrote     %s\n", path.get<std::string>().c_str());
+}
+
 }  // namespace
 
 int cmd_sequence(Session& s, int argc, char** argv) {
@@ -98,12 +197,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     const std::string object_path = object_label(a);
     if (object_path.empty()) throw UsageError("give --object FILE or --depth D.png --intrinsics fx,fy,cx,cy");
     const std::string candidates = a.get("--candidates").value_or("");
-    std::vector<Touch> touches;
-    if (a.get("--touches") && a.flag("--touch")) throw UsageError("give --touch or --touches, not both");
-    if (auto file = a.get("--touches")) touches = read_touch_file(*file);
-    for (const std::string& t : a.all("--touch")) touches.push_back(parse_touch(t));
-    if (touches.empty()) throw UsageError("no touches: give --touch IMG[,dx,dy,dz] or --touches FILE.json");
-    if (touches[0].motion) throw api::Error("the first touch has no previous one to move from; drop its motion");
+    const std::vector<Touch> touches = gather_touches(a);
     api::LocalizeOptions opt = touch_options(a);
     api::BeliefOptions belief;
     belief.sigma = a.number("--sigma", belief.sigma);
@@ -122,69 +216,11 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     api::Object object = encode_cli_object(model, a, candidates, opt.backend);
     api::SequenceResult r = model.localize_sequence(object, images, motions, opt, belief);
 
-    // The most believed candidates, best first (argmax included).
-    std::vector<size_t> order(r.belief.size());
-    std::iota(order.begin(), order.end(), size_t(0));
-    const size_t shown = std::min<size_t>(5, order.size());
-    std::partial_sort(order.begin(), order.begin() + long(shown), order.end(),
-                      [&](size_t x, size_t y) { return r.belief[x] > r.belief[y] || (r.belief[x] == r.belief[y] && x < y); });
-    auto candidate = [&](size_t i) {
-        const std::vector<float>& c = object.candidates();
-        return std::array<double, 3>{c[i * 3], c[i * 3 + 1], c[i * 3 + 2]};
-    };
-
-    nlohmann::json outputs = nlohmann::json::object();
-    if (auto p = a.get("--heatmap")) {
-        api::write_heatmap_ply(*p, object, r.heatmap);
-        outputs["heatmap"] = *p;
-    }
-    const bool random = is_shipped_random_model(model_file);
-    if (auto p = a.get("--render")) {
-        api::RenderOptions ro;
-        ro.contact = r.best_point;
-        ro.caption = model.info().name + (random ? " (RANDOM weights)" : "") + ": belief after " +
-                     std::to_string(touches.size()) + " touches on " + object_path;
-        api::render_heatmap_png(*p, object, r.heatmap, ro);
-        outputs["render"] = *p;
-    }
-
-    if (a.flag("--json")) {
-        nlohmann::json jt = nlohmann::json::array();
-        for (size_t i = 0; i < touches.size(); ++i) {
-            nlohmann::json t = touch_json(r.touches[i]);
-            t["tactile"] = touches[i].image;
-            t["motion"] = i == 0 ? nlohmann::json(nullptr) : point_json(motions[i - 1]);
-            jt.push_back(t);
-        }
-        nlohmann::json top = nlohmann::json::array();
-        for (size_t k = 0; k < shown; ++k)
-            top.push_back({{"index", order[k]}, {"belief", r.belief[order[k]]}, {"point", point_json(candidate(order[k]))}});
-        nlohmann::json j{{"model", model_json(model.info(), random)},
-                         {"object", object_json(object, candidates)},
-                         {"touches", jt},
-                         {"belief", {{"best", r.best}, {"best_point", point_json(r.best_point)}, {"top", top},
-                                     {"values", r.belief}}},
-                         {"timings_ms", timings_json(r.timings)},
-                         {"outputs", outputs}};
-        if (s.context) j["device"] = s.context->device().name;
-        std::printf("%s\n", j.dump(2).c_str());
-        return 0;
-    }
-    print_model(model.info(), random);
-    std::printf("object    %s: %zu points, %zu candidates%s\n", object_path.c_str(), object.cloud().size(),
-                object.candidate_count(), candidates.empty() ? " (its points)" : (" from " + candidates).c_str());
-    for (size_t i = 0; i < touches.size(); ++i) {
-        std::printf("touch %zu   %s", i + 1, touches[i].image.c_str());
-        if (i > 0) std::printf(", moved %s", point_str(motions[i - 1]).c_str());
-        std::printf("\n          contact %s\n", point_str(r.touches[i].contact).c_str());
-    }
-    std::printf("belief    argmax: candidate %d at %s (belief %.3g)\n", r.best, point_str(r.best_point).c_str(),
-                double(r.belief[size_t(r.best)]));
-    for (size_t k = 1; k < shown; ++k)
-        std::printf("          then candidate %zu at %s (%.3g)\n", order[k], point_str(candidate(order[k])).c_str(),
-                    double(r.belief[order[k]]));
-    std::printf("time      %.1f ms for the %zu touches and the belief\n", r.timings.wall_ms, touches.size());
-    for (auto& [what, path] : outputs.items()) std::printf("wrote     %s\n", path.get<std::string>().c_str());
+    Run run{touches, motions, model.info(), object, r, object_path, candidates, is_shipped_random_model(model_file), {}, 0};
+    rank_candidates(run);
+    const nlohmann::json outputs = write_outputs(a, run);
+    if (a.flag("--json")) print_json(s, run, outputs);
+    else print_text(run, outputs);
     return 0;
 }
 

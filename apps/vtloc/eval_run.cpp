@@ -113,113 +113,140 @@ private:
     std::map<int, Entry> images_;
 };
 
+// One method's run over every job: the timing (each new shape once untimed), the
+// progress line and the rows.
+class ModelRun {
+public:
+    ModelRun(api::Model& model, const Options& opt, std::vector<Skip>& skips, double& engine_ms, size_t total)
+        : model_(model), opt_(opt), skips_(skips), engine_ms_(engine_ms),
+          progress_("eval " + model.info().name, total) {}
+
+    MethodResult res;
+
+    void job(size_t ji, Job& job) {
+        api::LocalizeOptions lo;
+        lo.iters = opt_.iters;
+        lo.top_k = job.topk;
+        lo.gma = false;  // the alignment score is not a metric
+        lo.backend = opt_.backend;
+        lo.mm_per_px = opt_.frames_mm_per_px;
+        ImageCache cache(*job.rec, opt_, skips_);
+        api::Object object = encode(model_, job, opt_);
+        res.encoded.push_back(object);
+        kept_.clear();
+        if (opt_.sequence <= 1) batches(ji, job, object, lo, cache);
+        else windows(ji, job, object, lo, cache);
+        job.touches = kept_;
+    }
+
+    void finish() { progress_.finish(); }
+
+private:
+    // The first run of a shape compiles its pipelines: run each new shape once
+    // untimed, so that the engine time is the steady-state one.
+    template <class Call>
+    auto timed(const std::string& shape, Call&& call) {
+        if (warm_.insert(shape).second) call();
+        const auto t0 = Clock::now();
+        auto r = call();
+        engine_ms_ += ms_since(t0);
+        return r;
+    }
+
+    void record(size_t ji, const Job& job, const sim::TouchRecord* t, const sim::Point3& pred,
+                std::vector<int> ranking, std::vector<float> heat) {
+        TouchRow row;
+        row.job = ji;
+        row.touch = t;
+        row.contact = pred;
+        // A view cloud is another point set than the dataset's: MPE is then scored on the
+        // dataset cloud from the top-K (the same heat-map rule), so every --cloud compares.
+        const bool other_points = opt_.cloud == "view";
+        row.m = sim::touch_metrics(job.geom, pred, t->contact, std::move(ranking),
+                                   other_points ? std::vector<float>{} : heat, job.topk);
+        row.heat = std::move(heat);
+        res.scores[ji].push_back(sim::score(row.m));
+        res.rows.push_back(std::move(row));
+        kept_.push_back(t);
+    }
+
+    void batches(size_t ji, const Job& job, const api::Object& object, const api::LocalizeOptions& lo,
+                 ImageCache& cache) {
+        for (size_t b = 0; b < job.touches.size(); b += kBatch) {
+            std::vector<const sim::TouchRecord*> batch;
+            std::vector<api::TactileImage> images;
+            for (size_t i = b; i < std::min(job.touches.size(), b + kBatch); ++i)
+                if (const api::TactileImage* im = cache.get(*job.touches[i], true)) {
+                    batch.push_back(job.touches[i]);
+                    images.push_back(*im);
+                }
+            if (!batch.empty()) {
+                const std::string shape = shape_key('b', images, job.geom.candidates.size());
+                std::vector<api::TouchResult> r = timed(shape, [&] { return model_.localize(object, images, lo); });
+                for (size_t i = 0; i < batch.size(); ++i)
+                    record(ji, job, batch[i], r[i].contact, {}, std::move(r[i].heatmap));
+            }
+            progress_.advance(std::min(job.touches.size(), b + kBatch) - b);
+        }
+    }
+
+    void windows(size_t ji, const Job& job, const api::Object& object, const api::LocalizeOptions& lo,
+                 ImageCache& cache) {
+        // The collection path: train and test touches by `order`. The belief
+        // window is a touch and the (sequence - 1) touches before it there.
+        std::vector<const sim::TouchRecord*> path;
+        for (const sim::TouchRecord& t : job.rec->touches)
+            if (t.order >= 0 && t.split != "extra") path.push_back(&t);
+        std::stable_sort(path.begin(), path.end(), [](auto* x, auto* y) { return x->order < y->order; });
+        for (const sim::TouchRecord* t : job.touches) {
+            progress_.advance();
+            if (!cache.get(*t, true)) continue;
+            std::vector<const sim::TouchRecord*> window{t};
+            const auto at = std::find(path.begin(), path.end(), t);
+            for (auto it = at; it != path.end() && it != path.begin() && int(window.size()) < opt_.sequence;) {
+                --it;
+                if (!cache.get(**it, false)) break;  // an unreadable predecessor ends the window
+                window.insert(window.begin(), *it);
+            }
+            std::vector<api::TactileImage> images;
+            std::vector<std::array<double, 3>> motions;
+            for (size_t i = 0; i < window.size(); ++i) {
+                images.push_back(*cache.get(*window[i], false));
+                if (i > 0) motions.push_back(window[i]->motion);
+            }
+            api::BeliefOptions belief;
+            belief.window = opt_.sequence;
+            const std::string shape = shape_key('s', images, job.geom.candidates.size());
+            api::SequenceResult r =
+                timed(shape, [&] { return model_.localize_sequence(object, images, motions, lo, belief); });
+            // The prediction is the argmax candidate itself (exact, not the float round trip);
+            // rank as for single touches: candidates by distance to it.
+            record(ji, job, t, job.geom.candidates[size_t(r.best)], {}, std::move(r.heatmap));
+        }
+    }
+
+    api::Model& model_;
+    const Options& opt_;
+    std::vector<Skip>& skips_;
+    double& engine_ms_;
+    Progress progress_;
+    std::set<std::string> warm_;
+    std::vector<const sim::TouchRecord*> kept_;  // the current job's scored touches
+};
+
 }  // namespace
 
 MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options& opt, std::vector<Skip>& skips,
                        double& engine_ms) {
-    MethodResult res;
-    res.method = model.info().name;
-    res.scores.resize(jobs.size());
     size_t total = 0;
     for (const Job& j : jobs) total += j.touches.size();
-    Progress progress("eval " + model.info().name, total);
     engine_ms = 0;
-    // The first run of a shape compiles its pipelines: run each new shape once
-    // untimed, so that the engine time is the steady-state one.
-    std::set<std::string> warm;
-    auto timed = [&](const std::string& shape, auto&& call) {
-        if (warm.insert(shape).second) call();
-        const auto t0 = Clock::now();
-        auto r = call();
-        engine_ms += ms_since(t0);
-        return r;
-    };
-
-    for (size_t ji = 0; ji < jobs.size(); ++ji) {
-        Job& job = jobs[ji];
-        const sim::ObjectRecord& o = *job.rec;
-        api::LocalizeOptions lo;
-        lo.iters = opt.iters;
-        lo.top_k = job.topk;
-        lo.gma = false;  // the alignment score is not a metric
-        lo.backend = opt.backend;
-        lo.mm_per_px = opt.frames_mm_per_px;
-        ImageCache cache(o, opt, skips);
-        api::Object object = encode(model, job, opt);
-        res.encoded.push_back(object);
-        std::vector<const sim::TouchRecord*> kept;
-
-        auto record = [&](const sim::TouchRecord* t, const sim::Point3& pred, std::vector<int> ranking,
-                          std::vector<float> heat) {
-            TouchRow row;
-            row.job = ji;
-            row.touch = t;
-            row.contact = pred;
-            // A view cloud is another point set than the dataset's: MPE is then scored on the
-            // dataset cloud from the top-K (the same heat-map rule), so every --cloud compares.
-            const bool other_points = opt.cloud == "view";
-            row.m = sim::touch_metrics(job.geom, pred, t->contact, std::move(ranking),
-                                       other_points ? std::vector<float>{} : heat, job.topk);
-            row.heat = std::move(heat);
-            res.scores[ji].push_back(sim::score(row.m));
-            res.rows.push_back(std::move(row));
-            kept.push_back(t);
-        };
-
-        if (opt.sequence <= 1) {
-            for (size_t b = 0; b < job.touches.size(); b += kBatch) {
-                std::vector<const sim::TouchRecord*> batch;
-                std::vector<api::TactileImage> images;
-                for (size_t i = b; i < std::min(job.touches.size(), b + kBatch); ++i)
-                    if (const api::TactileImage* im = cache.get(*job.touches[i], true)) {
-                        batch.push_back(job.touches[i]);
-                        images.push_back(*im);
-                    }
-                if (!batch.empty()) {
-                    const std::string shape = shape_key('b', images, job.geom.candidates.size());
-                    std::vector<api::TouchResult> r = timed(shape, [&] { return model.localize(object, images, lo); });
-                    for (size_t i = 0; i < batch.size(); ++i)
-                        record(batch[i], r[i].contact, {}, std::move(r[i].heatmap));
-                }
-                progress.advance(std::min(job.touches.size(), b + kBatch) - b);
-            }
-        } else {
-            // The collection path: train and test touches by `order`. The belief
-            // window is a touch and the (sequence - 1) touches before it there.
-            std::vector<const sim::TouchRecord*> path;
-            for (const sim::TouchRecord& t : o.touches)
-                if (t.order >= 0 && t.split != "extra") path.push_back(&t);
-            std::stable_sort(path.begin(), path.end(), [](auto* x, auto* y) { return x->order < y->order; });
-            for (const sim::TouchRecord* t : job.touches) {
-                progress.advance();
-                if (!cache.get(*t, true)) continue;
-                std::vector<const sim::TouchRecord*> window{t};
-                const auto at = std::find(path.begin(), path.end(), t);
-                for (auto it = at; it != path.end() && it != path.begin() && int(window.size()) < opt.sequence;) {
-                    --it;
-                    if (!cache.get(**it, false)) break;  // an unreadable predecessor ends the window
-                    window.insert(window.begin(), *it);
-                }
-                std::vector<api::TactileImage> images;
-                std::vector<std::array<double, 3>> motions;
-                for (size_t i = 0; i < window.size(); ++i) {
-                    images.push_back(*cache.get(*window[i], false));
-                    if (i > 0) motions.push_back(window[i]->motion);
-                }
-                api::BeliefOptions belief;
-                belief.window = opt.sequence;
-                const std::string shape = shape_key('s', images, job.geom.candidates.size());
-                api::SequenceResult r =
-                    timed(shape, [&] { return model.localize_sequence(object, images, motions, lo, belief); });
-                // The prediction is the argmax candidate itself (exact, not the float round trip);
-                // rank as for single touches: candidates by distance to it.
-                record(t, job.geom.candidates[size_t(r.best)], {}, std::move(r.heatmap));
-            }
-        }
-        job.touches = kept;
-    }
-    progress.finish();
-    return res;
+    ModelRun run(model, opt, skips, engine_ms, total);
+    run.res.method = model.info().name;
+    run.res.scores.resize(jobs.size());
+    for (size_t ji = 0; ji < jobs.size(); ++ji) run.job(ji, jobs[ji]);
+    run.finish();
+    return std::move(run.res);
 }
 
 }  // namespace vtloc::cli::eval

@@ -7,6 +7,7 @@
 #include <string>
 
 #include "engine/api/vtloc/vtloc.h"
+#include "engine/model/model_file.h"
 #include "engine/model/vtloc_runner.h"
 #include "runtime/context.h"
 
@@ -54,7 +55,7 @@ struct Model::Impl {
 
 // Loads a weight file and checks it fully (config schema, every tensor the
 // network needs); `info` is filled from it.
-WeightStore load_checked_weights(const std::string& path, ModelInfo& info);
+ModelFile load_checked_model(const std::string& path, ModelInfo& info);
 
 // The one conversion between the API's PointCloud and the engine's [N, 6]
 // (or [N, 3] when the cloud has no normals) tensor; object.cpp.

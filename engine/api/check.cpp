@@ -50,7 +50,8 @@ CheckResult check(Context& context, const CheckOptions& options) {
         rt::Context& ctx = ContextAccess::rt(context);
         CheckResult r;
         ModelInfo info;
-        VtlocRunner runner(load_checked_weights(options.model, info), &ctx);
+        ModelFile file = load_checked_model(options.model, info);
+        VtlocRunner runner(std::move(file.weights), std::move(file.config), &ctx);
         r.model_name = info.name;
         const TactileImage image = load_tactile_image(options.tactile);
         const HostTensor cloud = cloud_tensor(load_point_cloud(options.object, info.sample_points));

@@ -7,7 +7,7 @@
 
 namespace vtloc::api {
 
-WeightStore load_checked_weights(const std::string& path, ModelInfo& info) {
+ModelFile load_checked_model(const std::string& path, ModelInfo& info) {
     ModelFile file = load_model_file(path);
     const ModelConfig& cfg = file.config;
     info = ModelInfo{};
@@ -31,13 +31,13 @@ WeightStore load_checked_weights(const std::string& path, ModelInfo& info) {
     }
     info.size_mib = double(info.parameter_count) * 4.0 / (1024.0 * 1024.0);
     info.file_bytes = file.file_bytes;
-    return std::move(file.weights);
+    return file;
 }
 
 ModelInfo inspect_model(const std::string& path) {
     return guarded([&] {
         ModelInfo info;
-        load_checked_weights(path, info);
+        load_checked_model(path, info);
         return info;
     });
 }
@@ -49,7 +49,7 @@ VtlocRunner& Model::Impl::runner(Backend b) {
     }
     // From the weights loaded with the model, never the file again: it may have
     // changed on disk since.
-    if (!cpu_runner) cpu_runner = std::make_unique<VtlocRunner>(gpu_runner->weights(), nullptr);
+    if (!cpu_runner) cpu_runner = std::make_unique<VtlocRunner>(gpu_runner->weights(), gpu_runner->config(), nullptr);
     return *cpu_runner;
 }
 
@@ -57,13 +57,13 @@ namespace {
 
 std::unique_ptr<Model::Impl> make_model(rt::Context* gpu, const std::string& path) {
     auto m = std::make_unique<Model::Impl>();
-    WeightStore w = load_checked_weights(path, m->info);
+    ModelFile f = load_checked_model(path, m->info);
     std::error_code ec;
     std::string canonical = std::filesystem::weakly_canonical(path, ec).string();
     m->key = (ec ? path : canonical) + "|" + std::to_string(m->info.file_bytes) + "|" + m->info.config_json;
     m->gpu = gpu;
-    if (gpu) m->gpu_runner = std::make_unique<VtlocRunner>(std::move(w), gpu);
-    else m->cpu_runner = std::make_unique<VtlocRunner>(std::move(w), nullptr);
+    if (gpu) m->gpu_runner = std::make_unique<VtlocRunner>(std::move(f.weights), std::move(f.config), gpu);
+    else m->cpu_runner = std::make_unique<VtlocRunner>(std::move(f.weights), std::move(f.config), nullptr);
     return m;
 }
 

@@ -26,67 +26,51 @@ OpCase fps_case(int64_t n, int64_t d, int64_t npoint, double radius, int64_t nsa
     return c;
 }
 
-}  // namespace
-
-std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
-    std::vector<OpCase> v;
-    v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
-    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
-    v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
-    for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, "")}) {
-        c.op = "ball_query";
-        c.variant = "after fps: " + c.variant.substr(2);
-        v.push_back(std::move(c));
-    }
-
-    // A PointNet++ stage: grouping, fused layers, neighbour max (ReLU).
+// A PointNet++ stage: grouping, fused layers, neighbour max (ReLU).
+OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath path) {
     const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
     const ops::Act relu = ops::kActRelu;
-    auto stage = [&](const std::string& op, const std::string& why, ops::BufferPath path) {
-        OpCase c(op, why);
-        int x = c.input("cloud", random_tensor({N, 6}, 21));
-        std::vector<int> f = ops::fps(c.g, x, S);
-        int ball = ops::ball_query(c.g, x, f[1], 0.6, ns);
-        HostTensor w1 = random_tensor({C1, 6}, 11, -0.5f, 0.5f), w2 = random_tensor({C2, C1}, 13, -0.3f, 0.3f);
-        HostTensor w3 = random_tensor({C3, 3 + C1}, 15, -0.3f, 0.3f);
-        int b1 = c.weight("b1", random_tensor({C1}, 12, -0.2f, 0.2f)), b2 = c.weight("b2", random_tensor({C2}, 14, -0.2f, 0.2f));
-        int b3 = c.weight("b3", random_tensor({C3}, 16, -0.2f, 0.2f));
-        int w1t = c.weight("w1t", ops::point_weight_kn(w1)), w2t = c.weight("w2t", ops::point_weight_kn(w2));
-        int w3t = c.weight("w3t", ops::point_weight_kn(w3));
-        int w1v = c.weight("w1", w1), w2v = c.weight("w2", w2);
-        std::vector<int> fin{x, f[1], ball, w1t, b1, x};
-        using In = ops::GroupLinear::Input;
-        // gather (first layer), plain rows with the fused max, gather + max, group-all + max
-        const ops::GroupLinear gather{In::Gather, 3, false, 1, relu, 0.01, path};
-        const ops::GroupLinear rows_max{In::Rows, 0, true, ns, relu, 0.01, path};
-        const ops::GroupLinear gather_max{In::Gather, 3, true, 1, relu, 0.01, path};
-        const ops::GroupLinear all_max{In::GroupAll, 0, true, S, ops::kActNone, 0.01, path};
-        if (op == "point_group") {
-            int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
-            c.output(grouped, "grouped");
-            int h = ops::linear(c.g, grouped, w1v, b1, relu);
-            c.output(ops::linear(c.g, h, w2v, b2, relu), "y");
-        } else if (op == "group_max") {
-            int fh = ops::group_linear(c.g, fin, gather);
-            c.output(ops::group_max(c.g, fh, ns, true), "max_cm");
-            int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
-            int h = ops::linear(c.g, grouped, w1v, b1, relu);
-            c.output(ops::group_max(c.g, h, ns, false), "max_pm");
-        } else {
-            int fh = ops::group_linear(c.g, fin, gather);
-            c.output(fh, "first");
-            c.output(ops::group_linear(c.g, {fh, w2t, b2}, rows_max), "fused");
-            int one = ops::group_linear(c.g, fin, gather_max);
-            c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
-        }
-        return c;
-    };
-    v.push_back(stage("point_group", "gather 37 groups of 12 from 300 points [N, 6], then two layers",
-                      ops::BufferPath::Texel));
-    v.push_back(stage("group_max", "channel-major and point-major, groups of 12", ops::BufferPath::Texel));
-    for (ops::BufferPath path : ops::kBufferPaths)
-        v.push_back(stage("group_linear", std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path",
-                          path));
+    OpCase c(op, why);
+    int x = c.input("cloud", random_tensor({N, 6}, 21));
+    std::vector<int> f = ops::fps(c.g, x, S);
+    int ball = ops::ball_query(c.g, x, f[1], 0.6, ns);
+    HostTensor w1 = random_tensor({C1, 6}, 11, -0.5f, 0.5f), w2 = random_tensor({C2, C1}, 13, -0.3f, 0.3f);
+    HostTensor w3 = random_tensor({C3, 3 + C1}, 15, -0.3f, 0.3f);
+    int b1 = c.weight("b1", random_tensor({C1}, 12, -0.2f, 0.2f)), b2 = c.weight("b2", random_tensor({C2}, 14, -0.2f, 0.2f));
+    int b3 = c.weight("b3", random_tensor({C3}, 16, -0.2f, 0.2f));
+    int w1t = c.weight("w1t", ops::point_weight_kn(w1)), w2t = c.weight("w2t", ops::point_weight_kn(w2));
+    int w3t = c.weight("w3t", ops::point_weight_kn(w3));
+    int w1v = c.weight("w1", w1), w2v = c.weight("w2", w2);
+    std::vector<int> fin{x, f[1], ball, w1t, b1, x};
+    using In = ops::GroupLinear::Input;
+    // gather (first layer), plain rows with the fused max, gather + max, group-all + max
+    const ops::GroupLinear gather{In::Gather, 3, false, 1, relu, 0.01, path};
+    const ops::GroupLinear rows_max{In::Rows, 0, true, ns, relu, 0.01, path};
+    const ops::GroupLinear gather_max{In::Gather, 3, true, 1, relu, 0.01, path};
+    const ops::GroupLinear all_max{In::GroupAll, 0, true, S, ops::kActNone, 0.01, path};
+    if (op == "point_group") {
+        int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
+        c.output(grouped, "grouped");
+        int h = ops::linear(c.g, grouped, w1v, b1, relu);
+        c.output(ops::linear(c.g, h, w2v, b2, relu), "y");
+    } else if (op == "group_max") {
+        int fh = ops::group_linear(c.g, fin, gather);
+        c.output(ops::group_max(c.g, fh, ns, true), "max_cm");
+        int grouped = ops::point_group(c.g, {x, f[1], ball, x}, 3);
+        int h = ops::linear(c.g, grouped, w1v, b1, relu);
+        c.output(ops::group_max(c.g, h, ns, false), "max_pm");
+    } else {
+        int fh = ops::group_linear(c.g, fin, gather);
+        c.output(fh, "first");
+        c.output(ops::group_linear(c.g, {fh, w2t, b2}, rows_max), "fused");
+        int one = ops::group_linear(c.g, fin, gather_max);
+        c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
+    }
+    return c;
+}
+
+// group_linear on a plain input: the max over groups and a plain leaky layer.
+void wide_cases(std::vector<OpCase>& v) {
     struct Wide { int64_t M, K, Nout, group; };
     for (Wide k : {Wide{20 * 128, 131, 96, 128}, Wide{1001, 37, 37, 13}}) {
         OpCase c("group_linear", "plain input [" + std::to_string(k.K) + ", " + std::to_string(k.M) + "] -> " +
@@ -104,7 +88,9 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain");
         v.push_back(std::move(c));
     }
+}
 
+void cloud_normalize_cases(std::vector<OpCase>& v) {
     for (int64_t n : {2, 4097}) {
         OpCase c("cloud_normalize", std::to_string(n) + " points, coordinates in -50..80");
         auto o = ops::cloud_normalize(c.g, c.input("c", random_tensor({n, 6}, uint32_t(40 + n), -50.0f, 80.0f)));
@@ -113,7 +99,9 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         c.tol = {2e-4, 1e-4};  // the fp32 mean of coordinates up to 80 (as tests/test_point_ops.cpp)
         v.push_back(std::move(c));
     }
+}
 
+void normal_estimate_cases(std::vector<OpCase>& v) {
     for (int k : {5, 16}) {
         OpCase c("normal_estimate", "sphere of 777 points, k = " + std::to_string(k));
         HostTensor xyz = random_tensor({777, 3}, uint32_t(50 + k));
@@ -128,6 +116,30 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         c.tol = {2e-3, 0};  // fp32 PCA in the shader, double in the reference (tests/test_normals.cpp)
         v.push_back(std::move(c));
     }
+}
+
+}  // namespace
+
+std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
+    std::vector<OpCase> v;
+    v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
+    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
+    v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
+    for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, "")}) {
+        c.op = "ball_query";
+        c.variant = "after fps: " + c.variant.substr(2);
+        v.push_back(std::move(c));
+    }
+
+    v.push_back(stage_case("point_group", "gather 37 groups of 12 from 300 points [N, 6], then two layers",
+                           ops::BufferPath::Texel));
+    v.push_back(stage_case("group_max", "channel-major and point-major, groups of 12", ops::BufferPath::Texel));
+    for (ops::BufferPath path : ops::kBufferPaths)
+        v.push_back(stage_case("group_linear",
+                               std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path", path));
+    wide_cases(v);
+    cloud_normalize_cases(v);
+    normal_estimate_cases(v);
     return v;
 }
 

@@ -20,6 +20,7 @@ using V3 = cv::Vec3d;
 const cv::Scalar kBackground(242, 243, 246), kPanel(221, 223, 229), kText(28, 30, 36), kDim(105, 108, 118);
 const cv::Scalar kGroundTruth(70, 230, 120);
 constexpr int kSuper = 2;  // discs are drawn at 2x and averaged down: smooth edges without per-disc AA cost
+constexpr int kSideWidth = 260;  // the side bar right of the two views
 
 V3 unit(V3 v) {
     double n = cv::norm(v);
@@ -115,19 +116,28 @@ cv::Rect2d view_box(const Scene& s, const Camera& cam, const RenderOptions& o) {
     return {x0, y0, std::max(x1 - x0, 1e-9), std::max(y1 - y0, 1e-9)};
 }
 
-// One view, drawn in place into `panel` (a region of the final image).
-void draw_view(cv::Mat panel, const Scene& s, const Camera& cam, double px_per_unit, cv::Point2d mid,
-               const RenderOptions& o, const std::string& label) {
-    const int n = int(s.cloud.shape[0]);
-    const int W = panel.cols * kSuper, H = panel.rows * kSuper;
-    cv::Mat big(H, W, CV_8UC3, kPanel);
-    cv::Mat depth(H, W, CV_32F, cv::Scalar(-1e30));  // nearest depth drawn per pixel (painter's order)
-    const double scale = px_per_unit * kSuper;
-    auto project = [&](V3 p, double& z) {
+// A view's projection onto its supersampled canvas (W x H pixels at kSuper x).
+struct Projection {
+    const Scene& s;
+    const Camera& cam;
+    cv::Point2d mid;
+    double scale;
+    int W, H;
+    cv::Point2d operator()(V3 p, double& z) const {
         V3 q = p - s.centre;
         z = q.dot(cam.toward);
         return cv::Point2d(W / 2.0 + (q.dot(cam.right) - mid.x) * scale, H / 2.0 - (q.dot(cam.up) - mid.y) * scale);
-    };
+    }
+};
+
+// The cloud's discs, far to near, into `big`; `depth` gets the nearest front-facing depth per
+// pixel. Returns the disc radius (supersampled pixels).
+double draw_points(cv::Mat& big, cv::Mat& depth, const Projection& project) {
+    const Scene& s = project.s;
+    const Camera& cam = project.cam;
+    const int n = int(s.cloud.shape[0]);
+    const int W = project.W, H = project.H;
+    const double scale = project.scale;
     std::vector<double> z(static_cast<size_t>(n));
     std::vector<cv::Point2d> xy(static_cast<size_t>(n));
     for (int i = 0; i < n; ++i) {
@@ -159,9 +169,13 @@ void draw_view(cv::Mat panel, const Scene& s, const Camera& cam, double px_per_u
         cv::circle(big, ctr, int(rr * 0.84), fill, cv::FILLED, cv::LINE_8, kShift);
         if (front) cv::circle(depth, ctr, rr, cv::Scalar(z[size_t(i)]), cv::FILLED, cv::LINE_8, kShift);
     }
-    outline_depth_jumps(big, depth, 2.5 * s.spacing);
-    cv::resize(big, panel, panel.size(), 0, 0, cv::INTER_AREA);
+    return r;
+}
 
+// The contact and truth markers on the final-size panel; `depth` and `r` from draw_points.
+void draw_markers(cv::Mat& panel, const cv::Mat& depth, double r, const Projection& project, const RenderOptions& o) {
+    const Scene& s = project.s;
+    const int W = project.W, H = project.H;
     // Markers, faded when a surface in front of them is nearer by more than 1.5 point spacings
     // plus 2% of the object's size (the nearest depth in a small window around the marker, so
     // that a gap between discs does not count as a view through).
@@ -191,8 +205,10 @@ void draw_view(cv::Mat panel, const Scene& s, const Camera& cam, double px_per_u
         cv::addWeighted(overlay, 0.4, panel, 0.6, 0, panel);
     }
     draw_markers(panel, true);
+}
 
-    // Axis triad (object axes as this view shows them) and the view's label.
+// Axis triad (object axes as this view shows them) and the view's label.
+void axes_and_label(cv::Mat& panel, const Camera& cam, const std::string& label) {
     cv::Point origin(34, panel.rows - 34);
     const char* names[3] = {"x", "y", "z"};
     const cv::Scalar axis_col[3] = {cv::Scalar(235, 90, 80), cv::Scalar(90, 210, 100), cv::Scalar(100, 150, 255)};
@@ -203,6 +219,20 @@ void draw_view(cv::Mat panel, const Scene& s, const Camera& cam, double px_per_u
         text(panel, names[a], tip + cv::Point(3, 4), 0.45, axis_col[a]);
     }
     text(panel, label, cv::Point(12, 24), 0.55, kText);
+}
+
+// One view, drawn in place into `panel` (a region of the final image).
+void draw_view(cv::Mat panel, const Scene& s, const Camera& cam, double px_per_unit, cv::Point2d mid,
+               const RenderOptions& o, const std::string& label) {
+    const int W = panel.cols * kSuper, H = panel.rows * kSuper;
+    cv::Mat big(H, W, CV_8UC3, kPanel);
+    cv::Mat depth(H, W, CV_32F, cv::Scalar(-1e30));  // nearest depth drawn per pixel (painter's order)
+    const Projection project{s, cam, mid, px_per_unit * kSuper, W, H};
+    const double r = draw_points(big, depth, project);
+    outline_depth_jumps(big, depth, 2.5 * s.spacing);
+    cv::resize(big, panel, panel.size(), 0, 0, cv::INTER_AREA);
+    draw_markers(panel, depth, r, project, o);
+    axes_and_label(panel, cam, label);
 }
 
 // Vertical colour bar with its ticks, top-left corner at `at`.
@@ -221,15 +251,8 @@ void colour_bar(cv::Mat& img, cv::Point at, int h) {
     }
 }
 
-}  // namespace
-
-RgbImage render_heatmap(const HostTensor& cloud, std::span<const float> heat, const RenderOptions& o) {
-    if (cloud.shape.size() != 2 || cloud.shape[1] != 6 || cloud.shape[0] < 1)
-        throw Error("render_heatmap: cloud must be N x 6 with N >= 1, got " + shape_str(cloud.shape));
-    if (size_t(cloud.shape[0]) != heat.size())
-        throw Error("render_heatmap: " + std::to_string(heat.size()) + " heat values for " +
-                    std::to_string(cloud.shape[0]) + " points");
-    if (o.width < 640 || o.height < 400) throw Error("render_heatmap: image must be at least 640 x 400");
+// The cloud's centre, radius and point spacing.
+Scene make_scene(const HostTensor& cloud, std::span<const float> heat) {
     const int n = int(cloud.shape[0]);
     Scene s{cloud, heat, V3(0, 0, 0)};
     for (int i = 0; i < n; ++i) s.centre += V3(cloud.data[size_t(i) * 6], cloud.data[size_t(i) * 6 + 1], cloud.data[size_t(i) * 6 + 2]);
@@ -248,7 +271,14 @@ RgbImage render_heatmap(const HostTensor& cloud, std::span<const float> heat, co
         sum += n > 1 ? best : s.radius * 0.05;
     }
     s.spacing = std::max(2 * sum / probes, s.radius * 1e-3);
+    return s;
+}
 
+// The two views: a 3/4 view of the widest side (or facing the contact) and the opposite side.
+std::pair<Camera, Camera> choose_cameras(const Scene& s, const RenderOptions& o) {
+    const HostTensor& cloud = s.cloud;
+    const int n = int(cloud.shape[0]);
+    auto pt = [&](int i) { return V3(cloud.data[size_t(i) * 6], cloud.data[size_t(i) * 6 + 1], cloud.data[size_t(i) * 6 + 2]); };
     // Horizontal frame around the up axis.
     V3 up = unit(V3(o.up[0], o.up[1], o.up[2]));
     if (cv::norm(up) == 0) up = V3(0, 1, 0);
@@ -285,32 +315,15 @@ RgbImage render_heatmap(const HostTensor& cloud, std::span<const float> heat, co
         else dir = want, turn = 20;
         elev = std::clamp(std::asin(std::clamp(nrm.dot(up), -1.0, 1.0)) * 180 / CV_PI + 20, -60.0, 65.0);
     }
-    Camera front = make_camera(up, dir, turn, elev), back = make_camera(up, -dir, turn, 20);
+    return {make_camera(up, dir, turn, elev), make_camera(up, -dir, turn, 20)};
+}
 
-    // Layout: caption bar, two views, side bar (tactile inset, legend, colour bar).
-    cv::Mat img(o.height, o.width, CV_8UC3, kBackground);
-    const int top = 44, side = 260, gap = 8;
-    const int pw = (o.width - side - 3 * gap) / 2, ph = o.height - top - gap;
-    // One scale for both views (the larger of the two fits), each centred on its own extent.
-    cv::Rect2d bf = view_box(s, front, o), bb = view_box(s, back, o);
-    double fit = std::min({0.86 * pw / bf.width, 0.84 * ph / bf.height, 0.86 * pw / bb.width, 0.84 * ph / bb.height});
-    auto mid = [](const cv::Rect2d& b) { return cv::Point2d(b.x + b.width / 2, b.y + b.height / 2); };
-    draw_view(img(cv::Rect(gap, top, pw, ph)), s, front, fit, mid(bf), o,
-              o.contact ? "facing the prediction" : "3/4 view");
-    draw_view(img(cv::Rect(2 * gap + pw, top, pw, ph)), s, back, fit, mid(bb), o, "opposite side");
-
-    std::string caption = o.caption.empty() ? "VTLoc contact heat-map" : o.caption;
-    double cs = 0.62;
-    int base = 0;
-    while (cs > 0.35 && cv::getTextSize(caption, cv::FONT_HERSHEY_SIMPLEX, cs, 1, &base).width > o.width - 24) cs -= 0.02;
-    text(img, caption, cv::Point(12, 29), cs, kText);
-
-    const int sx = o.width - side + 6;
-    int y = top + 22;
+// The side bar below its top `y`: tactile inset, marker legend, colour bar.
+void side_bar(cv::Mat& img, const RenderOptions& o, int sx, int y) {
     if (o.tactile && o.tactile->width > 0 && o.tactile->height > 0) {
         text(img, "tactile image", cv::Point(sx, y), 0.5, kText);
         cv::Mat t(o.tactile->height, o.tactile->width, CV_8UC3, const_cast<uint8_t*>(o.tactile->pixels.data()));
-        int tw = side - 30, th = std::min(int(std::lround(double(tw) * t.rows / t.cols)), 200);
+        int tw = kSideWidth - 30, th = std::min(int(std::lround(double(tw) * t.rows / t.cols)), 200);
         tw = std::min(tw, int(std::lround(double(th) * t.cols / t.rows)));
         cv::Mat dst = img(cv::Rect(sx, y + 8, tw, th));
         cv::resize(t, dst, dst.size(), 0, 0, tw < t.cols ? cv::INTER_AREA : cv::INTER_LINEAR);
@@ -332,29 +345,42 @@ RgbImage render_heatmap(const HostTensor& cloud, std::span<const float> heat, co
     }
     int bar_h = std::min(220, o.height - y - 40);
     if (bar_h > 60) colour_bar(img, cv::Point(sx + 4, y + 14), bar_h);
+}
+
+}  // namespace
+
+RgbImage render_heatmap(const HostTensor& cloud, std::span<const float> heat, const RenderOptions& o) {
+    if (cloud.shape.size() != 2 || cloud.shape[1] != 6 || cloud.shape[0] < 1)
+        throw Error("render_heatmap: cloud must be N x 6 with N >= 1, got " + shape_str(cloud.shape));
+    if (size_t(cloud.shape[0]) != heat.size())
+        throw Error("render_heatmap: " + std::to_string(heat.size()) + " heat values for " +
+                    std::to_string(cloud.shape[0]) + " points");
+    if (o.width < 640 || o.height < 400) throw Error("render_heatmap: image must be at least 640 x 400");
+    const Scene s = make_scene(cloud, heat);
+    const auto [front, back] = choose_cameras(s, o);
+
+    // Layout: caption bar, two views, side bar (tactile inset, legend, colour bar).
+    cv::Mat img(o.height, o.width, CV_8UC3, kBackground);
+    const int top = 44, side = kSideWidth, gap = 8;
+    const int pw = (o.width - side - 3 * gap) / 2, ph = o.height - top - gap;
+    // One scale for both views (the larger of the two fits), each centred on its own extent.
+    cv::Rect2d bf = view_box(s, front, o), bb = view_box(s, back, o);
+    double fit = std::min({0.86 * pw / bf.width, 0.84 * ph / bf.height, 0.86 * pw / bb.width, 0.84 * ph / bb.height});
+    auto mid = [](const cv::Rect2d& b) { return cv::Point2d(b.x + b.width / 2, b.y + b.height / 2); };
+    draw_view(img(cv::Rect(gap, top, pw, ph)), s, front, fit, mid(bf), o,
+              o.contact ? "facing the prediction" : "3/4 view");
+    draw_view(img(cv::Rect(2 * gap + pw, top, pw, ph)), s, back, fit, mid(bb), o, "opposite side");
+
+    std::string caption = o.caption.empty() ? "VTLoc contact heat-map" : o.caption;
+    double cs = 0.62;
+    int base = 0;
+    while (cs > 0.35 && cv::getTextSize(caption, cv::FONT_HERSHEY_SIMPLEX, cs, 1, &base).width > o.width - 24) cs -= 0.02;
+    text(img, caption, cv::Point(12, 29), cs, kText);
+
+    side_bar(img, o, o.width - side + 6, top + 22);
 
     RgbImage out(o.height, o.width);
     for (int r = 0; r < o.height; ++r) std::memcpy(out.at(r, 0), img.ptr<uint8_t>(r), size_t(o.width) * 3);
-    return out;
-}
-
-std::vector<float> nearest_heat(const HostTensor& cloud, std::span<const float> heat, const HostTensor& points) {
-    auto rows = [](const HostTensor& t) { return t.shape.size() == 2 && (t.shape[1] == 3 || t.shape[1] == 6); };
-    if (!rows(cloud) || !rows(points) || size_t(cloud.shape[0]) != heat.size() || cloud.shape[0] < 1)
-        throw Error("nearest_heat: cloud " + shape_str(cloud.shape) + " with " + std::to_string(heat.size()) +
-                    " heat values, points " + shape_str(points.shape));
-    const size_t n = size_t(cloud.shape[0]), cw = size_t(cloud.shape[1]), pw = size_t(points.shape[1]);
-    std::vector<float> out(size_t(points.shape[0]));
-    for (size_t i = 0; i < out.size(); ++i) {
-        const float* p = &points.data[i * pw];
-        double best = 1e300;
-        for (size_t j = 0; j < n; ++j) {
-            const float* q = &cloud.data[j * cw];
-            double d = (double(p[0]) - q[0]) * (double(p[0]) - q[0]) + (double(p[1]) - q[1]) * (double(p[1]) - q[1]) +
-                       (double(p[2]) - q[2]) * (double(p[2]) - q[2]);
-            if (d < best) best = d, out[i] = heat[j];
-        }
-    }
     return out;
 }
 

@@ -30,6 +30,83 @@ std::pair<int, int> conv_bn(Graph& g, WeightStore& w, const std::string& conv, c
     return {input_major ? g.weight(wkn, {in, out}) : g.weight(w2d, {out, in}), g.weight(bname, {out})};
 }
 
+// A stage's input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`
+// (-1: none), `channels` feature columns, `points` rows.
+struct StageInput {
+    int xyz, feat;
+    int64_t feat_begin, channels, points;
+};
+
+// Scale `s` of a set-abstraction stage: the ball around each centre, its shared MLP and the
+// max over the ball's points.
+int sa_scale(Graph& g, WeightStore& w, const SaStageConfig& st, size_t s, const std::string& pre,
+             const StageInput& si_in, int centres, bool fuse, PointEncoderOutputs& out) {
+    const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
+    const int64_t ns = st.nsample[s];
+    int ball = ops::ball_query(g, si_in.xyz, centres, st.radii[s], ns, ball_name);
+    out.indices.push_back({ball_name, ball});
+    std::vector<int> gather_in{si_in.xyz, centres, ball};
+    const int64_t fb = si_in.feat_begin;
+    const int feat = si_in.feat;
+    int x = -1;
+    if (!fuse) {
+        if (feat >= 0) gather_in.push_back(feat);
+        x = ops::point_group(g, gather_in, fb, pre + ".group." + si);
+    }
+    int64_t in = si_in.channels + 3;
+    const std::vector<int64_t>& widths = st.mlps[s];
+    for (size_t l = 0; l < widths.size(); ++l) {
+        const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
+        auto [wv, bv] = conv_bn(g, w, node, pre + ".bn_blocks." + si + "." + std::to_string(l), in, widths[l], fuse);
+        in = widths[l];
+        if (!fuse) {
+            x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
+            continue;
+        }
+        // Fused: the first layer gathers its rows from the cloud, the last
+        // one keeps only the max over each centre's neighbours.
+        ops::GroupLinear gl;
+        gl.act = ops::kActRelu;
+        std::vector<int> ins{x};
+        if (l == 0) {
+            ins = gather_in;
+            gl.input = ops::GroupLinear::Input::Gather;
+            gl.feat_begin = fb;
+        }
+        ins.insert(ins.end(), {wv, bv});
+        if (l == 0 && feat >= 0) ins.push_back(feat);
+        gl.max = l + 1 == widths.size();
+        gl.group = ns;
+        x = ops::group_linear(g, ins, gl, node);
+    }
+    if (!fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);
+    return x;
+}
+
+// Group all: one group of every point, input [xyz, features] (xyz first, not centred).
+int group_all(Graph& g, WeightStore& w, const PointConfig& c, const StageInput& st, bool fuse) {
+    const std::string pre = "point.sa" + std::to_string(c.sa.size() + 1);
+    int x = fuse ? -1 : ops::concat(g, {st.xyz, st.feat}, pre + ".input");
+    int64_t in = st.channels + 3;
+    for (size_t l = 0; l < c.group_all.size(); ++l) {
+        const std::string node = pre + ".mlp_convs." + std::to_string(l);
+        auto [wv, bv] = conv_bn(g, w, node, pre + ".mlp_bns." + std::to_string(l), in, c.group_all[l], fuse);
+        in = c.group_all[l];
+        if (!fuse) {
+            x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
+            continue;
+        }
+        // Not fused with the max: one group leaves too few invocations for the
+        // fused layer's group-per-invocation max; a separate max is cheap.
+        ops::GroupLinear gl;
+        gl.act = ops::kActRelu;
+        if (l == 0) gl.input = ops::GroupLinear::Input::GroupAll;
+        std::vector<int> ins = l == 0 ? std::vector<int>{st.xyz, wv, bv, st.feat} : std::vector<int>{x, wv, bv};
+        x = ops::group_linear(g, ins, gl, node);
+    }
+    return ops::group_max(g, x, st.points, fuse, pre + ".max");
+}
+
 }  // namespace
 
 PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud) {
@@ -48,108 +125,46 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelCon
     if (g.value(cloud).type != ElemType::F32) throw Error("the point cloud must be F32");
 
     PointEncoderOutputs out;
-    // Stage input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`.
-    int xyz = cloud, feat = c.use_normals ? cloud : -1;
-    int64_t feat_begin = c.use_normals ? 3 : 0, channels = c.use_normals ? 3 : 0, points = cs[0];
+    StageInput st_in{cloud, c.use_normals ? cloud : -1, c.use_normals ? 3 : 0, c.use_normals ? 3 : 0, cs[0]};
     for (size_t i = 0; i < c.sa.size(); ++i) {
         const SaStageConfig& st = c.sa[i];
         const std::string pre = "point.sa" + std::to_string(i + 1);
-        if (st.npoint > points)
-            throw Error(pre + " samples " + std::to_string(st.npoint) + " points but gets only " + std::to_string(points) +
-                        (i == 0 ? " (the cloud is too small for this model)" : ""));
-        std::vector<int> fps = ops::fps(g, xyz, st.npoint, pre + ".fps");
+        if (st.npoint > st_in.points)
+            throw Error(pre + " samples " + std::to_string(st.npoint) + " points but gets only " +
+                        std::to_string(st_in.points) + (i == 0 ? " (the cloud is too small for this model)" : ""));
+        std::vector<int> fps = ops::fps(g, st_in.xyz, st.npoint, pre + ".fps");
         out.indices.push_back({pre + ".fps", fps[0]});
         const int centres = fps[1];
         std::vector<int> scales;
         int64_t next_channels = 0;
         for (size_t s = 0; s < st.radii.size(); ++s) {
-            const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
-            const int64_t ns = st.nsample[s];
-            int ball = ops::ball_query(g, xyz, centres, st.radii[s], ns, ball_name);
-            out.indices.push_back({ball_name, ball});
-            std::vector<int> gather_in{xyz, centres, ball};
-            const int64_t fb = feat_begin;
-            int x = -1;
-            if (!options.fuse) {
-                if (feat >= 0) gather_in.push_back(feat);
-                x = ops::point_group(g, gather_in, fb, pre + ".group." + si);
-            }
-            int64_t in = channels + 3;
-            const std::vector<int64_t>& widths = st.mlps[s];
-            for (size_t l = 0; l < widths.size(); ++l) {
-                const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
-                auto [wv, bv] = conv_bn(g, w, node, pre + ".bn_blocks." + si + "." + std::to_string(l), in, widths[l],
-                                        options.fuse);
-                in = widths[l];
-                if (!options.fuse) {
-                    x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
-                    continue;
-                }
-                // Fused: the first layer gathers its rows from the cloud, the last
-                // one keeps only the max over each centre's neighbours.
-                ops::GroupLinear gl;
-                gl.act = ops::kActRelu;
-                std::vector<int> ins{x};
-                if (l == 0) {
-                    ins = gather_in;
-                    gl.input = ops::GroupLinear::Input::Gather;
-                    gl.feat_begin = fb;
-                }
-                ins.insert(ins.end(), {wv, bv});
-                if (l == 0 && feat >= 0) ins.push_back(feat);
-                gl.max = l + 1 == widths.size();
-                gl.group = ns;
-                x = ops::group_linear(g, ins, gl, node);
-            }
-            if (!options.fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);
-            scales.push_back(x);
-            next_channels += widths.back();
+            scales.push_back(sa_scale(g, w, st, s, pre, st_in, centres, options.fuse, out));
+            next_channels += st.mlps[s].back();
         }
-        feat = scales.size() == 1 ? scales[0] : ops::concat(g, scales, pre + ".concat");
-        xyz = centres, feat_begin = 0, channels = next_channels, points = st.npoint;
+        const int feat = scales.size() == 1 ? scales[0] : ops::concat(g, scales, pre + ".concat");
+        st_in = StageInput{centres, feat, 0, next_channels, st.npoint};
     }
 
-    // Group all: one group of every point, input [xyz, features] (xyz first, not centred).
-    const std::string pre = "point.sa" + std::to_string(c.sa.size() + 1);
-    int x = options.fuse ? -1 : ops::concat(g, {xyz, feat}, pre + ".input");
-    int64_t in = channels + 3;
-    for (size_t l = 0; l < c.group_all.size(); ++l) {
-        const std::string node = pre + ".mlp_convs." + std::to_string(l);
-        auto [wv, bv] = conv_bn(g, w, node, pre + ".mlp_bns." + std::to_string(l), in, c.group_all[l], options.fuse);
-        in = c.group_all[l];
-        if (!options.fuse) {
-            x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
-            continue;
-        }
-        // Not fused with the max: one group leaves too few invocations for the
-        // fused layer's group-per-invocation max; a separate max is cheap.
-        ops::GroupLinear gl;
-        gl.act = ops::kActRelu;
-        if (l == 0) gl.input = ops::GroupLinear::Input::GroupAll;
-        std::vector<int> ins = l == 0 ? std::vector<int>{xyz, wv, bv, feat} : std::vector<int>{x, wv, bv};
-        x = ops::group_linear(g, ins, gl, node);
-    }
-    x = ops::group_max(g, x, points, options.fuse, pre + ".max");
+    const int x = group_all(g, w, c, st_in, options.fuse);
     out.feature = add_mlp(g, w, "point.mlp", x, int(c.mlp.size()) + 1);
     if (g.value(out.feature).shape != Shape{1, config.C})
         throw Error("point.mlp gives " + shape_str(g.value(out.feature).shape) + ", expected [1, " + std::to_string(config.C) + "]");
     return out;
 }
 
-void check_point_cloud(const HostTensor& cloud, const ModelConfig& config) {
-    const PointConfig& c = config.point;
-    const int64_t width = c.use_normals ? 6 : 3;
+void check_object_cloud(const HostTensor& cloud, const ModelConfig& config) {
+    constexpr int64_t width = 6;
     if (cloud.shape.size() != 2 || cloud.shape[1] != width)
-        throw Error("the point cloud must be [N, " + std::to_string(width) + "] for this config, got " +
-                    shape_str(cloud.shape));
-    if (cloud.shape[0] == 0) throw Error("the point cloud is empty");
-    if (!c.sa.empty() && cloud.shape[0] < c.sa[0].npoint)
-        throw Error("the point cloud has " + std::to_string(cloud.shape[0]) + " points, fewer than the " +
-                    std::to_string(c.sa[0].npoint) + " that point.sa1 samples");
+        throw Error("the object cloud must be [N, 6] (xyz and normals), got " + shape_str(cloud.shape));
     for (size_t i = 0; i < cloud.data.size(); ++i)
         if (!std::isfinite(cloud.data[i]))
-            throw Error("the point cloud has a NaN or infinite value at point " + std::to_string(int64_t(i) / width) +
+            throw Error("the object cloud has a NaN or infinite value at point " + std::to_string(int64_t(i) / width) +
                         ", column " + std::to_string(int64_t(i) % width));
+    if (cloud.shape[0] == 0) throw Error("the object cloud is empty");
+    const int64_t need = config.point.min_points();
+    if (cloud.shape[0] < need)
+        throw Error("the object cloud has " + std::to_string(cloud.shape[0]) + " points, fewer than the " +
+                    std::to_string(need) + " that point.sa1 samples; the model needs at least that many");
 }
 
 }  // namespace vtloc

@@ -41,9 +41,10 @@ PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelCon
 PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud,
                                         const PointEncoderOptions& options);
 
-// Host-side check of a network input cloud before a GPU run (shaders cannot
-// throw): [N, 6] or [N, 3] as the config wants, at least sa1's npoint points,
-// finite values. Throws vtloc::Error naming the problem.
-void check_point_cloud(const HostTensor& cloud, const ModelConfig& config);
+// The one host-side check of an object cloud before the point branch runs
+// (shaders cannot throw; VtlocRunner calls it): [N, 6] (xyz and normals,
+// whichever columns the config feeds the encoder), finite values, at least
+// sa1's npoint points. Throws vtloc::Error naming the problem.
+void check_object_cloud(const HostTensor& cloud, const ModelConfig& config);
 
 }  // namespace vtloc

@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
+#include "engine/model/point_encoder.h"
 #include "engine/model/post.h"
 #include "runtime/context.h"
 #include "engine/ops/build.h"
@@ -31,8 +32,17 @@ struct VtlocRunner::Compiled {
     std::vector<NodeMs> cpu_times;
 };
 
+VtlocRunner::VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu)
+    : weights_(std::move(weights)), config_(std::move(config)), gpu_(gpu) {
+    split_gma_rows();
+}
+
 VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu)
-    : weights_(std::move(weights)), config_(ModelConfig::parse(weights_.config(), weights_.source())), gpu_(gpu) {
+    : weights_(std::move(weights)), config_(config_of(weights_)), gpu_(gpu) {
+    split_gma_rows();
+}
+
+void VtlocRunner::split_gma_rows() {
     if (config_.gma) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
 }
 
@@ -82,13 +92,7 @@ VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
 
 EncodedObject VtlocRunner::prepare_object(const HostTensor& cloud, const HostTensor* candidates) const {
     const ModelConfig& cfg = config();
-    if (cloud.shape.size() != 2 || cloud.shape[1] != 6)
-        throw Error("the object cloud must be [N, 6] (xyz and normals), got " + shape_str(cloud.shape));
-    require_finite(cloud, "the object cloud");
-    const int64_t need = cfg.point.min_points();
-    if (cloud.shape[0] < need)
-        throw Error("the object cloud has " + std::to_string(cloud.shape[0]) + " points; this model samples " +
-                    std::to_string(need) + " in its first stage and needs at least that many");
+    check_object_cloud(cloud, cfg);
     EncodedObject o;
     o.frame = object_frame(cloud);
     const bool normals = cfg.point.use_normals;

@@ -73,7 +73,10 @@ struct SequenceResult {
 
 class VtlocRunner {
 public:
-    // gpu == nullptr runs the CPU reference implementations.
+    // gpu == nullptr runs the CPU reference implementations. config: the
+    // weights' own, already parsed (load_model_file's), so a load parses it once.
+    VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu);
+    // For weights alone (tests, benches): parses their config here, once.
     VtlocRunner(WeightStore weights, rt::Context* gpu);
     ~VtlocRunner();
 
@@ -130,12 +133,13 @@ public:
     MemoryUse last_memory() const;
 
 private:
+    void split_gma_rows();  // the GMA weight in row chunks that fit a portable binding
     EncodedObject prepare_object(const HostTensor& cloud, const HostTensor* candidates) const;
     TensorMap run(const VtlocGraphSpec& spec, const TensorMap& inputs);
     TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
 
     WeightStore weights_;
-    ModelConfig config_;  // parsed from weights_ once
+    ModelConfig config_;  // the weights' config, parsed once per load
     rt::Context* gpu_;
     bool profile_ = false;
     bool ilu_stepped_ = false;

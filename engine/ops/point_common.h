@@ -33,7 +33,7 @@ inline int64_t int_param(const Params& p, const char* name, int64_t lo, int64_t 
 }
 
 // CPU references throw on NaN/inf coordinates (the GPU path relies on the host
-// check before upload: object_frame / check_point_cloud).
+// check before upload: object_frame / check_object_cloud).
 inline void require_finite_xyz(const HostTensor& x, const char* op) {
     const int64_t D = x.shape.back(), N = x.size() / D;
     for (int64_t i = 0; i < N; ++i)

@@ -120,6 +120,81 @@ const char* kTouchColumns[] = {"id", "split", "order", "image", "cx", "cy", "cz"
                                "tx", "ty", "tz", "press_mm", "spin_deg", "tilt_deg", "dx", "dy", "dz",
                                "q00", "q01", "q02", "q10", "q11", "q12", "q20", "q21", "q22", "qx", "qy", "qz"};
 
+// points.csv: x y z nx ny nz, as many rows as dataset.json's n_points (when > 0).
+void read_points(ObjectRecord& o, const fs::path& dir, int n_points) {
+    fs::path pp = dir / "points.csv";
+    Csv pc = read_csv(pp);
+    const char* pcols[] = {"x", "y", "z", "nx", "ny", "nz"};
+    size_t pidx[6];
+    for (int k = 0; k < 6; ++k) pidx[k] = pc.index(pcols[k], pp);
+    o.n_points = int(pc.rows.size());
+    if (o.n_points == 0) throw Error(pp.string() + ": no points");
+    if (n_points > 0 && o.n_points != n_points)
+        throw Error(pp.string() + ": " + std::to_string(o.n_points) + " points, dataset.json says " +
+                    std::to_string(n_points));
+    o.points = HostTensor({int64_t(o.n_points), 6});
+    for (size_t r = 0; r < pc.rows.size(); ++r)
+        for (int k = 0; k < 6; ++k) o.points.data[r * 6 + size_t(k)] = float(number(pc.rows[r][pidx[k]], pp, r, pcols[k]));
+}
+
+// Row `r` of touches.csv; `ix` maps the columns present to their index (absent SE(3) columns read as identity).
+TouchRecord touch_row(const Csv& tc, const std::map<std::string, size_t>& ix, const fs::path& tp, size_t r) {
+    auto num = [&](const char* c, double fallback) {
+        auto it = ix.find(c);
+        return it == ix.end() ? fallback : number(tc.rows[r][it->second], tp, r, c);
+    };
+    TouchRecord t;
+    t.id = int(num("id", 0));
+    t.split = tc.rows[r][ix.at("split")];
+    if (t.split != "train" && t.split != "test" && t.split != "extra")
+        throw Error(tp.string() + ":" + std::to_string(r + 2) + ": split '" + t.split + "' (train, test or extra)");
+    t.order = int(num("order", -1));
+    t.image = tc.rows[r][ix.at("image")];
+    const char* c3[] = {"cx", "cy", "cz"};
+    const char* n3[] = {"nx", "ny", "nz"};
+    const char* t3[] = {"tx", "ty", "tz"};
+    const char* d3[] = {"dx", "dy", "dz"};
+    const char* q3[] = {"qx", "qy", "qz"};
+    for (int k = 0; k < 3; ++k) {
+        t.contact[size_t(k)] = num(c3[k], 0);
+        t.normal[size_t(k)] = num(n3[k], 0);
+        t.t[size_t(k)] = num(t3[k], 0);
+        t.motion[size_t(k)] = num(d3[k], 0);
+        t.rel_t[size_t(k)] = num(q3[k], 0);
+    }
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            // Appended, not "r" + ...: GCC 12's -Wrestrict false positive on literal + string.
+            const std::string ab = std::to_string(a).append(std::to_string(b));
+            const std::string rn = std::string("r").append(ab), qn = std::string("q").append(ab);
+            t.R[size_t(a * 3 + b)] = num(rn.c_str(), a == b ? 1 : 0);
+            t.rel_R[size_t(a * 3 + b)] = num(qn.c_str(), a == b ? 1 : 0);
+        }
+    t.press_mm = num("press_mm", 0);
+    t.spin_deg = num("spin_deg", 0);
+    t.tilt_deg = num("tilt_deg", 0);
+    return t;
+}
+
+// touches.csv: one TouchRecord a row, ids increasing, at least one test touch.
+void read_touches(ObjectRecord& o, const fs::path& dir) {
+    fs::path tp = dir / "touches.csv";
+    Csv tc = read_csv(tp);
+    std::map<std::string, size_t> ix;
+    for (const char* c : kTouchColumns) {
+        // The SE(3) columns are optional for a user's own data.
+        bool optional = c[0] == 'q' || c[0] == 'r' || c[0] == 't' || std::string(c) == "press_mm" ||
+                        std::string(c) == "spin_deg" || std::string(c) == "tilt_deg";
+        if (optional && !tc.col.count(c)) continue;
+        ix[c] = tc.index(c, tp);
+    }
+    for (size_t r = 0; r < tc.rows.size(); ++r) o.touches.push_back(touch_row(tc, ix, tp, r));
+    for (size_t i = 1; i < o.touches.size(); ++i)
+        if (o.touches[i].id <= o.touches[i - 1].id)
+            throw Error(tp.string() + ": touch ids must increase (row " + std::to_string(i + 2) + ")");
+    if (o.touches_of("test").empty()) throw Error(tp.string() + ": no test touches (the candidates)");
+}
+
 ObjectRecord read_object(const fs::path& root, const json& entry, const fs::path& index_path, int n_points) {
     ObjectRecord o;
     o.name = field<std::string>(entry, "name", index_path);
@@ -143,71 +218,8 @@ ObjectRecord read_object(const fs::path& root, const json& entry, const fs::path
     o.diameter_mm = optional_field<double>(j, "diameter_mm", 0.0, oj);
     o.sample_seed = optional_field<uint64_t>(j, "sample_seed", uint64_t(0), oj);
 
-    fs::path pp = dir / "points.csv";
-    Csv pc = read_csv(pp);
-    const char* pcols[] = {"x", "y", "z", "nx", "ny", "nz"};
-    size_t pidx[6];
-    for (int k = 0; k < 6; ++k) pidx[k] = pc.index(pcols[k], pp);
-    o.n_points = int(pc.rows.size());
-    if (o.n_points == 0) throw Error(pp.string() + ": no points");
-    if (n_points > 0 && o.n_points != n_points)
-        throw Error(pp.string() + ": " + std::to_string(o.n_points) + " points, dataset.json says " +
-                    std::to_string(n_points));
-    o.points = HostTensor({int64_t(o.n_points), 6});
-    for (size_t r = 0; r < pc.rows.size(); ++r)
-        for (int k = 0; k < 6; ++k) o.points.data[r * 6 + size_t(k)] = float(number(pc.rows[r][pidx[k]], pp, r, pcols[k]));
-
-    fs::path tp = dir / "touches.csv";
-    Csv tc = read_csv(tp);
-    std::map<std::string, size_t> ix;
-    for (const char* c : kTouchColumns) {
-        // The SE(3) columns are optional for a user's own data.
-        bool optional = c[0] == 'q' || c[0] == 'r' || c[0] == 't' || std::string(c) == "press_mm" ||
-                        std::string(c) == "spin_deg" || std::string(c) == "tilt_deg";
-        if (optional && !tc.col.count(c)) continue;
-        ix[c] = tc.index(c, tp);
-    }
-    auto num = [&](size_t r, const char* c, double fallback) {
-        auto it = ix.find(c);
-        return it == ix.end() ? fallback : number(tc.rows[r][it->second], tp, r, c);
-    };
-    for (size_t r = 0; r < tc.rows.size(); ++r) {
-        TouchRecord t;
-        t.id = int(num(r, "id", 0));
-        t.split = tc.rows[r][ix["split"]];
-        if (t.split != "train" && t.split != "test" && t.split != "extra")
-            throw Error(tp.string() + ":" + std::to_string(r + 2) + ": split '" + t.split + "' (train, test or extra)");
-        t.order = int(num(r, "order", -1));
-        t.image = tc.rows[r][ix["image"]];
-        const char* c3[] = {"cx", "cy", "cz"};
-        const char* n3[] = {"nx", "ny", "nz"};
-        const char* t3[] = {"tx", "ty", "tz"};
-        const char* d3[] = {"dx", "dy", "dz"};
-        const char* q3[] = {"qx", "qy", "qz"};
-        for (int k = 0; k < 3; ++k) {
-            t.contact[size_t(k)] = num(r, c3[k], 0);
-            t.normal[size_t(k)] = num(r, n3[k], 0);
-            t.t[size_t(k)] = num(r, t3[k], 0);
-            t.motion[size_t(k)] = num(r, d3[k], 0);
-            t.rel_t[size_t(k)] = num(r, q3[k], 0);
-        }
-        for (int a = 0; a < 3; ++a)
-            for (int b = 0; b < 3; ++b) {
-                // Appended, not "r" + ...: GCC 12's -Wrestrict false positive on literal + string.
-                const std::string ab = std::to_string(a).append(std::to_string(b));
-                const std::string rn = std::string("r").append(ab), qn = std::string("q").append(ab);
-                t.R[size_t(a * 3 + b)] = num(r, rn.c_str(), a == b ? 1 : 0);
-                t.rel_R[size_t(a * 3 + b)] = num(r, qn.c_str(), a == b ? 1 : 0);
-            }
-        t.press_mm = num(r, "press_mm", 0);
-        t.spin_deg = num(r, "spin_deg", 0);
-        t.tilt_deg = num(r, "tilt_deg", 0);
-        o.touches.push_back(std::move(t));
-    }
-    for (size_t i = 1; i < o.touches.size(); ++i)
-        if (o.touches[i].id <= o.touches[i - 1].id)
-            throw Error(tp.string() + ": touch ids must increase (row " + std::to_string(i + 2) + ")");
-    if (o.touches_of("test").empty()) throw Error(tp.string() + ": no test touches (the candidates)");
+    read_points(o, dir, n_points);
+    read_touches(o, dir);
     o.has_mesh = fs::exists(dir / "mesh.ply");
     o.has_background = fs::exists(dir / "background.png");
     return o;

@@ -126,6 +126,41 @@ void position_floor(RealityReport& rep) {
     rep.floor_frames_over_3px = int(std::count_if(d.begin(), d.end(), [](double v) { return v > 3; }));
 }
 
+// Mean |RGB difference| of the rendered and the real frame inside and outside the annotated circle.
+void rgb_difference(RealityFrame& f, const std::vector<uint8_t>& sim, const std::vector<uint8_t>& real, int H, int W) {
+    double in = 0, out = 0;
+    size_t nin = 0, nout = 0;
+    for (int y = 0; y < H; ++y)
+        for (int x = 0; x < W; ++x) {
+            size_t p = (size_t(y) * W + x) * 3;
+            double d = 0;
+            for (int k = 0; k < 3; ++k) d += std::abs(double(sim[p + k]) - double(real[p + k]));
+            bool inside = std::hypot(x - f.annotated_cx, y - f.annotated_cy) <= f.annotated_r;
+            (inside ? in : out) += d / 3;
+            ++(inside ? nin : nout);
+        }
+    f.drgb_inside = nin ? in / nin : 0;
+    f.drgb_outside = nout ? out / nout : 0;
+}
+
+// The report's summary over its frames, then the position floor.
+void summarise(RealityReport& rep) {
+    std::vector<double> rerr, cd;
+    for (const RealityFrame& f : rep.frames) {
+        rerr.push_back(std::abs(f.radius_ratio - 1));
+        cd.push_back(f.centre_dist);
+        rep.mean_drgb_inside += f.drgb_inside / rep.frames.size();
+        rep.mean_drgb_outside += f.drgb_outside / rep.frames.size();
+        rep.max_drgb_inside = std::max(rep.max_drgb_inside, f.drgb_inside);
+        rep.max_drgb_outside = std::max(rep.max_drgb_outside, f.drgb_outside);
+    }
+    rep.median_radius_err = median(rerr);
+    rep.max_radius_err = *std::max_element(rerr.begin(), rerr.end());
+    rep.median_centre_dist = median(cd);
+    rep.max_centre_dist = *std::max_element(cd.begin(), cd.end());
+    position_floor(rep);
+}
+
 }  // namespace
 
 RealityReport reality_check(const Calibration& c, const RealityOptions& o) {
@@ -176,36 +211,11 @@ RealityReport reality_check(const Calibration& c, const RealityOptions& o) {
         f.sim = detect_contact(t.image, empty_sim, H, W);
         f.radius_ratio = f.real.radius > 0 ? f.sim.radius / f.real.radius : 0;
         f.centre_dist = std::hypot(f.sim.cx - f.real.cx, f.sim.cy - f.real.cy);
-        double in = 0, out = 0;
-        size_t nin = 0, nout = 0;
-        for (int y = 0; y < H; ++y)
-            for (int x = 0; x < W; ++x) {
-                size_t p = (size_t(y) * W + x) * 3;
-                double d = 0;
-                for (int k = 0; k < 3; ++k) d += std::abs(double(t.image[p + k]) - double(real[p + k]));
-                bool inside = std::hypot(x - f.annotated_cx, y - f.annotated_cy) <= f.annotated_r;
-                (inside ? in : out) += d / 3;
-                ++(inside ? nin : nout);
-            }
-        f.drgb_inside = nin ? in / nin : 0;
-        f.drgb_outside = nout ? out / nout : 0;
+        rgb_difference(f, t.image, real, H, W);
         rep.frames.push_back(f);
         rendered.push_back(std::move(t.image));
     }
-    std::vector<double> rerr, cd;
-    for (const RealityFrame& f : rep.frames) {
-        rerr.push_back(std::abs(f.radius_ratio - 1));
-        cd.push_back(f.centre_dist);
-        rep.mean_drgb_inside += f.drgb_inside / rep.frames.size();
-        rep.mean_drgb_outside += f.drgb_outside / rep.frames.size();
-        rep.max_drgb_inside = std::max(rep.max_drgb_inside, f.drgb_inside);
-        rep.max_drgb_outside = std::max(rep.max_drgb_outside, f.drgb_outside);
-    }
-    rep.median_radius_err = median(rerr);
-    rep.max_radius_err = *std::max_element(rerr.begin(), rerr.end());
-    rep.median_centre_dist = median(cd);
-    rep.max_centre_dist = *std::max_element(cd.begin(), cd.end());
-    position_floor(rep);
+    summarise(rep);
     if (!o.png_path.empty()) write_side_by_side(o.png_path, c, rep, rendered, o);
     return rep;
 }

@@ -40,6 +40,8 @@
 #include <utility>
 #include <vector>
 
+#include "check.h"  // check and check_ops: a device against the CPU reference
+
 namespace vtloc::api {
 
 // Library version (the CMake project version).
@@ -363,91 +365,5 @@ void render_heatmap_png(const std::string& path, const Object& object, const std
 // Every tensor of a result (keep_tensors) as one safetensors file, comparable
 // name by name with `python3 -m weights_tools.golden`.
 void save_tensors(const std::string& path, const std::vector<Tensor>& tensors, const std::string& config_json = "");
-
-// ---- Checking a device against the CPU reference (`vtloc check`) ------------
-
-struct CheckTolerance {
-    double abs = 0, rel = 0;  // |gpu - cpu| <= abs + rel * |cpu|; index tensors compare exactly
-};
-
-// The errors of one comparison (a node's outputs, one op case, or one output).
-struct CheckError {
-    double max_abs = 0;          // max |gpu - cpu|
-    double max_rel = 0;          // max |gpu - cpu| / |cpu| where |cpu| > the absolute tolerance
-    double tolerance_used = 0;   // max |gpu - cpu| / (abs + rel * |cpu|); above 1 fails
-    bool has_indices = false;    // some output is an I32 index tensor
-    bool indices_equal = true;   // ... and all of them equal the reference
-    int64_t mismatches = 0;      // elements out of tolerance
-    std::string first_mismatch;  // "element i: GPU x, CPU y", when there is one
-};
-
-struct NodeCheck {
-    std::string node, op;
-    std::string stage;           // the node name's first part ("tactile", "point.sa1", "ilu", ...)
-    std::vector<std::vector<int64_t>> input_shapes, output_shapes;
-    std::vector<std::string> dispatches;  // "shader spec=[local size, constants...] groups=XxYxZ"
-    CheckError error;
-    std::string failure;         // the CPU reference threw on the GPU's inputs
-    bool ok = true;
-};
-
-struct OutputCheck {
-    std::string name;
-    CheckError error;
-    bool ok = true;
-};
-
-struct CheckDevice {
-    std::string name, type, vulkan, driver;
-    std::vector<std::pair<std::string, std::string>> limits;  // those that choose shader variants
-};
-
-struct CheckOptions {
-    std::string model;    // weight file
-    std::string tactile;  // tactile image
-    std::string object;   // mesh (.glb/.gltf) or PLY point cloud
-};
-
-struct CheckResult {
-    bool ok = false;
-    CheckDevice device;
-    std::string model_name;
-    CheckTolerance node_tolerance{1e-4, 1e-4}, end_to_end_tolerance{2e-3, 2e-3};
-    std::vector<NodeCheck> nodes;       // schedule order; each CPU node ran on the GPU's inputs
-    std::vector<OutputCheck> outputs;   // the model's outputs against a full CPU run
-    int first_failure = -1;             // index into nodes, -1 if none
-    double gpu_ms = 0, cpu_ms = 0, wall_ms = 0;
-};
-
-// Runs the model once on the context's device (every intermediate kept) and
-// compares every node with its CPU reference fed the GPU's own inputs, and the
-// outputs with a full CPU reference run. Bad files throw Error; a mismatch
-// does not throw (ok = false).
-CheckResult check(Context& context, const CheckOptions& options);
-
-struct OpCheck {
-    std::string op, variant;
-    std::vector<std::string> dispatches;
-    CheckError error;
-    CheckTolerance tolerance;
-    std::string failure;  // recording or the reference threw
-    bool ok = true;
-    double ms = 0;
-};
-
-struct OpsCheckResult {
-    bool ok = false;
-    CheckDevice device;
-    std::vector<OpCheck> cases;
-    std::vector<std::string> uncovered_ops;  // registered ops with no self-test case (a failure)
-    double wall_ms = 0;
-};
-
-// The built-in self-test: every registered op on the device against its CPU
-// reference, at odd shapes and on each variant (texel / storage-buffer paths,
-// the tile shapes this device's limits choose). filter: only ops whose name
-// contains it. progress(i, n, case) after each case, when given.
-OpsCheckResult check_ops(Context& context, const std::string& filter = "",
-                         const std::function<void(size_t, size_t, const OpCheck&)>& progress = {});
 
 }  // namespace vtloc::api

@@ -1,0 +1,121 @@
+// The sensor calibration the touch renderer draws with (engine/sim/calibration.h):
+// the shipped file's shapes and the loader's errors.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "base/error.h"
+#include "engine/safetensors.h"
+#include "engine/sim/calibration.h"
+#include "engine/sim/primitives.h"
+#include "engine/sim/touch_renderer.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using namespace vtloc::sim;
+
+namespace {
+
+const Calibration& calib() {
+    static const Calibration c = load_calibration(default_calibration_path());
+    return c;
+}
+
+Appearance no_noise() {
+    Appearance a;
+    a.noise_sigma = 0;
+    return a;
+}
+
+}  // namespace
+
+TEST_CASE("sim: the shipped calibration loads with the documented shapes", "[sim]") {
+    const Calibration& c = calib();
+    CHECK(c.height == 120);
+    CHECK(c.width == 160);
+    CHECK(c.bins == 120);
+    CHECK(c.mm_per_px == Approx(0.1245));
+    CHECK(c.n_press == 49);
+    CHECK(c.press_imgs.size() == size_t(49) * 120 * 160 * 3);
+    CHECK(c.depth_bg.size() == size_t(120) * 160);
+}
+
+TEST_CASE("sim: calibration loader errors name the file and the tensor", "[sim]") {
+    const int H = 8, W = 10, B = 4;
+    auto blobs = [&] {
+        std::vector<TensorBlob> b;
+        for (const char* n : {"poly_r", "poly_g", "poly_b"})
+            b.push_back(TensorBlob::f32(n, {B, B, 6}, std::vector<float>(B * B * 6, 0.5f)));
+        b.push_back(TensorBlob::f32("real_bg", {H, W, 3}, std::vector<float>(H * W * 3, 100.0f)));
+        b.push_back(TensorBlob::f32("depth_bg", {H, W}, std::vector<float>(H * W, 1.0f)));
+        return b;
+    };
+    auto expect_error = [](const std::string& path, const std::string& tensor) {
+        try {
+            load_calibration(path);
+            FAIL("no error for " << tensor);
+        } catch (const Error& e) {
+            std::string m = e.what();
+            INFO(m);
+            CHECK(m.find(path) != std::string::npos);
+            CHECK(m.find(tensor) != std::string::npos);
+            CHECK(m.find('\n') == std::string::npos);
+        }
+    };
+    const std::string good = test::temp_path("sim_calib_good.safetensors");
+    write_safetensors(good, blobs(), {});
+    Calibration c = load_calibration(good);
+    CHECK(c.height == H);
+    CHECK(c.width == W);
+    CHECK(c.bins == B);
+    CHECK(c.n_press == 0);
+    // A tiny sensor renders too (no press frames needed).
+    Touch t = TouchRenderer(c, make_plane(50, 50), 0.5).render({0, 0, 0}, {0, 0, 1}, TouchParams{}, no_noise(), 0);
+    CHECK(t.ok);
+    CHECK(t.image.size() == size_t(H) * W * 3);
+
+    auto missing = blobs();
+    missing.erase(missing.begin() + 1);
+    const std::string p1 = test::temp_path("sim_calib_missing.safetensors");
+    write_safetensors(p1, missing, {});
+    expect_error(p1, "poly_g");
+
+    auto shape = blobs();
+    shape[4] = TensorBlob::f32("depth_bg", {H, W + 1}, std::vector<float>(H * (W + 1), 1.0f));
+    const std::string p2 = test::temp_path("sim_calib_shape.safetensors");
+    write_safetensors(p2, shape, {});
+    expect_error(p2, "depth_bg");
+
+    auto nonfinite = blobs();
+    std::vector<float> bg(H * W * 3, 100.0f);
+    bg[17] = std::nanf("");
+    nonfinite[3] = TensorBlob::f32("real_bg", {H, W, 3}, bg);
+    const std::string p3 = test::temp_path("sim_calib_nan.safetensors");
+    write_safetensors(p3, nonfinite, {});
+    expect_error(p3, "real_bg");
+
+    auto dtype = blobs();
+    dtype[0] = TensorBlob::i32("poly_r", {B, B, 6}, std::vector<int32_t>(B * B * 6, 1));
+    const std::string p4 = test::temp_path("sim_calib_dtype.safetensors");
+    write_safetensors(p4, dtype, {});
+    expect_error(p4, "poly_r");
+
+    auto press = blobs();
+    press.push_back(TensorBlob::f32("press_center", {2, 2}, std::vector<float>(4, 1.0f)));
+    TensorBlob imgs;
+    imgs.name = "press_imgs";
+    imgs.dtype = DType::U8;
+    imgs.shape = {2, H, W, 3};
+    imgs.bytes.assign(2 * H * W * 3, 0);
+    press.push_back(imgs);
+    const std::string p5 = test::temp_path("sim_calib_press.safetensors");
+    write_safetensors(p5, press, {});
+    expect_error(p5, "press_f0");  // press frames without their empty frame
+
+    const std::string nofile = test::temp_path("sim_calib_does_not_exist.safetensors");
+    try {
+        load_calibration(nofile);
+        FAIL("no error");
+    } catch (const Error& e) {
+        CHECK(std::string(e.what()).find(nofile) != std::string::npos);
+    }
+}
