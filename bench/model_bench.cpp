@@ -256,6 +256,13 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     }
     if (!opt.points.empty()) progress("point sweep");
     if (!opt.points.empty()) out["points"] = point_sweep(r, in, opt);
+    if (r.on_gpu()) {
+        // After every shape above: the weights are held once, whatever the shape count.
+        const VtlocRunner::AllMemory all = r.all_memory();
+        out["memory_all_shapes"] = {{"graphs", all.graphs}, {"weights_resident_bytes", all.resident_weight_bytes},
+                                    {"weights_if_per_graph_bytes", all.weight_bytes_by_graph},
+                                    {"activations_bytes", all.arena_bytes}};
+    }
     return out;
 }
 

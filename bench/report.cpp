@@ -30,6 +30,13 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
                         " (one buffer per activation would take %.2f MiB)\n",
                      mib(m["weights_bytes"]), mib(m["activations_peak_bytes"]), mib(m["total_bytes"]),
                      mib(m["activations_unplanned_bytes"]));
+        if (b.contains("memory_all_shapes")) {
+            const json& a = b["memory_all_shapes"];
+            std::fprintf(f, "  after all %d graph shapes: weights %.2f MiB, resident once (one copy per graph would be"
+                            " %.2f MiB) + activations %.2f MiB\n",
+                         a["graphs"].get<int>(), mib(a["weights_resident_bytes"]), mib(a["weights_if_per_graph_bytes"]),
+                         mib(a["activations_bytes"]));
+        }
     }
     std::fprintf(f, "\n  per stage (%s, median of profiled runs)\n", name == "gpu" ? "GPU timestamps" : "CPU wall per node");
     const json& st = b["stages_ms"];

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <climits>
 #include <cstring>
+#include <set>
 
 #include "base/error.h"
 #include "engine/op.h"
@@ -115,40 +116,33 @@ MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t a
 
 GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile,
                          bool keep_all)
-    : ctx_(ctx),
-      graph_(g),
-      order_(graph_.topo_order()),
-      weights_(std::min<uint64_t>(ctx.info().max_storage_buffer_range, 1ull << 30),
-               std::max<uint64_t>({16, ctx.info().storage_offset_alignment, ctx.info().texel_offset_alignment})) {
+    : GpuExecutor(ctx, g, weights, std::make_shared<ResidentWeights>(ctx), profile, keep_all) {}
+
+GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights,
+                         std::shared_ptr<ResidentWeights> resident, bool profile, bool keep_all)
+    : ctx_(ctx), graph_(g), order_(graph_.topo_order()), resident_(std::move(resident)) {
     const rt::DeviceInfo& info = ctx_.info();
     // Any tensor may be bound as a storage or a texel buffer: both alignments hold.
     const uint64_t align = std::max<uint64_t>({16, info.storage_offset_alignment, info.texel_offset_alignment});
     seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
 
-    // Weights: packed into as few immutable buffers as the binding range allows.
-    std::vector<std::pair<int, const HostTensor*>> used;
-    for (size_t i = 0; i < graph_.values().size(); ++i) {
-        const Value& v = graph_.values()[i];
-        if (v.kind != ValueKind::Weight) continue;
-        const HostTensor& t = weights.get(v.name, v.shape);
-        weight_slots_[int(i)] = weights_.reserve(std::max<uint64_t>(4, t.data.size() * 4));
-        used.push_back({int(i), &t});
+    const size_t mark = resident_->batches();
+    try {
+        build(weights, align, keep_all);
+    } catch (...) {
+        // What this build made is freed by the members' own destructors; the
+        // weights it alone uploaded go back too.
+        seq_.reset();
+        resident_->forget_since(mark);
+        throw;
     }
-    weights_.allocate(ctx_, rt::MemoryKind::Device);
-    if (!used.empty()) {
-        rt::Buffer staging(ctx_, weights_.total_bytes() + used.size() * align, rt::MemoryKind::Staging);
-        seq_->begin();
-        uint64_t at = 0;
-        for (auto& [id, t] : used) {
-            rt::BufferView dst = weights_.view(weight_slots_[id]);
-            if (!t->data.empty())
-                std::memcpy(static_cast<char*>(staging.mapped()) + at, t->data.data(), t->data.size() * 4);
-            seq_->copy({staging.handle(), at, dst.size}, dst);
-            at += dst.size;
-        }
-        seq_->end();
-        seq_->submit_and_wait();
-    }
+}
+
+void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_all) {
+    resident_->ensure(graph_, weights);
+    std::set<std::string> read;
+    for (const Value& v : graph_.values())
+        if (v.kind == ValueKind::Weight && read.insert(v.name).second) weight_bytes_ += resident_->view(v.name).size;
 
     // Activations: one arena, reused across values with disjoint lifetimes.
     plan_ = plan_memory(graph_, order_, align, !keep_all);
@@ -202,7 +196,7 @@ GpuExecutor::~GpuExecutor() = default;
 
 rt::BufferView GpuExecutor::view_of(int value) const {
     const Value& v = graph_.value(value);
-    if (v.kind == ValueKind::Weight) return weights_.view(weight_slots_.at(value));
+    if (v.kind == ValueKind::Weight) return resident_->view(v.name);
     return {arena_.handle(), uint64_t(plan_.offset[size_t(value)]),
             std::max<uint64_t>(4, uint64_t(numel(v.shape)) * 4)};
 }

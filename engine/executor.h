@@ -8,6 +8,7 @@
 
 #include "engine/graph.h"
 #include "engine/tensor.h"
+#include "engine/resident_weights.h"
 #include "engine/weights.h"
 #include "runtime/memory.h"
 #include "runtime/sequence.h"
@@ -51,6 +52,10 @@ public:
     // any intermediate as the GPU computed it.
     GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile = false,
                 bool keep_all = false);
+    // The same, reading its weights from (and adding missing ones to) a
+    // model's resident set, shared with the model's other executors.
+    GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights,
+                std::shared_ptr<ResidentWeights> resident, bool profile = false, bool keep_all = false);
     ~GpuExecutor();
 
     TensorMap run(const TensorMap& inputs);
@@ -58,19 +63,22 @@ public:
     HostTensor value(int id) const;
 
     const MemoryPlan& memory_plan() const { return plan_; }
-    uint64_t weight_bytes() const { return weights_.total_bytes(); }
+    // Device bytes of the weights this graph reads (resident, maybe shared).
+    uint64_t weight_bytes() const { return weight_bytes_; }
     const rt::Sequence& sequence() const { return *seq_; }
     std::vector<rt::Sequence::NodeTime> node_times() const { return seq_->node_times(); }
 
 private:
     rt::BufferView view_of(int value) const;
+    // Uploads missing weights, plans and allocates the arena, records the graph.
+    void build(const WeightStore& weights, uint64_t align, bool keep_all);
 
     rt::Context& ctx_;
     Graph graph_;
     std::vector<int> order_;
     MemoryPlan plan_;
-    rt::ChunkedBuffers weights_;
-    std::map<int, rt::ChunkedBuffers::Slot> weight_slots_;
+    std::shared_ptr<ResidentWeights> resident_;
+    uint64_t weight_bytes_ = 0;
     rt::Buffer arena_;
     rt::Buffer staging_in_, staging_out_;
     rt::Buffer staging_all_;  // keep_all: a copy of the whole arena

@@ -198,3 +198,29 @@ TEST_CASE("bad inputs to the model are named", "[model]") {
     REQUIRE_THROWS_WITH(runner.localize(EncodedObject{}, {c.image}), Catch::Contains("not encoded"));
     test::require_no_validation_messages();
 }
+
+TEST_CASE("a model's weights are resident once for all its graph shapes", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    const TouchResult once = runner.localize_once(c.image, c.cloud, &c.candidates);  // reads every weight
+    const VtlocRunner::MemoryUse m1 = runner.last_memory();
+    REQUIRE(m1.resident_weight_bytes > 0);
+    CHECK(m1.weight_bytes <= m1.resident_weight_bytes);
+    CHECK(m1.resident_weight_bytes - m1.weight_bytes < 1024);  // the buffers' alignment padding
+
+    // Three more shapes: the object branch alone, a batch of 2, another K.
+    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
+    CHECK(runner.last_memory().weight_bytes < m1.resident_weight_bytes);
+    runner.localize(obj, {c.image, c.image});
+    TouchOptions k3;
+    k3.k = 3;
+    const TouchResult r = runner.localize(obj, {c.image}, k3).at(0);
+    CHECK(runner.last_memory().resident_weight_bytes == m1.resident_weight_bytes);  // nothing uploaded again
+
+    // The shared weights give what a runner of that one shape gives.
+    VtlocRunner fresh(c.weights, &test::gpu());
+    const TouchResult f = fresh.localize(fresh.encode_object(c.cloud, &c.candidates), {c.image}, k3).at(0);
+    check_same(r, f, "K = 3 after other shapes vs a fresh runner");
+    check_same(runner.localize(obj, {c.image}).at(0), once, "cached touch vs one-shot");
+    test::require_no_validation_messages();
+}

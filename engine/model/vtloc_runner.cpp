@@ -60,7 +60,10 @@ TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Gra
     if (!c) {
         auto fresh = std::make_unique<Compiled>();
         fresh->graph = build();
-        if (gpu_) fresh->gpu = std::make_unique<GpuExecutor>(*gpu_, fresh->graph, weights_, profile_);
+        if (gpu_) {
+            if (!resident_) resident_ = std::make_shared<ResidentWeights>(*gpu_);
+            fresh->gpu = std::make_unique<GpuExecutor>(*gpu_, fresh->graph, weights_, resident_, profile_);
+        }
         c = std::move(fresh);
     }
     last_ = c.get();
@@ -85,8 +88,21 @@ VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
     MemoryUse m;
     if (!last_ || !last_->gpu) return m;
     m.weight_bytes = last_->gpu->weight_bytes();
+    m.resident_weight_bytes = resident_ ? resident_->bytes() : 0;
     m.arena_bytes = last_->gpu->memory_plan().arena_bytes;
     m.unplanned_bytes = last_->gpu->memory_plan().total_bytes;
+    return m;
+}
+
+VtlocRunner::AllMemory VtlocRunner::all_memory() const {
+    AllMemory m;
+    m.resident_weight_bytes = resident_ ? resident_->bytes() : 0;
+    for (const auto& [key, c] : compiled_) {
+        if (!c || !c->gpu) continue;
+        ++m.graphs;
+        m.weight_bytes_by_graph += c->gpu->weight_bytes();
+        m.arena_bytes += c->gpu->memory_plan().arena_bytes;
+    }
     return m;
 }
 

@@ -125,12 +125,21 @@ public:
 
     // The graph of the last run, and on the GPU the device memory it holds.
     struct MemoryUse {
-        uint64_t weight_bytes = 0;  // weights uploaded for this graph
+        uint64_t weight_bytes = 0;  // weights this graph reads
+        uint64_t resident_weight_bytes = 0;  // every weight resident for this runner: each once, all shapes
         uint64_t arena_bytes = 0;   // activation arena (lifetime-planned peak)
         uint64_t unplanned_bytes = 0;  // what one buffer per activation would take
     };
     const Graph* last_graph() const;
     MemoryUse last_memory() const;
+    // Every graph shape this runner has built on the GPU so far.
+    struct AllMemory {
+        size_t graphs = 0;
+        uint64_t resident_weight_bytes = 0;    // held: each weight once
+        uint64_t weight_bytes_by_graph = 0;    // what one weight copy per graph would hold
+        uint64_t arena_bytes = 0;              // the graphs' activation arenas together
+    };
+    AllMemory all_memory() const;
 
 private:
     void split_gma_rows();  // the GMA weight in row chunks that fit a portable binding
@@ -144,6 +153,8 @@ private:
     bool profile_ = false;
     bool ilu_stepped_ = false;
     struct Compiled;
+    // Weights on the GPU, once for every graph shape (made at the first GPU run).
+    std::shared_ptr<ResidentWeights> resident_;
     std::map<std::string, std::unique_ptr<Compiled>> compiled_;
     Compiled* last_ = nullptr;
 };

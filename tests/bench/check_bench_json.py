@@ -99,6 +99,12 @@ def main(path, plot, reps, iters, batches, points):
         positive(m[k], f"memory.{k}")
     need(m["total_bytes"] == m["weights_bytes"] + m["activations_peak_bytes"], "memory.total_bytes")
     need(m["activations_peak_bytes"] <= m["activations_unplanned_bytes"], "arena above one-buffer-per-tensor")
+    a = g["memory_all_shapes"]
+    need(a["graphs"] > 1, "memory_all_shapes: the run built several graph shapes")
+    # Weights are held once: no more than the largest graph reads (+ alignment), far below one copy per graph.
+    need(a["weights_resident_bytes"] <= m["weights_bytes"] + 4096, "memory_all_shapes: weights resident once")
+    need(a["weights_if_per_graph_bytes"] >= a["graphs"] // 2 * m["weights_bytes"] // 2,
+         "memory_all_shapes: per-graph weight sum")
     for k in ("conv", "mlp"):
         f = g["efficiency"][k]["fraction_of_peak"]
         need(abs(f - g["efficiency"][k]["gflops"] / p["gflops"]) < 1e-9, f"fraction_of_peak {k}")

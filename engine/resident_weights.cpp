@@ -1,0 +1,86 @@
+#include "engine/resident_weights.h"
+
+#include <algorithm>
+#include <cstring>
+
+#include "base/error.h"
+#include "runtime/context.h"
+#include "runtime/sequence.h"
+
+namespace vtloc {
+
+ResidentWeights::ResidentWeights(rt::Context& ctx) : ctx_(ctx) {
+    const rt::DeviceInfo& info = ctx.info();
+    // Any tensor may be bound as a storage or a texel buffer: both alignments hold.
+    align_ = std::max<uint64_t>({16, info.storage_offset_alignment, info.texel_offset_alignment});
+}
+
+ResidentWeights::~ResidentWeights() = default;
+
+void ResidentWeights::ensure(const Graph& g, const WeightStore& weights) {
+    struct Fresh {
+        std::string name;
+        const HostTensor* t;
+        Shape shape;  // as the graph reads it
+    };
+    std::vector<Fresh> fresh;
+    for (const Value& v : g.values()) {
+        if (v.kind != ValueKind::Weight) continue;
+        auto it = slots_.find(v.name);
+        if (it != slots_.end()) {
+            if (it->second.shape != v.shape)
+                throw Error("weight '" + v.name + "' is resident as " + shape_str(it->second.shape) +
+                            " but this graph reads it as " + shape_str(v.shape));
+            continue;
+        }
+        if (std::any_of(fresh.begin(), fresh.end(), [&](const Fresh& f) { return f.name == v.name; })) continue;
+        fresh.push_back({v.name, &weights.get(v.name, v.shape), v.shape});
+    }
+    if (fresh.empty()) return;
+
+    // Packed into as few immutable buffers as the binding range allows.
+    auto bufs = std::make_unique<rt::ChunkedBuffers>(
+        std::min<uint64_t>(ctx_.info().max_storage_buffer_range, 1ull << 30), align_);
+    std::vector<rt::ChunkedBuffers::Slot> placed;
+    for (const Fresh& f : fresh) placed.push_back(bufs->reserve(std::max<uint64_t>(4, f.t->data.size() * 4)));
+    bufs->allocate(ctx_, rt::MemoryKind::Device);
+
+    rt::Buffer staging(ctx_, bufs->total_bytes() + fresh.size() * align_, rt::MemoryKind::Staging);
+    rt::Sequence seq(ctx_, false);
+    seq.begin();
+    uint64_t at = 0;
+    for (size_t i = 0; i < fresh.size(); ++i) {
+        const HostTensor& t = *fresh[i].t;
+        rt::BufferView dst = bufs->view(placed[i]);
+        if (!t.data.empty()) std::memcpy(static_cast<char*>(staging.mapped()) + at, t.data.data(), t.data.size() * 4);
+        seq.copy({staging.handle(), at, dst.size}, dst);
+        at += dst.size;
+    }
+    seq.end();
+    seq.submit_and_wait();
+    // Only now, with the upload done, do the names become visible.
+    const size_t batch = batches_.size();
+    batches_.push_back(std::move(bufs));
+    for (size_t i = 0; i < fresh.size(); ++i)
+        slots_[fresh[i].name] = Slot{batch, placed[i], fresh[i].shape};
+}
+
+rt::BufferView ResidentWeights::view(const std::string& name) const {
+    auto it = slots_.find(name);
+    if (it == slots_.end()) throw Error("weight '" + name + "' is not resident on the device");
+    return batches_[it->second.batch]->view(it->second.slot);
+}
+
+void ResidentWeights::forget_since(size_t mark) {
+    for (auto it = slots_.begin(); it != slots_.end();)
+        it = it->second.batch >= mark ? slots_.erase(it) : std::next(it);
+    while (batches_.size() > mark) batches_.pop_back();
+}
+
+uint64_t ResidentWeights::bytes() const {
+    uint64_t n = 0;
+    for (const auto& b : batches_) n += b->total_bytes();
+    return n;
+}
+
+}  // namespace vtloc
