@@ -5,6 +5,7 @@
 // must stay flat after the warm-up (each case's first run builds its graph).
 //   vtloc-soak [--model M] [--runs 10000] [--warmup W] [--json FILE]
 //              [--png FILE] [--max-drift-mib 1]
+//   vtloc-soak --plot-from SOAK.json --png FILE    (redraw a run's picture)
 // The warm-up (default: the larger of one pass over the cases and a tenth of
 // the runs) is left out of the flatness checks: glibc's heap takes a few
 // steps of 1-6 MiB in the first ~200 runs as it settles, then stays put.
@@ -185,7 +186,7 @@ int usage() {
 
 int main(int argc, char** argv) {
     std::string model_path = std::string(VTLOC_SOURCE_DIR) + "/models/vtloc-lite.safetensors";
-    std::string json_path, png_path;
+    std::string json_path, png_path, plot_from;
     long runs = 10000, warmup_arg = -1;
     double max_drift = 1.0;
     for (int i = 1; i < argc; ++i) {
@@ -196,11 +197,21 @@ int main(int argc, char** argv) {
         else if (a == "--warmup") warmup_arg = std::atol(argv[++i]);
         else if (a == "--json") json_path = argv[++i];
         else if (a == "--png") png_path = argv[++i];
+        else if (a == "--plot-from") plot_from = argv[++i];
         else if (a == "--max-drift-mib") max_drift = std::atof(argv[++i]);
         else return usage();
     }
     if (runs < 1) return usage();
     try {
+        if (!plot_from.empty()) {
+            std::ifstream in(plot_from);
+            const nlohmann::json j = nlohmann::json::parse(in);
+            if (png_path.empty()) return usage();
+            vtloc::bench::plot_soak(png_path, j.at("rss_mib").get<std::vector<double>>(),
+                                    j.at("gpu_mib").get<std::vector<double>>(), j.at("warmup_runs").get<size_t>(),
+                                    j.at("rss_slope_mib_per_run").get<double>());
+            return 0;
+        }
         api::Context ctx;
         api::Model model(ctx, model_path);
         const std::string ex = std::string(VTLOC_SOURCE_DIR) + "/examples";

@@ -55,7 +55,7 @@ void panel(cv::Mat& m, cv::Rect r, const std::vector<double>& y, size_t from, co
         cv::line(m, px(x0, mean + slope * (x0 - mx)), px(x0 + n, mean + slope * (x0 + n - mx)), kFit, 1, cv::LINE_AA);
     }
     cv::rectangle(m, r, kInk);
-    text(m, title, {r.x, r.y - 8}, 0.5);
+    text(m, title, {r.x, r.y - 8}, 0.45);
 }
 
 }  // namespace
@@ -66,7 +66,7 @@ void plot_soak(const std::string& path, const std::vector<double>& rss, const st
     const size_t from = warmup + 1 < rss.size() ? warmup : 0;
     cv::Mat m(580, 900, CV_8UC3, cv::Scalar(255, 255, 255));
     char t[200];
-    std::snprintf(t, sizeof t, "host RSS (MiB) after the warm-up (%.0f -> %.0f MiB over runs 0..%zu); red: fit, %.3g MiB/1000 runs",
+    std::snprintf(t, sizeof t, "host RSS (MiB) after the warm-up (%.0f -> %.0f MiB in runs 0..%zu); red: fit, %.3g MiB/1000 runs",
                   rss.front(), rss[from], from, 1000 * slope);
     panel(m, {80, 40, 790, 200}, rss, from, t, slope);
     std::snprintf(t, sizeof t, "GPU memory held by the context (MiB) after the warm-up (%.0f -> %.0f MiB)", gpu.front(), gpu[from]);
