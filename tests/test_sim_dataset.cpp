@@ -115,6 +115,23 @@ TEST_CASE("dataset: reader errors name the file", "[sim]") {
     write_file_atomic((root / "dataset.json").string(), j);
     require_error([&] { read_dataset(root.string()); }, {"dataset.json", "field 'seed' has the wrong type"});
 
+    // Fuzzer finding (fuzz_dataset, once UBSan halted the fuzzer): a float or an
+    // out-of-range integer where an integer field belongs was cast by the JSON
+    // library, undefined behaviour; now a one-line error.
+    for (const char* bad : {"1.5e39", "3000000000", "12.5", "-1"}) {
+        root = write_small_dataset("ds_n_points_range");
+        j = slurp(root / "dataset.json");
+        const size_t at = j.find("\"n_points\"");
+        REQUIRE(at != std::string::npos);
+        j.replace(at, j.find_first_of(",}", at) - at, std::string("\"n_points\": ") + bad);
+        write_file_atomic((root / "dataset.json").string(), j);
+        INFO("n_points " << bad);
+        if (std::string(bad) == "-1")  // in range of int: refused by the reader's own check
+            require_error([&] { read_dataset(root.string()); }, {"dataset.json", "'n_points' must be >= 1, got -1"});
+        else
+            require_error([&] { read_dataset(root.string()); }, {"dataset.json", "'n_points' must be an integer in the range"});
+    }
+
     root = write_small_dataset("ds_missing_points");
     fs::remove(root / "objects/cube/points.csv");
     require_error([&] { read_dataset(root.string()); }, {"points.csv", "cannot read"});

@@ -8,6 +8,8 @@
 #include <map>
 #include <nlohmann/json.hpp>
 #include <sstream>
+#include <type_traits>
+#include <utility>
 
 #include "base/error.h"
 
@@ -37,6 +39,16 @@ json read_json(const fs::path& p) {
 template <class T>
 T field(const json& j, const char* key, const fs::path& p) {
     if (!j.is_object() || !j.contains(key)) throw Error(p.string() + ": missing field '" + key + "'");
+    if constexpr (std::is_integral_v<T> && !std::is_same_v<T, bool>) {
+        // nlohmann casts a float (1.5e39) or an out-of-range integer to T: undefined behaviour (UBSan, fuzzing).
+        const json& v = j.at(key);
+        if (!v.is_number()) throw Error(p.string() + ": field '" + key + "' has the wrong type");
+        const bool fits = v.is_number_unsigned() ? std::in_range<T>(v.get<uint64_t>())
+                          : v.is_number_integer() ? std::in_range<T>(v.get<int64_t>())
+                                                  : false;
+        if (!fits) throw Error(p.string() + ": field '" + key + "' must be an integer in the range of its type");
+        return v.is_number_unsigned() ? T(v.get<uint64_t>()) : T(v.get<int64_t>());
+    }
     try {
         return j.at(key).get<T>();
     } catch (const json::exception&) {
@@ -255,6 +267,7 @@ Dataset read_dataset(const std::string& root_arg) {
     d.root = root_arg;
     d.seed = optional_field<uint64_t>(j, "seed", uint64_t(0), index);
     d.n_points = field<int>(j, "n_points", index);
+    if (d.n_points < 1) throw Error(index.string() + ": field 'n_points' must be >= 1, got " + std::to_string(d.n_points));
     json s = field<json>(j, "sensor", index);
     d.sensor.height = field<int>(s, "height", index);
     d.sensor.width = field<int>(s, "width", index);
