@@ -16,7 +16,6 @@
 
 using namespace vtloc;
 using namespace vtloc::io;
-using vtloc::test::append_le;
 using vtloc::test::require_error;
 using vtloc::test::write_temp;
 using namespace vtloc::test::mesh;

@@ -10,8 +10,6 @@
 #include <sstream>
 
 #include "engine/io/mesh_formats.h"
-#include "engine/io/mesh_formats_detail.h"
-#include "engine/io/splitmix64.h"
 #include "tests/api_test_util.h"
 #include "tests/io_test_util.h"
 #include "tests/mesh_fixtures.h"

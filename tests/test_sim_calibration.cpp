@@ -9,24 +9,13 @@
 #include "engine/sim/primitives.h"
 #include "engine/sim/touch_renderer.h"
 #include "tests/harness.h"
+#include "tests/sim_fixtures.h"
 
 using namespace vtloc;
 using namespace vtloc::sim;
 
-namespace {
-
-const Calibration& calib() {
-    static const Calibration c = load_calibration(default_calibration_path());
-    return c;
-}
-
-Appearance no_noise() {
-    Appearance a;
-    a.noise_sigma = 0;
-    return a;
-}
-
-}  // namespace
+using test::calib;
+using test::no_noise;
 
 TEST_CASE("sim: the shipped calibration loads with the documented shapes", "[sim]") {
     const Calibration& c = calib();

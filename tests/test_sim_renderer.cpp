@@ -12,22 +12,15 @@
 #include "engine/sim/primitives.h"
 #include "engine/sim/touch_renderer.h"
 #include "tests/harness.h"
+#include "tests/sim_fixtures.h"
 
 using namespace vtloc;
 using namespace vtloc::sim;
 
+using test::calib;
+using test::no_noise;
+
 namespace {
-
-const Calibration& calib() {
-    static const Calibration c = load_calibration(default_calibration_path());
-    return c;
-}
-
-Appearance no_noise() {
-    Appearance a;
-    a.noise_sigma = 0;
-    return a;
-}
 
 double dot(const Vec3& a, const Vec3& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 Vec3 column(const SensorPose& p, int k) { return {p.R[k], p.R[3 + k], p.R[6 + k]}; }

@@ -59,10 +59,7 @@ struct Run {
 nlohmann::json write_outputs(const Run& run, std::string& golden) {
     const Args& a = run.a;
     nlohmann::json outputs = nlohmann::json::object();
-    if (auto p = a.get("--heatmap")) {
-        api::write_heatmap_ply(*p, run.object, run.r.heatmap);
-        outputs["heatmap"] = *p;
-    }
+    write_heatmap_option(a, run.object, run.r.heatmap, outputs);
     if (auto p = a.get("--render")) {
         api::RenderOptions ro;
         ro.contact = run.r.contact;

@@ -122,10 +122,7 @@ void rank_candidates(Run& run) {
 
 nlohmann::json write_outputs(const Args& a, const Run& run) {
     nlohmann::json outputs = nlohmann::json::object();
-    if (auto p = a.get("--heatmap")) {
-        api::write_heatmap_ply(*p, run.object, run.r.heatmap);
-        outputs["heatmap"] = *p;
-    }
+    write_heatmap_option(a, run.object, run.r.heatmap, outputs);
     if (auto p = a.get("--render")) {
         api::RenderOptions ro;
         ro.contact = run.r.best_point;

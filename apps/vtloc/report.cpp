@@ -95,4 +95,12 @@ void print_touch(const api::TouchResult& r, const std::string& indent) {
                     indent.c_str(), double(*r.alignment));
 }
 
+void write_heatmap_option(const Args& a, const api::Object& object, const std::vector<float>& heat,
+                          nlohmann::json& outputs) {
+    if (auto p = a.get("--heatmap")) {
+        api::write_heatmap_ply(*p, object, heat);
+        outputs["heatmap"] = *p;
+    }
+}
+
 }  // namespace vtloc::cli

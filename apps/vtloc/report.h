@@ -20,5 +20,8 @@ void print_model(const api::ModelInfo& m, bool random);
 void print_device(const api::DeviceInfo& d, bool chosen);
 // Contact, top-K and alignment of one touch, indented by `indent`.
 void print_touch(const api::TouchResult& r, const std::string& indent = "");
+// --heatmap FILE: the heat-map PLY over the object's cloud, its path recorded in `outputs`.
+void write_heatmap_option(const Args& a, const api::Object& object, const std::vector<float>& heat,
+                          nlohmann::json& outputs);
 
 }  // namespace vtloc::cli

@@ -10,6 +10,7 @@
 #   bash tests/sanitize/run.sh [asan|tsan ...]      (default: asan tsan)
 # Run after the README's test command: the [golden] tests read build/goldens.
 set -euo pipefail
+set -f  # test filters such as [threads] are Catch tags, not globs
 root="$(cd "$(dirname "$0")/../.." && pwd)"
 here="$root/tests/sanitize"
 kinds=("$@")
@@ -28,41 +29,37 @@ configure() {  # build-dir sanitizers
   cmake --build "$1" -j"$(nproc)" --target vtloc_tests > /dev/null
 }
 
+# run BUILD-DIR SANITIZERS REPORT-PATTERN TEST-FILTER [ENV=VALUE ...]: builds the
+# test binary, runs it, fails on its exit status or any report in its log
+# (reports do not halt the run, so one run shows them all).
 status=0
+run() {
+  local build="$root/$1" sanitizers="$2" pattern="$3" filter="$4"
+  shift 4
+  configure "$build" "$sanitizers"
+  if ! (cd "$build" && env VTLOC_VALIDATION=1 "$@" tests/vtloc_tests $filter > "$build/sanitize.log" 2>&1); then
+    status=1
+  fi
+  if grep -q "$pattern" "$build/sanitize.log"; then
+    grep "$pattern" "$build/sanitize.log" | sort | uniq -c >&2
+    status=1
+  fi
+  tail -n 4 "$build/sanitize.log"
+}
+
 for kind in "${kinds[@]}"; do
   case "$kind" in
     asan)
-      build="$root/build-asan"
-      configure "$build" "address,undefined"
       echo "sanitize: ASan + UBSan, the whole vtloc_tests suite"
-      if ! (cd "$build" && VTLOC_VALIDATION=1 \
-            ASAN_OPTIONS="detect_leaks=1:abort_on_error=0:strict_string_checks=1:detect_stack_use_after_return=1" \
-            LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
-            UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=0" \
-            tests/vtloc_tests --order decl > "$build/sanitize.log" 2>&1); then
-        status=1
-      fi
-      # UBSan reports and goes on (every finding of a run in one log); any report fails.
-      if grep -q "runtime error:" "$build/sanitize.log"; then
-        grep "runtime error:" "$build/sanitize.log" | sort | uniq -c >&2
-        status=1
-      fi
-      tail -n 4 "$build/sanitize.log"
+      run build-asan "address,undefined" "runtime error:" "--order decl" \
+        ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1" \
+        LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
+        UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=0"
       ;;
     tsan)
-      build="$root/build-tsan"
-      configure "$build" "thread"
       echo "sanitize: TSan, the [threads] tests"
-      if ! (cd "$build" && VTLOC_VALIDATION=1 \
-            TSAN_OPTIONS="suppressions=$here/tsan.supp:halt_on_error=0:second_deadlock_stack=1" \
-            tests/vtloc_tests "[threads]" > "$build/sanitize.log" 2>&1); then
-        status=1
-      fi
-      if grep -q "WARNING: ThreadSanitizer" "$build/sanitize.log"; then
-        grep "WARNING: ThreadSanitizer" "$build/sanitize.log" | sort | uniq -c >&2
-        status=1
-      fi
-      tail -n 4 "$build/sanitize.log"
+      run build-tsan "thread" "WARNING: ThreadSanitizer" "[threads]" \
+        TSAN_OPTIONS="suppressions=$here/tsan.supp:halt_on_error=0:second_deadlock_stack=1"
       ;;
     *) echo "sanitize: unknown kind $kind (asan, tsan)" >&2; exit 2 ;;
   esac
