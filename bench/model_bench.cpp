@@ -100,15 +100,6 @@ json nodes_json(const Profile& p) {
     return out;
 }
 
-// Least-squares slope of y over x.
-double slope(const std::vector<double>& x, const std::vector<double>& y) {
-    const double n = double(x.size());
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
-    const double d = n * sxx - sx * sx;
-    return d != 0 ? (n * sxy - sx * sy) / d : 0.0;
-}
-
 bool has_ilu(const VtlocRunner& r) { return r.config().head == Head::Ilu; }
 
 json ilu_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {

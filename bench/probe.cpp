@@ -7,6 +7,14 @@
 
 namespace vtloc::bench {
 
+double slope(const std::vector<double>& x, const std::vector<double>& y) {
+    const double n = double(x.size());
+    double sx = 0, sy = 0, sxx = 0, sxy = 0;
+    for (size_t i = 0; i < x.size(); ++i) sx += x[i], sy += y[i], sxx += x[i] * x[i], sxy += x[i] * y[i];
+    const double d = n * sxx - sx * sx;
+    return d != 0 ? (n * sxy - sx * sy) / d : 0.0;
+}
+
 Stats summarize(std::vector<double> s) {
     Stats st;
     if (s.empty()) return st;

@@ -15,6 +15,8 @@ struct Stats {
     double median = 0, p10 = 0, p90 = 0, min = 0;
 };
 Stats summarize(std::vector<double> samples);
+// Least-squares slope of y over x (0 when x does not vary).
+double slope(const std::vector<double>& x, const std::vector<double>& y);
 
 // Wall-clock milliseconds of f(), `reps` times after `warmup` untimed calls.
 template <class F>

@@ -26,6 +26,7 @@
 #include <vtloc/vtloc.h>
 
 #include "base/atomic_write.h"
+#include "bench/probe.h"
 #include "bench/soak_plot.h"
 
 namespace api = vtloc::api;
@@ -159,21 +160,17 @@ uint64_t run_case(api::Model& model, const std::vector<api::Object>& objects,
     return h.h;
 }
 
+// RSS slope and drift over the runs after the warm-up (MiB per run; slope * runs).
 struct Fit {
-    double slope = 0, drift = 0;  // MiB per run; slope * runs after the warm-up
+    double slope = 0, drift = 0;
 };
 Fit line_fit(const std::vector<double>& y, size_t from) {
     Fit f;
-    const size_t n = y.size() - std::min(from, y.size());
-    if (n < 2) return f;
-    double sx = 0, sy = 0, sxx = 0, sxy = 0;
-    for (size_t i = from; i < y.size(); ++i) {
-        double x = double(i);
-        sx += x, sy += y[i], sxx += x * x, sxy += x * y[i];
-    }
-    const double d = double(n) * sxx - sx * sx;
-    f.slope = d > 0 ? (double(n) * sxy - sx * sy) / d : 0;
-    f.drift = f.slope * double(n);
+    if (y.size() < from + 2) return f;
+    std::vector<double> x(y.size() - from);
+    for (size_t i = 0; i < x.size(); ++i) x[i] = double(from + i);
+    f.slope = vtloc::bench::slope(x, {y.begin() + long(from), y.end()});
+    f.drift = f.slope * double(x.size());
     return f;
 }
 

@@ -121,9 +121,7 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
 GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights,
                          std::shared_ptr<ResidentWeights> resident, bool profile, bool keep_all)
     : ctx_(ctx), graph_(g), order_(graph_.topo_order()), resident_(std::move(resident)) {
-    const rt::DeviceInfo& info = ctx_.info();
-    // Any tensor may be bound as a storage or a texel buffer: both alignments hold.
-    const uint64_t align = std::max<uint64_t>({16, info.storage_offset_alignment, info.texel_offset_alignment});
+    const uint64_t align = ctx_.info().tensor_alignment();
     seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
 
     const size_t mark = resident_->batches();

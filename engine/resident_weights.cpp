@@ -9,11 +9,7 @@
 
 namespace vtloc {
 
-ResidentWeights::ResidentWeights(rt::Context& ctx) : ctx_(ctx) {
-    const rt::DeviceInfo& info = ctx.info();
-    // Any tensor may be bound as a storage or a texel buffer: both alignments hold.
-    align_ = std::max<uint64_t>({16, info.storage_offset_alignment, info.texel_offset_alignment});
-}
+ResidentWeights::ResidentWeights(rt::Context& ctx) : ctx_(ctx), align_(ctx.info().tensor_alignment()) {}
 
 ResidentWeights::~ResidentWeights() = default;
 

@@ -3,9 +3,9 @@
 // Vulkan 1.1 core only; no device extension is required.
 #include <vulkan/vulkan.h>
 
-#include <atomic>
-
+#include <algorithm>
 #include <array>
+#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -41,6 +41,10 @@ struct DeviceInfo {
     bool has_timestamps = false;
     bool has_compute_queue = false;
     uint64_t device_local_bytes = 0;
+    // Offset alignment of any tensor: it may be bound as a storage or a texel buffer.
+    uint64_t tensor_alignment() const {
+        return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment});
+    }
 };
 
 const char* device_type_name(VkPhysicalDeviceType t);
