@@ -142,6 +142,41 @@ TEST_CASE("flatten keeps the bytes and joins the trailing axes", "[op][flatten]"
     }
 }
 
+TEST_CASE("stack joins along the first axis and rows cuts it back, byte for byte", "[op][stack][rows]") {
+    const std::vector<Shape> parts{{1, 3, 5, 7}, {3, 3, 5, 7}, {1, 3, 5, 7}, {2, 3, 5, 7}};
+    Graph g;
+    TensorMap inputs;
+    std::vector<int> ids;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        const std::string name = std::string("x").append(std::to_string(i));
+        ids.push_back(g.input(name, parts[i]));
+        inputs[name] = random_tensor(parts[i], 70 + uint32_t(i));
+    }
+    const int all = ops::stack(g, ids, "all");
+    CHECK(g.value(all).shape == Shape{7, 3, 5, 7});
+    g.output(all, "all");
+    // Cut the stacked tensor back into its parts (and one odd range across two of them).
+    int64_t start = 0;
+    for (size_t i = 0; i < parts.size(); ++i) {
+        g.output(ops::rows(g, all, start, parts[i][0]), std::string("back").append(std::to_string(i)));
+        start += parts[i][0];
+    }
+    g.output(ops::rows(g, all, 3, 3), "middle");
+    TensorMap got = run_gpu_and_compare(g, WeightStore{}, inputs);
+    for (size_t i = 0; i < parts.size(); ++i)  // exact: nothing but copies
+        CHECK(got.at(std::string("back").append(std::to_string(i))).data == inputs.at(std::string("x").append(std::to_string(i))).data);
+}
+
+TEST_CASE("stack and rows name bad shapes and ranges", "[op][stack][rows]") {
+    Graph g;
+    int a = g.input("a", {2, 7}), b = g.input("b", {2, 6}), n = g.input("n", {4, 7}, ElemType::I32);
+    REQUIRE_THROWS_WITH(ops::stack(g, {a, b}, "bad_stack"),
+                        Catch::Contains("bad_stack") && Catch::Contains("differ outside the first axis"));
+    REQUIRE_THROWS_WITH(ops::stack(g, {a, n}), Catch::Contains("mix element types"));
+    REQUIRE_THROWS_WITH(ops::rows(g, a, 1, 2, "bad_rows"), Catch::Contains("bad_rows") && Catch::Contains("outside the 2 rows"));
+    REQUIRE_THROWS_WITH(ops::rows(g, a, 0, 0), Catch::Contains("outside"));
+}
+
 TEST_CASE("every registered op has an [op] test tagged with its name", "[op][registry]") {
     std::set<std::string> tagged;
     for (const Catch::TestCase& t : Catch::getRegistryHub().getTestCaseRegistry().getAllTests()) {

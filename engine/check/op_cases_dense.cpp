@@ -1,4 +1,4 @@
-// Self-test cases: linear, the binary and activation ops, concat, flatten
+// Self-test cases: linear, the binary and activation ops, concat, flatten, stack, rows
 // (the shapes of tests/test_ops.cpp).
 #include <cmath>
 
@@ -63,6 +63,15 @@ std::vector<OpCase> dense_cases(const rt::DeviceInfo&) {
     OpCase flat("flatten", "[3, 5, 7, 9] -> [3, 315] (a copy, no shader)");
     flat.output(flat.g.add1("flatten", {flat.input("x", random_tensor({3, 5, 7, 9}, 50))}), "y");
     v.push_back(std::move(flat));
+
+    OpCase st("stack", "[1, 3, 5, 7] [2, 3, 5, 7] [1, 3, 5, 7] along the first axis (copies, no shader)");
+    st.output(st.g.add1("stack", {st.input("a", random_tensor({1, 3, 5, 7}, 51)), st.input("b", random_tensor({2, 3, 5, 7}, 52)),
+                                  st.input("c", random_tensor({1, 3, 5, 7}, 53))}),
+              "y");
+    v.push_back(std::move(st));
+    OpCase rw("rows", "rows 2..4 of [7, 3, 5] (a copy, no shader)");
+    rw.output(rw.g.add1("rows", {rw.input("x", random_tensor({7, 3, 5}, 54))}, {{"start", 2}, {"count", 3}}), "y");
+    v.push_back(std::move(rw));
     return v;
 }
 

@@ -1,5 +1,7 @@
 #include "engine/model/vtloc_graph.h"
 
+#include <vector>
+
 #include "base/error.h"
 #include "engine/model/gma.h"
 #include "engine/model/heads.h"
@@ -44,15 +46,30 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
     int symmetry = spec.symmetry_order > 1 ? g.input("symmetry", {spec.symmetry_order, 12}) : -1;
     const int64_t k = spec.k > 0 ? spec.k : cfg.K;
 
+    // One tactile encoder over all of the batch's images and one GMA over all its
+    // rows (weights read once per batch, dispatches independent of its size); each
+    // touch then takes its own row back for the per-touch heads.
+    const bool batched = spec.batch > 1;
+    std::vector<int> inputs;
     for (int64_t b = 0; b < spec.batch; ++b) {
         const std::string s = touch_suffix(b, spec.batch);
         int image = g.input("tactile.image" + s, {spec.image_height, spec.image_width, 3}, ElemType::I32);
-        int x = add_tactile_preprocess(g, cfg, image);
-        g.output(x, "tactile.input" + s);
-        int ft = build_tactile_encoder(g, w, cfg, x);
+        inputs.push_back(add_tactile_preprocess(g, cfg, image));
+        g.output(inputs.back(), "tactile.input" + s);
+    }
+    const int ft_all = build_tactile_encoder(g, w, cfg, batched ? ops::stack(g, inputs, "tactile.batch") : inputs[0]);
+    int pd_all = -1;
+    if (gma) {
+        const int fp_rows = batched ? ops::stack(g, std::vector<int>(size_t(spec.batch), fp), "gma.point_rows") : fp;
+        pd_all = build_gma(g, w, cfg, ft_all, fp_rows);
+    }
+
+    for (int64_t b = 0; b < spec.batch; ++b) {
+        const std::string s = touch_suffix(b, spec.batch);
+        const int ft = batched ? ops::rows(g, ft_all, b, 1, "tactile.feature" + s) : ft_all;
         g.output(ft, "tactile.feature" + s);
         if (gma) {
-            int pd = build_gma(g, w, cfg, ft, fp);
+            const int pd = batched ? ops::rows(g, pd_all, b, 1, "gma.cloud" + s) : pd_all;
             g.output(pd, "gma.cloud" + s);
             g.output(ops::chamfer(g, pd, gma_target, "gma.chamfer" + s).at(0), "gma.chamfer" + s);
         }

@@ -28,6 +28,10 @@ int activation(Graph& g, Act act, int x, double slope, const std::string& name) 
 
 int concat(Graph& g, const std::vector<int>& xs, const std::string& name) { return g.add1("concat", xs, {}, name); }
 int flatten(Graph& g, int x, const std::string& name) { return g.add1("flatten", {x}, {}, name); }
+int stack(Graph& g, const std::vector<int>& xs, const std::string& name) { return g.add1("stack", xs, {}, name); }
+int rows(Graph& g, int x, int64_t start, int64_t count, const std::string& name) {
+    return g.add1("rows", {x}, {{"start", double(start)}, {"count", double(count)}}, name);
+}
 
 int binary(Graph& g, Binary op, int a, int b, const std::string& name) {
     return g.add1(op == Binary::Add ? "add" : op == Binary::Sub ? "sub" : "mul", {a, b}, {}, name);

@@ -30,6 +30,9 @@ int concat(Graph& g, const std::vector<int>& xs, const std::string& name = "");
 enum class Binary { Add, Sub, Mul };
 int binary(Graph& g, Binary op, int a, int b, const std::string& name = "");
 int flatten(Graph& g, int x, const std::string& name = "");
+// Along the first axis: stack joins [n_i, ...] tensors, rows takes [start, start + count).
+int stack(Graph& g, const std::vector<int>& xs, const std::string& name = "");
+int rows(Graph& g, int x, int64_t start, int64_t count, const std::string& name = "");
 
 // Image.
 struct Conv2d {

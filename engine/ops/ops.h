@@ -23,6 +23,8 @@ extern const OpDef op_max_pool2d;          // pool2d.cpp
 extern const OpDef op_global_avg_pool;     // pool2d.cpp
 extern const OpDef op_tactile_preprocess;  // tactile_preprocess.cpp
 extern const OpDef op_flatten;             // flatten.cpp
+extern const OpDef op_stack;               // stack.cpp
+extern const OpDef op_rows;                // rows.cpp
 extern const OpDef op_disentangle;  // disentangle.cpp (GMA)
 extern const OpDef op_gma_decode;   // gma_decode.cpp
 extern const OpDef op_chamfer;      // chamfer.cpp

@@ -19,6 +19,8 @@ const OpDef* const kOps[] = {
     &ops::op_global_avg_pool,
     &ops::op_tactile_preprocess,
     &ops::op_flatten,
+    &ops::op_stack,
+    &ops::op_rows,
     &ops::op_disentangle,
     &ops::op_gma_decode,
     &ops::op_chamfer,
