@@ -41,6 +41,8 @@ shared float part[L];
 shared float c[3];
 
 #define tid gl_LocalInvocationID.x
+// ilu.comp runs one workgroup per touch of a batch: its row of F^t (F^p is shared).
+#define ft_row (gl_WorkGroupID.x * C)
 #define lane (gl_LocalInvocationID.x % G)
 #define grp (gl_LocalInvocationID.x / G)
 
@@ -61,14 +63,14 @@ float group_sum(float s) {
 void ilu_load_x() {
     for (uint i = tid; i < C; i += L) {
         xv[i] = fp[i];
-        xv[C + i] = max(ft[i], 0.0);
+        xv[C + i] = max(ft[ft_row + i], 0.0);
     }
 }
 
 // h_0 = tanh(F^t), c = 0 and the x half of the gates.
 void ilu_init() {
     ilu_load_x();
-    for (uint i = tid; i < C; i += L) h[i] = apply_act(ft[i], ACT_TANH, 0.0);
+    for (uint i = tid; i < C; i += L) h[i] = apply_act(ft[ft_row + i], ACT_TANH, 0.0);
     if (tid < 3u) c[tid] = 0.0;
     barrier();
 

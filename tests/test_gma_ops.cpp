@@ -55,6 +55,8 @@ TEST_CASE("disentangle matches the CPU reference, whole and split", "[op][disent
     check_disentangle(1, 37, 13, 7, 10, 2);   // 10 + 10 + 10 + 7 rows
     check_disentangle(3, 64, 129, 5, 1, 3);   // one row per chunk, several input rows
     check_disentangle(1, 256, 300, 64, 97, 4);  // long rows, ragged column blocks
+    check_disentangle(19, 70, 9, 12, 25, 5);  // a batch: row blocks of 8, 8 and 3, three chunks
+    check_disentangle(8, 33, 7, 3, 33, 6);    // exactly one row block, V = 1
 }
 
 TEST_CASE("disentangle rejects mismatched chunks", "[op][disentangle]") {

@@ -77,6 +77,30 @@ TEST_CASE("ilu matches the CPU reference with 1, 4 and 16 lanes per row", "[op][
     }
 }
 
+TEST_CASE("ilu runs a batch of states in one dispatch, each row as if alone", "[op][ilu]") {
+    const int64_t C = 37, H = 19, B = 5;
+    const int max_iters = 9;
+    WeightStore w = random_ilu(C, H, 21);
+    Graph g;
+    const int fp = g.input("fp", {1, C}), iters = g.input("iters", {1}, ElemType::I32);
+    const int ft_all = g.input("ft", {B, C});
+    IluOutputs all = build_ilu(g, w, ft_all, fp, iters, max_iters);
+    CHECK(g.value(all.c).shape == Shape{B, max_iters, 3});
+    CHECK(g.value(all.contact).shape == Shape{B, 3});
+    g.output(all.c, "c");
+    g.output(all.contact, "contact");
+    for (int64_t b = 0; b < B; ++b) {  // the same rows through single-state ILUs in the same graph
+        IluOutputs one = build_ilu(g, w, ops::rows(g, ft_all, b, 1), fp, iters, max_iters);
+        g.output(one.contact, std::string("contact").append(std::to_string(b)));
+    }
+    TensorMap got = test::run_gpu_and_compare(g, w, {{"ft", random_tensor({B, C}, 31, -2.0f, 2.0f)},
+                                                     {"fp", random_tensor({1, C}, 32, -2.0f, 2.0f)},
+                                                     {"iters", ilu_iters_input(7, max_iters)}});
+    for (int64_t b = 0; b < B; ++b)  // one workgroup per state runs the single-state code: bit-identical
+        for (int j = 0; j < 3; ++j)
+            CHECK(got.at("contact").data[size_t(b * 3 + j)] == got.at(std::string("contact").append(std::to_string(b))).data[size_t(j)]);
+}
+
 TEST_CASE("ilu takes N at run time: one recorded graph, N = 7, 2, 0", "[op][ilu]") {
     const int64_t C = 45, H = 21;
     const int nmax = 7;

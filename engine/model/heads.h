@@ -8,7 +8,8 @@
 
 namespace vtloc {
 
-// ILU from F^t, F^p ([1, C] each), fused into one op (engine/ops/ilu.cpp).
+// ILU from F^t, F^p ([1, C] each), fused into one op (engine/ops/ilu.cpp). F^t may
+// also be [B, C]: B states in the one dispatch, c [B, max_iters, 3], contact [B, 3].
 // `iters` is a graph value, I32 [1], holding N (0..max_iters) at run time, so N
 // changes without rebuilding; max_iters is 0..limits::kMaxIters. c: [max_iters, 3] = c_1..c_N
 // then zero rows; contact: [3] = c^p = c_N (0 for N = 0).

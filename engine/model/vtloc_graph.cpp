@@ -46,9 +46,10 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
     int symmetry = spec.symmetry_order > 1 ? g.input("symmetry", {spec.symmetry_order, 12}) : -1;
     const int64_t k = spec.k > 0 ? spec.k : cfg.K;
 
-    // One tactile encoder over all of the batch's images and one GMA over all its
-    // rows (weights read once per batch, dispatches independent of its size); each
-    // touch then takes its own row back for the per-touch heads.
+    // One tactile encoder over all of the batch's images, one GMA over all its rows
+    // and one ILU over all its states (weights read once per batch, dispatches
+    // independent of its size); each touch then takes its own rows back for
+    // retrieval and the heat-map.
     const bool batched = spec.batch > 1;
     std::vector<int> inputs;
     for (int64_t b = 0; b < spec.batch; ++b) {
@@ -63,6 +64,8 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
         const int fp_rows = batched ? ops::stack(g, std::vector<int>(size_t(spec.batch), fp), "gma.point_rows") : fp;
         pd_all = build_gma(g, w, cfg, ft_all, fp_rows);
     }
+    const bool ilu_batched = ilu_head && batched && !spec.ilu_stepped;
+    const IluOutputs ilu_all = ilu_batched ? build_ilu(g, w, ft_all, fp, iters, spec.max_iters) : IluOutputs{};
 
     for (int64_t b = 0; b < spec.batch; ++b) {
         const std::string s = touch_suffix(b, spec.batch);
@@ -74,7 +77,10 @@ Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraph
             g.output(ops::chamfer(g, pd, gma_target, "gma.chamfer" + s).at(0), "gma.chamfer" + s);
         }
         int contact;
-        if (ilu_head) {
+        if (ilu_batched) {
+            g.output(ops::rows(g, ilu_all.c, b, 1, "ilu.c" + s), "ilu.c" + s);
+            contact = ops::rows(g, ilu_all.contact, b, 1, "contact" + s);
+        } else if (ilu_head) {
             IluOutputs ilu = spec.ilu_stepped ? build_ilu_stepped(g, w, ft, fp, iters, spec.max_iters)
                                                : build_ilu(g, w, ft, fp, iters, spec.max_iters);
             g.output(ilu.c, "ilu.c" + s);

@@ -63,7 +63,11 @@ void gpu(const GpuOpArgs& a) {
     const int64_t N = numel(a.in[1].shape) / a.in[1].shape[0];
     const int64_t M = numel(a.out[0].shape) / std::max<int64_t>(1, N);
     if (M == 0 || N == 0) return;
-    if (M > int64_t(d.max_workgroup_count[1]))
+    // Up to 8 rows (a batch's touches) per workgroup share each weight load; their
+    // X slabs share the shared memory.
+    const uint32_t mb = uint32_t(std::min<int64_t>(M, 8));
+    const int64_t row_blocks = (M + mb - 1) / mb;
+    if (row_blocks > int64_t(d.max_workgroup_count[1]))
         throw Error(std::to_string(M) + " input rows exceed the device's workgroup count limit");
     to_u32(M * K, "input size");
     to_u32(M * N, "output size");
@@ -71,20 +75,20 @@ void gpu(const GpuOpArgs& a) {
     // 16-byte loads when rows split into whole vec4s (bindings are 16-byte aligned:
     // weights and arena offsets are aligned to at least 16).
     const uint32_t V = N % 4 == 0 ? 4 : 1;
-    // X slab in shared memory: up to 1024 values (a paper-size chunk in one slab).
-    const uint32_t tk = std::max(1u, std::min(1024u, d.max_shared_memory / 8));
-    const rt::Pipeline& pipe = pipeline(a.ctx, "disentangle", 3, 32, {local, V, tk});
+    // X slab per row in shared memory: up to 1024 values (a paper-size chunk in one slab).
+    const uint32_t tk = std::max(1u, std::min(1024u, d.max_shared_memory / (8 * mb)));
+    const rt::Pipeline& pipe = pipeline(a.ctx, "disentangle", 3, 36, {local, V, tk, mb});
     uint32_t k_off = 0;
     for (size_t c = 1; c < a.in.size(); ++c) {
         const uint32_t rows = to_u32(a.in[c].shape[0], "weight chunk rows");
         to_u32(int64_t(rows) * N, "weight chunk size");
-        struct { uint32_t N, K, k_off, Kc, accumulate, last, act; float slope; } push{
+        struct { uint32_t N, K, k_off, Kc, accumulate, last, act; float slope; uint32_t M; } push{
             uint32_t(N), uint32_t(K), k_off, rows, c > 1 ? 1u : 0u, c + 1 == a.in.size() ? 1u : 0u,
-            uint32_t(a.params.get("act", kActNone)), float(a.params.get("slope", 0.01))};
+            uint32_t(a.params.get("act", kActNone)), float(a.params.get("slope", 0.01)), uint32_t(M)};
         a.seq.dispatch(pipe,
                        {{a.in[0].view, rt::Access::Read}, {a.in[c].view, rt::Access::Read},
                         {a.out[0].view, c > 1 ? rt::Access::ReadWrite : rt::Access::Write}},
-                       &push, sizeof(push), grid_groups(uint64_t(N / V), local, d), uint32_t(M));
+                       &push, sizeof(push), grid_groups(uint64_t(N / V), local, d), uint32_t(row_blocks));
         k_off += rows;
     }
 }

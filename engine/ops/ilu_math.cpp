@@ -29,7 +29,7 @@ double sigmoid(double v) { return 1.0 / (1.0 + std::exp(-v)); }
 
 }  // namespace
 
-int64_t check_inputs(const std::vector<TensorDesc>& in) {
+int64_t check_inputs(const std::vector<TensorDesc>& in, bool batch) {
     if (in[2].type != ElemType::I32 || in[2].shape != Shape{1})
         throw Error("iteration count must be an I32 [1] tensor, got " + std::string(elem_type_name(in[2].type)) +
                     " " + shape_str(in[2].shape));
@@ -37,8 +37,12 @@ int64_t check_inputs(const std::vector<TensorDesc>& in) {
         if (i != 2 && in[i].type != ElemType::F32) throw Error("input " + std::to_string(i) + " must be F32");
     if (in[0].shape.empty()) throw Error("F^t must be [1, C]");
     const int64_t C = in[0].shape.back();
-    if (numel(in[0].shape) != C || C == 0) throw Error("F^t must be one non-empty row [1, C], got " + shape_str(in[0].shape));
-    expect_shape(in[1], in[0].shape, "F^p");
+    const bool rows = batch && in[0].shape.size() == 2 && in[0].shape[0] >= 1;
+    if (C == 0 || (!rows && numel(in[0].shape) != C))
+        throw Error(std::string("F^t must be ") + (batch ? "[B, C]" : "one non-empty row [1, C]") + ", got " +
+                    shape_str(in[0].shape));
+    if (numel(in[1].shape) != C || in[1].shape.back() != C)
+        throw Error("F^p is " + shape_str(in[1].shape) + ", expected one row of " + std::to_string(C));
     for (int g = 0; g < 3; ++g) {
         expect_shape(in[size_t(3 + 2 * g)], {C, 3 * C}, "gate weight");
         expect_shape(in[size_t(4 + 2 * g)], {C}, "gate bias");
@@ -52,13 +56,13 @@ int64_t check_inputs(const std::vector<TensorDesc>& in) {
     return C;
 }
 
-State init(const std::vector<const HostTensor*>& in) {
+State init(const std::vector<const HostTensor*>& in, int64_t row) {
     const int64_t C = in[0]->shape.back();
     State s;
     s.h.resize(size_t(C));
     std::vector<double> x(size_t(2 * C));
     for (int64_t i = 0; i < C; ++i) {
-        double ft = in[0]->data[size_t(i)];
+        double ft = in[0]->data[size_t(row * C + i)];
         s.h[size_t(i)] = std::tanh(ft);
         x[size_t(i)] = in[1]->data[size_t(i)];
         x[size_t(C + i)] = std::max(ft, 0.0);

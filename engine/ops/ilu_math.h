@@ -1,7 +1,7 @@
 #pragma once
 // The ILU head's math in double, shared by the CPU references of ilu (fused)
 // and ilu_step (one iteration per dispatch). Inputs in the ops' order:
-// 0 F^t [1, C], 1 F^p [1, C], 2 N (I32 [1]), 3..8 convz/convr/convq weight
+// 0 F^t [1, C] (ilu: [B, C], B touches), 1 F^p [1, C], 2 N (I32 [1]), 3..8 convz/convr/convq weight
 // [C, 3C] and bias [C], 9 head.0.weight [H, C], 10 head.0.bias, 11
 // head.2.weight [3, H], 12 head.2.bias.
 #include <vector>
@@ -12,7 +12,8 @@
 namespace vtloc::ops::ilu_math {
 
 // Checks inputs 0..12 (types and shapes) and returns their 13 descriptors' C.
-int64_t check_inputs(const std::vector<TensorDesc>& in);
+// `batch`: F^t may hold B >= 1 rows (one GRU state each, all with the one F^p).
+int64_t check_inputs(const std::vector<TensorDesc>& in, bool batch = false);
 
 struct State {
     std::vector<double> h;   // [C]
@@ -20,8 +21,8 @@ struct State {
     double c[3] = {0, 0, 0};
 };
 
-// h_0 = tanh(F^t), c = 0, gx from x = [F^p, ReLU(F^t)].
-State init(const std::vector<const HostTensor*>& in);
+// h_0 = tanh(F^t), c = 0, gx from x = [F^p, ReLU(F^t)], for F^t's row `row`.
+State init(const std::vector<const HostTensor*>& in, int64_t row = 0);
 // One GRU update of h, then c += head(h).
 void iterate(const std::vector<const HostTensor*>& in, State& s);
 
