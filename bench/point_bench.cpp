@@ -19,6 +19,7 @@
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/point_encoder.h"
+#include "engine/model/prepared_weights.h"
 #include "runtime/context.h"
 
 using namespace vtloc;
@@ -81,8 +82,9 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
 int main(int argc, char** argv) {
     try {
         rt::Context ctx;
-        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
-        const ModelConfig cfg = config_of(w);
+        const WeightStore file = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
+        const ModelConfig cfg = config_of(file);
+        const WeightStore w = prepare_weights(cfg, file);
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
         const double probe = bench::peak_gflops(ctx);
         std::printf("fma probe: %.1f GFLOP/s\n\n", probe);

@@ -17,6 +17,7 @@
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/tactile_encoder.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/ops/conv2d.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "runtime/context.h"
@@ -60,8 +61,9 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 int main(int argc, char** argv) {
     try {
         rt::Context ctx;
-        WeightStore w = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
-        const ModelConfig cfg = config_of(w);
+        const WeightStore file = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
+        const ModelConfig cfg = config_of(file);
+        const WeightStore w = prepare_weights(cfg, file);
         const int64_t S = cfg.tactile.in_size;
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
 

@@ -10,6 +10,7 @@
 
 #include "base/error.h"
 #include "engine/model/point_encoder.h"
+#include "engine/model/prepared_weights.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
 
@@ -25,7 +26,8 @@ struct Result {
 // Builds the encoder on the golden cloud, runs it on the GPU (and the CPU
 // reference when `cpu`), checks indices exactly and returns F^p's error.
 Result run_golden(const std::string& dir, const std::string& name, bool fuse, bool cpu, test::Tolerance tol) {
-    WeightStore w = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
+    const WeightStore file = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
+    const WeightStore w = prepare_weights(config_of(file), file);
     test::Golden gold(test::require_golden_file(dir, name + ".golden.safetensors"));
     HostTensor cloud = gold.f32("point.cloud");
     Graph g;
@@ -77,8 +79,9 @@ TEST_CASE("point encoder matches the PyTorch golden (vtloc-r18, paper config)", 
 }
 
 TEST_CASE("point encoder rejects bad clouds and configs", "[point]") {
-    WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
-    const ModelConfig cfg = config_of(w);  // normals, sa1 samples 32 points
+    const WeightStore file = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
+    const ModelConfig cfg = config_of(file);  // normals, sa1 samples 32 points
+    const WeightStore w = prepare_weights(cfg, file);
     auto build_error = [&](Shape s) {
         Graph g;
         try {

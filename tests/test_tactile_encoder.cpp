@@ -15,6 +15,7 @@
 #include <set>
 
 #include "base/error.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/model/tactile_encoder.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "tests/golden.h"
@@ -51,8 +52,13 @@ double max_abs_diff(const HostTensor& a, const HostTensor& b) {
 
 // Runs the branch on the golden's image on the GPU and (if `cpu`) with the CPU
 // references, comparing both with the golden.
+WeightStore load_prepared(const std::string& path) {
+    const WeightStore file = WeightStore::load(path);
+    return prepare_weights(config_of(file), file);
+}
+
 void check_against_golden(const std::string& dir, const std::string& name, bool cpu) {
-    WeightStore w = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
+    WeightStore w = load_prepared(test::require_golden_file(dir, name + ".safetensors"));
     test::Golden gold(test::require_golden_file(dir, name + ".golden.safetensors"));
     const TensorInfo& img = gold.file().at("input.tactile");
     REQUIRE(img.dtype == DType::U8);
@@ -93,7 +99,7 @@ TEST_CASE("tactile branch matches the PyTorch golden (vtloc-r18 at 224x224)", "[
 
 TEST_CASE("the encoder fed the golden tactile.input gives the golden F^t (vtloc-tiny)", "[tactile][golden]") {
     // Stage by stage: no preprocessing error in the encoder's input.
-    WeightStore w = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
+    WeightStore w = load_prepared(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
     test::Golden gold(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.golden.safetensors"));
     Graph g;
     int x = g.input("x", gold.shape("tactile.input"));
@@ -132,7 +138,8 @@ TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile][golden]") {
 
     Graph g;
     int x = g.input("x", {1, 3, 224, 224});
-    build_tactile_encoder(g, w, config_of(w), x);
+    const WeightStore prepared = prepare_weights(config_of(w), w);
+    build_tactile_encoder(g, prepared, config_of(w), x);
     std::set<std::string> used;
     for (const Value& v : g.values())
         if (v.kind == ValueKind::Weight) used.insert(v.name);
@@ -165,6 +172,8 @@ TEST_CASE("the tactile encoder names missing weights and bad configs", "[tactile
     partial.set_config(w.config());
     for (const std::string& n : w.names())
         if (n != "tactile.backbone.layer2.0.downsample.1.running_var") partial.add(n, w.get(n));
-    REQUIRE_THROWS_WITH(build_tactile_encoder(g, partial, cfg, x),
-                        Catch::Contains("tactile.backbone.layer2.0.downsample.1.running_var"));
+    REQUIRE_THROWS_WITH(prepare_weights(cfg, partial), Catch::Contains("tactile.backbone.layer2.0.downsample.1.running_var"));
+    // Builders read prepared weights only, and name the layer a missing one comes from.
+    REQUIRE_THROWS_WITH(build_tactile_encoder(g, w, cfg, x),
+                        Catch::Contains("tactile.backbone.conv1.weight") && Catch::Contains("prepare_weights"));
 }

@@ -5,7 +5,7 @@
 #include <optional>
 
 #include "base/error.h"
-#include "engine/model/gma.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/model/vtloc_graph.h"
 #include "engine/safetensors.h"
 
@@ -13,11 +13,10 @@ namespace vtloc {
 
 namespace {
 
-// Builds the whole network once (on a copy: building adds folded tensors) and
-// reads every weight it names with the shape the graph expects.
+// Prepares the weights and builds the whole network once, reading every weight it
+// names with the shape the graph expects.
 void check_tensors(const ModelConfig& cfg, const WeightStore& weights) {
-    WeightStore w = weights;
-    if (cfg.gma) split_weight_rows(w, "gma.weight", kPortableBindingBytes);
+    const WeightStore w = prepare_weights(cfg, weights);
     VtlocGraphSpec spec;
     spec.image_height = spec.image_width = limits::kMinImageSide;
     spec.n_points = cfg.point.min_points();

@@ -3,7 +3,7 @@
 #include <cmath>
 
 #include "base/error.h"
-#include "engine/model/batchnorm_fold.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/model/layers.h"
 #include "engine/ops/build.h"
 #include "engine/ops/common.h"
@@ -13,21 +13,14 @@ namespace vtloc {
 
 namespace {
 
-// A 1x1 Conv2d with its BatchNorm folded: the weight as [out, in] (linear's
-// layout) or, for group_linear, input-major [in, out]; and the bias.
-std::pair<int, int> conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string& bn, int64_t in,
-                            int64_t out, bool input_major) {
-    const std::string w2d = conv + ".weight#bn#2d", wkn = conv + ".weight#bn#kn", bname = conv + ".bias#bn";
-    if (!w.has(w2d) || !w.has(wkn) || !w.has(bname)) {  // a second graph on the same store reuses them
-        w.get(conv + ".weight", {out, in, 1, 1});  // names the layer if the file disagrees with the config
-        FoldedNames f = fold_batchnorm(w, conv, bn);
-        if (f.bias != bname) throw Error("unexpected folded bias name '" + f.bias + "'");
-        HostTensor t = w.get(f.weight);
-        w.add(wkn, ops::point_weight_kn(t));
-        t.shape = {out, in};
-        w.add(w2d, std::move(t));
-    }
-    return {input_major ? g.weight(wkn, {in, out}) : g.weight(w2d, {out, in}), g.weight(bname, {out})};
+// A 1x1 Conv2d with its BatchNorm folded (prepare_weights): the weight as [out, in]
+// (linear's layout) or, for group_linear, input-major [in, out]; and the bias.
+std::pair<int, int> conv_bn(Graph& g, const WeightStore& w, const std::string& conv, int64_t in, int64_t out,
+                            bool input_major) {
+    // the [out, in] copy names the layer if the file disagrees with the config
+    prepared_tensor(w, prepared::point_2d(conv), conv, {out, in});
+    return {input_major ? g.weight(prepared::point_kn(conv), {in, out}) : g.weight(prepared::point_2d(conv), {out, in}),
+            g.weight(prepared::bias(conv), {out})};
 }
 
 // A stage's input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`
@@ -39,7 +32,7 @@ struct StageInput {
 
 // Scale `s` of a set-abstraction stage: the ball around each centre, its shared MLP and the
 // max over the ball's points.
-int sa_scale(Graph& g, WeightStore& w, const SaStageConfig& st, size_t s, const std::string& pre,
+int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, const std::string& pre,
              const StageInput& si_in, int centres, bool fuse, PointEncoderOutputs& out) {
     const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
     const int64_t ns = st.nsample[s];
@@ -57,7 +50,7 @@ int sa_scale(Graph& g, WeightStore& w, const SaStageConfig& st, size_t s, const 
     const std::vector<int64_t>& widths = st.mlps[s];
     for (size_t l = 0; l < widths.size(); ++l) {
         const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
-        auto [wv, bv] = conv_bn(g, w, node, pre + ".bn_blocks." + si + "." + std::to_string(l), in, widths[l], fuse);
+        auto [wv, bv] = conv_bn(g, w, node, in, widths[l], fuse);
         in = widths[l];
         if (!fuse) {
             x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
@@ -84,13 +77,13 @@ int sa_scale(Graph& g, WeightStore& w, const SaStageConfig& st, size_t s, const 
 }
 
 // Group all: one group of every point, input [xyz, features] (xyz first, not centred).
-int group_all(Graph& g, WeightStore& w, const PointConfig& c, const StageInput& st, bool fuse) {
+int group_all(Graph& g, const WeightStore& w, const PointConfig& c, const StageInput& st, bool fuse) {
     const std::string pre = "point.sa" + std::to_string(c.sa.size() + 1);
     int x = fuse ? -1 : ops::concat(g, {st.xyz, st.feat}, pre + ".input");
     int64_t in = st.channels + 3;
     for (size_t l = 0; l < c.group_all.size(); ++l) {
         const std::string node = pre + ".mlp_convs." + std::to_string(l);
-        auto [wv, bv] = conv_bn(g, w, node, pre + ".mlp_bns." + std::to_string(l), in, c.group_all[l], fuse);
+        auto [wv, bv] = conv_bn(g, w, node, in, c.group_all[l], fuse);
         in = c.group_all[l];
         if (!fuse) {
             x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
@@ -109,11 +102,11 @@ int group_all(Graph& g, WeightStore& w, const PointConfig& c, const StageInput& 
 
 }  // namespace
 
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud) {
+PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int cloud) {
     return build_point_encoder(g, w, config, cloud, PointEncoderOptions{});
 }
 
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud,
+PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int cloud,
                                         const PointEncoderOptions& options) {
     const PointConfig& c = config.point;
     const Shape& cs = g.value(cloud).shape;

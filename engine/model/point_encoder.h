@@ -29,16 +29,16 @@ struct PointEncoderOptions {
 // cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in
 // the normalised frame (object_frame.h). Reads `point.sa{i}.conv_blocks.*`,
 // `bn_blocks.*`, `point.sa{n+1}.mlp_convs.*`, `mlp_bns.*` and `point.mlp.*`;
-// each BatchNorm is folded into its 1x1 convolution, added to `w` as
+// as prepare_weights left them: each BatchNorm folded into its 1x1 convolution,
 // `<conv>.weight#bn#kn` ([in, out], group_linear's layout), `<conv>.weight#bn#2d`
-// ([out, in], linear's, for the unfused path) and `<conv>.bias#bn` (originals stay).
+// ([out, in], linear's, for the unfused path) and `<conv>.bias#bn`.
 // Fused graph per scale: fps, ball_query, group_linear (gather) -> group_linear
 // ... -> group_linear (max); scales concatenated; group all: group_linear on
 // [xyz, features] -> ... -> group_max; then the point.mlp head (linear).
 // Throws vtloc::Error on a config that does not fit the schema, a cloud of the
 // wrong width, or fewer points than a stage samples.
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud);
-PointEncoderOutputs build_point_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int cloud,
+PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int cloud);
+PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int cloud,
                                         const PointEncoderOptions& options);
 
 // The one host-side check of an object cloud before the point branch runs

@@ -3,7 +3,7 @@
 #include <string>
 
 #include "base/error.h"
-#include "engine/model/batchnorm_fold.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/ops/common.h"
 #include "engine/ops/conv2d.h"
 #include "engine/ops/tactile_preprocess.h"
@@ -13,16 +13,11 @@ namespace vtloc {
 
 namespace {
 
-// conv (+ folded BatchNorm) + optional residual + optional ReLU, torchvision names.
-int conv_bn(Graph& g, WeightStore& w, const std::string& conv, const std::string& bn, int x, int64_t stride,
-            int64_t pad, bool relu, int residual = -1) {
-    const std::string wname = conv + ".weight#bn#ihwo", bname = conv + ".bias#bn";
-    if (!w.has(wname) || !w.has(bname)) {  // a second touch in the same graph reuses them
-        FoldedNames f = fold_batchnorm(w, conv, bn);
-        w.add(wname, ops::conv_weight_to_ihwo(w.get(f.weight)));
-        if (f.bias != bname) throw Error("unexpected folded bias name '" + f.bias + "'");
-    }
-    const HostTensor& wt = w.get(wname);
+// conv (+ its folded BatchNorm: prepare_weights) + optional residual + optional ReLU, torchvision names.
+int conv_bn(Graph& g, const WeightStore& w, const std::string& conv, int x, int64_t stride, int64_t pad, bool relu,
+            int residual = -1) {
+    const std::string wname = prepared::conv_ihwo(conv), bname = prepared::bias(conv);
+    const HostTensor& wt = prepared_tensor(w, wname, conv);
     ops::Conv2d c;
     c.stride_h = c.stride_w = stride;
     c.pad_h = c.pad_w = pad;
@@ -50,7 +45,7 @@ int add_tactile_preprocess(Graph& g, const ModelConfig& config, int image) {
     return ops::tactile_preprocess(g, image, c.crop, c.in_size, "tactile.input");
 }
 
-int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int input) {
+int build_tactile_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int input) {
     const TactileConfig& c = config.tactile;
     const Shape& xs = g.value(input).shape;
     if (xs.size() != 4 || xs[1] != 3 || xs[2] != c.in_size || xs[3] != c.in_size)
@@ -58,7 +53,7 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
                     std::to_string(c.in_size) + "] (config in_size), got " + shape_str(xs));
     const std::string p = "tactile.backbone.";
     // Stem: conv 7x7/2 + BN + ReLU, max-pool 3x3/2 pad 1.
-    int x = conv_bn(g, w, p + "conv1", p + "bn1", input, 2, 3, true);
+    int x = conv_bn(g, w, p + "conv1", input, 2, 3, true);
     x = ops::max_pool2d(g, x, ops::Pool2d{3, 3, 2, 2, 1, 1}, p + "maxpool");
     int64_t inplanes = c.widths[0];
     for (size_t s = 0; s < 4; ++s)
@@ -69,9 +64,9 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
             const int64_t stride = s > 0 && b == 0 ? 2 : 1;
             int skip = x;
             if (stride != 1 || inplanes != c.widths[s])
-                skip = conv_bn(g, w, m + "downsample.0", m + "downsample.1", x, stride, 0, false);
-            int y = conv_bn(g, w, m + "conv1", m + "bn1", x, stride, 1, true);
-            x = conv_bn(g, w, m + "conv2", m + "bn2", y, 1, 1, true, skip);
+                skip = conv_bn(g, w, m + "downsample.0", x, stride, 0, false);
+            int y = conv_bn(g, w, m + "conv1", x, stride, 1, true);
+            x = conv_bn(g, w, m + "conv2", y, 1, 1, true, skip);
             inplanes = c.widths[s];
         }
     x = ops::global_avg_pool(g, x, p + "avgpool");  // [N, C, 1, 1]
@@ -81,15 +76,13 @@ int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, i
     const int layers = int(c.mlp.size()) + 1;
     for (int i = 0; i < layers; ++i) {
         const std::string m = "tactile.mlp." + std::to_string(2 * i);
-        const HostTensor& lw = w.get(m + ".weight");
-        if (lw.shape.size() != 2) throw Error("weight '" + m + ".weight' must be [out, in], got " + shape_str(lw.shape));
-        if (!w.has(m + ".weight#ihwo"))
-            w.add(m + ".weight#ihwo", ops::conv_weight_to_ihwo(HostTensor(Shape{lw.shape[0], lw.shape[1], 1, 1}, lw.data)));
-        const int bias = w.has(m + ".bias") ? g.weight(m + ".bias", {lw.shape[0]}) : -1;
+        const HostTensor& lw = prepared_tensor(w, prepared::head_ihwo(m), m);  // [in, 1, 1, out]
+        if (lw.shape.size() != 4) throw Error("weight '" + m + ".weight' must be [out, in], got " + shape_str(lw.shape));
+        const int bias = w.has(m + ".bias") ? g.weight(m + ".bias", {lw.shape[3]}) : -1;
         ops::Conv2d head;
         head.layout = ops::kConvIHWO;
         head.act = i + 1 < layers ? ops::kActRelu : ops::kActNone;
-        x = ops::conv2d(g, x, g.weight(m + ".weight#ihwo", {lw.shape[1], 1, 1, lw.shape[0]}), bias, -1, head, m);
+        x = ops::conv2d(g, x, g.weight(prepared::head_ihwo(m), lw.shape), bias, -1, head, m);
     }
     return ops::flatten(g, x, "tactile.feature");
 }

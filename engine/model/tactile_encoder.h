@@ -20,10 +20,9 @@ int add_tactile_preprocess(Graph& g, const ModelConfig& config, int image);
 // input: [N, 3, S, S] preprocessed images. Returns F^t, [N, C] (node
 // `tactile.feature`). Weights are read under torchvision's resnet18 names with
 // prefix `tactile.backbone.` and the head's `tactile.mlp.{0,2,..}` (Linear [out,
-// in]). Each BatchNorm is folded into its convolution here, and the folded
-// weights are added to `w` as `<conv>.weight#bn#ihwo` / `<conv>.bias#bn` in
-// conv2d's IHWO layout (the originals stay); the head's Linear weights likewise as
-// `tactile.mlp.<i>.weight#ihwo`, run as 1x1 convolutions.
-int build_tactile_encoder(Graph& g, WeightStore& w, const ModelConfig& config, int input);
+// in]), as prepare_weights left them: each BatchNorm folded into its convolution
+// (`<conv>.weight#bn#ihwo` / `<conv>.bias#bn`, conv2d's IHWO layout) and the
+// head's Linear weights as `tactile.mlp.<i>.weight#ihwo`, run as 1x1 convolutions.
+int build_tactile_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int input);
 
 }  // namespace vtloc

@@ -17,7 +17,7 @@ std::string touch_suffix(int64_t b, int64_t batch) {
     return s;
 }
 
-Graph build_vtloc_graph(const ModelConfig& cfg, WeightStore& w, const VtlocGraphSpec& spec) {
+Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const VtlocGraphSpec& spec) {
     const int64_t C = cfg.C;
     const bool normals = cfg.point.use_normals;
     const bool ilu_head = cfg.head == Head::Ilu;

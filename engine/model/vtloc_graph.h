@@ -38,8 +38,8 @@ struct VtlocGraphSpec {
     bool ilu_stepped = false;                   // bench: one dispatch per ILU iteration (build_ilu_stepped)
 };
 
-// Builds the graph; BN folding and W^d chunking add prepared tensors to `w`.
-Graph build_vtloc_graph(const ModelConfig& config, WeightStore& w, const VtlocGraphSpec& spec);
+// Builds the graph from weights made by prepare_weights (engine/model/prepared_weights.h).
+Graph build_vtloc_graph(const ModelConfig& config, const WeightStore& w, const VtlocGraphSpec& spec);
 
 // The per-touch name suffix for touch b of a batch of `batch`.
 std::string touch_suffix(int64_t b, int64_t batch);

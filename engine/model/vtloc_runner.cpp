@@ -5,6 +5,7 @@
 
 #include "base/error.h"
 #include "engine/model/gma.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/model/heads.h"
 #include "engine/model/point_encoder.h"
 #include "engine/model/post.h"
@@ -33,18 +34,10 @@ struct VtlocRunner::Compiled {
 };
 
 VtlocRunner::VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu)
-    : weights_(std::move(weights)), config_(std::move(config)), gpu_(gpu) {
-    split_gma_rows();
-}
+    : weights_(prepare_weights(config, weights)), config_(std::move(config)), gpu_(gpu) {}
 
 VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu)
-    : weights_(std::move(weights)), config_(config_of(weights_)), gpu_(gpu) {
-    split_gma_rows();
-}
-
-void VtlocRunner::split_gma_rows() {
-    if (config_.gma) split_weight_rows(weights_, "gma.weight", kPortableBindingBytes);
-}
+    : VtlocRunner(weights, config_of(weights), gpu) {}
 
 VtlocRunner::~VtlocRunner() = default;
 

@@ -142,12 +142,11 @@ public:
     AllMemory all_memory() const;
 
 private:
-    void split_gma_rows();  // the GMA weight in row chunks that fit a portable binding
     EncodedObject prepare_object(const HostTensor& cloud, const HostTensor* candidates) const;
     TensorMap run(const VtlocGraphSpec& spec, const TensorMap& inputs);
     TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
 
-    WeightStore weights_;
+    const WeightStore weights_;  // prepare_weights' output: what every graph shape reads, never changed
     ModelConfig config_;  // the weights' config, parsed once per load
     rt::Context* gpu_;
     bool profile_ = false;
