@@ -17,8 +17,10 @@ namespace {
 // (linear's layout) or, for group_linear, input-major [in, out]; and the bias.
 std::pair<int, int> conv_bn(Graph& g, const WeightStore& w, const std::string& conv, int64_t in, int64_t out,
                             bool input_major) {
-    // the [out, in] copy names the layer if the file disagrees with the config
-    prepared_tensor(w, prepared::point_2d(conv), conv, {out, in});
+    const HostTensor& t = prepared_tensor(w, prepared::point_2d(conv), conv);
+    if (t.shape != Shape{out, in})  // named as the file's tensor: the file disagrees with the config
+        throw Error("weight '" + conv + ".weight' has shape " + shape_str({t.shape.at(0), t.shape.at(1), 1, 1}) +
+                    ", expected " + shape_str({out, in, 1, 1}));
     return {input_major ? g.weight(prepared::point_kn(conv), {in, out}) : g.weight(prepared::point_2d(conv), {out, in}),
             g.weight(prepared::bias(conv), {out})};
 }

@@ -82,10 +82,4 @@ const HostTensor& prepared_tensor(const WeightStore& w, const std::string& name,
     return w.get(name);
 }
 
-const HostTensor& prepared_tensor(const WeightStore& w, const std::string& name, const std::string& layer,
-                                  const Shape& shape) {
-    prepared_tensor(w, name, layer);
-    return w.get(name, shape);
-}
-
 }  // namespace vtloc

@@ -25,10 +25,7 @@ inline std::string point_kn(const std::string& conv) { return conv + ".weight#bn
 inline std::string head_ihwo(const std::string& linear) { return linear + ".weight#ihwo"; }
 }  // namespace prepared
 
-// A prepared tensor (with the shape a builder expects, when given); a missing one
-// is named as the file's layer it comes from.
+// A prepared tensor; a missing one is named as the file's layer it comes from.
 const HostTensor& prepared_tensor(const WeightStore& w, const std::string& name, const std::string& layer);
-const HostTensor& prepared_tensor(const WeightStore& w, const std::string& name, const std::string& layer,
-                                  const Shape& shape);
 
 }  // namespace vtloc
