@@ -13,10 +13,9 @@ namespace vtloc {
 
 namespace {
 
-// Prepares the weights and builds the whole network once, reading every weight it
+// Builds the whole network once on the prepared weights, reading every weight it
 // names with the shape the graph expects.
-void check_tensors(const ModelConfig& cfg, const WeightStore& weights) {
-    const WeightStore w = prepare_weights(cfg, weights);
+void check_tensors(const ModelConfig& cfg, const WeightStore& w) {
     VtlocGraphSpec spec;
     spec.image_height = spec.image_width = limits::kMinImageSide;
     spec.n_points = cfg.point.min_points();
@@ -48,20 +47,23 @@ ModelFile load_model_file(const std::string& path) {
     } catch (const Error& e) {
         throw Error(std::string(e.what()) + " (not a safetensors weight file?)");
     }
-    ModelFile m{WeightStore::from_file(*loaded), {}, {}, std::filesystem::file_size(path)};
-    m.config = ModelConfig::parse(m.weights.config(), path);
+    const WeightStore file = WeightStore::from_file(*loaded);
+    ModelConfig config = ModelConfig::parse(file.config(), path);
     try {
-        check_finite(m.weights);
+        check_finite(file);
     } catch (const Error& e) {
         throw Error(path + ": " + e.what());
     }
+    std::optional<PreparedWeights> prepared;
     try {
-        check_tensors(m.config, m.weights);
+        prepared.emplace(prepare_weights(config, file));
+        check_tensors(config, *prepared);
     } catch (const Error& e) {
         std::string msg = e.what();
         if (msg.rfind(path + ": ", 0) == 0) msg = msg.substr(path.size() + 2);  // WeightStore names the file
-        throw Error(path + ": " + msg + " (the tensors do not fit the file's config '" + m.config.name + "')");
+        throw Error(path + ": " + msg + " (the tensors do not fit the file's config '" + config.name + "')");
     }
+    ModelFile m{std::move(*prepared), std::move(config), {}, std::filesystem::file_size(path)};
     for (const TensorInfo& t : loaded->tensors())
         m.tensors.push_back(
             {t.name, dtype_name(t.dtype), t.shape, t.dtype == DType::F32 || t.dtype == DType::F16 || t.dtype == DType::BF16});

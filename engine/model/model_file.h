@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "engine/model/model_config.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/tensor.h"
 #include "engine/weights.h"
 
@@ -18,7 +19,7 @@ struct ModelFile {
         Shape shape;
         bool floating = false;  // F32/F16/BF16 (parameters), not integer counters
     };
-    WeightStore weights;
+    PreparedWeights weights;  // prepare_weights' set: what the network reads
     ModelConfig config;
     std::vector<Tensor> tensors;  // as stored in the file
     uint64_t file_bytes = 0;

@@ -1,5 +1,6 @@
 #include "engine/model/prepared_weights.h"
 
+#include <algorithm>
 #include <set>
 
 #include "base/error.h"
@@ -39,7 +40,7 @@ std::string batchnorm_of(const std::string& layer) {
 
 }  // namespace
 
-WeightStore prepare_weights(const ModelConfig& config, const WeightStore& file) {
+PreparedWeights prepare_weights(const ModelConfig& config, const WeightStore& file) {
     WeightStore work = file;  // fold_batchnorm adds its outputs beside the originals
     std::set<std::string> consumed;
     for (const std::string& name : file.names()) {
@@ -73,7 +74,7 @@ WeightStore prepare_weights(const ModelConfig& config, const WeightStore& file) 
     out.set_config(file.config());
     for (const std::string& name : work.names())
         if (!consumed.count(name)) out.add(name, work.get(name));
-    return out;
+    return PreparedWeights(std::move(out));
 }
 
 const HostTensor& prepared_tensor(const WeightStore& w, const std::string& name, const std::string& layer) {

@@ -7,14 +7,30 @@
 // builders only read this store (const) by the names below; the file's
 // tensors that only fed the folding are not kept.
 #include <string>
+#include <utility>
 
 #include "engine/model/model_config.h"
 #include "engine/weights.h"
 
 namespace vtloc {
 
+class PreparedWeights;
+
 // Throws naming the layer when a convolution's BatchNorm or a statistic is missing.
-WeightStore prepare_weights(const ModelConfig& config, const WeightStore& file);
+PreparedWeights prepare_weights(const ModelConfig& config, const WeightStore& file);
+
+// What prepare_weights made, and only that (nothing else constructs one), so a
+// holder can take it without preparing again; read-only once made.
+class PreparedWeights {
+public:
+    const WeightStore& store() const { return store_; }
+    operator const WeightStore&() const { return store_; }  // what the builders and executors read
+
+private:
+    explicit PreparedWeights(WeightStore s) : store_(std::move(s)) {}
+    friend PreparedWeights prepare_weights(const ModelConfig& config, const WeightStore& file);
+    WeightStore store_;
+};
 
 // Names of the prepared tensors of a conv (+ BN) layer and of a tactile head layer.
 namespace prepared {

@@ -4,11 +4,10 @@
 #include <cmath>
 
 #include "base/error.h"
-#include "engine/model/gma.h"
-#include "engine/model/prepared_weights.h"
 #include "engine/model/heads.h"
 #include "engine/model/point_encoder.h"
 #include "engine/model/post.h"
+#include "engine/model/prepared_weights.h"
 #include "runtime/context.h"
 #include "engine/ops/build.h"
 
@@ -33,10 +32,13 @@ struct VtlocRunner::Compiled {
     std::vector<NodeMs> cpu_times;
 };
 
-VtlocRunner::VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu)
-    : weights_(prepare_weights(config, weights)), config_(std::move(config)), gpu_(gpu) {}
+VtlocRunner::VtlocRunner(PreparedWeights weights, ModelConfig config, rt::Context* gpu)
+    : weights_(std::move(weights)), config_(std::move(config)), gpu_(gpu) {}
 
-VtlocRunner::VtlocRunner(WeightStore weights, rt::Context* gpu)
+VtlocRunner::VtlocRunner(const WeightStore& weights, ModelConfig config, rt::Context* gpu)
+    : VtlocRunner(prepare_weights(config, weights), config, gpu) {}
+
+VtlocRunner::VtlocRunner(const WeightStore& weights, rt::Context* gpu)
     : VtlocRunner(weights, config_of(weights), gpu) {}
 
 VtlocRunner::~VtlocRunner() = default;

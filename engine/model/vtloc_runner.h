@@ -13,6 +13,7 @@
 
 #include "engine/executor.h"
 #include "engine/ops/object_frame.h"
+#include "engine/model/prepared_weights.h"
 #include "engine/model/vtloc_graph.h"
 #include "engine/weights.h"
 
@@ -74,10 +75,12 @@ struct SequenceResult {
 class VtlocRunner {
 public:
     // gpu == nullptr runs the CPU reference implementations. config: the
-    // weights' own, already parsed (load_model_file's), so a load parses it once.
-    VtlocRunner(WeightStore weights, ModelConfig config, rt::Context* gpu);
+    // weights' own, already parsed (load_model_file's), so a load parses it once;
+    // prepared weights (load_model_file's too) are not prepared again.
+    VtlocRunner(PreparedWeights weights, ModelConfig config, rt::Context* gpu);
+    VtlocRunner(const WeightStore& weights, ModelConfig config, rt::Context* gpu);
     // For weights alone (tests, benches): parses their config here, once.
-    VtlocRunner(WeightStore weights, rt::Context* gpu);
+    VtlocRunner(const WeightStore& weights, rt::Context* gpu);
     ~VtlocRunner();
 
     const ModelConfig& config() const { return config_; }
@@ -146,7 +149,7 @@ private:
     TensorMap run(const VtlocGraphSpec& spec, const TensorMap& inputs);
     TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
 
-    const WeightStore weights_;  // prepare_weights' output: what every graph shape reads, never changed
+    const PreparedWeights weights_;  // what every graph shape reads, never changed
     ModelConfig config_;  // the weights' config, parsed once per load
     rt::Context* gpu_;
     bool profile_ = false;
