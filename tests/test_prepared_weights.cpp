@@ -52,7 +52,7 @@ TEST_CASE("prepared weights serve every graph shape and drop what only fed the f
     }
 }
 
-TEST_CASE("prepare_weights splits W^d into bindable row chunks once", "[model][weights]") {
+TEST_CASE("prepare_weights keeps a W^d that fits one binding whole, under its own name", "[model][weights]") {
     const WeightStore file = WeightStore::load(test::require_golden_file(test::goldens_dir(), "vtloc-tiny.safetensors"));
     const ModelConfig cfg = config_of(file);
     REQUIRE(cfg.gma);

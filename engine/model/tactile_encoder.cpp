@@ -76,8 +76,8 @@ int build_tactile_encoder(Graph& g, const WeightStore& w, const ModelConfig& con
     const int layers = int(c.mlp.size()) + 1;
     for (int i = 0; i < layers; ++i) {
         const std::string m = "tactile.mlp." + std::to_string(2 * i);
-        const HostTensor& lw = prepared_tensor(w, prepared::head_ihwo(m), m);  // [in, 1, 1, out]
-        if (lw.shape.size() != 4) throw Error("weight '" + m + ".weight' must be [out, in], got " + shape_str(lw.shape));
+        // [in, 1, 1, out]: prepare_weights made it from a checked [out, in]
+        const HostTensor& lw = prepared_tensor(w, prepared::head_ihwo(m), m);
         const int bias = w.has(m + ".bias") ? g.weight(m + ".bias", {lw.shape[3]}) : -1;
         ops::Conv2d head;
         head.layout = ops::kConvIHWO;
