@@ -6,6 +6,8 @@
 // streams through shared memory in tiles of L rows (one row loaded per thread),
 // so each target row is read from memory once per workgroup.
 // mins[r] = min_b ||a_r - b||^2 (r < Na), mins[Na + r] = min_a ||b_r - a||^2.
+// Workgroup y = the set s of A (A holds sets of Na rows; B is shared): its A rows
+// start at s * Na, its mins at s * (Na + Nb).
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const bool WIDE = false;  // rows of 6 (xyz + normal), else 3
 
@@ -20,6 +22,7 @@ shared vec3 tile_n[WIDE ? gl_WorkGroupSize.x : 1u];
 
 vec3 row(uint set, uint i, uint c0) {
     uint b = i * D + c0;
+    if (set == 0u) b += gl_WorkGroupID.y * p.Na * D;
     return set == 0u ? vec3(A[b], A[b + 1u], A[b + 2u]) : vec3(B[b], B[b + 1u], B[b + 2u]);
 }
 
@@ -64,6 +67,7 @@ void main() {
         barrier();
     }
     // A NaN anywhere makes the distance NaN rather than silently ignored.
-    if (q < nq) mins[from_a ? q : p.Na + q] = nan1 ? (0.0 / 0.0) : best;
-    if (q2 < nq) mins[from_a ? q2 : p.Na + q2] = nan2 ? (0.0 / 0.0) : best2;
+    const uint base = gl_WorkGroupID.y * (p.Na + p.Nb) + (from_a ? 0u : p.Na);
+    if (q < nq) mins[base + q] = nan1 ? (0.0 / 0.0) : best;
+    if (q2 < nq) mins[base + q2] = nan2 ? (0.0 / 0.0) : best2;
 }

@@ -1,6 +1,7 @@
 #version 450
-// Min-max normalisation of the heat-map in place, in one workgroup: a min/max
-// tree in shared memory, then s = (s - lo) / (hi - lo); all zeros when hi == lo.
+// Min-max normalisation of the heat-map in place, one workgroup per map of a
+// batch: a min/max tree in shared memory, then s = (s - lo) / (hi - lo); all
+// zeros when hi == lo.
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) buffer Heat_ { float heat[]; };
@@ -11,8 +12,9 @@ shared vec2 part[gl_WorkGroupSize.x];  // (min, max)
 void main() {
     const uint L = gl_WorkGroupSize.x;
     const uint tid = gl_LocalInvocationID.x;
+    const uint base = gl_WorkGroupID.x * p.P;
     vec2 m = vec2(1.0 / 0.0, -1.0 / 0.0);
-    for (uint i = tid; i < p.P; i += L) m = vec2(min(m.x, heat[i]), max(m.y, heat[i]));
+    for (uint i = base + tid; i < base + p.P; i += L) m = vec2(min(m.x, heat[i]), max(m.y, heat[i]));
     part[tid] = m;
     barrier();
     for (uint width = L; width > 1u;) {
@@ -25,5 +27,5 @@ void main() {
         barrier();
     }
     const float lo = part[0].x, hi = part[0].y;
-    for (uint i = tid; i < p.P; i += L) heat[i] = hi == lo ? 0.0 : (heat[i] - lo) / (hi - lo);
+    for (uint i = base + tid; i < base + p.P; i += L) heat[i] = hi == lo ? 0.0 : (heat[i] - lo) / (hi - lo);
 }

@@ -8,6 +8,8 @@
 // computed here as (dx*dx + dy*dy) + dz*dz in single precision, each operation
 // rounded once (`precise`: no fma), exactly as the reference does.
 // FINAL: write index[K] and score[K] instead of keys.
+// Workgroup y = the contact (row) of a batch: its contact, key lists (src_stride /
+// dst_stride words apart; the candidates are shared) and outputs (K apart).
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint S = 256;  // chunk: a power of two >= 2K
 layout(constant_id = 2) const bool FIRST = true;
@@ -18,7 +20,7 @@ layout(std430, binding = 1) readonly buffer Src_ { uint src[]; };  // candidates
 layout(std430, binding = 2) buffer Dst_ { uint dst[]; };           // keys of this pass
 layout(std430, binding = 3) buffer Index_ { int index[]; };
 layout(std430, binding = 4) buffer Score_ { float score[]; };
-layout(push_constant) uniform Push { uint n; uint K; } p;
+layout(push_constant) uniform Push { uint n; uint K; uint src_stride; uint dst_stride; } p;
 
 shared uvec2 keys[S];
 
@@ -28,18 +30,20 @@ void main() {
     const uint L = gl_WorkGroupSize.x;
     const uint tid = gl_LocalInvocationID.x;
     const uint base = gl_WorkGroupID.x * S;
+    const uint row = gl_WorkGroupID.y;
+    const uint src0 = row * p.src_stride, dst0 = row * p.dst_stride, out0 = row * p.K;
     for (uint i = tid; i < S; i += L) {
         uint gi = base + i;
         uvec2 key = uvec2(0xFFFFFFFFu);
         if (gi < p.n) {
             if (FIRST) {
-                precise float dx = uintBitsToFloat(src[gi * 3u]) - contact[0];
-                precise float dy = uintBitsToFloat(src[gi * 3u + 1u]) - contact[1];
-                precise float dz = uintBitsToFloat(src[gi * 3u + 2u]) - contact[2];
+                precise float dx = uintBitsToFloat(src[gi * 3u]) - contact[3u * row];
+                precise float dy = uintBitsToFloat(src[gi * 3u + 1u]) - contact[3u * row + 1u];
+                precise float dz = uintBitsToFloat(src[gi * 3u + 2u]) - contact[3u * row + 2u];
                 precise float s = (dx * dx + dy * dy) + dz * dz;
                 key = uvec2(floatBitsToUint(s), gi);
             } else {
-                key = uvec2(src[2u * gi], src[2u * gi + 1u]);
+                key = uvec2(src[src0 + 2u * gi], src[src0 + 2u * gi + 1u]);
             }
         }
         keys[i] = key;
@@ -62,12 +66,12 @@ void main() {
     for (uint i = tid; i < p.K; i += L) {
         uvec2 k = keys[i];
         if (FINAL) {
-            index[i] = int(k.y);
-            score[i] = uintBitsToFloat(k.x);
+            index[out0 + i] = int(k.y);
+            score[out0 + i] = uintBitsToFloat(k.x);
         } else {
             uint o = gl_WorkGroupID.x * p.K + i;
-            dst[2u * o] = k.x;
-            dst[2u * o + 1u] = k.y;
+            dst[dst0 + 2u * o] = k.x;
+            dst[dst0 + 2u * o + 1u] = k.y;
         }
     }
 }

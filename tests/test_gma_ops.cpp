@@ -117,6 +117,30 @@ TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
     test::require_no_validation_messages();
 }
 
+TEST_CASE("chamfer compares a batch of sets with one cloud, each as if alone", "[op][chamfer]") {
+    // A [S, Na, D] with S > 1: S distances, GPU against CPU, and each set's value
+    // and nearest distances bit-identical to the unbatched op's on the GPU.
+    for (int64_t S : {2, 5}) {
+        const Shape a{S, 300, 6}, b{257, 6};
+        TensorMap out = check_chamfer(a, b, uint32_t(20 + S));
+        REQUIRE(out.at("chamfer").shape == Shape{S});
+        HostTensor all = random_tensor(a, uint32_t(20 + S), -1.0f, 1.0f), cloud = random_tensor(b, uint32_t(21 + S), -1.0f, 1.0f);
+        Graph g;
+        std::vector<int> one = ops::chamfer(g, g.input("a", {300, 6}), g.input("b", b));
+        g.output(one[0], "chamfer");
+        g.output(one[1], "mins");
+        GpuExecutor exec(test::gpu(), g, WeightStore{});
+        for (int64_t s = 0; s < S; ++s) {
+            HostTensor set({300, 6}, std::vector<float>(all.data.begin() + s * 1800, all.data.begin() + (s + 1) * 1800));
+            TensorMap single = exec.run({{"a", set}, {"b", cloud}});
+            CHECK(out.at("chamfer").data[size_t(s)] == single.at("chamfer").data[0]);
+            const auto& mins = out.at("mins").data;
+            CHECK(std::vector<float>(mins.begin() + s * 557, mins.begin() + (s + 1) * 557) == single.at("mins").data);
+        }
+        test::require_no_validation_messages();
+    }
+}
+
 TEST_CASE("chamfer at 16384 x 16384", "[op][chamfer]") {
     check_chamfer({16384, 6}, {16384, 6}, 11);  // ~6 s on lavapipe: ~3 s GPU, ~3 s CPU oracle
 }

@@ -104,12 +104,39 @@ TEST_CASE("tactile_preprocess on real GelSight frames and 480x640 / 240x320 fram
     check_frames({synthetic_frame(240, 320)}, 240, 320, 320, 224);
 }
 
+TEST_CASE("tactile_preprocess takes a batch of frames, each as if alone", "[op][preprocess]") {
+    // [B, H, W, 3] -> [B, 3, S, S]: GPU against CPU, and each frame of the batch
+    // bit-identical to the single-frame op's output on the GPU.
+    const int64_t B = 3, h = 37, w = 53, crop = 40, size = 23;
+    HostTensor batch({B, h, w, 3}, ElemType::I32);
+    uint32_t s = 777;
+    for (size_t i = 0; i < batch.data.size(); ++i) batch.set_int(i, int32_t((s = s * 1664525u + 1013904223u) >> 24));
+    Graph g;
+    g.output(ops::tactile_preprocess(g, g.input("image", batch.shape, ElemType::I32), crop, size), "x");
+    TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, {{"image", batch}}, kPrepTol);
+    REQUIRE(out.at("x").shape == Shape{B, 3, size, size});
+    GpuExecutor exec(test::gpu(), prep_graph(h, w, crop, size), WeightStore{});
+    const size_t in_n = size_t(h * w * 3), out_n = size_t(3 * size * size);
+    for (int64_t b = 0; b < B; ++b) {
+        HostTensor one({h, w, 3}, ElemType::I32);
+        std::copy(batch.data.begin() + std::ptrdiff_t(b * in_n), batch.data.begin() + std::ptrdiff_t((b + 1) * in_n), one.data.begin());
+        TensorMap single = exec.run({{"image", one}});
+        const auto& x = out.at("x").data;
+        CHECK(std::vector<float>(x.begin() + std::ptrdiff_t(b * out_n), x.begin() + std::ptrdiff_t((b + 1) * out_n)) ==
+              single.at("x").data);
+    }
+    test::require_no_validation_messages();
+    Graph bad;
+    REQUIRE_THROWS_WITH(ops::tactile_preprocess(bad, bad.input("e", {0, 9, 9, 3}, ElemType::I32), 8, 8),
+                        Catch::Contains("is empty"));
+}
+
 TEST_CASE("tactile_preprocess rejects bad images and parameters", "[op][preprocess]") {
     Graph g;
     REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("a", {7, 9, 3}, ElemType::I32), 8, 8),
                         Catch::Contains("smaller than 8x8"));
     REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("b", {9, 9, 4}, ElemType::I32), 8, 8),
-                        Catch::Contains("must be [H, W, 3]"));
+                        Catch::Contains("must be [H, W, 3] (RGB) or a batch"));
     REQUIRE_THROWS_WITH(ops::tactile_preprocess(g, g.input("c", {9, 9, 3}), 8, 8),
                         Catch::Contains("must be I32"));
     // Raw Params on purpose: a missing size must be refused at Graph::add.

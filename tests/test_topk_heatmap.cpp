@@ -172,3 +172,43 @@ TEST_CASE("heatmap rejects bad inputs", "[op][heatmap]") {
                                                     {"i", HostTensor::from_ints({1}, {2})}}),
                         Catch::Contains("index 2 is outside 0..1"));
 }
+
+TEST_CASE("topk and heatmap run a batch of contacts, each row as if alone", "[op][topk][heatmap]") {
+    // Batches of 3 and 7 contacts: one pass (M = 37), several passes (2049 with
+    // K = 64, 100003 with K = 5). GPU against CPU exactly, and every row of the
+    // batch exactly as the unbatched op gives it on the GPU.
+    for (int64_t M : {37, 2049, 100003})
+        for (int64_t B : {3, 7}) {
+            const int k = M == 2049 ? 64 : 5;
+            INFO("M " << M << " B " << B << " K " << k);
+            HostTensor contacts = random_tensor({B, 3}, uint32_t(M + B), -1.0f, 1.0f);
+            HostTensor cand = grid_candidates(M, uint32_t(M) + 7);  // ties across rows too
+            HostTensor cloud = random_tensor({513, 6}, uint32_t(B));
+            Graph g;
+            const int c = g.input("c", contacts.shape), cd = g.input("cand", cand.shape), pc = g.input("cloud", cloud.shape);
+            std::vector<int> top = ops::topk(g, c, cd, k);
+            g.output(top[0], "index");
+            g.output(top[1], "score");
+            g.output(ops::heatmap(g, pc, cd, top[0], -1), "heat");
+            test::BothRuns r = test::run_both(g, WeightStore{}, {{"c", contacts}, {"cand", cand}, {"cloud", cloud}});
+            REQUIRE(r.gpu.at("index").shape == Shape{B, k});
+            REQUIRE(r.gpu.at("heat").shape == Shape{B, 513});
+            test::require_same_ints(r.gpu.at("index"), r.cpu.at("index"), "batched topk.index");
+            CHECK(r.gpu.at("score").data == r.cpu.at("score").data);
+            test::require_close(r.gpu.at("heat"), r.cpu.at("heat"), test::Tolerance{}, "batched heat-map");
+            for (int64_t b = 0; b < B; ++b) {
+                HostTensor one({3}, {contacts.data[size_t(3 * b)], contacts.data[size_t(3 * b + 1)], contacts.data[size_t(3 * b + 2)]});
+                Graph g1;
+                const int c1 = g1.input("c", {3}), cd1 = g1.input("cand", cand.shape), pc1 = g1.input("cloud", cloud.shape);
+                std::vector<int> t1 = ops::topk(g1, c1, cd1, k);
+                g1.output(t1[0], "index");
+                g1.output(ops::heatmap(g1, pc1, cd1, t1[0], -1), "heat");
+                GpuExecutor exec(test::gpu(), g1, WeightStore{});
+                TensorMap single = exec.run({{"c", one}, {"cand", cand}, {"cloud", cloud}});
+                std::vector<int32_t> all = r.gpu.at("index").ints();
+                CHECK(std::vector<int32_t>(all.begin() + b * k, all.begin() + (b + 1) * k) == single.at("index").ints());
+                const auto& heat = r.gpu.at("heat").data;
+                CHECK(std::vector<float>(heat.begin() + b * 513, heat.begin() + (b + 1) * 513) == single.at("heat").data);
+            }
+        }
+}

@@ -64,6 +64,7 @@ void check_same(const TouchResult& a, const TouchResult& b, const std::string& w
     for (auto& [name, t] : b.tensors) {
         if (name.rfind("point.", 0) == 0) continue;  // object tensors exist on one path only
         REQUIRE(a.tensors.count(name));
+        CHECK(a.tensors.at(name).shape == t.shape);
         if (t.type == ElemType::I32) CHECK(a.tensors.at(name).ints() == t.ints());
         else test::require_close(a.tensors.at(name), t, {1e-6, 1e-6}, what + ": " + name);
     }
@@ -98,29 +99,38 @@ TEST_CASE("vtloc-mcr (paper-size MCR baseline) end to end matches the PyTorch go
 }
 
 TEST_CASE("cached object and batched touches equal the one-shot path", "[model]") {
-    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
-    VtlocRunner runner(c.weights, &test::gpu());
-    // Three touches: the golden frame, its mirror and a darker copy.
-    std::vector<HostTensor> images{c.image, c.image, c.image};
-    const int64_t H = c.image.shape[0], W = c.image.shape[1];
-    for (int64_t y = 0; y < H; ++y)
-        for (int64_t x = 0; x < W; ++x)
-            for (int ch = 0; ch < 3; ++ch) {
-                size_t i = size_t((y * W + x) * 3 + ch);
-                images[1].set_int(i, c.image.int_at(size_t((y * W + (W - 1 - x)) * 3 + ch)));
-                images[2].set_int(i, c.image.int_at(i) / 2);
-            }
-    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
-    c.golden->compare("point.feature", HostTensor({obj.feature.size()}, obj.feature.data), kFeature);
-    std::vector<TouchResult> batch = runner.localize(obj, images);
-    REQUIRE(batch.size() == 3);
-    for (size_t b = 0; b < images.size(); ++b) {
-        TouchResult once = runner.localize_once(images[b], c.cloud, &c.candidates);
-        check_same(batch[b], once, "batch touch " + std::to_string(b) + " vs one-shot");
-        TouchResult single = runner.localize(obj, {images[b]}).at(0);
-        check_same(single, once, "cached touch " + std::to_string(b) + " vs one-shot");
+    for (const char* name : {"vtloc-tiny", "vtloc-mcr-tiny"}) {
+        INFO(name);
+        GoldenCase c = load_case(test::goldens_dir(), name);
+        VtlocRunner runner(c.weights, &test::gpu());
+        // Three touches: the golden frame, its mirror and a darker copy.
+        std::vector<HostTensor> images{c.image, c.image, c.image};
+        const int64_t H = c.image.shape[0], W = c.image.shape[1];
+        for (int64_t y = 0; y < H; ++y)
+            for (int64_t x = 0; x < W; ++x)
+                for (int ch = 0; ch < 3; ++ch) {
+                    size_t i = size_t((y * W + x) * 3 + ch);
+                    images[1].set_int(i, c.image.int_at(size_t((y * W + (W - 1 - x)) * 3 + ch)));
+                    images[2].set_int(i, c.image.int_at(i) / 2);
+                }
+        EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
+        c.golden->compare("point.feature", HostTensor({obj.feature.size()}, obj.feature.data), kFeature);
+        std::vector<TouchResult> batch = runner.localize(obj, images);
+        REQUIRE(batch.size() == 3);
+        const size_t nodes3 = runner.last_graph()->nodes().size();
+        for (size_t b = 0; b < images.size(); ++b) {
+            TouchResult once = runner.localize_once(images[b], c.cloud, &c.candidates);
+            check_same(batch[b], once, "batch touch " + std::to_string(b) + " vs one-shot");
+            TouchResult single = runner.localize(obj, {images[b]}).at(0);
+            check_same(single, once, "cached touch " + std::to_string(b) + " vs one-shot");
+        }
+        // A batch is one network: 16 touches take the nodes that 3 take.
+        std::vector<HostTensor> sixteen(16, images[1]);
+        std::vector<TouchResult> many = runner.localize(obj, sixteen);
+        CHECK(runner.last_graph()->nodes().size() == nodes3);
+        check_same(many[15], batch[1], "touch 15 of 16 vs touch 1 of 3");
+        test::require_no_validation_messages();
     }
-    test::require_no_validation_messages();
 }
 
 TEST_CASE("ILU iterations are chosen per run without rebuilding", "[model]") {

@@ -1,6 +1,6 @@
 // Self-test cases: disentangle (whole and split into row chunks), gma_decode,
-// chamfer, ilu (1/4/16 lanes per row), ilu_step, topk (ties), heatmap (with
-// and without symmetry) and belief (the shapes of tests/test_gma_ops.cpp,
+// chamfer (one set and a batch), ilu (1/4/16 lanes per row), ilu_step, topk (ties;
+// a batch with its heat-maps), heatmap (with and without symmetry) and belief (the shapes of tests/test_gma_ops.cpp,
 // test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
 #include <cmath>
 
@@ -77,7 +77,8 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
     dec.output(dec.g.add1("gma_decode", {dec.input("o", o)}), "y");
     v.push_back(std::move(dec));
 
-    for (auto [a, b] : {std::pair<Shape, Shape>{{37, 3}, {53, 3}}, {{1, 300, 6}, {257, 6}}, {{1000, 3}, {7, 3}}}) {
+    for (auto [a, b] : {std::pair<Shape, Shape>{{37, 3}, {53, 3}}, {{1, 300, 6}, {257, 6}}, {{1000, 3}, {7, 3}},
+                        {{5, 300, 6}, {257, 6}}}) {  // the last: a batch of 5 sets
         OpCase c("chamfer", shape_str(a) + " vs " + shape_str(b));
         std::vector<int> out = c.g.add("chamfer", {c.input("a", random_tensor(a, 1)), c.input("b", random_tensor(b, 2))});
         c.output(out[0], "chamfer");
@@ -104,6 +105,15 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
             c.tol = {0.0, 0.0};  // same fp32 roundings on both sides
             v.push_back(std::move(c));
         }
+    }
+    {
+        OpCase c("topk", "a batch of 7 contacts, 2049 candidates, K 64, and their heat-maps on 513 points");
+        const int cand = c.input("cand", random_tensor({2049, 3}, 11));
+        std::vector<int> out = ops::topk(c.g, c.input("c", random_tensor({7, 3}, 12)), cand, 64);
+        c.output(out[0], "index");
+        c.output(out[1], "score");
+        c.output(ops::heatmap(c.g, c.input("cloud", random_tensor({513, 6}, 13)), cand, out[0], -1), "heat");
+        v.push_back(std::move(c));
     }
 
     for (bool sym : {false, true}) {

@@ -91,6 +91,15 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo&) {
         c.tol = {1e-5, 1e-5};
         v.push_back(std::move(c));
     }
+    {
+        OpCase c("tactile_preprocess", "a batch of 3 frames 37x53, crop 40 size 23");
+        HostTensor batch({3, 37, 53, 3}, ElemType::I32);
+        uint32_t s = 777;
+        for (size_t i = 0; i < batch.data.size(); ++i) batch.set_int(i, int32_t((s = s * 1664525u + 1013904223u) >> 24));
+        c.output(ops::tactile_preprocess(c.g, c.input("image", batch), 40, 23), "x");
+        c.tol = {1e-5, 1e-5};
+        v.push_back(std::move(c));
+    }
     return v;
 }
 

@@ -4,8 +4,11 @@
 // Chamfer (optional), ILU or MCR, top-K retrieval and the heat-map. One graph
 // is one command buffer, so a run is one submit.
 //
-// Inputs (names; S = per-touch suffix, "" for batch 1, else "/0", "/1", ...):
-//   tactile.image{S}   I32 [H, W, 3] byte values (ops::tactile_image_tensor)
+// A batch of B > 1 touches on one object runs as one network: each per-touch
+// input and output (touch_outputs() below) gains a leading axis B; B = 1 keeps
+// the SPEC section 8 shapes.
+// Inputs:
+//   tactile.image      I32 [H, W, 3] byte values (ops::tactile_image_tensor); [B, H, W, 3]
 //   point.cloud        F32 [N, 6] (or [N, 3] without normals), normalised frame
 //   gma.target         F32 [N, 6] normalised cloud with normals, only when GMA
 //                      runs and the network takes no normals
@@ -13,11 +16,11 @@
 //   candidates         F32 [M, 3] normalised, when retrieval is on
 //   ilu.iters          I32 [1], N for this run (ILU head only)
 //   symmetry           F32 [order, 12] (engine/model/post.h), with a symmetry prior
-// Outputs: the SPEC section 8 names (with the suffix for per-touch ones), plus
-//   point.feature when the object branch runs; ilu.c is [max_iters, 3] of which
-//   the first N rows are c_1..c_N.
+// Outputs: the SPEC section 8 names, plus point.feature when the object branch
+//   runs; ilu.c is [max_iters, 3] of which the first N rows are c_1..c_N.
 #include <cstdint>
 #include <string>
+#include <vector>
 
 #include "engine/graph.h"
 #include "engine/model/model_config.h"
@@ -41,7 +44,13 @@ struct VtlocGraphSpec {
 // Builds the graph from weights made by prepare_weights (engine/model/prepared_weights.h).
 Graph build_vtloc_graph(const ModelConfig& config, const WeightStore& w, const VtlocGraphSpec& spec);
 
-// The per-touch name suffix for touch b of a batch of `batch`.
-std::string touch_suffix(int64_t b, int64_t batch);
+// The outputs with one row per touch (a leading axis B in a batch graph).
+// keeps_axis: the single-touch graph gives them a leading axis of 1 too
+// (tactile.input [1, 3, S, S], tactile.feature [1, C], gma.cloud [1, N^d, 6]).
+struct TouchOutput {
+    const char* name;
+    bool keeps_axis;
+};
+const std::vector<TouchOutput>& touch_outputs();
 
 }  // namespace vtloc

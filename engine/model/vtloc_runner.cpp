@@ -173,19 +173,38 @@ TouchRun touch_run(const ModelConfig& cfg, const EncodedObject& o, const std::ve
         r.spec.symmetry_order = sym.order;
         r.inputs["symmetry"] = symmetry_transforms({pn.data[0], pn.data[1], pn.data[2]}, sym.axis_dir, sym.order);
     }
-    for (size_t b = 0; b < images.size(); ++b)
-        r.inputs["tactile.image" + touch_suffix(int64_t(b), r.spec.batch)] = images[b];
+    if (images.size() == 1) {
+        r.inputs["tactile.image"] = images[0];
+    } else {
+        HostTensor batch(Shape{r.spec.batch, s0[0], s0[1], 3}, ElemType::I32);
+        for (size_t b = 0; b < images.size(); ++b)
+            std::copy(images[b].data.begin(), images[b].data.end(), batch.data.begin() + std::ptrdiff_t(b * images[b].data.size()));
+        r.inputs["tactile.image"] = std::move(batch);
+    }
     return r;
 }
 
-TouchResult collect(const TensorMap& out, const std::string& sfx, const EncodedObject& o, int iters) {
+// Row b of a batch graph's per-touch output [B, ...], shaped as a single-touch
+// graph gives it.
+HostTensor touch_row(const HostTensor& t, int64_t b, bool keeps_axis) {
+    Shape shape(t.shape.begin() + 1, t.shape.end());
+    if (keeps_axis) shape.insert(shape.begin(), 1);
+    const size_t n = size_t(t.size() / t.shape[0]);
+    HostTensor row(shape, t.type);
+    std::copy(t.data.begin() + std::ptrdiff_t(size_t(b) * n), t.data.begin() + std::ptrdiff_t(size_t(b + 1) * n), row.data.begin());
+    return row;
+}
+
+// Touch b's result; a batch graph's shared outputs (the object's) stay out of it.
+TouchResult collect(const TensorMap& out, int64_t b, int64_t batch, const EncodedObject& o, int iters) {
     TouchResult r;
-    for (auto& [name, t] : out) {
-        if (name.size() < sfx.size() || name.compare(name.size() - sfx.size(), sfx.size(), sfx) != 0) continue;
-        std::string base = name.substr(0, name.size() - sfx.size());
-        if (!sfx.empty() && base.find('/') != std::string::npos) continue;
-        if (sfx.empty() && name.find('/') != std::string::npos) continue;
-        r.tensors[base] = t;
+    if (batch == 1) {
+        r.tensors = out;
+    } else {
+        for (const TouchOutput& t : touch_outputs()) {
+            auto it = out.find(t.name);
+            if (it != out.end()) r.tensors[t.name] = touch_row(it->second, b, t.keeps_axis);
+        }
     }
     if (r.tensors.count("ilu.c")) {  // the graph holds room for 64 iterations; keep the N that ran
         HostTensor& c = r.tensors["ilu.c"];
@@ -215,7 +234,7 @@ std::vector<TouchResult> VtlocRunner::localize(const EncodedObject& object, cons
     r.inputs["point.feature"] = object.feature;
     TensorMap out = run(r.spec, r.inputs);
     std::vector<TouchResult> results;
-    for (int64_t b = 0; b < r.spec.batch; ++b) results.push_back(collect(out, touch_suffix(b, r.spec.batch), object, r.iters));
+    for (int64_t b = 0; b < r.spec.batch; ++b) results.push_back(collect(out, b, r.spec.batch, object, r.iters));
     return results;
 }
 
@@ -225,7 +244,7 @@ TouchResult VtlocRunner::localize_once(const HostTensor& image, const HostTensor
     TouchRun r = touch_run(config(), o, {image}, options);
     r.spec.encode_object = true;
     TensorMap out = run(r.spec, r.inputs);
-    return collect(out, "", o, r.iters);
+    return collect(out, 0, 1, o, r.iters);
 }
 
 VtlocRunner::Prepared VtlocRunner::prepare_once(const HostTensor& image, const HostTensor& cloud,

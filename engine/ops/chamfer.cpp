@@ -16,6 +16,7 @@ namespace vtloc::ops {
 namespace {
 
 int64_t rows_of(const Shape& s) { return numel(s) / s.back(); }
+int64_t sets_of(const Shape& a) { return a.size() == 3 && a[0] > 1 ? a[0] : 1; }
 
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     expect_input_count(in, 2, 2);
@@ -29,16 +30,18 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) 
     if (in[0].shape.back() != in[1].shape.back())
         throw Error("point sets have rows of different widths: " + shape_str(in[0].shape) + " and " +
                     shape_str(in[1].shape));
-    return {TensorDesc{Shape{}}, TensorDesc{Shape{rows_of(in[0].shape) + rows_of(in[1].shape)}}};
+    const int64_t sets = sets_of(in[0].shape);
+    return {TensorDesc{sets > 1 ? Shape{sets} : Shape{}},
+            TensorDesc{Shape{rows_of(in[0].shape) + sets * rows_of(in[1].shape)}}};
 }
 
-// min over `to` of the squared distance to row q of `from`, in double.
-double nearest(const HostTensor& from, int64_t q, const HostTensor& to, int64_t D) {
+// min over the n rows of `to` of the squared distance to row `from`, in double.
+double nearest(const float* from, const float* to, int64_t n, int64_t D) {
     double best = std::numeric_limits<double>::infinity();
-    for (int64_t j = 0; j < to.size() / D; ++j) {
+    for (int64_t j = 0; j < n; ++j) {
         double d = 0.0;
         for (int64_t c = 0; c < D; ++c) {
-            double e = double(from.data[size_t(q * D + c)]) - to.data[size_t(j * D + c)];
+            double e = double(from[c]) - to[j * D + c];
             d += e * e;
         }
         best = std::min(best, d);
@@ -51,25 +54,30 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     for (int i = 0; i < 2; ++i)
         for (float v : in[size_t(i)]->data)
             if (!std::isfinite(v)) throw Error(std::string("chamfer: point set ") + (i ? "B" : "A") + " holds NaN or inf");
-    const int64_t D = a.shape.back(), Na = a.size() / D, Nb = b.size() / D;
-    double sa = 0.0, sb = 0.0;
-    for (int64_t q = 0; q < Na; ++q) {
-        double d = nearest(a, q, b, D);
-        out[1]->data[size_t(q)] = float(d);
-        sa += d;
+    const int64_t sets = sets_of(a.shape), D = a.shape.back(), Na = a.size() / D / sets, Nb = b.size() / D;
+    for (int64_t s = 0; s < sets; ++s) {
+        const float* as = &a.data[size_t(s * Na * D)];
+        float* mins = &out[1]->data[size_t(s * (Na + Nb))];
+        double sa = 0.0, sb = 0.0;
+        for (int64_t q = 0; q < Na; ++q) {
+            double d = nearest(as + q * D, b.data.data(), Nb, D);
+            mins[q] = float(d);
+            sa += d;
+        }
+        for (int64_t q = 0; q < Nb; ++q) {
+            double d = nearest(&b.data[size_t(q * D)], as, Na, D);
+            mins[Na + q] = float(d);
+            sb += d;
+        }
+        out[0]->data[size_t(s)] = float(sa / double(Na) + sb / double(Nb));
     }
-    for (int64_t q = 0; q < Nb; ++q) {
-        double d = nearest(b, q, a, D);
-        out[1]->data[size_t(Na + q)] = float(d);
-        sb += d;
-    }
-    out[0]->data[0] = float(sa / double(Na) + sb / double(Nb));
 }
 
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     const uint32_t D = uint32_t(a.in[0].shape.back());
-    const uint32_t Na = to_u32(rows_of(a.in[0].shape), "rows of A");
+    const uint32_t sets = to_u32(sets_of(a.in[0].shape), "point sets");
+    const uint32_t Na = to_u32(rows_of(a.in[0].shape) / sets, "rows of A");
     const uint32_t Nb = to_u32(rows_of(a.in[1].shape), "rows of B");
     // The tile holds one target row per thread: one or two vec3 (16 bytes each in
     // shared memory). Each thread queries two rows.
@@ -79,15 +87,20 @@ void gpu(const GpuOpArgs& a) {
     if (ga + gb > d.max_workgroup_count[0])
         throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
                     " rows need more workgroups than the device allows");
+    if (sets > d.max_workgroup_count[1])
+        throw Error(std::to_string(sets) + " point sets exceed the device's " + std::to_string(d.max_workgroup_count[1]) +
+                    " workgroups along y");
+    to_u32(int64_t(sets) * (int64_t(Na) + Nb), "nearest-distance array size");
+    to_u32(numel(a.in[0].shape), "A size");
     struct { uint32_t Na, Nb, groups_a; } push{Na, Nb, uint32_t(ga)};
     a.seq.dispatch(pipeline(a.ctx, "chamfer_nn", 3, 12, {local, D == 6 ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {a.out[1].view, rt::Access::Write}},
-                   &push, sizeof(push), uint32_t(ga + gb));
+                   &push, sizeof(push), uint32_t(ga + gb), sets);
     uint32_t sum_local = elementwise_local_size(d);
     while (sum_local > 1 && sum_local * 8 > d.max_shared_memory) sum_local /= 2;
     a.seq.dispatch(pipeline(a.ctx, "chamfer_sum", 2, 8, {sum_local}),
-                   {{a.out[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, 8, 1);
+                   {{a.out[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, 8, sets);
 }
 
 }  // namespace

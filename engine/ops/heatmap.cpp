@@ -6,6 +6,8 @@
 // Inputs: cloud [P, D >= 3] (xyz first), candidates [M, 3], topk index I32 [K]
 // (rank order), optionally the symmetry prior as T affine maps [T, 12] (3x4
 // row-major, symmetry_transforms in engine/model/post.h makes them). Output [P].
+// A batch: index [B, K] (B > 1, one top-K per touch) gives [B, P], one heat-map
+// per row (workgroup y of the score pass, one normalising workgroup per row).
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -27,32 +29,33 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) 
     if (cloud.size() != 2 || cloud[1] < 3) throw Error("cloud must be [P, D >= 3], got " + shape_str(cloud));
     if (cloud[0] == 0) throw Error("the cloud is empty");
     if (cand.size() != 2 || cand[1] != 3 || cand[0] == 0) throw Error("candidates must be [M > 0, 3], got " + shape_str(cand));
-    if (idx.size() != 1 || idx[0] == 0) throw Error("top-K index must be [K > 0], got " + shape_str(idx));
+    if (idx.empty() || idx.size() > 2 || numel(idx) == 0)
+        throw Error("top-K index must be [K > 0] or a batch [B, K > 0], got " + shape_str(idx));
     if (in.size() == 4 && (in[3].shape.size() != 2 || in[3].shape[1] != 12 || in[3].shape[0] == 0))
         throw Error("symmetry maps must be [T > 0, 12], got " + shape_str(in[3].shape));
     to_u32(numel(cloud), "cloud size");
     to_u32(numel(cand), "candidate array size");
-    return {TensorDesc{{cloud[0]}}};
+    const int64_t B = idx.size() == 2 ? idx[0] : 1;
+    to_u32(B * cloud[0], "heat-map batch size");
+    return {TensorDesc{B > 1 ? Shape{B, cloud[0]} : Shape{cloud[0]}}};
 }
 
-void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
-    const HostTensor &cloud = *in[0], &cand = *in[1], &idx = *in[2];
-    const int64_t P = cloud.shape[0], D = cloud.shape[1], M = cand.shape[0], K = idx.size();
-    for (const HostTensor* t : {in[0], in[1]})
-        for (float v : t->data)
-            if (!std::isfinite(v)) throw Error(std::string("heat-map: the ") + (t == in[0] ? "cloud" : "candidates") + " hold NaN or inf");
+// One heat-map from the top-K indices idx[0, K) into out[0, P).
+void heat_row(const HostTensor& cloud, const HostTensor& cand, const int32_t* idx, int64_t K, const HostTensor* sym,
+              float* out) {
+    const int64_t P = cloud.shape[0], D = cloud.shape[1], M = cand.shape[0];
     // Centres with their ranks, copy order (rank, copy) as the reference builds them.
     std::vector<std::array<double, 3>> centres;
     std::vector<int> ranks;
-    const int64_t T = in.size() == 4 ? in[3]->shape[0] : 0;
+    const int64_t T = sym ? sym->shape[0] : 0;
     for (int64_t j = 0; j < K; ++j) {
-        int32_t ci = idx.int_at(size_t(j));
+        int32_t ci = idx[j];
         if (ci < 0 || ci >= M) throw Error("heat-map: top-K index " + std::to_string(ci) + " is outside 0.." + std::to_string(M - 1));
         const float* c = &cand.data[size_t(3 * ci)];
         for (int64_t t = 0; t < std::max<int64_t>(T, 1); ++t) {
             std::array<double, 3> ct{c[0], c[1], c[2]};
             if (T > 0) {
-                const float* a = &in[3]->data[size_t(12 * t)];
+                const float* a = &sym->data[size_t(12 * t)];
                 for (int r = 0; r < 3; ++r)
                     ct[size_t(r)] = double(a[4 * r]) * c[0] + double(a[4 * r + 1]) * c[1] + double(a[4 * r + 2]) * c[2] + a[4 * r + 3];
             }
@@ -73,26 +76,40 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
         s[size_t(i)] = std::exp(-best) / w;
     }
     auto [lo, hi] = std::minmax_element(s.begin(), s.end());
-    for (int64_t i = 0; i < P; ++i)
-        out[0]->data[size_t(i)] = *hi == *lo ? 0.0f : float((s[size_t(i)] - *lo) / (*hi - *lo));
+    for (int64_t i = 0; i < P; ++i) out[i] = *hi == *lo ? 0.0f : float((s[size_t(i)] - *lo) / (*hi - *lo));
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    for (const HostTensor* t : {in[0], in[1]})
+        for (float v : t->data)
+            if (!std::isfinite(v)) throw Error(std::string("heat-map: the ") + (t == in[0] ? "cloud" : "candidates") + " hold NaN or inf");
+    const HostTensor& idx = *in[2];
+    const int64_t B = idx.shape.size() == 2 ? idx.shape[0] : 1, K = idx.shape.back(), P = in[0]->shape[0];
+    const std::vector<int32_t> all = idx.ints();
+    for (int64_t b = 0; b < B; ++b)
+        heat_row(*in[0], *in[1], &all[size_t(b * K)], K, in.size() == 4 ? in[3] : nullptr, &out[0]->data[size_t(b * P)]);
 }
 
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     const uint32_t local = elementwise_local_size(d);
     const bool sym = a.in.size() == 4;
+    const Shape& idx = a.in[2].shape;
+    const uint32_t B = idx.size() == 2 ? to_u32(idx[0], "heat-map batch") : 1u;
+    if (B > d.max_workgroup_count[1] || B > d.max_workgroup_count[0])
+        throw Error("a heat-map batch of " + std::to_string(B) + " exceeds the device's workgroup count limits");
     struct { uint32_t P, D, M, K, T; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[0].shape[1]),
-                                          uint32_t(a.in[1].shape[0]), to_u32(a.in[2].shape[0], "K"),
+                                          uint32_t(a.in[1].shape[0]), to_u32(idx.back(), "K"),
                                           sym ? to_u32(a.in[3].shape[0], "symmetry maps") : 0u};
     a.seq.dispatch(pipeline(a.ctx, "heatmap_score", 5, 20, {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {a.in[2].view, rt::Access::Read}, {(sym ? a.in[3] : a.in[1]).view, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
-                   &push, sizeof(push), grid_groups(push.P, local, d));
+                   &push, sizeof(push), grid_groups(push.P, local, d), B);
     uint32_t norm_local = local;
     while (norm_local > 1 && norm_local * 8 > d.max_shared_memory) norm_local /= 2;
     a.seq.dispatch(pipeline(a.ctx, "heatmap_norm", 1, 4, {norm_local}), {{a.out[0].view, rt::Access::ReadWrite}},
-                   &push.P, 4, 1);
+                   &push.P, 4, B);
 }
 
 }  // namespace

@@ -1,5 +1,5 @@
 // tactile_preprocess: I32 [H, W, 3] image (byte values, see tactile_preprocess.h)
-// -> F32 [1, 3, size, size] network input, SPEC section 2: T / 255, centre crop
+// -> F32 [1, 3, size, size] network input (a batch [B, H, W, 3] -> [B, 3, size, size]), SPEC section 2: T / 255, centre crop
 // (params crop; zero padding), bilinear resize to `size` (align_corners false,
 // no antialias), ImageNet mean/std. Values outside 0..255 are clamped (both paths).
 // -> shaders/tactile_preprocess.comp
@@ -35,11 +35,15 @@ const double kMean[3] = {0.485, 0.456, 0.406};
 const double kStd[3] = {0.229, 0.224, 0.225};
 
 struct Prep {
-    int64_t h, w, crop, size;
+    int64_t batch, h, w, crop, size;
 };
 
-Prep prep_params(const Shape& img, const Params& p) {
-    if (img.size() != 3 || img[2] != 3) throw Error("image must be [H, W, 3] (RGB), got " + shape_str(img));
+Prep prep_params(const Shape& shape, const Params& p) {
+    if ((shape.size() != 3 && shape.size() != 4) || shape.back() != 3)
+        throw Error("image must be [H, W, 3] (RGB) or a batch [B, H, W, 3], got " + shape_str(shape));
+    if (shape.size() == 4 && shape[0] < 1) throw Error("the image batch " + shape_str(shape) + " is empty");
+    const int64_t batch = shape.size() == 4 ? shape[0] : 1;
+    const Shape img(shape.end() - 3, shape.end());
     if (img[0] < kMinTactileSide || img[1] < kMinTactileSide)
         throw Error("image " + shape_str(img) + " is smaller than " + std::to_string(kMinTactileSide) + "x" +
                     std::to_string(kMinTactileSide));
@@ -49,7 +53,7 @@ Prep prep_params(const Shape& img, const Params& p) {
             throw Error(std::string("param ") + name + " must be an integer in 1..65536, got " + std::to_string(v));
         return int64_t(v);
     };
-    Prep q{img[0], img[1], get("crop"), get("size")};
+    Prep q{batch, img[0], img[1], get("crop"), get("size")};
     if (q.crop * (2 * q.size + 1) > (int64_t(1) << 31) - 1)
         throw Error("crop " + std::to_string(q.crop) + " and size " + std::to_string(q.size) +
                     " overflow the shader's 32-bit source index");
@@ -60,7 +64,7 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     expect_input_count(in, 1, 1);
     if (in[0].type != ElemType::I32) throw Error("image must be I32 (one byte value per element)");
     Prep q = prep_params(in[0].shape, p);
-    return {Shape{1, 3, q.size, q.size}};
+    return {Shape{q.batch, 3, q.size, q.size}};
 }
 
 // PyTorch's source index and the weight of the second tap, along one axis.
@@ -76,35 +80,38 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const HostTensor& img = *in[0];
     Prep q = prep_params(img.shape, p);
     const int64_t top = center_crop_start(q.h, q.crop), left = center_crop_start(q.w, q.crop);
-    auto px = [&](int64_t c, int64_t cy, int64_t cx) {  // crop space, [0, 1]
+    auto px = [&](int64_t b, int64_t c, int64_t cy, int64_t cx) {  // crop space, [0, 1]
         int64_t y = cy + top, x = cx + left;
         if (y < 0 || y >= q.h || x < 0 || x >= q.w) return 0.0;
-        return double(std::clamp(img.int_at(size_t((y * q.w + x) * 3 + c)), 0, 255)) / 255.0;
+        return double(std::clamp(img.int_at(size_t(((b * q.h + y) * q.w + x) * 3 + c)), 0, 255)) / 255.0;
     };
-    for (int64_t c = 0; c < 3; ++c)
-        for (int64_t oy = 0; oy < q.size; ++oy)
-            for (int64_t ox = 0; ox < q.size; ++ox) {
-                int64_t y0, y1, x0, x1;
-                double ly, lx;
-                source(oy, q.crop, q.size, y0, y1, ly);
-                source(ox, q.crop, q.size, x0, x1, lx);
-                double v = (1 - ly) * ((1 - lx) * px(c, y0, x0) + lx * px(c, y0, x1)) +
-                           ly * ((1 - lx) * px(c, y1, x0) + lx * px(c, y1, x1));
-                out[0]->data[size_t((c * q.size + oy) * q.size + ox)] = float((v - kMean[c]) / kStd[c]);
-            }
+    for (int64_t b = 0; b < q.batch; ++b)
+        for (int64_t c = 0; c < 3; ++c)
+            for (int64_t oy = 0; oy < q.size; ++oy)
+                for (int64_t ox = 0; ox < q.size; ++ox) {
+                    int64_t y0, y1, x0, x1;
+                    double ly, lx;
+                    source(oy, q.crop, q.size, y0, y1, ly);
+                    source(ox, q.crop, q.size, x0, x1, lx);
+                    double v = (1 - ly) * ((1 - lx) * px(b, c, y0, x0) + lx * px(b, c, y0, x1)) +
+                               ly * ((1 - lx) * px(b, c, y1, x0) + lx * px(b, c, y1, x1));
+                    out[0]->data[size_t(((b * 3 + c) * q.size + oy) * q.size + ox)] = float((v - kMean[c]) / kStd[c]);
+                }
 }
 
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     Prep q = prep_params(a.in[0].shape, a.params);
-    uint32_t local = row_local_size(d, 3 * uint64_t(q.size));
-    const rt::Pipeline& pipe = pipeline(a.ctx, "tactile_preprocess", 2, 24, {local});
-    struct { uint32_t h, w, crop, s; int32_t top, left; } push{
+    const uint64_t rows = uint64_t(q.batch) * 3 * uint64_t(q.size);
+    uint32_t local = row_local_size(d, rows);
+    const rt::Pipeline& pipe = pipeline(a.ctx, "tactile_preprocess", 2, 28, {local});
+    struct { uint32_t h, w, crop, s; int32_t top, left; uint32_t rows; } push{
         uint32_t(q.h), uint32_t(q.w), uint32_t(q.crop), uint32_t(q.size),
-        int32_t(center_crop_start(q.h, q.crop)), int32_t(center_crop_start(q.w, q.crop))};
+        int32_t(center_crop_start(q.h, q.crop)), int32_t(center_crop_start(q.w, q.crop)), to_u32(rows, "output rows")};
     to_u32(numel(a.in[0].shape), "image size");
+    to_u32(numel(a.out[0].shape), "output size");
     a.seq.dispatch(pipe, {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, sizeof(push),
-                   grid_groups(3 * uint64_t(q.size), local, d));
+                   grid_groups(rows, local, d));
 }
 
 }  // namespace
