@@ -210,6 +210,39 @@ TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[si
     require_error([&] { build_dataset(objs, o); }, {"ds_build_a", "other options"});
 }
 
+TEST_CASE("dataset builder: --extra-views renders each extra contact several times", "[sim]") {
+    BuildOptions o;
+    o.contacts = 10;
+    o.extra = 9;
+    o.extra_views = 3;
+    o.n_points = 128;
+    o.seed = 5;
+    o.threads = 1;
+    o.out = fresh_dir("ds_build_views").string();
+    build_dataset({{"shape:box", 80.0}}, o);
+    Dataset d = read_dataset(o.out);
+    REQUIRE(d.objects.size() == 1);
+    const auto extra = d.objects[0].touches_of("extra");
+    REQUIRE(extra.size() == 9);
+    // Three contacts, three renders each: one place (the tilt moves the contact
+    // by at most a few tenths of a mm), other spins and presses.
+    for (size_t g = 0; g < 9; g += 3)
+        for (size_t v = 1; v < 3; ++v) {
+            const auto &a = *extra[g], &b = *extra[g + v];
+            double d2 = 0;
+            for (int k = 0; k < 3; ++k) d2 += (a.contact[size_t(k)] - b.contact[size_t(k)]) * (a.contact[size_t(k)] - b.contact[size_t(k)]);
+            CHECK(d2 < 1.0);
+            CHECK(a.spin_deg != b.spin_deg);
+            CHECK(a.press_mm != b.press_mm);
+        }
+    double d01 = 0;
+    for (int k = 0; k < 3; ++k) d01 += (extra[0]->contact[size_t(k)] - extra[3]->contact[size_t(k)]) * (extra[0]->contact[size_t(k)] - extra[3]->contact[size_t(k)]);
+    CHECK(d01 > 1.0);  // the next group is another place
+    // A dataset built with one view per contact is not resumed with three.
+    o.extra_views = 1;
+    require_error([&] { build_dataset({{"shape:box", 80.0}}, o); }, {"ds_build_views", "other options"});
+}
+
 TEST_CASE("dataset builder: object list errors", "[sim]") {
     fs::path d = fresh_dir("ds_list");
     std::ofstream(d / "list.txt") << "# comment\nshape:sphere 50\nfoo.off abc\n";

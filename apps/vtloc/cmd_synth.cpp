@@ -33,6 +33,8 @@ const char* kHelp =
     "touches:\n"
     "  --contacts N        train + test contacts per object (default 40; 7:3 split)\n"
     "  --extra N           extra training touches per object, >= 2 mm from test contacts (default 0)\n"
+    "  --extra-views V     render each extra contact V times, each with its own spin, press, tilt\n"
+    "                      and look (default 1: N contacts; V: N / V contacts)\n"
     "  --n-points N        points per object cloud (default 1024)\n"
     "  --max-tilt DEG      sensor axis tilt, uniform in 0..DEG, at most 10 (default 5)\n"
     "  --plain-look        no appearance randomisation of training touches\n"
@@ -72,7 +74,7 @@ int check_sensor(const std::string& out) {
 int cmd_synth(Session&, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--out"}, {"--objects"}, {"--mesh-dir"}, {"--shape", true, true}, {"--mesh", true, true},
-            {"--scale-mm"}, {"--list-shapes", false}, {"--contacts"}, {"--extra"}, {"--n-points"},
+            {"--scale-mm"}, {"--list-shapes", false}, {"--contacts"}, {"--extra"}, {"--extra-views"}, {"--n-points"},
             {"--max-tilt"}, {"--plain-look", false}, {"--view", false}, {"--seed"}, {"--threads"}, {"--calibration"},
             {"--background"}, {"--mm-per-px"}, {"--check-sensor"}});
     if (a.help()) {
@@ -102,6 +104,7 @@ int cmd_synth(Session&, int argc, char** argv) {
         o.out = a.required("--out");
         o.contacts = a.integer("--contacts", 40, 2, 100000);
         o.extra = a.integer("--extra", 0, 0, 1000000);
+        o.extra_views = a.integer("--extra-views", 1, 1, 1000);
         o.n_points = a.integer("--n-points", 1024, 1, 1 << 20);
         o.max_tilt_deg = a.number("--max-tilt", 5);
         if (o.max_tilt_deg < 0 || o.max_tilt_deg > 10) throw UsageError("--max-tilt must be within 0..10 degrees");

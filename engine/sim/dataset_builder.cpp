@@ -50,6 +50,7 @@ std::string options_json(const BuildOptions& o) {
               {"min_separation_mm", o.min_separation_mm}, {"unseen_fraction", o.unseen_fraction},
               {"randomize_train_look", o.randomize_train_look}, {"calibration", o.calibration},
               {"background", o.background}, {"mm_per_px", o.mm_per_px ? *o.mm_per_px : 0.0}};
+    if (o.extra_views != 1) j["extra_views"] = o.extra_views;  // absent: datasets built before it still resume
     return j.dump();
 }
 

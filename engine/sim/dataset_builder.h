@@ -27,6 +27,7 @@ struct BuildOptions {
     int contacts = 40;                // train + test contacts per object
     double test_fraction = 0.3;       // the 7:3 contact split
     int extra = 0;                    // extra training touches per object (>= 2 mm from every test contact)
+    int extra_views = 1;              // renders per extra contact, each with its own spin, press, tilt and look
     int n_points = 1024;
     double max_tilt_deg = 5;          // tilt of the sensor axis, uniform in [0, max]
     double press_min_mm = 0.3, press_max_mm = 1.5;

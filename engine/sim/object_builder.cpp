@@ -218,30 +218,42 @@ void collection_order(std::vector<TouchRecord>& recs, const std::vector<SensorPo
 }
 
 // Extra training touches: new contacts, never within 2 mm of a test contact.
+// Each contact gets extra_views renders in a row (fewer only for the last, when
+// extra is not a multiple), each with its own spin, press, tilt and look, so that
+// training sees one place under the nuisances a network must learn to ignore; a
+// contact where any of them fails is dropped whole.
 void extra_touches(Shared& sh, TouchRenderer& renderer, Draws& draws, size_t n_test, const fs::path& dir,
                    std::vector<TouchRecord>& recs) {
     const BuildOptions& opt = sh.opt;
     int done = 0, n = 0;
     while (done < opt.extra && n < 50 * opt.extra + 200) {
-        ++n;
         Vec3 p, nrm;
         draws.next_point(p, nrm);
-        TouchParams tp = draws.params();
-        Appearance look = opt.randomize_train_look ? random_look(draws.rng) : Appearance{};
-        if (!sh.background.empty()) look.background = sh.background;
-        Touch t = renderer.render(p, nrm, tp, look, draws.rng.next_u64());
-        if (!t.ok) {
-            sh.rejected++;
-            continue;
+        const int views = std::min(opt.extra_views, opt.extra - done);
+        std::vector<std::pair<Touch, TouchParams>> group;
+        for (int v = 0; v < views; ++v) {
+            ++n;
+            TouchParams tp = draws.params();
+            Appearance look = opt.randomize_train_look ? random_look(draws.rng) : Appearance{};
+            if (!sh.background.empty()) look.background = sh.background;
+            Touch t = renderer.render(p, nrm, tp, look, draws.rng.next_u64());
+            if (!t.ok) {
+                sh.rejected++;
+                break;
+            }
+            bool near_test = false;
+            for (size_t k = 0; k < n_test; ++k) near_test = near_test || dist(recs[k].contact, t.contact) < 2.0;
+            if (near_test) break;
+            group.push_back({std::move(t), tp});
         }
-        bool near_test = false;
-        for (size_t k = 0; k < n_test; ++k) near_test = near_test || dist(recs[k].contact, t.contact) < 2.0;
-        if (near_test) continue;
-        TouchRecord r = record(t, int(recs.size()), "extra", tp);
-        write_png(dir / r.image, t.image, sh.calib.height, sh.calib.width);
-        recs.push_back(r);
-        ++done;
-        sh.touches++;
+        if (int(group.size()) < views) continue;
+        for (auto& [t, tp] : group) {
+            TouchRecord r = record(t, int(recs.size()), "extra", tp);
+            write_png(dir / r.image, t.image, sh.calib.height, sh.calib.width);
+            recs.push_back(r);
+            ++done;
+            sh.touches++;
+        }
     }
 }
 
