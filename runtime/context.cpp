@@ -142,6 +142,7 @@ DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     d.driver_version = p.driverVersion;
     d.vendor_id = p.vendorID;
     d.subgroup_size = std::max(1u, sub.subgroupSize);
+    d.subgroup_ops = (sub.supportedStages & VK_SHADER_STAGE_COMPUTE_BIT) ? sub.supportedOperations : 0u;
     d.max_shared_memory = l.maxComputeSharedMemorySize;
     d.max_invocations = l.maxComputeWorkGroupInvocations;
     for (int i = 0; i < 3; ++i) {

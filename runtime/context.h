@@ -26,6 +26,8 @@ struct DeviceInfo {
     uint32_t driver_version = 0;
     uint32_t vendor_id = 0;
     uint32_t subgroup_size = 1;
+    // VkSubgroupFeatureFlags usable in compute shaders (0 when compute has none).
+    uint32_t subgroup_ops = 0;
     uint32_t max_shared_memory = 0;           // bytes per workgroup
     uint32_t max_invocations = 0;             // per workgroup
     std::array<uint32_t, 3> max_workgroup_size{};

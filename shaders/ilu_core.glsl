@@ -4,7 +4,11 @@
 // gate in shared memory.
 // Matvecs: the workgroup is R = L / G row groups of G lanes; a group computes one
 // output row per round, its lanes reading consecutive weights, and the lanes'
-// partial sums meet in shared memory (no subgroup size assumed).
+// partial sums meet in shared memory (no subgroup size assumed) or, with
+// ILU_SUBGROUP defined (ilu_subgroup.comp, ilu_step_subgroup.comp: the host picks
+// them when the device has subgroup shuffles, G divides the subgroup size and L
+// is whole subgroups), in registers by a butterfly of subgroup shuffles: no
+// barrier per round, which on lavapipe is most of an iteration's cost.
 // The x half of each gate ([h, x] input order) is the same in every iteration,
 // so W[:, C:3C] x + b is computed once (ilu_init) and kept in gx.
 layout(local_size_x_id = 0) in;
@@ -43,13 +47,23 @@ shared float c[3];
 #define tid gl_LocalInvocationID.x
 // ilu.comp runs one workgroup per touch of a batch: its row of F^t (F^p is shared).
 #define ft_row (gl_WorkGroupID.x * C)
+#ifdef ILU_SUBGROUP
+// A row group is G consecutive invocations of one subgroup (G divides its size).
+#define lane (gl_SubgroupInvocationID % G)
+#define grp ((gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID) / G)
+#else
 #define lane (gl_LocalInvocationID.x % G)
 #define grp (gl_LocalInvocationID.x / G)
+#endif
 
 // Sum of the G lanes' partials of each row group, valid in lane 0. Called in
 // uniform control flow; the second barrier frees `part` for the next round.
 float group_sum(float s) {
     if (G == 1u) return s;  // one lane per row: nothing to combine, no barrier
+#ifdef ILU_SUBGROUP
+    for (uint o = G / 2u; o > 0u; o >>= 1u) s += subgroupShuffleXor(s, o);  // stays within the aligned group
+    return s;
+#endif
     part[tid] = s;
     barrier();
     float t = 0.0;

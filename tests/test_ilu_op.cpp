@@ -59,18 +59,21 @@ TEST_CASE("ilu matches the CPU reference at odd sizes", "[op][ilu]") {
     }
 }
 
-TEST_CASE("ilu matches the CPU reference with 1, 4 and 16 lanes per row", "[op][ilu]") {
+TEST_CASE("ilu matches the CPU reference with 1, 4, 8 and 16 lanes per row, both ways of summing", "[op][ilu]") {
     // The shader's row groups: 1 lane (no partial sums) up to 16 (coalesced rows).
+    // Where the device has subgroup shuffles, groups that fit a subgroup sum by
+    // shuffles (lavapipe, subgroup size 8: 4 and 8 lanes; size 4: 4 lanes), the
+    // others through shared memory; `subgroup` off forces shared memory.
     const int64_t C = 37, H = 19;
     WeightStore w = random_ilu(C, H, 11);
-    for (int lanes : {1, 4, 16}) {
-        INFO("lanes " << lanes);
+    for (auto [lanes, subgroup] : {std::pair{1, true}, {4, true}, {8, true}, {8, false}, {16, true}}) {
+        INFO("lanes " << lanes << ", subgroup sums allowed " << subgroup);
         Graph g;
         std::vector<int> in{g.input("ft", {1, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
         for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
                               "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
             in.push_back(g.weight(n, w.get(n).shape));
-        std::vector<int> out = ops::ilu(g, in, 5, "", lanes);
+        std::vector<int> out = ops::ilu(g, in, 5, "", lanes, subgroup);
         g.output(out[0], "c");
         test::run_gpu_and_compare(g, w, {{"ft", random_tensor({1, C}, 1, -2.0f, 2.0f)},
                                          {"fp", random_tensor({1, C}, 2, -2.0f, 2.0f)}, {"iters", ilu_iters_input(5, 5)}});

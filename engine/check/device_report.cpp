@@ -54,7 +54,16 @@ DeviceReport device_report(rt::Context& ctx) {
     auto xyz = [](const std::array<uint32_t, 3>& a) {
         return std::to_string(a[0]) + " x " + std::to_string(a[1]) + " x " + std::to_string(a[2]);
     };
+    std::string ops;
+    const std::pair<uint32_t, const char*> names[] = {
+        {VK_SUBGROUP_FEATURE_BASIC_BIT, "basic"},       {VK_SUBGROUP_FEATURE_VOTE_BIT, "vote"},
+        {VK_SUBGROUP_FEATURE_ARITHMETIC_BIT, "arithmetic"}, {VK_SUBGROUP_FEATURE_BALLOT_BIT, "ballot"},
+        {VK_SUBGROUP_FEATURE_SHUFFLE_BIT, "shuffle"},   {VK_SUBGROUP_FEATURE_SHUFFLE_RELATIVE_BIT, "shuffle_relative"},
+        {VK_SUBGROUP_FEATURE_CLUSTERED_BIT, "clustered"}, {VK_SUBGROUP_FEATURE_QUAD_BIT, "quad"}};
+    for (auto [bit, name] : names)
+        if (d.subgroup_ops & bit) ops.append(ops.empty() ? "" : " ").append(name);
     r.limits = {{"subgroup size", std::to_string(d.subgroup_size)},
+                {"subgroup ops (compute)", ops.empty() ? "none" : ops},
                 {"max workgroup invocations", std::to_string(d.max_invocations)},
                 {"max workgroup size", xyz(d.max_workgroup_size)},
                 {"max workgroup count", xyz(d.max_workgroup_count)},

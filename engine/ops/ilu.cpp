@@ -56,11 +56,12 @@ void gpu(const GpuOpArgs& a) {
     for (const GpuTensor& t : a.in) b.push_back({t.view, rt::Access::Read});
     for (const GpuTensor& t : a.out) b.push_back({t.view, rt::Access::Write});
     const uint32_t rows = to_u32(numel(a.in[0].shape) / a.in[0].shape.back(), "ILU batch");
-    a.seq.dispatch(pipeline(a.ctx, "ilu", 15, 4, {l.L, l.C, l.H, l.G}), b, &max_iters, 4, rows);
+    a.seq.dispatch(pipeline(a.ctx, l.subgroup ? "ilu_subgroup" : "ilu", 15, 4, {l.L, l.C, l.H, l.G}), b, &max_iters, 4,
+                   rows);
 }
 
 }  // namespace
 
-const OpDef op_ilu{"ilu", infer, cpu, gpu, 0, {"max_iters", "lanes"}};
+const OpDef op_ilu{"ilu", infer, cpu, gpu, 0, {"max_iters", "lanes", "subgroup"}};
 
 }  // namespace vtloc::ops

@@ -99,6 +99,10 @@ Launch launch(const GpuOpArgs& a) {
     l.L = elementwise_local_size(d);
     l.G = uint32_t(a.params.get("lanes", 8));  // a power of two dividing L
     while (l.G > 1 && l.L % l.G) l.G /= 2;
+    const uint32_t sg = d.subgroup_size;
+    l.subgroup = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
+                 (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && l.G > 1 && l.G <= sg && sg % l.G == 0 &&
+                 l.L % sg == 0;
     const uint64_t shared = (9ull * l.C + l.H + l.L + 3) * 4;
     if (shared > d.max_shared_memory)
         throw Error("ILU with C = " + std::to_string(l.C) + " needs " + std::to_string(shared) +

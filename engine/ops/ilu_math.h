@@ -29,8 +29,12 @@ void iterate(const std::vector<const HostTensor*>& in, State& s);
 // The shaders' spec constants (workgroup size L, C, H, lanes per row G); throws
 // when h and the gates do not fit the device's shared memory. Param "lanes"
 // overrides the default of 8 lanes per row (tests cover both shader paths).
+// subgroup: the row sums by subgroup shuffles (the *_subgroup shaders) where the
+// device has them, G divides its subgroup size and L is whole subgroups; param
+// "subgroup" = 0 keeps the shared-memory sums (tests run both).
 struct Launch {
     uint32_t L, C, H, G;
+    bool subgroup;
 };
 Launch launch(const GpuOpArgs& a);
 

@@ -70,11 +70,12 @@ void gpu(const GpuOpArgs& a) {
     std::vector<rt::Binding> b;
     for (const GpuTensor& t : a.in) b.push_back({t.view, rt::Access::Read});
     for (const GpuTensor& t : a.out) b.push_back({t.view, rt::Access::Write});
-    a.seq.dispatch(pipeline(a.ctx, "ilu_step", 17, 8, {l.L, l.C, l.H, l.G}), b, push, 8, 1);
+    a.seq.dispatch(pipeline(a.ctx, l.subgroup ? "ilu_step_subgroup" : "ilu_step", 17, 8, {l.L, l.C, l.H, l.G}), b,
+                   push, 8, 1);
 }
 
 }  // namespace
 
-const OpDef op_ilu_step{"ilu_step", infer, cpu, gpu, 0, {"max_iters", "step", "lanes"}};
+const OpDef op_ilu_step{"ilu_step", infer, cpu, gpu, 0, {"max_iters", "step", "lanes", "subgroup"}};
 
 }  // namespace vtloc::ops
