@@ -144,15 +144,26 @@ TEST_CASE("dataset: reader errors name the file", "[sim]") {
     require_error([&] { read_dataset(root.string()); }, {"points.csv", "missing column 'nz'"});
 }
 
-TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[sim]") {
+namespace {
+
+// Small, quick builds: 10 contacts, 128 points, one thread, into a fresh folder.
+BuildOptions small_build(const std::string& dir, int extra, int extra_views = 1) {
     BuildOptions o;
     o.contacts = 10;
-    o.extra = 3;
+    o.extra = extra;
+    o.extra_views = extra_views;
     o.n_points = 128;
     o.seed = 5;
     o.threads = 1;
+    o.out = fresh_dir(dir).string();
+    return o;
+}
+
+}  // namespace
+
+TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[sim]") {
+    BuildOptions o = small_build("ds_build_a", 3);
     std::vector<ObjectSource> objs = {{"shape:sphere", 60.0}, {"shape:box", 80.0}, {"shape:comb_fine", {}}};
-    o.out = fresh_dir("ds_build_a").string();
     BuildReport ra = build_dataset(objs, o);
     CHECK(ra.objects == 3);
     CHECK(ra.resumed == 0);
@@ -211,14 +222,7 @@ TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[si
 }
 
 TEST_CASE("dataset builder: --extra-views renders each extra contact several times", "[sim]") {
-    BuildOptions o;
-    o.contacts = 10;
-    o.extra = 9;
-    o.extra_views = 3;
-    o.n_points = 128;
-    o.seed = 5;
-    o.threads = 1;
-    o.out = fresh_dir("ds_build_views").string();
+    BuildOptions o = small_build("ds_build_views", 9, 3);
     build_dataset({{"shape:box", 80.0}}, o);
     Dataset d = read_dataset(o.out);
     REQUIRE(d.objects.size() == 1);
