@@ -10,6 +10,8 @@
 // MODE 1 (gather): row m = (centre m / NS, slot) is [features of q, xyz of q - centre],
 //   q = idx[m], read straight from the cloud (SPEC 2: features first).
 // MODE 2 (group all): row m is [xyz of m, features of m] (xyz first, not centred).
+// MODE 3 (per point): row m is [features of m, xyz of m] (MODE 1's columns for the
+//   point itself, not centred: sa_gather.comp subtracts the centre's share).
 // MAXPOOL: out[g][n] = max over the NS rows of group g (point-major [M / NS][N]);
 //   else out is channel-major [N][M], the next layer's MODE 0 input.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
@@ -77,7 +79,7 @@ void block(uint m0, uint mend) {
         }
         return;
     }
-    // MODE 1 / 2: each row's source point, and for MODE 1 its offset from the centre.
+    // MODE 1 / 2 / 3: each row's source point, and for MODE 1 its offset from the centre.
     uint q[TM];
     vec3 xyz[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) {
@@ -88,10 +90,11 @@ void block(uint m0, uint mend) {
                           LOAD_A(q[i] * p.D + 2u) - centre[c + 2u]);
         } else {
             q[i] = rows[i];
-            xyz[i] = vec3(LOAD_A(3u * q[i]), LOAD_A(3u * q[i] + 1u), LOAD_A(3u * q[i] + 2u));
+            const uint d = MODE == 3u ? p.D : 3u;
+            xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
         }
     }
-    const uint kf = MODE == 1u ? 0u : 3u;  // first feature column of the row
+    const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
     if (MODE == 2u)
         [[unroll]] for (uint c = 0; c < 3; ++c) {
             [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = xyz[i][c];
@@ -112,7 +115,7 @@ void block(uint m0, uint mend) {
             fma_row(a, kf + k);
         }
     }
-    if (MODE == 1u)
+    if (MODE == 1u || MODE == 3u)
         [[unroll]] for (uint c = 0; c < 3; ++c) {
             [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = xyz[i][c];
             fma_row(a, p.CF + c);

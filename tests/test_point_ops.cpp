@@ -265,3 +265,48 @@ TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query
     }
     test::require_no_validation_messages();
 }
+
+TEST_CASE("layer one per source point plus sa_gather equals the gathered layer, both buffer paths",
+          "[op][sa_gather][group_linear]") {
+    // group_linear (Points) gives U = W [features, xyz] + b per source point;
+    // sa_gather takes U[q] - W_xyz c_s per ball row. Both match their CPU
+    // references, and together the direct gathered layer (group_linear, Gather):
+    // the same sums, grouped differently, so within the default tolerance.
+    const int64_t P = 301, S = 37, NS = 7, N = 10;
+    HostTensor cloud = test::random_tensor({P, 6}, 41), centres = test::random_tensor({S, 3}, 42), feat = test::random_tensor({P, 13}, 43);
+    std::vector<int32_t> idx(size_t(S * NS));
+    uint32_t st = 9;
+    for (auto& v : idx) v = int32_t((st = st * 1664525u + 1013904223u) >> 8) % int32_t(P);
+    for (bool own_features : {false, true}) {  // the cloud's normals, or a feature tensor from column 2
+        const int64_t fb = own_features ? 2 : 3, CF = own_features ? 11 : 3, K = CF + 3;
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            INFO("features " << (own_features ? "separate" : "the cloud's normals") << ", path " << ops::path_name(path));
+            Graph g;
+            TensorMap in{{"cloud", cloud}, {"centres", centres}, {"idx", HostTensor::from_ints({S, NS}, idx)},
+                         {"w", test::random_tensor({K, N}, 44, -0.5f, 0.5f)}, {"b", test::random_tensor({N}, 45)}};
+            const int x = g.input("cloud", cloud.shape), c = g.input("centres", centres.shape);
+            const int ix = g.input("idx", {S, NS}, ElemType::I32), w = g.input("w", {K, N}), b = g.input("b", {N});
+            int f = x;
+            if (own_features) {
+                f = g.input("feat", feat.shape);
+                in["feat"] = feat;
+            }
+            ops::GroupLinear per_point;
+            per_point.input = ops::GroupLinear::Input::Points;
+            per_point.feat_begin = fb;
+            per_point.path = path;
+            const int u = ops::group_linear(g, {x, w, b, f}, per_point);
+            g.output(u, "u");
+            g.output(ops::sa_gather(g, u, c, ix, w, ops::kActRelu, "", path), "factored");
+            ops::GroupLinear gather;
+            gather.input = ops::GroupLinear::Input::Gather;
+            gather.feat_begin = fb;
+            gather.act = ops::kActRelu;
+            gather.path = path;
+            g.output(ops::group_linear(g, {x, c, ix, w, b, f}, gather), "direct");
+            TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, in);
+            REQUIRE(out.at("factored").shape == Shape{N, S * NS});
+            test::require_close(out.at("factored"), out.at("direct"), test::Tolerance{}, "factored vs direct layer one");
+        }
+    }
+}

@@ -1,6 +1,6 @@
 // Self-test cases: fps, ball_query, point_group, group_max, group_linear
-// (gather, plain and group-all inputs; fused max; texel and storage-buffer
-// paths), cloud_normalize (the shapes of tests/test_point_ops.cpp) and
+// (gather, plain, group-all and per-point inputs; fused max; texel and
+// storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
 // normal_estimate (a sphere sample, as tests/test_normals.cpp).
 #include <cmath>
 
@@ -67,6 +67,28 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
     }
     return c;
+}
+
+// Layer one per source point (group_linear, Points) and sa_gather, both buffer paths.
+void add_sa_gather_cases(std::vector<OpCase>& v) {
+    const int64_t P = 301, S = 37, NS = 7, N = 10, K = 6;
+    std::vector<int32_t> idx(size_t(S * NS));
+    uint32_t st = 9;
+    for (auto& x : idx) x = int32_t((st = st * 1664525u + 1013904223u) >> 8) % int32_t(P);
+    for (ops::BufferPath path : ops::kBufferPaths) {
+        OpCase c("sa_gather", std::string("layer one per point of 301, 37 balls of 7, ") + ops::path_name(path));
+        const int x = c.input("cloud", random_tensor({P, 6}, 41)), w = c.input("w", random_tensor({K, N}, 44, -0.5f, 0.5f));
+        ops::GroupLinear per_point;
+        per_point.input = ops::GroupLinear::Input::Points;
+        per_point.feat_begin = 3;
+        per_point.path = path;
+        const int u = ops::group_linear(c.g, {x, w, c.input("b", random_tensor({N}, 45)), x}, per_point);
+        c.output(u, "u");
+        c.output(ops::sa_gather(c.g, u, c.input("centres", random_tensor({S, 3}, 42)),
+                                c.input("idx", HostTensor::from_ints({S, NS}, idx)), w, ops::kActRelu, "", path),
+                 "y");
+        v.push_back(std::move(c));
+    }
 }
 
 // group_linear on a plain input: the max over groups and a plain leaky layer.
@@ -138,6 +160,7 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
         v.push_back(stage_case("group_linear",
                                std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path", path));
     wide_cases(v);
+    add_sa_gather_cases(v);
     cloud_normalize_cases(v);
     normal_estimate_cases(v);
     return v;

@@ -25,6 +25,12 @@ std::pair<int, int> conv_bn(Graph& g, const WeightStore& w, const std::string& c
             g.weight(prepared::bias(conv), {out})};
 }
 
+// Layer one of a scale is computed per source point (sa_gather.cpp) when its
+// input is wider than this: the gather costs about as much per output as 100
+// multiply-adds of the direct layer on lavapipe (measured 2026-11-24: 8 ns
+// against 0.08 ns per multiply-add), so only the paper's SA2 (323 inputs) gains.
+constexpr int64_t kFactorFromK = 128;
+
 // A stage's input: xyz in columns 0..2 of `xyz`, features in columns feat_begin.. of `feat`
 // (-1: none), `channels` feature columns, `points` rows.
 struct StageInput {
@@ -60,6 +66,18 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         }
         // Fused: the first layer gathers its rows from the cloud, the last
         // one keeps only the max over each centre's neighbours.
+        if (l == 0 && widths.size() > 1 && si_in.channels + 3 > kFactorFromK && si_in.points < st.npoint * ns) {
+            // Layer one once per source point, then each ball row takes its
+            // point's value less the centre's share (sa_gather.cpp).
+            ops::GroupLinear pl;
+            pl.input = ops::GroupLinear::Input::Points;
+            pl.feat_begin = fb;
+            std::vector<int> pins{si_in.xyz, wv, bv};
+            if (feat >= 0) pins.push_back(feat);
+            const int u = ops::group_linear(g, pins, pl, node + ".points");
+            x = ops::sa_gather(g, u, centres, ball, wv, ops::kActRelu, node);
+            continue;
+        }
         ops::GroupLinear gl;
         gl.act = ops::kActRelu;
         std::vector<int> ins{x};

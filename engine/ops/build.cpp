@@ -123,10 +123,15 @@ int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::str
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name) {
     Params p{{"in", double(l.input)}, {"act", double(l.act)}, {"slope", l.slope},
              {"texel", flag(l.path == BufferPath::Texel)}};
-    if (l.input == GroupLinear::Input::Gather) p.set("feat_begin", d(l.feat_begin));
+    if (l.input == GroupLinear::Input::Gather || l.input == GroupLinear::Input::Points) p.set("feat_begin", d(l.feat_begin));
     if (l.max) p.set("max", 1);
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls
     return g.add1("group_linear", in, p, name);
+}
+
+int sa_gather(Graph& g, int u, int centres, int idx, int weight_kn, Act act, const std::string& name, BufferPath path) {
+    return g.add1("sa_gather", {u, centres, idx, weight_kn}, {{"act", double(act)}, {"texel", flag(path == BufferPath::Texel)}},
+                  name);
 }
 
 int normal_estimate(Graph& g, int points, int order, int cell_start, const PointGrid& grid, int64_t k, int orient,

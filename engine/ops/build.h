@@ -83,8 +83,8 @@ int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, c
 int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name = "");
 int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::string& name = "");
 struct GroupLinear {
-    enum class Input { Rows = 0, Gather = 1, GroupAll = 2 } input = Input::Rows;
-    int64_t feat_begin = 0;  // Gather: first feature column
+    enum class Input { Rows = 0, Gather = 1, GroupAll = 2, Points = 3 } input = Input::Rows;
+    int64_t feat_begin = 0;  // Gather, Points: first feature column
     bool max = false;        // keep only the max over each group of `group` rows
     int64_t group = 1;
     Act act = kActNone;
@@ -92,6 +92,10 @@ struct GroupLinear {
     BufferPath path = BufferPath::Texel;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
+// Layer one of a set-abstraction MLP from its per-point part u = group_linear
+// (Points) of the same weight (sa_gather.cpp): rows of the ball `idx` around `centres`.
+int sa_gather(Graph& g, int u, int centres, int idx, int weight_kn, Act act, const std::string& name = "",
+              BufferPath path = BufferPath::Texel);
 // Normals from the k nearest points found through `grid` (point_grid.h);
 // orient: 0 as computed, 1 away from `ref` (a centroid), 2 towards it (a camera).
 int normal_estimate(Graph& g, int points, int order, int cell_start, const PointGrid& grid, int64_t k, int orient,

@@ -10,6 +10,9 @@
 //      [features of q from column feat_begin, xyz of q - centre s], q = idx[s, j].
 //   2: group all: [xyz [M, 3], W^T, bias (, features [M, C])]; row m is
 //      [xyz of m, features of m] (xyz first, not centred).
+//   3: per point: [points [M, D >= 3], W^T, bias (, features [M, DF])]; row m is
+//      [features of m from column feat_begin, xyz of m] (a set-abstraction
+//      layer's columns, not centred: sa_gather subtracts the centre's part).
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's.
@@ -27,7 +30,7 @@ namespace {
 struct Layout {
     int mode = 0;
     bool max = false;
-    GatherShape g;  // in = 1 (in = 2: P = M, D = 3, DF = C)
+    GatherShape g;  // in = 1 (in = 2, 3: P = M; in = 2: D = 3, DF = C)
     int64_t M = 0, K = 0, N = 0, NS = 1;
     size_t w = 1;   // index of W^T among the inputs
     bool feat = false;
@@ -35,7 +38,7 @@ struct Layout {
 
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l;
-    l.mode = p.has("in") ? int(int_param(p, "in", 0, 2)) : 0;
+    l.mode = p.has("in") ? int(int_param(p, "in", 0, 3)) : 0;
     l.max = p.get("max", 0) != 0;
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
@@ -45,6 +48,21 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
         l.feat = in.size() == 6;
         l.g = gather_shape(in[0], in[1], in[2], l.feat ? &in[5] : nullptr, p);
         l.M = l.g.rows(), l.K = l.g.K(), l.NS = l.g.NS, l.w = 3;
+    } else if (l.mode == 3) {
+        expect_input_count(in, 3, 4);
+        const Shape& x = in[0].shape;
+        if (x.size() != 2 || x[1] < 3) throw Error("points must be [M, D >= 3], got " + shape_str(x));
+        l.feat = in.size() == 4;
+        l.M = l.g.P = x[0], l.g.D = x[1];
+        if (l.feat) {
+            if (in[3].shape.size() != 2 || in[3].shape[0] != l.M)
+                throw Error("features " + shape_str(in[3].shape) + " must have one row per point (" + std::to_string(l.M) + ")");
+            l.g.DF = in[3].shape[1];
+            l.g.FB = p.has("feat_begin") ? int_param(p, "feat_begin", 0, l.g.DF) : 0;
+            l.g.CF = l.g.DF - l.g.FB;
+        }
+        l.K = l.g.CF + 3;
+        if (l.max) l.NS = int_param(p, "group", 1, std::max<int64_t>(1, l.M));
     } else {
         expect_input_count(in, 3, l.mode == 2 ? 4 : 3);
         const Shape& x = in[0].shape;
@@ -97,6 +115,8 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
         for (int64_t k = 0; k < l.K; ++k)
             row[size_t(k)] = l.mode == 1   ? gather_value(*in[0], *in[1], *in[2], feat, l.g, m, k)
                              : l.mode == 2 ? (k < 3 ? in[0]->data[size_t(3 * m + k)] : feat->data[size_t(m * l.g.CF + k - 3)])
+                             : l.mode == 3 ? (k < l.g.CF ? feat->data[size_t(m * l.g.DF + l.g.FB + k)]
+                                                         : in[0]->data[size_t(m * l.g.D + k - l.g.CF)])
                                            : in[0]->data[size_t(k * l.M + m)];
         for (int64_t n = 0; n < l.N; ++n) {
             double acc = b.data[size_t(n)];

@@ -38,6 +38,7 @@ extern const OpDef op_ball_query;       // ball_query.cpp
 extern const OpDef op_point_group;      // point_group.cpp
 extern const OpDef op_group_max;        // point_group.cpp
 extern const OpDef op_group_linear;     // group_linear.cpp
+extern const OpDef op_sa_gather;     // sa_gather.cpp
 extern const OpDef op_cloud_normalize;  // cloud_normalize.cpp
 extern const OpDef op_normal_estimate;  // normal_estimate.cpp
 }  // namespace vtloc::ops

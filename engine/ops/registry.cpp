@@ -34,6 +34,7 @@ const OpDef* const kOps[] = {
     &ops::op_point_group,
     &ops::op_group_max,
     &ops::op_group_linear,
+    &ops::op_sa_gather,
     &ops::op_cloud_normalize,
     &ops::op_normal_estimate,
 };
