@@ -80,6 +80,74 @@ TEST_CASE("ilu matches the CPU reference with 1, 4, 8 and 16 lanes per row, both
     }
 }
 
+namespace {
+
+// The fused op on explicit inputs, with the shader variant chosen by `wave`.
+std::vector<int> ilu_nodes(Graph& g, const WeightStore& w, int64_t B, int64_t C, int max_iters, int wave) {
+    std::vector<int> in{g.input("ft", {B, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
+    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+        in.push_back(g.weight(n, w.get(n).shape));
+    return ops::ilu(g, in, max_iters, "", 0, true, wave);
+}
+
+}  // namespace
+
+TEST_CASE("ilu's register-resident shader matches the CPU reference, in one subgroup and across several", "[op][ilu]") {
+    // wave = the subgroup size: h lives in registers and blocks move by shuffles;
+    // 2 and 4 times it: the same shader passes blocks through shared memory. Sizes
+    // cover a lane with no block (C = 4), several blocks per lane and a last
+    // block held by only some lanes (C = 20, H = 12 at 8 lanes).
+    const uint32_t sg = test::gpu().info().subgroup_size;
+    struct Case { int64_t C, H; int iters; };
+    for (Case c : {Case{4, 4, 3}, Case{20, 12, 9}, Case{64, 64, 16}, Case{128, 64, 5}}) {
+        WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C) + 7);
+        for (uint32_t wave : {sg, 2 * sg, 4 * sg}) {
+            INFO("C " << c.C << " H " << c.H << " workgroup " << wave << " (subgroup " << sg << ")");
+            Graph g;
+            std::vector<int> out = ilu_nodes(g, w, 1, c.C, c.iters, int(wave));
+            g.output(out[0], "c");
+            g.output(out[1], "contact");
+            test::run_gpu_and_compare(g, w, {{"ft", random_tensor({1, c.C}, 3, -2.0f, 2.0f)},
+                                             {"fp", random_tensor({1, c.C}, 4, -2.0f, 2.0f)},
+                                             {"iters", ilu_iters_input(c.iters, c.iters)}});
+        }
+    }
+}
+
+TEST_CASE("ilu's register-resident shader runs a batch, each row bit-identical to it alone", "[op][ilu]") {
+    const int64_t C = 64, H = 32, B = 4;
+    const int n = 6;
+    WeightStore w = random_ilu(C, H, 41);
+    const HostTensor ft = random_tensor({B, C}, 42, -2.0f, 2.0f), fp = random_tensor({1, C}, 43, -2.0f, 2.0f);
+    Graph g;
+    std::vector<int> all = ilu_nodes(g, w, B, C, n, int(test::gpu().info().subgroup_size));
+    g.output(all[1], "contact");
+    TensorMap got = test::run_gpu_and_compare(g, w, {{"ft", ft}, {"fp", fp}, {"iters", ilu_iters_input(n, n)}});
+    for (int64_t b = 0; b < B; ++b) {
+        Graph g1;
+        std::vector<int> one = ilu_nodes(g1, w, 1, C, n, int(test::gpu().info().subgroup_size));
+        g1.output(one[1], "contact");
+        HostTensor row({1, C});
+        std::copy_n(ft.data.begin() + b * C, C, row.data.begin());
+        TensorMap alone = GpuExecutor(test::gpu(), g1, w).run({{"ft", row}, {"fp", fp}, {"iters", ilu_iters_input(n, n)}});
+        for (int j = 0; j < 3; ++j) CHECK(got.at("contact").data[size_t(b * 3 + j)] == alone.at("contact").data[size_t(j)]);
+    }
+}
+
+TEST_CASE("ilu refuses a forced register-resident shader where it cannot run, by name", "[op][ilu]") {
+    WeightStore w = random_ilu(37, 19, 2);  // C not a multiple of 4
+    Graph g;
+    std::vector<int> out = ilu_nodes(g, w, 1, 37, 3, 16);
+    g.output(out[1], "contact");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, w), Catch::Contains("divisible by 4"));
+    WeightStore w2 = random_ilu(16, 8, 2);
+    Graph g2;
+    std::vector<int> out2 = ilu_nodes(g2, w2, 1, 16, 3, 12);  // not a power of two
+    g2.output(out2[1], "contact");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g2, w2), Catch::Contains("power-of-two"));
+}
+
 TEST_CASE("ilu runs a batch of states in one dispatch, each row as if alone", "[op][ilu]") {
     const int64_t C = 37, H = 19, B = 5;
     const int max_iters = 9;

@@ -1,5 +1,5 @@
 // Self-test cases: disentangle (whole and split into row chunks), gma_decode,
-// chamfer (one set and a batch), ilu (1/4/8/16 lanes per row), ilu_step, topk (ties;
+// chamfer (one set and a batch), ilu (1/4/8/16 lanes per row, register-resident), ilu_step, topk (ties;
 // a batch with its heat-maps), heatmap (with and without symmetry) and belief (the shapes of tests/test_gma_ops.cpp,
 // test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
 #include <cmath>
@@ -88,6 +88,9 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
 
     v.push_back(ilu_case(37, 19, 7, false, 0));
     v.push_back(ilu_case(301, 33, 3, false, 0));
+    // C and H multiples of 4: the register-resident shader (ilu_wave) where the device has shuffles.
+    v.push_back(ilu_case(64, 32, 16, false, 0));
+    v.push_back(ilu_case(20, 12, 9, false, 0));
     for (double lanes : {1.0, 4.0, 8.0, 16.0}) v.push_back(ilu_case(37, 19, 5, false, lanes));  // 4, 8: shuffles where they fit
     v.push_back(ilu_case(37, 19, 7, true, 0));
 

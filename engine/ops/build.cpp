@@ -76,10 +76,11 @@ int gma_decode(Graph& g, int x, const std::string& name) { return g.add1("gma_de
 std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name) { return g.add("chamfer", {a, b}, {}, name); }
 
 std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name, int lanes,
-                     bool subgroup) {
+                     bool subgroup, int wave) {
     Params p{{"max_iters", double(max_iters)}};
     if (lanes > 0) p.set("lanes", double(lanes));
     if (!subgroup) p.set("subgroup", 0);
+    if (wave != 1) p.set("wave", double(wave));
     return g.add("ilu", in, p, name);
 }
 

@@ -56,11 +56,13 @@ int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const st
 int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name = "");
 int gma_decode(Graph& g, int x, const std::string& name = "");
 std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "");
-// lanes: lanes per row of the fused GRU (0: the op's default).
-// lanes: 0 = the default; subgroup = false keeps the row sums in shared memory
-// even where the device has subgroup shuffles (engine/ops/ilu_math.h).
+// lanes: lanes per row of the fused GRU (0: the op's default); subgroup = false
+// keeps the row sums in shared memory even where the device has subgroup
+// shuffles; wave: 1 = the register-resident shader where it applies, 0 = never,
+// >= 2 = it with that workgroup size, an error where it cannot run
+// (engine/ops/ilu_math.h).
 std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name = "", int lanes = 0,
-                     bool subgroup = true);
+                     bool subgroup = true, int wave = 1);
 std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, int step, const std::string& name = "");
 std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "");
 // symmetry: -1 for none.

@@ -27,6 +27,38 @@ std::vector<double> matvec(const HostTensor& W, const HostTensor* b, int64_t str
 
 double sigmoid(double v) { return 1.0 / (1.0 + std::exp(-v)); }
 
+// At most 16 row blocks (64 rows) of h per lane: private arrays stay in registers.
+constexpr uint32_t kMaxWaveBlocks = 16;
+
+void choose_wave(const GpuOpArgs& a, Launch& l) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const double want = a.params.get("wave", 1);
+    if (want == 0) return;
+    // A forced width (want >= 2) is a test's request: refuse it by name rather than
+    // quietly run the other shader.
+    auto no = [&](const std::string& why) {
+        if (want >= 2) throw Error("the register-resident ILU (wave " + std::to_string(int(want)) + ") " + why);
+    };
+    const uint32_t sg = d.subgroup_size;
+    if (!(d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) || !(d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) || !sg)
+        return no("needs subgroup shuffles");
+    if (l.C % 4 || l.H % 4)
+        return no("needs C and H divisible by 4, got C = " + std::to_string(l.C) + ", H = " + std::to_string(l.H));
+    const uint32_t L = want >= 2 ? uint32_t(want) : sg;
+    if ((L & (L - 1)) || L > d.max_workgroup_size[0] || L > d.max_invocations)
+        return no("needs a power-of-two workgroup size within the device's limits");
+    if (uint64_t(l.C) * l.C * 3 / 4 > d.max_texel_elements || uint64_t(l.H) * 3 > d.max_texel_elements)
+        return no("needs the gate weights to fit a texel buffer (" + std::to_string(d.max_texel_elements) + " texels)");
+    const uint32_t RB = (l.C / 4 + L - 1) / L, HB = (l.H / 4 + L - 1) / L;
+    if (RB > kMaxWaveBlocks || HB > kMaxWaveBlocks)
+        return no("holds at most " + std::to_string(4 * kMaxWaveBlocks) + " rows per lane");
+    if (uint64_t(l.C) * 4 + uint64_t(L) * 16 > d.max_shared_memory) return no("needs more shared memory");
+    l.wave = true;
+    l.wave_L = L;
+    l.RB = RB;
+    l.HB = HB;
+}
+
 }  // namespace
 
 int64_t check_inputs(const std::vector<TensorDesc>& in, bool batch) {
@@ -103,6 +135,7 @@ Launch launch(const GpuOpArgs& a) {
     l.subgroup = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
                  (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && l.G > 1 && l.G <= sg && sg % l.G == 0 &&
                  l.L % sg == 0;
+    choose_wave(a, l);
     const uint64_t shared = (9ull * l.C + l.H + l.L + 3) * 4;
     if (shared > d.max_shared_memory)
         throw Error("ILU with C = " + std::to_string(l.C) + " needs " + std::to_string(shared) +

@@ -32,9 +32,16 @@ void iterate(const std::vector<const HostTensor*>& in, State& s);
 // subgroup: the row sums by subgroup shuffles (the *_subgroup shaders) where the
 // device has them, G divides its subgroup size and L is whole subgroups; param
 // "subgroup" = 0 keeps the shared-memory sums (tests run both).
+// wave: the register-resident variant (shaders/ilu_wave.comp) where the device
+// has subgroup shuffles, C and H are multiples of 4 and the weights fit texel
+// buffers: a workgroup of one subgroup (wave_L invocations), no barriers. Param
+// "wave" = 0 turns it off; a value >= 2 asks for that workgroup size instead
+// (tests use twice the subgroup size to run its shared-memory path).
 struct Launch {
     uint32_t L, C, H, G;
     bool subgroup;
+    bool wave = false;
+    uint32_t wave_L = 0, RB = 0, HB = 0;
 };
 Launch launch(const GpuOpArgs& a);
 
