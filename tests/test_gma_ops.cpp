@@ -82,12 +82,14 @@ TEST_CASE("gma_decode matches the CPU reference", "[op][gma_decode]") {
 
 namespace {
 
-TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed) {
+// shuffles: the search by subgroup shuffles (the default where the device has
+// them) or, false, the shared-memory tiled one.
+TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed, bool shuffles = true) {
     Graph g;
-    std::vector<int> out = ops::chamfer(g, g.input("a", a), g.input("b", b));
+    std::vector<int> out = ops::chamfer(g, g.input("a", a), g.input("b", b), "", shuffles);
     g.output(out[0], "chamfer");
     g.output(out[1], "mins");
-    INFO("chamfer " << shape_str(a) << " vs " << shape_str(b));
+    INFO("chamfer " << shape_str(a) << " vs " << shape_str(b) << (shuffles ? ", shuffles where the device has them" : ", shared-memory tiles"));
     return run_gpu_and_compare(g, WeightStore{},
                                {{"a", random_tensor(a, seed, -1.0f, 1.0f)}, {"b", random_tensor(b, seed + 1, -1.0f, 1.0f)}});
 }
@@ -95,10 +97,12 @@ TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed) {
 }  // namespace
 
 TEST_CASE("chamfer matches the CPU reference at odd sizes, widths 3 and 6", "[op][chamfer]") {
-    check_chamfer({37, 3}, {53, 3}, 1);
-    check_chamfer({1, 6}, {1, 6}, 2);
-    check_chamfer({1, 300, 6}, {257, 6}, 3);  // leading axes are flattened into rows
-    check_chamfer({1000, 3}, {7, 3}, 4);
+    for (bool shuffles : {true, false}) {
+        check_chamfer({37, 3}, {53, 3}, 1, shuffles);
+        check_chamfer({1, 6}, {1, 6}, 2, shuffles);
+        check_chamfer({1, 300, 6}, {257, 6}, 3, shuffles);  // leading axes are flattened into rows
+        check_chamfer({1000, 3}, {7, 3}, 4, shuffles);
+    }
 }
 
 TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
@@ -120,13 +124,13 @@ TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
 TEST_CASE("chamfer compares a batch of sets with one cloud, each as if alone", "[op][chamfer]") {
     // A [S, Na, D] with S > 1: S distances, GPU against CPU, and each set's value
     // and nearest distances bit-identical to the unbatched op's on the GPU.
-    for (int64_t S : {2, 5}) {
+    for (auto [S, shuffles] : {std::pair<int64_t, bool>{2, true}, {5, true}, {3, false}}) {
         const Shape a{S, 300, 6}, b{257, 6};
-        TensorMap out = check_chamfer(a, b, uint32_t(20 + S));
+        TensorMap out = check_chamfer(a, b, uint32_t(20 + S), shuffles);
         REQUIRE(out.at("chamfer").shape == Shape{S});
         HostTensor all = random_tensor(a, uint32_t(20 + S), -1.0f, 1.0f), cloud = random_tensor(b, uint32_t(21 + S), -1.0f, 1.0f);
         Graph g;
-        std::vector<int> one = ops::chamfer(g, g.input("a", {300, 6}), g.input("b", b));
+        std::vector<int> one = ops::chamfer(g, g.input("a", {300, 6}), g.input("b", b), "", shuffles);
         g.output(one[0], "chamfer");
         g.output(one[1], "mins");
         GpuExecutor exec(test::gpu(), g, WeightStore{});

@@ -73,7 +73,11 @@ int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, con
 
 int gma_decode(Graph& g, int x, const std::string& name) { return g.add1("gma_decode", {x}, {}, name); }
 
-std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name) { return g.add("chamfer", {a, b}, {}, name); }
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name, bool subgroup) {
+    Params p;
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add("chamfer", {a, b}, p, name);
+}
 
 std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name, int lanes,
                      bool subgroup, int wave) {

@@ -55,7 +55,8 @@ int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const st
 // GMA and heads.
 int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name = "");
 int gma_decode(Graph& g, int x, const std::string& name = "");
-std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "");
+// subgroup = false: the shared-memory tiled search even where the device has shuffles.
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", bool subgroup = true);
 // lanes: lanes per row of the fused GRU (0: the op's default); subgroup = false
 // keeps the row sums in shared memory even where the device has subgroup
 // shuffles; wave: 1 = the register-resident shader where it applies, 0 = never,

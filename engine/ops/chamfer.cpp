@@ -1,7 +1,9 @@
 // chamfer: mean_a min_b ||a - b||^2 + mean_b min_a ||a - b||^2 (SPEC 3) over rows
 // of width 3 or 6 (the last axis; leading axes are flattened into rows).
-// -> shaders/chamfer_nn.comp (both nearest-neighbour searches, tiled through
-// shared memory) then shaders/chamfer_sum.comp (the means, one workgroup).
+// -> shaders/chamfer_nn_subgroup.comp (both nearest-neighbour searches, target
+// rows passed by subgroup shuffles; chamfer_nn.comp tiles them through shared
+// memory on devices without shuffles, or with param subgroup = 0) then
+// shaders/chamfer_sum.comp (the means, one workgroup).
 // Outputs: 0 = the distance (a 0-d scalar), 1 = the per-row nearest squared
 // distances [Na + Nb] (A's rows, then B's), which the second pass reduces.
 #include <algorithm>
@@ -79,21 +81,29 @@ void gpu(const GpuOpArgs& a) {
     const uint32_t sets = to_u32(sets_of(a.in[0].shape), "point sets");
     const uint32_t Na = to_u32(rows_of(a.in[0].shape) / sets, "rows of A");
     const uint32_t Nb = to_u32(rows_of(a.in[1].shape), "rows of B");
-    // The tile holds one target row per thread: one or two vec3 (16 bytes each in
-    // shared memory). Each thread queries two rows.
-    uint32_t local = elementwise_local_size(d);
-    while (local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
-    const uint64_t ga = (Na + 2 * local - 1) / (2 * local), gb = (Nb + 2 * local - 1) / (2 * local);
-    if (ga + gb > d.max_workgroup_count[0])
-        throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
-                    " rows need more workgroups than the device allows");
     if (sets > d.max_workgroup_count[1])
         throw Error(std::to_string(sets) + " point sets exceed the device's " + std::to_string(d.max_workgroup_count[1]) +
                     " workgroups along y");
     to_u32(int64_t(sets) * (int64_t(Na) + Nb), "nearest-distance array size");
     to_u32(numel(a.in[0].shape), "A size");
+    // Where the device has subgroup shuffles (param subgroup = 0 forces the tiles),
+    // target rows pass between lanes by shuffles: one query per thread, 64 per
+    // workgroup (whole subgroups) so that a small set still spreads over cores.
+    // Otherwise the shared-memory tile holds one target row per thread (one or two
+    // vec3, 16 bytes each), two queries per thread.
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    const bool shuffle = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
+                         (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg <= elementwise_local_size(d);
+    uint32_t local = elementwise_local_size(d);
+    if (shuffle) local = std::max(sg, std::min(64u, local) / sg * sg);
+    while (!shuffle && local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
+    const uint32_t per_group = shuffle ? local : 2 * local;
+    const uint64_t ga = (Na + per_group - 1) / per_group, gb = (Nb + per_group - 1) / per_group;
+    if (ga + gb > d.max_workgroup_count[0])
+        throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
+                    " rows need more workgroups than the device allows");
     struct { uint32_t Na, Nb, groups_a; } push{Na, Nb, uint32_t(ga)};
-    a.seq.dispatch(pipeline(a.ctx, "chamfer_nn", 3, 12, {local, D == 6 ? 1u : 0u}),
+    a.seq.dispatch(pipeline(a.ctx, shuffle ? "chamfer_nn_subgroup" : "chamfer_nn", 3, 12, {local, D == 6 ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {a.out[1].view, rt::Access::Write}},
                    &push, sizeof(push), uint32_t(ga + gb), sets);
@@ -105,6 +115,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_chamfer{"chamfer", infer, cpu, gpu, 0, {}};
+const OpDef op_chamfer{"chamfer", infer, cpu, gpu, 0, {"subgroup"}};
 
 }  // namespace vtloc::ops
