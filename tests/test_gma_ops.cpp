@@ -17,7 +17,10 @@ using vtloc::test::run_gpu_and_compare;
 namespace {
 
 // x [rows, K] times W [K, J, L] split into chunks of `chunk_rows` rows.
-void check_disentangle(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t chunk_rows, uint32_t seed) {
+// shuffles: the subgroup variant (the default where the device has shuffles) or
+// the shared-memory slabs.
+void check_disentangle(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t chunk_rows, uint32_t seed,
+                       bool shuffles) {
     WeightStore w;
     w.add("wd", random_tensor({K, J, L}, seed + 1, -0.3f, 0.3f));
     std::vector<std::string> names = split_weight_rows(w, "wd", uint64_t(chunk_rows * J * L * 4));
@@ -25,9 +28,10 @@ void check_disentangle(int64_t rows, int64_t K, int64_t J, int64_t L, int64_t ch
     Graph g;
     std::vector<int> in{g.input("x", {rows, K})};
     for (const std::string& n : names) in.push_back(g.weight(n, w.get(n).shape));
-    g.output(ops::disentangle(g, in, ops::kActLeaky, 0.01), "y");
+    g.output(ops::disentangle(g, in, ops::kActLeaky, 0.01, "", shuffles), "y");
     REQUIRE(g.value(g.outputs()[0].second).shape == Shape{rows, J, L});
-    INFO("disentangle " << rows << "x" << K << " by [" << K << ", " << J << ", " << L << "] in " << names.size() << " chunks");
+    INFO("disentangle " << rows << "x" << K << " by [" << K << ", " << J << ", " << L << "] in " << names.size()
+                        << " chunks, " << (shuffles ? "shuffles where the device has them" : "shared-memory slabs"));
     run_gpu_and_compare(g, w, {{"x", random_tensor({rows, K}, seed, -2.0f, 2.0f)}});
 }
 
@@ -51,12 +55,14 @@ TEST_CASE("row-chunk planner keeps every chunk within the limit", "[op][disentan
 }
 
 TEST_CASE("disentangle matches the CPU reference, whole and split", "[op][disentangle]") {
-    check_disentangle(1, 37, 13, 7, 37, 1);   // one chunk
-    check_disentangle(1, 37, 13, 7, 10, 2);   // 10 + 10 + 10 + 7 rows
-    check_disentangle(3, 64, 129, 5, 1, 3);   // one row per chunk, several input rows
-    check_disentangle(1, 256, 300, 64, 97, 4);  // long rows, ragged column blocks
-    check_disentangle(19, 70, 9, 12, 25, 5);  // a batch: row blocks of 8, 8 and 3, three chunks
-    check_disentangle(8, 33, 7, 3, 33, 6);    // exactly one row block, V = 1
+    for (bool s : {true, false}) {
+        check_disentangle(1, 37, 13, 7, 37, 1, s);     // one chunk
+        check_disentangle(1, 37, 13, 7, 10, 2, s);     // 10 + 10 + 10 + 7 rows
+        check_disentangle(3, 64, 129, 5, 1, 3, s);     // one row per chunk, several input rows
+        check_disentangle(1, 256, 300, 64, 97, 4, s);  // long rows, ragged column blocks
+        check_disentangle(19, 70, 9, 12, 25, 5, s);    // a batch: row blocks of 8, 8 and 3, three chunks
+        check_disentangle(8, 33, 7, 3, 33, 6, s);      // exactly one row block, V = 1
+    }
 }
 
 TEST_CASE("disentangle rejects mismatched chunks", "[op][disentangle]") {

@@ -67,8 +67,10 @@ int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const st
     return g.add1("tactile_preprocess", {image}, {{"crop", d(crop)}, {"size", d(size)}}, name);
 }
 
-int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name) {
-    return g.add1("disentangle", in, {{"act", double(act)}, {"slope", slope}}, name);
+int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name, bool subgroup) {
+    Params p{{"act", double(act)}, {"slope", slope}};
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add1("disentangle", in, p, name);
 }
 
 int gma_decode(Graph& g, int x, const std::string& name) { return g.add1("gma_decode", {x}, {}, name); }

@@ -53,7 +53,9 @@ int global_avg_pool(Graph& g, int x, const std::string& name = "");
 int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name = "");
 
 // GMA and heads.
-int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name = "");
+// subgroup = false: the shared-memory slabs even where the device has shuffles.
+int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name = "",
+                bool subgroup = true);
 int gma_decode(Graph& g, int x, const std::string& name = "");
 // subgroup = false: the shared-memory tiled search even where the device has shuffles.
 std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", bool subgroup = true);

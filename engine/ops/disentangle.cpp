@@ -1,5 +1,8 @@
 // disentangle: GMA's einsum y[..., j, l] = act(sum_i x[..., i] W[i, j, l]), i.e. a
 // GEMM whose weight is stored [K, N] (not Linear's [N, K]). -> shaders/disentangle.comp
+// (X staged through shared memory), or disentangle_subgroup.comp (X by subgroup
+// shuffles, W as texels) where the device has shuffles; param subgroup = 0 forces
+// the first.
 // Inputs: x [..., K], then W as one or more row chunks [K_c, ...] (same trailing
 // dims, rows summing to K) so that no chunk exceeds maxStorageBufferRange;
 // split_weight_rows (engine/model/gma.h) makes the chunks. One dispatch per
@@ -77,7 +80,19 @@ void gpu(const GpuOpArgs& a) {
     const uint32_t V = N % 4 == 0 ? 4 : 1;
     // X slab per row in shared memory: up to 1024 values (a paper-size chunk in one slab).
     const uint32_t tk = std::max(1u, std::min(1024u, d.max_shared_memory / (8 * mb)));
-    const rt::Pipeline& pipe = pipeline(a.ctx, "disentangle", 3, 36, {local, V, tk, mb});
+    // Where the device has subgroup shuffles and every chunk fits its texel limit
+    // (param subgroup = 0 forces the slabs): X by shuffles, W as texels, 64
+    // threads per workgroup so that the columns spread over cores.
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    bool shuffle = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
+                   (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg <= local;
+    for (size_t c = 1; c < a.in.size(); ++c)
+        shuffle = shuffle && uint64_t(numel(a.in[c].shape) / V) <= d.max_texel_elements;
+    const uint32_t slocal = std::max(sg, std::min(64u, local) / sg * sg);
+    const rt::Pipeline& pipe = shuffle ? a.ctx.pipelines().get(rt::PipelineDesc{"disentangle_subgroup", 3, 36,
+                                                                                {slocal, V, mb}, 0x2u})
+                                       : pipeline(a.ctx, "disentangle", 3, 36, {local, V, tk, mb});
+    const VkFormat wfmt = !shuffle ? VK_FORMAT_UNDEFINED : V == 4 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
     uint32_t k_off = 0;
     for (size_t c = 1; c < a.in.size(); ++c) {
         const uint32_t rows = to_u32(a.in[c].shape[0], "weight chunk rows");
@@ -86,15 +101,16 @@ void gpu(const GpuOpArgs& a) {
             uint32_t(N), uint32_t(K), k_off, rows, c > 1 ? 1u : 0u, c + 1 == a.in.size() ? 1u : 0u,
             uint32_t(a.params.get("act", kActNone)), float(a.params.get("slope", 0.01)), uint32_t(M)};
         a.seq.dispatch(pipe,
-                       {{a.in[0].view, rt::Access::Read}, {a.in[c].view, rt::Access::Read},
+                       {{a.in[0].view, rt::Access::Read}, {a.in[c].view, rt::Access::Read, wfmt},
                         {a.out[0].view, c > 1 ? rt::Access::ReadWrite : rt::Access::Write}},
-                       &push, sizeof(push), grid_groups(uint64_t(N / V), local, d), uint32_t(row_blocks));
+                       &push, sizeof(push), grid_groups(uint64_t(N / V), shuffle ? slocal : local, d),
+                       uint32_t(row_blocks));
         k_off += rows;
     }
 }
 
 }  // namespace
 
-const OpDef op_disentangle{"disentangle", infer, cpu, gpu, 0, {"act", "slope"}};
+const OpDef op_disentangle{"disentangle", infer, cpu, gpu, 0, {"act", "slope", "subgroup"}};
 
 }  // namespace vtloc::ops
