@@ -100,7 +100,7 @@ TEST_CASE("ilu's register-resident shader matches the CPU reference, in one subg
     // block held by only some lanes (C = 20, H = 12 at 8 lanes).
     const uint32_t sg = test::gpu().info().subgroup_size;
     struct Case { int64_t C, H; int iters; };
-    for (Case c : {Case{4, 4, 3}, Case{20, 12, 9}, Case{64, 64, 16}, Case{128, 64, 5}}) {
+    for (Case c : {Case{4, 4, 3}, Case{20, 12, 9}, Case{64, 64, 16}, Case{128, 64, 16}, Case{200, 64, 16}}) {
         WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C) + 7);
         for (uint32_t wave : {sg, 2 * sg, 4 * sg}) {
             INFO("C " << c.C << " H " << c.H << " workgroup " << wave << " (subgroup " << sg << ")");
