@@ -17,7 +17,9 @@ using vtloc::test::run_gpu_and_compare;
 
 namespace {
 
-void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, uint32_t seed) {
+// shuffles: linear_subgroup.comp where it applies (K % 4 == 0 and the device has
+// shuffles), or gemm.comp's tiles.
+void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, uint32_t seed, bool shuffles = true) {
     const int64_t in = x_shape.back();
     Graph g;
     WeightStore w;
@@ -27,8 +29,9 @@ void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, ui
     w.add("fc.bias", random_tensor({out}, seed + 2, -bound, bound));
     int x = g.input("x", x_shape);
     const int b = bias ? g.weight("fc.bias", {out}) : -1;
-    g.output(ops::linear(g, x, g.weight("fc.weight", {out, in}), b, ops::Act(act), 0.2), "y");
-    INFO("linear x" << shape_str(x_shape) << " -> " << out << " bias " << bias << " act " << act);
+    g.output(ops::linear(g, x, g.weight("fc.weight", {out, in}), b, ops::Act(act), 0.2, "", shuffles), "y");
+    INFO("linear x" << shape_str(x_shape) << " -> " << out << " bias " << bias << " act " << act
+                    << (shuffles ? ", shuffles where they apply" : ", gemm tiles"));
     run_gpu_and_compare(g, w, {{"x", random_tensor(x_shape, seed, -2.0f, 2.0f)}});
 }
 
@@ -50,9 +53,25 @@ TEST_CASE("linear matches the CPU reference at odd shapes", "[op][linear]") {
     check_linear({130, 70}, 129, true, ops::kActNone, 6);  // several tiles, ragged edges
 }
 
+TEST_CASE("linear with K % 4 == 0 matches the CPU reference by shuffles and by tiles", "[op][linear]") {
+    // The GMA decoder's shapes (256 rows, 16..64 wide, down to 6 outputs), the
+    // tactile head's one row, a batch with leading axes, and rows and outputs that
+    // do not fill a workgroup or an output block.
+    for (bool shuffles : {true, false}) {
+        check_linear({256, 16}, 64, true, ops::kActLeaky, 21, shuffles);
+        check_linear({256, 32}, 6, true, ops::kActNone, 22, shuffles);
+        check_linear({1, 512}, 256, true, ops::kActRelu, 23, shuffles);
+        check_linear({5, 3, 64}, 13, false, ops::kActNone, 24, shuffles);
+        check_linear({130, 68}, 129, true, ops::kActTanh, 25, shuffles);
+        check_linear({3, 4}, 1, true, ops::kActSigmoid, 26, shuffles);
+    }
+}
+
 TEST_CASE("linear fuses every activation into its epilogue", "[op][linear]") {
-    for (uint32_t act : {ops::kActRelu, ops::kActLeaky, ops::kActTanh, ops::kActSigmoid})
+    for (uint32_t act : {ops::kActRelu, ops::kActLeaky, ops::kActTanh, ops::kActSigmoid}) {
         check_linear({9, 31}, 17, true, act, 10 + act);
+        check_linear({9, 32}, 17, true, act, 10 + act);  // the shuffle shader's epilogue
+    }
 }
 
 TEST_CASE("linear tiles fit the device and its subgroups", "[op][linear]") {
@@ -195,7 +214,7 @@ TEST_CASE("a misspelt or foreign parameter is refused with the node's name", "[o
     int x = g.input("x", {4, 10});
     int w = g.weight("fc.weight", {8, 10});
     REQUIRE_THROWS_WITH(g.add1("linear", {x, w}, {{"slop", 0.1}}, "fc1"),
-                        Catch::Contains("node 'fc1' (linear): unknown parameter 'slop' (it takes act, slope)"));
+                        Catch::Contains("node 'fc1' (linear): unknown parameter 'slop' (it takes act, slope, subgroup)"));
     REQUIRE_THROWS_WITH(g.add1("concat", {x, x}, {{"axis", 0}}, "cat"),
                         Catch::Contains("unknown parameter 'axis' (it takes none)"));
 }

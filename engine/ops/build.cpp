@@ -13,10 +13,12 @@ double d(int64_t v) { return double(v); }
 
 const char* path_name(BufferPath p) { return p == BufferPath::Texel ? "texel" : "storage-buffer"; }
 
-int linear(Graph& g, int x, int w, int bias, Act act, double slope, const std::string& name) {
+int linear(Graph& g, int x, int w, int bias, Act act, double slope, const std::string& name, bool subgroup) {
     std::vector<int> in{x, w};
     if (bias >= 0) in.push_back(bias);
-    return g.add1("linear", in, {{"act", double(act)}, {"slope", slope}}, name);
+    Params p{{"act", double(act)}, {"slope", slope}};
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add1("linear", in, p, name);
 }
 
 int activation(Graph& g, Act act, int x, double slope, const std::string& name) {

@@ -23,7 +23,9 @@ inline constexpr BufferPath kBufferPaths[] = {BufferPath::Texel, BufferPath::Sto
 const char* path_name(BufferPath p);
 
 // Dense and elementwise.
-int linear(Graph& g, int x, int w, int bias, Act act = kActNone, double slope = 0.01, const std::string& name = "");
+// subgroup = false: gemm.comp's shared-memory tiles even where the shuffle shader applies.
+int linear(Graph& g, int x, int w, int bias, Act act = kActNone, double slope = 0.01, const std::string& name = "",
+           bool subgroup = true);
 int activation(Graph& g, Act act, int x, double slope = 0.01, const std::string& name = "");  // relu, leaky_relu, ...
 int concat(Graph& g, const std::vector<int>& xs, const std::string& name = "");
 // Elementwise with suffix broadcasting.

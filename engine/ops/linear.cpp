@@ -1,6 +1,9 @@
 // linear: y = act(x W^T + b), W stored [N, K] as PyTorch does; x [..., K] is
-// flattened to M rows. -> shaders/gemm.comp (tiled, fused bias + activation).
-// Params: act (see Act, default none), slope (leaky, default 0.01).
+// flattened to M rows. -> shaders/linear_subgroup.comp (weights passed between
+// lanes by subgroup shuffles) where the device has shuffles and K % 4 == 0,
+// else shaders/gemm.comp (shared-memory tiles). Both fuse bias + activation.
+// Params: act (see Act, default none), slope (leaky, default 0.01), subgroup
+// (default 1; 0 forces gemm.comp).
 #include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/gemm_tiles.h"
@@ -30,6 +33,16 @@ GemmTiles choose_gemm_tiles(const rt::DeviceInfo& d, int64_t M, int64_t N) {
 }
 
 namespace {
+
+// The shuffle shader: the device has subgroup shuffles, K splits into vec4s and
+// x and W fit the texel limit.
+bool use_subgroup_rows(const GpuOpArgs& a, int64_t M, int64_t N, int64_t K) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    return a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
+           (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && d.subgroup_size > 0 &&
+           d.subgroup_size <= elementwise_local_size(d) && K % 4 == 0 && K > 0 &&
+           uint64_t(M * K / 4) <= d.max_texel_elements && uint64_t(N * K / 4) <= d.max_texel_elements;
+}
 
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
     expect_input_count(in, 2, 3);
@@ -67,8 +80,7 @@ void gpu(const GpuOpArgs& a) {
     const Shape& ws = a.in[1].shape;
     const int64_t K = ws[1], N = ws[0];
     const int64_t M = numel(a.out[0].shape) / std::max<int64_t>(1, N);
-    GemmTiles t = choose_gemm_tiles(a.ctx.info(), M, N);
-    const rt::Pipeline& pipe = pipeline(a.ctx, "gemm", 4, 24, {t.threads(), t.bm, t.bn, t.bk, t.tm, t.tn});
+    const rt::DeviceInfo& d = a.ctx.info();
     struct { uint32_t M, N, K, has_bias, act; float slope; } push{
         to_u32(M, "GEMM rows"), to_u32(N, "GEMM columns"), to_u32(K, "GEMM depth"),
         a.in.size() == 3 ? 1u : 0u, uint32_t(a.params.get("act", kActNone)), float(a.params.get("slope", 0.01))};
@@ -76,6 +88,22 @@ void gpu(const GpuOpArgs& a) {
     to_u32(M * N, "GEMM output size");
     // Without a bias any read-only buffer fills the binding; the shader skips it.
     const rt::BufferView& bias = a.in.size() == 3 ? a.in[2].view : a.in[1].view;
+    if (M > 0 && N > 0 && use_subgroup_rows(a, M, N, K)) {
+        const uint32_t sg = d.subgroup_size, TN = std::min(8u, sg);
+        const uint32_t local = std::max(sg, std::min(64u, elementwise_local_size(d)) / sg * sg);
+        const uint64_t gx = (uint64_t(M) + local - 1) / local, gy = (uint64_t(N) + TN - 1) / TN;
+        if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
+            throw Error("linear of " + std::to_string(M) + " rows and " + std::to_string(N) +
+                        " outputs needs more workgroups than the device allows");
+        const VkFormat v4 = VK_FORMAT_R32G32B32A32_SFLOAT;
+        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"linear_subgroup", 4, 24, {local, TN}, 0x3u}),
+                       {{a.in[0].view, rt::Access::Read, v4}, {a.in[1].view, rt::Access::Read, v4},
+                        {bias, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+                       &push, sizeof(push), uint32_t(gx), uint32_t(gy));
+        return;
+    }
+    GemmTiles t = choose_gemm_tiles(d, M, N);
+    const rt::Pipeline& pipe = pipeline(a.ctx, "gemm", 4, 24, {t.threads(), t.bm, t.bn, t.bk, t.tm, t.tn});
     a.seq.dispatch(pipe,
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {bias, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
@@ -84,6 +112,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_linear{"linear", infer, cpu, gpu, 0, {"act", "slope"}};
+const OpDef op_linear{"linear", infer, cpu, gpu, 0, {"act", "slope", "subgroup"}};
 
 }  // namespace vtloc::ops
