@@ -23,9 +23,10 @@ HostTensor grid_candidates(int64_t M, uint32_t seed) {
     return t;
 }
 
-test::BothRuns run_topk(const HostTensor& contact, const HostTensor& cand, int k) {
+// subgroup: the register shader where it applies (K <= 16, shuffles), or the sort.
+test::BothRuns run_topk(const HostTensor& contact, const HostTensor& cand, int k, bool subgroup = true) {
     Graph g;
-    std::vector<int> o = ops::topk(g, g.input("c", contact.shape), g.input("cand", cand.shape), k);
+    std::vector<int> o = ops::topk(g, g.input("c", contact.shape), g.input("cand", cand.shape), k, "", subgroup);
     g.output(o[0], "index");
     g.output(o[1], "score");
     test::BothRuns r = test::run_both(g, WeightStore{}, {{"c", contact}, {"cand", cand}});
@@ -38,13 +39,16 @@ test::BothRuns run_topk(const HostTensor& contact, const HostTensor& cand, int k
 
 TEST_CASE("topk matches the CPU reference at odd sizes, with ties", "[op][topk]") {
     HostTensor c({3}, {0.1f, -0.2f, 0.05f});
-    for (int64_t M : {1, 5, 37, 2049, 100003})
-        for (int k : {1, 5, 64}) {
-            if (k > M) continue;
-            INFO("M " << M << " K " << k);
-            run_topk(c, random_tensor({M, 3}, uint32_t(M), -1.0f, 1.0f), k);
-            run_topk(HostTensor({1, 3}, {0, 0, 0}), grid_candidates(M, uint32_t(M) + 1), k);  // many exact ties
-        }
+    // K 1, 5, 16 take the register shader where the device has shuffles; K 64
+    // and 256, and every K with subgroup off, the shared-memory sort.
+    for (bool subgroup : {true, false})
+        for (int64_t M : {1, 5, 37, 2049, 100003})
+            for (int k : {1, 5, 16, 64}) {
+                if (k > M) continue;
+                INFO("M " << M << " K " << k << (subgroup ? "" : ", sort forced"));
+                run_topk(c, random_tensor({M, 3}, uint32_t(M), -1.0f, 1.0f), k, subgroup);
+                run_topk(HostTensor({1, 3}, {0, 0, 0}), grid_candidates(M, uint32_t(M) + 1), k, subgroup);  // many exact ties
+            }
     run_topk(c, random_tensor({5000, 3}, 3, -1.0f, 1.0f), 256);  // the largest K
 }
 
@@ -53,10 +57,12 @@ TEST_CASE("topk breaks ties to the lower index (test_post.py hand case)", "[op][
     test::BothRuns r = run_topk(HostTensor({3}, {0, 0, 0}), cand, 4);
     CHECK(r.gpu.at("index").ints() == std::vector<int32_t>{2, 5, 0, 1});
     CHECK(r.gpu.at("score").data == std::vector<float>{0.25f, 0.25f, 1, 1});
-    // All candidates identical: indices in order.
+    // All candidates identical: indices in order, by either shader.
     HostTensor same({300, 3});
-    r = run_topk(HostTensor({3}, {1, 2, 3}), same, 7);
-    CHECK(r.gpu.at("index").ints() == std::vector<int32_t>{0, 1, 2, 3, 4, 5, 6});
+    for (bool subgroup : {true, false}) {
+        r = run_topk(HostTensor({3}, {1, 2, 3}), same, 7, subgroup);
+        CHECK(r.gpu.at("index").ints() == std::vector<int32_t>{0, 1, 2, 3, 4, 5, 6});
+    }
 }
 
 TEST_CASE("topk rejects K out of range, empty sets and NaN", "[op][topk]") {

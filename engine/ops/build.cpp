@@ -96,8 +96,10 @@ std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, i
     return g.add("ilu_step", in, {{"max_iters", double(max_iters)}, {"step", double(step)}}, name);
 }
 
-std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name) {
-    return g.add("topk", {contact, candidates}, {{"k", d(k)}}, name);
+std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name, bool subgroup) {
+    Params p{{"k", d(k)}};
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add("topk", {contact, candidates}, p, name);
 }
 
 int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name) {

@@ -69,7 +69,9 @@ std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", b
 std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name = "", int lanes = 0,
                      bool subgroup = true, int wave = 1);
 std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, int step, const std::string& name = "");
-std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "");
+// subgroup = false: the shared-memory sort even where the register shader applies (K <= 16).
+std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "",
+                      bool subgroup = true);
 // symmetry: -1 for none.
 int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name = "");
 struct Belief {

@@ -1,6 +1,8 @@
 // topk: the K candidates nearest c^p (SPEC 3): S_i = ||c^p - c_i||^2 ascending,
-// ties to the lower index. -> shaders/topk.comp, a few passes, each sorting
-// chunks of S keys in shared memory and keeping K per chunk.
+// ties to the lower index. -> shaders/topk_subgroup.comp (K <= 16 on a device
+// with subgroup shuffles: one subgroup per contact, keys in registers), else
+// shaders/topk.comp, a few passes, each sorting chunks of S keys in shared
+// memory and keeping K per chunk. Param subgroup = 0 forces the second.
 // Inputs: contact [3] (or [1, 3]), candidates [M, 3]. Param k (1..256, <= M).
 // Outputs: index I32 [K], score F32 [K], and a workspace (I32, contents
 // unspecified) holding the intermediate key lists of the passes.
@@ -18,6 +20,9 @@ namespace vtloc::ops {
 namespace {
 
 constexpr int64_t kRegionAlign = 256;  // the largest minStorageBufferOffsetAlignment Vulkan allows
+// The register path: K keys per lane, one subgroup scanning every candidate (a
+// million at most: beyond that the multi-pass sort spreads over cores).
+constexpr int64_t kSubgroupMaxK = 16, kSubgroupMaxM = 1 << 20;
 
 int64_t pow2_at_least(int64_t v) {
     int64_t p = 1;
@@ -105,6 +110,19 @@ void gpu(const GpuOpArgs& a) {
     if (B > int64_t(d.max_workgroup_count[1]))
         throw Error("a top-K batch of " + std::to_string(B) + " contacts exceeds the device's " +
                     std::to_string(d.max_workgroup_count[1]) + " workgroups along y");
+    // Small K on a device with shuffles (param subgroup = 0 forces the sort): one
+    // subgroup per contact keeps its K best in registers (topk_subgroup.comp).
+    const uint32_t sg = d.subgroup_size;
+    if (a.params.get("subgroup", 1) != 0 && K <= kSubgroupMaxK && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
+        (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg > 0 && sg <= elementwise_local_size(d) &&
+        uint64_t(M) * 3 <= d.max_texel_elements && M <= kSubgroupMaxM) {
+        struct { uint32_t n; } push{uint32_t(M)};
+        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"topk_subgroup", 4, 4, {sg, uint32_t(K)}, 0x2u}),
+                       {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read, VK_FORMAT_R32_SFLOAT},
+                        {a.out[0].view, rt::Access::Write}, {a.out[1].view, rt::Access::Write}},
+                       &push, sizeof(push), 1, uint32_t(B));
+        return;
+    }
     // The largest chunk using at most half the shared memory, up to 2048 keys,
     // and no larger than the candidates need (a smaller sort).
     int64_t S = min_chunk(K);
@@ -142,6 +160,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_topk{"topk", infer, cpu, gpu, 1u << 2, {"k"}};  // output 2: the workspace
+const OpDef op_topk{"topk", infer, cpu, gpu, 1u << 2, {"k", "subgroup"}};  // output 2: the workspace
 
 }  // namespace vtloc::ops
