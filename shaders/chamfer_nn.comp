@@ -8,13 +8,17 @@
 // mins[r] = min_b ||a_r - b||^2 (r < Na), mins[Na + r] = min_a ||b_r - a||^2.
 // Workgroup y = the set s of A (A holds sets of Na rows; B is shared): its A rows
 // start at s * Na, its mins at s * (Na + Nb).
+// One dispatch scans targets t_begin .. t_begin + t_chunk - 1 of the other set
+// and, past the first chunk, keeps the smaller of its result and the stored one:
+// the host splits long scans so that no invocation's loops run past a CPU
+// driver's iteration limit (engine/ops/common.h).
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const bool WIDE = false;  // rows of 6 (xyz + normal), else 3
 
 layout(std430, binding = 0) readonly buffer A_ { float A[]; };
 layout(std430, binding = 1) readonly buffer B_ { float B[]; };
-layout(std430, binding = 2) writeonly buffer Mins_ { float mins[]; };
-layout(push_constant) uniform Push { uint Na; uint Nb; uint groups_a; } p;
+layout(std430, binding = 2) buffer Mins_ { float mins[]; };
+layout(push_constant) uniform Push { uint Na; uint Nb; uint groups_a; uint t_begin; uint t_chunk; } p;
 
 const uint D = WIDE ? 6u : 3u;
 shared vec3 tile_p[gl_WorkGroupSize.x];
@@ -26,13 +30,23 @@ vec3 row(uint set, uint i, uint c0) {
     return set == 0u ? vec3(A[b], A[b + 1u], A[b + 2u]) : vec3(B[b], B[b + 1u], B[b + 2u]);
 }
 
+// This chunk's nearest distance, or NaN, merged with the earlier chunks' (at i).
+float merge(bool first, bool nan, float best, uint i) {
+    if (nan) return 0.0 / 0.0;
+    if (first) return best;
+    const float old = mins[i];
+    return isnan(old) ? old : min(old, best);
+}
+
 void main() {
     const uint L = gl_WorkGroupSize.x;
     const uint tid = gl_LocalInvocationID.x;
     const bool from_a = gl_WorkGroupID.x < p.groups_a;
     const uint qset = from_a ? 0u : 1u;
     const uint nq = from_a ? p.Na : p.Nb;
-    const uint nt = from_a ? p.Nb : p.Na;
+    const uint n_all = from_a ? p.Nb : p.Na;
+    const uint t_first = min(p.t_begin, n_all);
+    const uint nt = min(p.t_chunk, n_all - t_first);  // targets of this chunk (uniform)
     const uint q = (from_a ? gl_WorkGroupID.x : gl_WorkGroupID.x - p.groups_a) * 2u * L + tid;
     const uint q2 = q + L;
 
@@ -45,8 +59,8 @@ void main() {
     for (uint t0 = 0; t0 < nt; t0 += L) {
         uint rows = min(L, nt - t0);
         if (tid < rows) {
-            tile_p[tid] = row(1u - qset, t0 + tid, 0u);
-            if (WIDE) tile_n[tid] = row(1u - qset, t0 + tid, 3u);
+            tile_p[tid] = row(1u - qset, t_first + t0 + tid, 0u);
+            if (WIDE) tile_n[tid] = row(1u - qset, t_first + t0 + tid, 3u);
         }
         barrier();
         for (uint j = 0; j < rows; ++j) {
@@ -68,6 +82,7 @@ void main() {
     }
     // A NaN anywhere makes the distance NaN rather than silently ignored.
     const uint base = gl_WorkGroupID.y * (p.Na + p.Nb) + (from_a ? 0u : p.Na);
-    if (q < nq) mins[base + q] = nan1 ? (0.0 / 0.0) : best;
-    if (q2 < nq) mins[base + q2] = nan2 ? (0.0 / 0.0) : best2;
+    if (nt == 0u) return;  // this set has no targets left in this chunk
+    if (q < nq) mins[base + q] = merge(p.t_begin == 0u, nan1, best, base + q);
+    if (q2 < nq) mins[base + q2] = merge(p.t_begin == 0u, nan2, best2, base + q2);
 }

@@ -7,7 +7,7 @@
 // there. No shared memory, no barrier. Why: where a shared-memory load is a loop
 // over the lanes (CPU drivers), reading the tile cost more than the distances;
 // a shuffle by an index every lane shares is a register broadcast. Same layout,
-// outputs and NaN rule as chamfer_nn.comp, one query per thread. The workgroup
+// outputs, NaN rule and target chunks as chamfer_nn.comp, one query per thread. The workgroup
 // is whole subgroups (the host's choice), and every lane takes part in every
 // shuffle, queries past the end included.
 layout(local_size_x_id = 0) in;
@@ -15,8 +15,8 @@ layout(constant_id = 1) const bool WIDE = false;  // rows of 6 (xyz + normal), e
 
 layout(std430, binding = 0) readonly buffer A_ { float A[]; };
 layout(std430, binding = 1) readonly buffer B_ { float B[]; };
-layout(std430, binding = 2) writeonly buffer Mins_ { float mins[]; };
-layout(push_constant) uniform Push { uint Na; uint Nb; uint groups_a; } p;
+layout(std430, binding = 2) buffer Mins_ { float mins[]; };
+layout(push_constant) uniform Push { uint Na; uint Nb; uint groups_a; uint t_begin; uint t_chunk; } p;
 
 const uint D = WIDE ? 6u : 3u;
 
@@ -39,7 +39,9 @@ void load_row(bool from_a, uint i, uint n, out vec3 xyz, out vec3 nrm) {
 void main() {
     const uint L = gl_WorkGroupSize.x, S = gl_SubgroupSize;
     const bool from_a = gl_WorkGroupID.x < p.groups_a;  // queries from A, targets from B
-    const uint nq = from_a ? p.Na : p.Nb, nt = from_a ? p.Nb : p.Na;
+    const uint nq = from_a ? p.Na : p.Nb, n_all = from_a ? p.Nb : p.Na;
+    const uint t_first = min(p.t_begin, n_all);
+    const uint nt = min(p.t_chunk, n_all - t_first);  // targets of this chunk (uniform)
     const uint q = (from_a ? gl_WorkGroupID.x : gl_WorkGroupID.x - p.groups_a) * L + gl_LocalInvocationID.x;
     vec3 qp, qn;
     load_row(from_a, q, nq, qp, qn);
@@ -47,7 +49,7 @@ void main() {
     bool nan = false;
     for (uint t0 = 0u; t0 < nt; t0 += S) {
         vec3 tp, tn;
-        load_row(!from_a, t0 + gl_SubgroupInvocationID, nt, tp, tn);
+        load_row(!from_a, t_first + t0 + gl_SubgroupInvocationID, t_first + nt, tp, tn);
         const uint rows = min(S, nt - t0);
         for (uint j = 0u; j < rows; ++j) {
             vec3 e = qp - subgroupShuffle(tp, j);
@@ -62,5 +64,13 @@ void main() {
     }
     // A NaN anywhere makes the distance NaN rather than silently ignored.
     const uint base = gl_WorkGroupID.y * (p.Na + p.Nb) + (from_a ? 0u : p.Na);
-    if (q < nq) mins[base + q] = nan ? (0.0 / 0.0) : best;
+    if (nt == 0u || q >= nq) return;  // no targets left in this chunk for this set
+    if (nan) {
+        mins[base + q] = 0.0 / 0.0;
+    } else if (p.t_begin == 0u) {
+        mins[base + q] = best;
+    } else {
+        const float old = mins[base + q];
+        mins[base + q] = isnan(old) ? old : min(old, best);
+    }
 }

@@ -100,7 +100,7 @@ TEST_CASE("ilu's register-resident shader matches the CPU reference, in one subg
     // block held by only some lanes (C = 20, H = 12 at 8 lanes).
     const uint32_t sg = test::gpu().info().subgroup_size;
     struct Case { int64_t C, H; int iters; };
-    for (Case c : {Case{4, 4, 3}, Case{20, 12, 9}, Case{64, 64, 16}, Case{128, 64, 16}, Case{200, 64, 16}}) {
+    for (Case c : {Case{4, 4, 3}, Case{20, 12, 9}, Case{64, 64, 16}, Case{128, 64, 40}, Case{200, 64, 16}}) {
         WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C) + 7);
         for (uint32_t wave : {sg, 2 * sg, 4 * sg}) {
             INFO("C " << c.C << " H " << c.H << " workgroup " << wave << " (subgroup " << sg << ")");
@@ -146,6 +146,12 @@ TEST_CASE("ilu refuses a forced register-resident shader where it cannot run, by
     std::vector<int> out2 = ilu_nodes(g2, w2, 1, 16, 3, 12);  // not a power of two
     g2.output(out2[1], "contact");
     REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g2, w2), Catch::Contains("power-of-two"));
+    // A scan longer than a CPU driver lets one invocation's loops run (ops/common.h).
+    WeightStore w3 = random_ilu(256, 64, 2);
+    Graph g3;
+    std::vector<int> out3 = ilu_nodes(g3, w3, 1, 256, 64, int(test::gpu().info().subgroup_size));
+    g3.output(out3[1], "contact");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g3, w3), Catch::Contains("loop iterations"));
 }
 
 TEST_CASE("ilu runs a batch of states in one dispatch, each row as if alone", "[op][ilu]") {

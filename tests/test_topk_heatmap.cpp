@@ -83,8 +83,9 @@ TEST_CASE("topk rejects K out of range, empty sets and NaN", "[op][topk]") {
 
 namespace {
 
+// subgroup: the one-dispatch shader where the device has shuffles, or the two passes.
 HostTensor run_heatmap(const HostTensor& cloud, const HostTensor& cand, const std::vector<int32_t>& index,
-                       const HostTensor* sym = nullptr) {
+                       const HostTensor* sym = nullptr, bool subgroup = true) {
     Graph g;
     const int pc = g.input("cloud", cloud.shape), cd = g.input("cand", cand.shape);
     const int idx = g.input("index", {int64_t(index.size())}, ElemType::I32);
@@ -94,7 +95,8 @@ HostTensor run_heatmap(const HostTensor& cloud, const HostTensor& cand, const st
         symmetry = g.input("sym", sym->shape);
         inputs["sym"] = *sym;
     }
-    g.output(ops::heatmap(g, pc, cd, idx, symmetry), "heat");
+    g.output(ops::heatmap(g, pc, cd, idx, symmetry, "", subgroup), "heat");
+    INFO("heat-map of " << cloud.shape[0] << " points" << (subgroup ? "" : ", two passes forced"));
     return test::run_gpu_and_compare(g, WeightStore{}, inputs).at("heat");
 }
 
@@ -117,11 +119,13 @@ std::vector<double> minmax(std::vector<double> s) {
 TEST_CASE("heatmap matches the CPU reference at odd sizes, with and without symmetry", "[op][heatmap]") {
     HostTensor cand = random_tensor({301, 3}, 1);
     std::vector<int32_t> idx{17, 3, 300, 0, 17};  // a repeated centre: its lower rank wins
-    run_heatmap(random_tensor({1037, 6}, 2), cand, idx);
-    run_heatmap(random_tensor({1, 3}, 3), cand, {5});
     HostTensor sym = symmetry_transforms({0.1, -0.2, 0.0}, {0.3, 1.0, -0.2}, 5);
-    run_heatmap(random_tensor({513, 3}, 4), cand, idx, &sym);
-    run_heatmap(random_tensor({100000, 3}, 5), random_tensor({7, 3}, 6), {6, 5, 4, 3, 2, 1, 0});
+    for (bool subgroup : {true, false}) {
+        run_heatmap(random_tensor({1037, 6}, 2), cand, idx, nullptr, subgroup);
+        run_heatmap(random_tensor({1, 3}, 3), cand, {5}, nullptr, subgroup);
+        run_heatmap(random_tensor({513, 3}, 4), cand, idx, &sym, subgroup);
+        run_heatmap(random_tensor({100000, 3}, 5), random_tensor({7, 3}, 6), {6, 5, 4, 3, 2, 1, 0}, nullptr, subgroup);
+    }
 }
 
 TEST_CASE("heatmap hand cases of test_post.py: ties, flat, symmetry order 2", "[op][heatmap]") {

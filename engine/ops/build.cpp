@@ -102,10 +102,12 @@ std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const st
     return g.add("topk", {contact, candidates}, p, name);
 }
 
-int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name) {
+int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name, bool subgroup) {
     std::vector<int> in{cloud, candidates, index};
     if (symmetry >= 0) in.push_back(symmetry);
-    return g.add1("heatmap", in, {}, name);
+    Params p;
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add1("heatmap", in, p, name);
 }
 
 std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name) {

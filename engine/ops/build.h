@@ -73,7 +73,9 @@ std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, i
 std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "",
                       bool subgroup = true);
 // symmetry: -1 for none.
-int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name = "");
+// subgroup = false: the two-pass shaders even where the one-subgroup shader applies.
+int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name = "",
+            bool subgroup = true);
 struct Belief {
     double sigma = 0.2, sigma_m = 0.05;
     int window = 4;

@@ -17,6 +17,10 @@
 namespace vtloc::ops {
 namespace {
 
+// Targets one dispatch scans per query: within kLoopIterationBudget whatever the
+// subgroup size (the shuffle shader adds one round per subgroup of targets).
+constexpr uint32_t kTargetChunk = 32768;
+
 int64_t rows_of(const Shape& s) { return numel(s) / s.back(); }
 int64_t sets_of(const Shape& a) { return a.size() == 3 && a[0] > 1 ? a[0] : 1; }
 
@@ -91,9 +95,15 @@ void gpu(const GpuOpArgs& a) {
     // workgroup (whole subgroups) so that a small set still spreads over cores.
     // Otherwise the shared-memory tile holds one target row per thread (one or two
     // vec3, 16 bytes each), two queries per thread.
+    // Where the device has subgroup shuffles (param subgroup = 0 forces the tiles),
+    // target rows pass between lanes by shuffles: one query per thread, 64 per
+    // workgroup (whole subgroups) so that a small set still spreads over cores.
+    // Otherwise the shared-memory tile holds one target row per thread (one or two
+    // vec3, 16 bytes each), two queries per thread. Either way one dispatch scans
+    // at most kTargetChunk targets per query (the loop budget of ops/common.h), the
+    // later ones keeping the smaller distance.
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    const bool shuffle = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
-                         (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg <= elementwise_local_size(d);
+    const bool shuffle = a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d);
     uint32_t local = elementwise_local_size(d);
     if (shuffle) local = std::max(sg, std::min(64u, local) / sg * sg);
     while (!shuffle && local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
@@ -102,11 +112,15 @@ void gpu(const GpuOpArgs& a) {
     if (ga + gb > d.max_workgroup_count[0])
         throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
                     " rows need more workgroups than the device allows");
-    struct { uint32_t Na, Nb, groups_a; } push{Na, Nb, uint32_t(ga)};
-    a.seq.dispatch(pipeline(a.ctx, shuffle ? "chamfer_nn_subgroup" : "chamfer_nn", 3, 12, {local, D == 6 ? 1u : 0u}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
-                    {a.out[1].view, rt::Access::Write}},
-                   &push, sizeof(push), uint32_t(ga + gb), sets);
+    const rt::Pipeline& nn = pipeline(a.ctx, shuffle ? "chamfer_nn_subgroup" : "chamfer_nn", 3, 20, {local, D == 6 ? 1u : 0u});
+    for (uint32_t t0 = 0; t0 < std::max(Na, Nb); t0 += kTargetChunk) {
+        struct { uint32_t Na, Nb, groups_a, t_begin, t_chunk; } push{Na, Nb, uint32_t(ga), t0, kTargetChunk};
+        a.seq.dispatch(nn,
+                       {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
+                        {a.out[1].view, t0 == 0 ? rt::Access::Write : rt::Access::ReadWrite}},
+                       &push, sizeof(push), uint32_t(ga + gb), sets);
+    }
+    struct { uint32_t Na, Nb; } push{Na, Nb};
     uint32_t sum_local = elementwise_local_size(d);
     while (sum_local > 1 && sum_local * 8 > d.max_shared_memory) sum_local /= 2;
     a.seq.dispatch(pipeline(a.ctx, "chamfer_sum", 2, 8, {sum_local}),

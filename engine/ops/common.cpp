@@ -24,6 +24,11 @@ uint32_t elementwise_local_size(const rt::DeviceInfo& d) {
     return limit >= sg ? limit / sg * sg : limit;
 }
 
+bool has_subgroup_shuffles(const rt::DeviceInfo& d) {
+    return (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) && (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) &&
+           d.subgroup_size > 0 && d.subgroup_size <= elementwise_local_size(d);
+}
+
 uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d) {
     uint64_t groups = (n + local_size - 1) / local_size;
     // Beyond a few thousand groups a grid-stride loop costs nothing and keeps

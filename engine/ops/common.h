@@ -19,6 +19,15 @@ float apply_act(float v, uint32_t act, float slope);
 // Workgroup size for 1-D elementwise shaders: up to 256 invocations, a multiple
 // of the subgroup size, within the device's limits.
 uint32_t elementwise_local_size(const rt::DeviceInfo& d);
+// The device has the subgroup operations the *_subgroup / *_wave shaders use
+// (basic + shuffle) and a subgroup fits an elementwise workgroup.
+bool has_subgroup_shuffles(const rt::DeviceInfo& d);
+// Lavapipe (llvmpipe) ends every loop of a shader once the loops of one
+// invocation have taken 65535 back-edges in all (a limiter shared by all the
+// shader's loops), silently. Shaders that put a long scan in one invocation (one
+// subgroup per row) take it only while this bound on their loop iterations
+// holds; the others spread the work over more invocations.
+constexpr uint64_t kLoopIterationBudget = 60000;
 // Workgroup count for a grid-stride loop over n items.
 uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d);
 

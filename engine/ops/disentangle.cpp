@@ -84,11 +84,17 @@ void gpu(const GpuOpArgs& a) {
     // (param subgroup = 0 forces the slabs): X by shuffles, W as texels, 64
     // threads per workgroup so that the columns spread over cores.
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    bool shuffle = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
-                   (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg <= local;
-    for (size_t c = 1; c < a.in.size(); ++c)
-        shuffle = shuffle && uint64_t(numel(a.in[c].shape) / V) <= d.max_texel_elements;
     const uint32_t slocal = std::max(sg, std::min(64u, local) / sg * sg);
+    bool shuffle = a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d);
+    // Loop iterations of one invocation for the longest chunk: column blocks of its
+    // grid-stride loop, each walking the chunk's rows (kLoopIterationBudget).
+    const uint64_t col_rounds = (uint64_t(N / V) + uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal - 1) /
+                                (uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal);
+    for (size_t c = 1; c < a.in.size(); ++c) {
+        const uint64_t rows_c = uint64_t(a.in[c].shape[0]);
+        shuffle = shuffle && uint64_t(numel(a.in[c].shape) / V) <= d.max_texel_elements &&
+                  col_rounds * ((rows_c + sg - 1) / sg * (1 + uint64_t(sg) * (1 + mb)) + 2 * mb) <= kLoopIterationBudget;
+    }
     const rt::Pipeline& pipe = shuffle ? a.ctx.pipelines().get(rt::PipelineDesc{"disentangle_subgroup", 3, 36,
                                                                                 {slocal, V, mb}, 0x2u})
                                        : pipeline(a.ctx, "disentangle", 3, 36, {local, V, tk, mb});

@@ -1,8 +1,10 @@
 // heatmap: rank-weighted heat-map over the cloud (SPEC 3, weights_tools/post.py
 // heatmap): w = rank of the nearest top-K centre (lowest rank on a tie),
 // s_p = exp(-||p - c*_w||) / w, min-max normalised (all zeros when flat).
-// -> shaders/heatmap_score.comp (per point) + shaders/heatmap_norm.comp (the
-// min/max reduction and the normalisation, one workgroup).
+// -> shaders/heatmap_subgroup.comp (both steps in one dispatch, one subgroup per
+// row) on a device with subgroup shuffles, else shaders/heatmap_score.comp (per
+// point) + shaders/heatmap_norm.comp (the min/max reduction and the
+// normalisation, one workgroup). Param subgroup = 0 forces the second.
 // Inputs: cloud [P, D >= 3] (xyz first), candidates [M, 3], topk index I32 [K]
 // (rank order), optionally the symmetry prior as T affine maps [T, 12] (3x4
 // row-major, symmetry_transforms in engine/model/post.h makes them). Output [P].
@@ -101,6 +103,22 @@ void gpu(const GpuOpArgs& a) {
     struct { uint32_t P, D, M, K, T; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[0].shape[1]),
                                           uint32_t(a.in[1].shape[0]), to_u32(idx.back(), "K"),
                                           sym ? to_u32(a.in[3].shape[0], "symmetry maps") : 0u};
+    // One dispatch, one subgroup per row, where the device has shuffles, the cloud
+    // fits its texel limit and one lane's scan stays within the loop budget
+    // (param subgroup = 0 forces the two passes).
+    const uint32_t sg = d.subgroup_size;
+    const uint64_t scan = has_subgroup_shuffles(d)
+                              ? (push.P + sg - 1) / sg * (2 + uint64_t(push.K) * (1 + std::max(push.T, 1u))) + 64
+                              : 0;
+    if (a.params.get("subgroup", 1) != 0 && scan > 0 && scan <= kLoopIterationBudget &&
+        uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements) {
+        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"heatmap_subgroup", 5, 20, {sg}, 0x1u}),
+                       {{a.in[0].view, rt::Access::Read, VK_FORMAT_R32_SFLOAT}, {a.in[1].view, rt::Access::Read},
+                        {a.in[2].view, rt::Access::Read}, {(sym ? a.in[3] : a.in[1]).view, rt::Access::Read},
+                        {a.out[0].view, rt::Access::ReadWrite}},
+                       &push, sizeof(push), 1, B);
+        return;
+    }
     a.seq.dispatch(pipeline(a.ctx, "heatmap_score", 5, 20, {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {a.in[2].view, rt::Access::Read}, {(sym ? a.in[3] : a.in[1]).view, rt::Access::Read},
@@ -114,6 +132,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_heatmap{"heatmap", infer, cpu, gpu, 0, {}};
+const OpDef op_heatmap{"heatmap", infer, cpu, gpu, 0, {"subgroup"}};
 
 }  // namespace vtloc::ops

@@ -40,8 +40,7 @@ void choose_wave(const GpuOpArgs& a, Launch& l) {
         if (want >= 2) throw Error("the register-resident ILU (wave " + std::to_string(int(want)) + ") " + why);
     };
     const uint32_t sg = d.subgroup_size;
-    if (!(d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) || !(d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) || !sg)
-        return no("needs subgroup shuffles");
+    if (!has_subgroup_shuffles(d)) return no("needs subgroup shuffles");
     if (l.C % 4 || l.H % 4)
         return no("needs C and H divisible by 4, got C = " + std::to_string(l.C) + ", H = " + std::to_string(l.H));
     const uint32_t L = want >= 2 ? uint32_t(want) : sg;
@@ -53,6 +52,12 @@ void choose_wave(const GpuOpArgs& a, Launch& l) {
     if (RB > kMaxWaveBlocks || HB > kMaxWaveBlocks)
         return no("holds at most " + std::to_string(4 * kMaxWaveBlocks) + " rows per lane");
     if (uint64_t(l.C) * 4 + uint64_t(L) * 16 > d.max_shared_memory) return no("needs more shared memory");
+    // Loop iterations of one invocation at max_iters (every loop counted, unrolled or not).
+    const uint64_t CB = l.C / 4, per_iter = 3 * CB * (1 + RB) + CB * (1 + HB) + 4 * RB + 5 * HB + 16;
+    const uint64_t iters = uint64_t(a.params.get("max_iters", 0));
+    if (iters * per_iter + 2 * CB * (1 + RB) + RB + HB + 3 * iters + 16 > kLoopIterationBudget)
+        return no("would run " + std::to_string(iters * per_iter) + " loop iterations in one invocation, over the " +
+                  std::to_string(kLoopIterationBudget) + " budget");
     l.wave = true;
     l.wave_L = L;
     l.RB = RB;

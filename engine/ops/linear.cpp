@@ -34,14 +34,15 @@ GemmTiles choose_gemm_tiles(const rt::DeviceInfo& d, int64_t M, int64_t N) {
 
 namespace {
 
-// The shuffle shader: the device has subgroup shuffles, K splits into vec4s and
-// x and W fit the texel limit.
+// The shuffle shader: the device has subgroup shuffles, K splits into vec4s,
+// x and W fit the texel limit and K is not so long that one thread's loop
+// exceeds the loop budget.
 bool use_subgroup_rows(const GpuOpArgs& a, int64_t M, int64_t N, int64_t K) {
     const rt::DeviceInfo& d = a.ctx.info();
-    return a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
-           (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && d.subgroup_size > 0 &&
-           d.subgroup_size <= elementwise_local_size(d) && K % 4 == 0 && K > 0 &&
-           uint64_t(M * K / 4) <= d.max_texel_elements && uint64_t(N * K / 4) <= d.max_texel_elements;
+    // Loop iterations of one thread: K / 4 blocks of up to 8 outputs (kLoopIterationBudget).
+    return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d) && K % 4 == 0 && K > 0 &&
+           uint64_t(M * K / 4) <= d.max_texel_elements && uint64_t(N * K / 4) <= d.max_texel_elements &&
+           uint64_t(K / 4) * 9 + 16 <= kLoopIterationBudget;
 }
 
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {

@@ -20,9 +20,9 @@ namespace vtloc::ops {
 namespace {
 
 constexpr int64_t kRegionAlign = 256;  // the largest minStorageBufferOffsetAlignment Vulkan allows
-// The register path: K keys per lane, one subgroup scanning every candidate (a
-// million at most: beyond that the multi-pass sort spreads over cores).
-constexpr int64_t kSubgroupMaxK = 16, kSubgroupMaxM = 1 << 20;
+// The register path: K keys per lane, one subgroup scanning every candidate while
+// that scan stays within kLoopIterationBudget; beyond, the multi-pass sort.
+constexpr int64_t kSubgroupMaxK = 16;
 
 int64_t pow2_at_least(int64_t v) {
     int64_t p = 1;
@@ -113,9 +113,9 @@ void gpu(const GpuOpArgs& a) {
     // Small K on a device with shuffles (param subgroup = 0 forces the sort): one
     // subgroup per contact keeps its K best in registers (topk_subgroup.comp).
     const uint32_t sg = d.subgroup_size;
-    if (a.params.get("subgroup", 1) != 0 && K <= kSubgroupMaxK && (d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) &&
-        (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && sg > 0 && sg <= elementwise_local_size(d) &&
-        uint64_t(M) * 3 <= d.max_texel_elements && M <= kSubgroupMaxM) {
+    if (a.params.get("subgroup", 1) != 0 && K <= kSubgroupMaxK && has_subgroup_shuffles(d) &&
+        uint64_t(M) * 3 <= d.max_texel_elements &&
+        (uint64_t(M) + sg - 1) / sg * uint64_t(K + 1) + uint64_t(K) * (K + 8) <= kLoopIterationBudget) {
         struct { uint32_t n; } push{uint32_t(M)};
         a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"topk_subgroup", 4, 4, {sg, uint32_t(K)}, 0x2u}),
                        {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read, VK_FORMAT_R32_SFLOAT},
