@@ -310,3 +310,19 @@ TEST_CASE("layer one per source point plus sa_gather equals the gathered layer, 
         }
     }
 }
+
+TEST_CASE("FPS and ball query refuse, on a CPU driver, clouds whose scan would outrun its loop limit", "[op][fps][ball_query]") {
+    // Lavapipe ends a shader's loops after 65,535 iterations per invocation
+    // (engine/ops/common.h); these ops have no split, so they refuse by name.
+    const rt::DeviceInfo& d = test::gpu().info();
+    if (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU) return;  // a GPU runs them at any size (the sizes above)
+    Graph g;
+    const int big = g.input("pts", {200000, 3});
+    g.output(ops::fps(g, big, 512)[0], "idx");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, WeightStore{}), Catch::Contains("FPS of 512 from 200000 points") &&
+                                                                         Catch::Contains("CPU driver"));
+    Graph g2;
+    const int pts = g2.input("pts", {70000, 3}), c = g2.input("c", {4, 3});
+    g2.output(ops::ball_query(g2, pts, c, 0.1, 8), "idx");
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g2, WeightStore{}), Catch::Contains("ball query over 70000 points"));
+}

@@ -68,6 +68,9 @@ void gpu(const GpuOpArgs& a) {
     struct { uint32_t N, D, S, NS; float r2; } push{to_u32(a.in[0].shape[0], "points"),
                                                     to_u32(a.in[0].shape[1], "point width"), S,
                                                     to_u32(a.out[0].shape[1], "nsample"), radius2(a.params)};
+    // A thread may scan every point (a centre that finds fewer than nsample).
+    check_loop_budget(d, uint64_t(push.N) + push.N / L + 2 * uint64_t(push.NS) + 8,
+                      "ball query over " + std::to_string(push.N) + " points");
     a.seq.dispatch(pipeline(a.ctx, "ball_query", 3, sizeof(push), {L}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},

@@ -29,6 +29,13 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d) {
            d.subgroup_size > 0 && d.subgroup_size <= elementwise_local_size(d);
 }
 
+void check_loop_budget(const rt::DeviceInfo& d, uint64_t iterations, const std::string& what) {
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && iterations > kLoopIterationBudget)
+        throw Error(what + " would loop up to " + std::to_string(iterations) + " times in one invocation; '" + d.name +
+                    "' is a CPU driver, which ends a shader's loops after 65,535 iterations (limit used: " +
+                    std::to_string(kLoopIterationBudget) + "): reduce the cloud first");
+}
+
 uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d) {
     uint64_t groups = (n + local_size - 1) / local_size;
     // Beyond a few thousand groups a grid-stride loop costs nothing and keeps

@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the op implementations in engine/ops/.
 #include <cstdint>
+#include <string>
 #include <vector>
 
 #include "engine/op.h"
@@ -28,6 +29,9 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d);
 // subgroup per row) take it only while this bound on their loop iterations
 // holds; the others spread the work over more invocations.
 constexpr uint64_t kLoopIterationBudget = 60000;
+// For a shader with no alternative: on a CPU device (where the limiter lives),
+// refuses by name a dispatch whose invocations may loop more than the budget.
+void check_loop_budget(const rt::DeviceInfo& d, uint64_t iterations, const std::string& what);
 // Workgroup count for a grid-stride loop over n items.
 uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d);
 

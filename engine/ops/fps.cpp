@@ -61,6 +61,13 @@ void gpu(const GpuOpArgs& a) {
     while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
     const uint32_t per = (N + L - 1) / L;
     const bool regs = per <= kMaxPer && !a.params.get("no_registers", 0);
+    uint32_t log_l = 0;
+    while ((1u << log_l) < L) ++log_l;
+    // Per step: the tree's log2(L) rounds, and a pass over the thread's points
+    // unless they sit in registers (a constant trip count the compiler unrolls:
+    // 4,097 steps of 5 points each run correctly on lavapipe).
+    check_loop_budget(d, uint64_t(S) * ((regs ? 1 : per) + log_l + 1),
+                      "FPS of " + std::to_string(S) + " from " + std::to_string(N) + " points");
     struct { uint32_t N, D, S; } push{N, to_u32(a.in[0].shape[1], "point width"), S};
     a.seq.dispatch(pipeline(a.ctx, "fps", 4, sizeof(push), {L, regs ? per : 1u, regs ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write},
