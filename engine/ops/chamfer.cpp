@@ -94,11 +94,6 @@ void gpu(const GpuOpArgs& a) {
     // target rows pass between lanes by shuffles: one query per thread, 64 per
     // workgroup (whole subgroups) so that a small set still spreads over cores.
     // Otherwise the shared-memory tile holds one target row per thread (one or two
-    // vec3, 16 bytes each), two queries per thread.
-    // Where the device has subgroup shuffles (param subgroup = 0 forces the tiles),
-    // target rows pass between lanes by shuffles: one query per thread, 64 per
-    // workgroup (whole subgroups) so that a small set still spreads over cores.
-    // Otherwise the shared-memory tile holds one target row per thread (one or two
     // vec3, 16 bytes each), two queries per thread. Either way one dispatch scans
     // at most kTargetChunk targets per query (the loop budget of ops/common.h), the
     // later ones keeping the smaller distance.

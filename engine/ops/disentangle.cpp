@@ -88,8 +88,8 @@ void gpu(const GpuOpArgs& a) {
     bool shuffle = a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d);
     // Loop iterations of one invocation for the longest chunk: column blocks of its
     // grid-stride loop, each walking the chunk's rows (kLoopIterationBudget).
-    const uint64_t col_rounds = (uint64_t(N / V) + uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal - 1) /
-                                (uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal);
+    const uint64_t span = uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal;  // columns per round
+    const uint64_t col_rounds = (uint64_t(N / V) + span - 1) / span;
     for (size_t c = 1; c < a.in.size(); ++c) {
         const uint64_t rows_c = uint64_t(a.in[c].shape[0]);
         shuffle = shuffle && uint64_t(numel(a.in[c].shape) / V) <= d.max_texel_elements &&

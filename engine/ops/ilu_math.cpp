@@ -142,7 +142,7 @@ Launch launch(const GpuOpArgs& a) {
                  l.L % sg == 0;
     choose_wave(a, l);
     const uint64_t shared = (9ull * l.C + l.H + l.L + 3) * 4;
-    if (shared > d.max_shared_memory)
+    if (!l.wave && shared > d.max_shared_memory)
         throw Error("ILU with C = " + std::to_string(l.C) + " needs " + std::to_string(shared) +
                     " bytes of shared memory; the device has " + std::to_string(d.max_shared_memory));
     return l;
