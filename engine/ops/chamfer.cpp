@@ -97,10 +97,8 @@ void gpu(const GpuOpArgs& a) {
     // vec3, 16 bytes each), two queries per thread. Either way one dispatch scans
     // at most kTargetChunk targets per query (the loop budget of ops/common.h), the
     // later ones keeping the smaller distance.
-    const uint32_t sg = std::max(1u, d.subgroup_size);
-    const bool shuffle = a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d);
-    uint32_t local = elementwise_local_size(d);
-    if (shuffle) local = std::max(sg, std::min(64u, local) / sg * sg);
+    const bool shuffle = shuffles_allowed(a);
+    uint32_t local = shuffle ? subgroup_group_size(d) : elementwise_local_size(d);
     while (!shuffle && local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
     const uint32_t per_group = shuffle ? local : 2 * local;
     const uint64_t ga = (Na + per_group - 1) / per_group, gb = (Nb + per_group - 1) / per_group;

@@ -29,6 +29,15 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d) {
            d.subgroup_size > 0 && d.subgroup_size <= elementwise_local_size(d);
 }
 
+bool shuffles_allowed(const GpuOpArgs& a) {
+    return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(a.ctx.info());
+}
+
+uint32_t subgroup_group_size(const rt::DeviceInfo& d) {
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    return std::max(sg, std::min(64u, elementwise_local_size(d)) / sg * sg);
+}
+
 void check_loop_budget(const rt::DeviceInfo& d, uint64_t iterations, const std::string& what) {
     if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && iterations > kLoopIterationBudget)
         throw Error(what + " would loop up to " + std::to_string(iterations) + " times in one invocation; '" + d.name +

@@ -23,6 +23,13 @@ uint32_t elementwise_local_size(const rt::DeviceInfo& d);
 // The device has the subgroup operations the *_subgroup / *_wave shaders use
 // (basic + shuffle) and a subgroup fits an elementwise workgroup.
 bool has_subgroup_shuffles(const rt::DeviceInfo& d);
+// The op may take its *_subgroup shader: the device has shuffles and the op's
+// param "subgroup" (default 1) does not force the plain one.
+bool shuffles_allowed(const GpuOpArgs& a);
+// Workgroup size of the *_subgroup shaders that spread rows over workgroups: 64
+// invocations in whole subgroups (at least one), so a few hundred rows still
+// reach every core of a CPU driver.
+uint32_t subgroup_group_size(const rt::DeviceInfo& d);
 // Lavapipe (llvmpipe) ends every loop of a shader once the loops of one
 // invocation have taken 65535 back-edges in all (a limiter shared by all the
 // shader's loops), silently. Shaders that put a long scan in one invocation (one

@@ -84,8 +84,8 @@ void gpu(const GpuOpArgs& a) {
     // (param subgroup = 0 forces the slabs): X by shuffles, W as texels, 64
     // threads per workgroup so that the columns spread over cores.
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    const uint32_t slocal = std::max(sg, std::min(64u, local) / sg * sg);
-    bool shuffle = a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d);
+    const uint32_t slocal = subgroup_group_size(d);
+    bool shuffle = shuffles_allowed(a);
     // Loop iterations of one invocation for the longest chunk: column blocks of its
     // grid-stride loop, each walking the chunk's rows (kLoopIterationBudget).
     const uint64_t span = uint64_t(grid_groups(uint64_t(N / V), slocal, d)) * slocal;  // columns per round

@@ -106,11 +106,9 @@ void gpu(const GpuOpArgs& a) {
     // One dispatch, one subgroup per row, where the device has shuffles, the cloud
     // fits its texel limit and one lane's scan stays within the loop budget
     // (param subgroup = 0 forces the two passes).
-    const uint32_t sg = d.subgroup_size;
-    const uint64_t scan = has_subgroup_shuffles(d)
-                              ? (push.P + sg - 1) / sg * (2 + uint64_t(push.K) * (1 + std::max(push.T, 1u))) + 64
-                              : 0;
-    if (a.params.get("subgroup", 1) != 0 && scan > 0 && scan <= kLoopIterationBudget &&
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    const uint64_t scan = (push.P + sg - 1) / sg * (2 + uint64_t(push.K) * (1 + std::max(push.T, 1u))) + 64;
+    if (shuffles_allowed(a) && scan <= kLoopIterationBudget &&
         uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements) {
         // Up to 16 centres without symmetry stay in registers (the shader's KR).
         const uint32_t kr = !sym && push.K <= 16 ? push.K : 0u;

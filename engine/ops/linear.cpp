@@ -40,7 +40,7 @@ namespace {
 bool use_subgroup_rows(const GpuOpArgs& a, int64_t M, int64_t N, int64_t K) {
     const rt::DeviceInfo& d = a.ctx.info();
     // Loop iterations of one thread: K / 4 blocks of up to 8 outputs (kLoopIterationBudget).
-    return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(d) && K % 4 == 0 && K > 0 &&
+    return shuffles_allowed(a) && K % 4 == 0 && K > 0 &&
            uint64_t(M * K / 4) <= d.max_texel_elements && uint64_t(N * K / 4) <= d.max_texel_elements &&
            uint64_t(K / 4) * 9 + 16 <= kLoopIterationBudget;
 }
@@ -90,8 +90,8 @@ void gpu(const GpuOpArgs& a) {
     // Without a bias any read-only buffer fills the binding; the shader skips it.
     const rt::BufferView& bias = a.in.size() == 3 ? a.in[2].view : a.in[1].view;
     if (M > 0 && N > 0 && use_subgroup_rows(a, M, N, K)) {
-        const uint32_t sg = d.subgroup_size, TN = std::min(8u, sg);
-        const uint32_t local = std::max(sg, std::min(64u, elementwise_local_size(d)) / sg * sg);
+        const uint32_t TN = std::min(8u, d.subgroup_size);
+        const uint32_t local = subgroup_group_size(d);
         const uint64_t gx = (uint64_t(M) + local - 1) / local, gy = (uint64_t(N) + TN - 1) / TN;
         if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
             throw Error("linear of " + std::to_string(M) + " rows and " + std::to_string(N) +

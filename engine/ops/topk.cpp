@@ -113,7 +113,7 @@ void gpu(const GpuOpArgs& a) {
     // Small K on a device with shuffles (param subgroup = 0 forces the sort): one
     // subgroup per contact keeps its K best in registers (topk_subgroup.comp).
     const uint32_t sg = d.subgroup_size;
-    if (a.params.get("subgroup", 1) != 0 && K <= kSubgroupMaxK && has_subgroup_shuffles(d) &&
+    if (shuffles_allowed(a) && K <= kSubgroupMaxK &&
         uint64_t(M) * 3 <= d.max_texel_elements &&
         (uint64_t(M) + sg - 1) / sg * uint64_t(K + 1) + uint64_t(K) * (K + 8) <= kLoopIterationBudget) {
         struct { uint32_t n; } push{uint32_t(M)};
