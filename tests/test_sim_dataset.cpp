@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
+#include <opencv2/imgcodecs.hpp>
 #include <sstream>
 
 #include "base/error.h"
@@ -259,4 +260,32 @@ TEST_CASE("dataset builder: object list errors", "[sim]") {
     CHECK(*l[0].scale_mm == 50.0);
     CHECK(l[1].source == "/data/meshes/a.off");
     CHECK_FALSE(l[1].scale_mm);
+}
+
+TEST_CASE("dataset builder: --indentation writes each touch's ground-truth indentation", "[sim]") {
+    BuildOptions o = small_build("ds_build_depth", 4);
+    o.indentation = true;
+    build_dataset({{"shape:cone", 60.0}}, o);
+    Dataset d = read_dataset(o.out);
+    REQUIRE(d.objects.size() == 1);
+    const ObjectRecord& ob = d.objects[0];
+    REQUIRE(ob.touches.size() == 14);
+    for (const TouchRecord& t : ob.touches) {
+        fs::path p = fs::path(ob.folder) / t.image;
+        p.replace_extension(".depth.png");
+        INFO(p.string());
+        cv::Mat m = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
+        REQUIRE(m.type() == CV_16UC1);
+        cv::Mat frame = cv::imread((fs::path(ob.folder) / t.image).string(), cv::IMREAD_UNCHANGED);
+        CHECK(m.size() == frame.size());
+        double hi = 0;
+        cv::minMaxLoc(m, nullptr, &hi);
+        // Micrometres: some of the gel is pressed in, never deeper than the
+        // press itself (the gel starts at first contact).
+        CHECK(hi > 50);
+        CHECK(hi <= 1000 * t.press_mm + 1);
+    }
+    // A dataset built without the maps is not resumed with them.
+    o.indentation = false;
+    require_error([&] { build_dataset({{"shape:cone", 60.0}}, o); }, {"ds_build_depth", "other options"});
 }

@@ -41,6 +41,8 @@ const char* kHelp =
     "  --view              also write each object's single-view cloud (view.xyz, view.json:\n"
     "                      what a depth camera far away sees from one seeded direction, no\n"
     "                      normals); adds them to an already built dataset too\n"
+    "  --indentation       also write each touch's gel indentation, the renderer's ground-truth\n"
+    "                      geometry, as touches/<id>.depth.png (16-bit grey, micrometres)\n"
     "  --seed S            (default 1)\n"
     "  --threads N         (default: all cores)\n"
     "sensor:\n"
@@ -75,7 +77,7 @@ int cmd_synth(Session&, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--out"}, {"--objects"}, {"--mesh-dir"}, {"--shape", true, true}, {"--mesh", true, true},
             {"--scale-mm"}, {"--list-shapes", false}, {"--contacts"}, {"--extra"}, {"--extra-views"}, {"--n-points"},
-            {"--max-tilt"}, {"--plain-look", false}, {"--view", false}, {"--seed"}, {"--threads"}, {"--calibration"},
+            {"--max-tilt"}, {"--plain-look", false}, {"--view", false}, {"--indentation", false}, {"--seed"}, {"--threads"}, {"--calibration"},
             {"--background"}, {"--mm-per-px"}, {"--check-sensor"}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -110,6 +112,7 @@ int cmd_synth(Session&, int argc, char** argv) {
         if (o.max_tilt_deg < 0 || o.max_tilt_deg > 10) throw UsageError("--max-tilt must be within 0..10 degrees");
         o.randomize_train_look = !a.flag("--plain-look");
         o.view = a.flag("--view");
+        o.indentation = a.flag("--indentation");
         o.seed = uint64_t(a.integer("--seed", 1, 0, 2147483647));
         o.threads = a.integer("--threads", 0, 0, 256);
         o.calibration = a.get("--calibration").value_or("");

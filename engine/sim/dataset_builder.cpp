@@ -51,6 +51,7 @@ std::string options_json(const BuildOptions& o) {
               {"randomize_train_look", o.randomize_train_look}, {"calibration", o.calibration},
               {"background", o.background}, {"mm_per_px", o.mm_per_px ? *o.mm_per_px : 0.0}};
     if (o.extra_views != 1) j["extra_views"] = o.extra_views;  // absent: datasets built before it still resume
+    if (o.indentation) j["indentation"] = true;
     return j.dump();
 }
 

@@ -42,6 +42,9 @@ struct BuildOptions {
     // view.json), for built and resumed objects alike; not part of the options
     // a resumed dataset must match, so --view can be added to a built dataset.
     bool view = false;
+    // Also write each touch's gel indentation (the renderer's ground-truth
+    // geometry) as touches/<id>.depth.png: 16-bit grey, micrometres.
+    bool indentation = false;
     // Called after each object: (objects done, objects total, touches rendered so far).
     std::function<void(int, int, long)> progress;
 };

@@ -108,6 +108,19 @@ void write_png(const fs::path& p, const std::vector<uint8_t>& img, int h, int w)
     if (!cv::imwrite(p.string(), m)) throw Error(p.string() + ": cannot write the PNG");
 }
 
+// The touch's frame, and with --indentation its indentation map beside it
+// (micrometres in 16 bits: up to 65 mm, far beyond any press).
+void write_touch(const fs::path& dir, const TouchRecord& r, const Touch& t, int h, int w, bool indentation) {
+    write_png(dir / r.image, t.image, h, w);
+    if (!indentation) return;
+    cv::Mat d(h, w, CV_16UC1);
+    for (int i = 0; i < h * w; ++i)
+        d.ptr<uint16_t>()[i] = uint16_t(std::clamp(std::lround(double(t.indentation_mm[size_t(i)]) * 1000.0), 0L, 65535L));
+    fs::path p = dir / r.image;
+    p.replace_extension(".depth.png");
+    if (!cv::imwrite(p.string(), d)) throw Error(p.string() + ": cannot write the PNG");
+}
+
 }  // namespace
 
 namespace {
@@ -249,7 +262,7 @@ void extra_touches(Shared& sh, TouchRenderer& renderer, Draws& draws, size_t n_t
         if (int(group.size()) < views) continue;
         for (auto& [t, tp] : group) {
             TouchRecord r = record(t, int(recs.size()), "extra", tp);
-            write_png(dir / r.image, t.image, sh.calib.height, sh.calib.width);
+            write_touch(dir, r, t, sh.calib.height, sh.calib.width, opt.indentation);
             recs.push_back(r);
             ++done;
             sh.touches++;
@@ -310,7 +323,7 @@ ObjectRecord build_object(const Job& job, Shared& sh) {
             if (t.ok) a.touch = std::move(t);
         }
         TouchRecord r = record(a.touch, int(k), test ? "test" : "train", a.params);
-        write_png(dir / r.image, a.touch.image, H, W);
+        write_touch(dir, r, a.touch, H, W, opt.indentation);
         recs.push_back(r);
         poses.push_back(a.touch.pose);
     }
