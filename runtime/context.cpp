@@ -155,6 +155,8 @@ DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     d.max_storage_buffers = l.maxPerStageDescriptorStorageBuffers;
     d.texel_offset_alignment = std::max<uint64_t>(1, l.minTexelBufferOffsetAlignment);
     d.max_texel_elements = l.maxTexelBufferElements;
+    d.uniform_offset_alignment = std::max<uint64_t>(1, l.minUniformBufferOffsetAlignment);
+    d.max_uniform_range = l.maxUniformBufferRange;
     d.timestamp_period = l.timestampPeriod;
     int fam = compute_queue_family(pd);
     d.has_compute_queue = fam >= 0;

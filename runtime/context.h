@@ -39,13 +39,17 @@ struct DeviceInfo {
     // Uniform texel buffers (read-only samplerBuffer bindings, see PipelineDesc).
     uint64_t texel_offset_alignment = 1;      // minTexelBufferOffsetAlignment
     uint32_t max_texel_elements = 0;          // maxTexelBufferElements (Vulkan guarantees 65536)
+    // Uniform buffers (PipelineDesc::uniform_bindings): small read-only data every
+    // lane reads at the same address.
+    uint64_t uniform_offset_alignment = 1;    // minUniformBufferOffsetAlignment
+    uint64_t max_uniform_range = 0;           // maxUniformBufferRange (Vulkan guarantees 16384)
     float timestamp_period = 0.0f;            // ns per tick
     bool has_timestamps = false;
     bool has_compute_queue = false;
     uint64_t device_local_bytes = 0;
-    // Offset alignment of any tensor: it may be bound as a storage or a texel buffer.
+    // Offset alignment of any tensor: it may be bound as a storage, texel or uniform buffer.
     uint64_t tensor_alignment() const {
-        return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment});
+        return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment, uniform_offset_alignment});
     }
 };
 

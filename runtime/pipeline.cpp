@@ -21,12 +21,17 @@ void check_interface(const PipelineDesc& desc, const ShaderInterface& iface) {
         throw Error(what + " declares " + std::to_string(iface.bindings.size()) + " bindings; the op passes " +
                     std::to_string(desc.bindings));
     for (uint32_t i = 0; i < iface.bindings.size(); ++i) {
-        const BindingKind want = (desc.texel_bindings >> i) & 1 ? BindingKind::TexelBuffer : BindingKind::StorageBuffer;
+        const BindingKind want = (desc.texel_bindings >> i) & 1     ? BindingKind::TexelBuffer
+                                 : (desc.uniform_bindings >> i) & 1 ? BindingKind::UniformBuffer
+                                                                    : BindingKind::StorageBuffer;
+        auto name = [](BindingKind k) {
+            return k == BindingKind::TexelBuffer     ? "a texel buffer"
+                   : k == BindingKind::UniformBuffer ? "a uniform buffer"
+                                                     : "a storage buffer";
+        };
         if (iface.bindings[i] != want && iface.bindings[i] != BindingKind::Other)
-            throw Error(what + ": binding " + std::to_string(i) + " is " +
-                        (iface.bindings[i] == BindingKind::TexelBuffer ? "a texel buffer" : "a storage buffer") +
-                        " in the shader, but the op binds " +
-                        (want == BindingKind::TexelBuffer ? "a texel buffer" : "a storage buffer"));
+            throw Error(what + ": binding " + std::to_string(i) + " is " + name(iface.bindings[i]) +
+                        " in the shader, but the op binds " + name(want));
     }
     if (iface.push_bytes != desc.push_bytes)
         throw Error(what + " declares " + std::to_string(iface.push_bytes) + " bytes of push constants; the op pushes " +
@@ -36,8 +41,8 @@ void check_interface(const PipelineDesc& desc, const ShaderInterface& iface) {
 }  // namespace
 
 bool PipelineDesc::operator<(const PipelineDesc& o) const {
-    return std::tie(shader, bindings, push_bytes, spec, texel_bindings) <
-           std::tie(o.shader, o.bindings, o.push_bytes, o.spec, o.texel_bindings);
+    return std::tie(shader, bindings, push_bytes, spec, texel_bindings, uniform_bindings) <
+           std::tie(o.shader, o.bindings, o.push_bytes, o.spec, o.texel_bindings, o.uniform_bindings);
 }
 
 size_t PipelineCache::size() const {
@@ -58,9 +63,12 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
                     " bytes of push constants; the device allows " +
                     std::to_string(info.max_push_constants));
     // Texel buffers count against maxPerStageDescriptorSampledImages (at least 16).
-    const uint32_t storage = desc.bindings - uint32_t(std::popcount(desc.texel_bindings));
+    const uint32_t storage =
+        desc.bindings - uint32_t(std::popcount(desc.texel_bindings)) - uint32_t(std::popcount(desc.uniform_bindings));
     if (desc.texel_bindings >> desc.bindings)
         throw Error("shader '" + desc.shader + "': texel binding mask names a binding it does not have");
+    if (desc.uniform_bindings >> desc.bindings || (desc.uniform_bindings & desc.texel_bindings))
+        throw Error("shader '" + desc.shader + "': uniform binding mask names a binding it does not have, or a texel one");
     if (storage > info.max_storage_buffers)
         throw Error("shader '" + desc.shader + "' binds " + std::to_string(storage) +
                     " storage buffers; the device allows " + std::to_string(info.max_storage_buffers) +
@@ -79,8 +87,9 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     for (uint32_t i = 0; i < desc.bindings; ++i) {
         binds[i] = {};
         binds[i].binding = i;
-        binds[i].descriptorType = (desc.texel_bindings >> i) & 1 ? VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER
-                                                                 : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
+        binds[i].descriptorType = (desc.texel_bindings >> i) & 1     ? VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER
+                                  : (desc.uniform_bindings >> i) & 1 ? VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER
+                                                                     : VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         binds[i].descriptorCount = 1;
         binds[i].stageFlags = VK_SHADER_STAGE_COMPUTE_BIT;
     }

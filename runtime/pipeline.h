@@ -1,7 +1,8 @@
 #pragma once
 // Compute pipelines, created once per (shader, specialization constants) and cached.
 // Conventions every shader follows:
-//   - bindings 0..n-1 of set 0 are storage buffers, in the order the op passes them;
+//   - bindings 0..n-1 of set 0 are storage buffers (or texel / uniform buffers
+//     where PipelineDesc says so), in the order the op passes them;
 //   - specialization constant 0 is local_size_x (the host picks it from device limits);
 //   - constants 1.. are the shader's own (tile sizes, modes), 32-bit each;
 //   - small per-dispatch numbers go in push constants.
@@ -29,6 +30,10 @@ struct PipelineDesc {
     // with texelFetch) instead of a storage buffer. On CPU devices a texel fetch is a
     // branch-free gather while a storage-buffer load is a loop over the lanes.
     uint32_t texel_bindings = 0;
+    // Bit i set: binding i is a uniform buffer. On CPU devices a uniform-buffer load
+    // at an address every lane shares is one load and a broadcast, where a
+    // storage-buffer load is still a loop over the lanes (README "On CPUs without AVX-512, measured").
+    uint32_t uniform_bindings = 0;
 
     bool operator<(const PipelineDesc& o) const;
 };

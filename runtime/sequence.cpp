@@ -84,7 +84,7 @@ void Sequence::track(const std::vector<std::pair<BufferView, Access>>& accesses,
         // Whatever comes next (compute or transfer) is ordered after everything
         // before the barrier, so all pending ranges can be forgotten.
         barrier(VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT | VK_PIPELINE_STAGE_TRANSFER_BIT,
-                VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT |
+                VK_ACCESS_SHADER_READ_BIT | VK_ACCESS_SHADER_WRITE_BIT | VK_ACCESS_UNIFORM_READ_BIT |
                     VK_ACCESS_TRANSFER_READ_BIT | VK_ACCESS_TRANSFER_WRITE_BIT);
     }
     for (auto& [view, access] : accesses) {
@@ -118,11 +118,12 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
     while (true) {
         if (pools_used_ == descriptor_pools_.size()) {
             const uint32_t n = std::max(kDescriptorsPerPool, p.desc.bindings);
-            VkDescriptorPoolSize sizes[2] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, n},
-                                             {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, n}};
+            VkDescriptorPoolSize sizes[3] = {{VK_DESCRIPTOR_TYPE_STORAGE_BUFFER, n},
+                                             {VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER, n},
+                                             {VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER, n}};
             VkDescriptorPoolCreateInfo pi{VK_STRUCTURE_TYPE_DESCRIPTOR_POOL_CREATE_INFO};
             pi.maxSets = kSetsPerPool;
-            pi.poolSizeCount = 2;
+            pi.poolSizeCount = 3;
             pi.pPoolSizes = sizes;
             DescriptorPoolHandle pool;
             check_vk(vkCreateDescriptorPool(ctx_.device(), &pi, nullptr, pool.out(ctx_.device())),
@@ -197,6 +198,19 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
             views[i] = texel_view(p, uint32_t(i), bindings[i]);
             writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
             writes[i].pTexelBufferView = &views[i];
+            continue;
+        }
+        if ((p.desc.uniform_bindings >> i) & 1) {
+            const std::string what = "shader '" + p.desc.shader + "': uniform binding " + std::to_string(i);
+            if (bindings[i].access != Access::Read) throw Error(what + " is read-only");
+            if (v.size > info.max_uniform_range)
+                throw Error(what + " has " + std::to_string(v.size) + " bytes; the device allows " +
+                            std::to_string(info.max_uniform_range) + " (maxUniformBufferRange)");
+            if (v.offset % info.uniform_offset_alignment)
+                throw Error(what + " is not aligned to minUniformBufferOffsetAlignment");
+            infos[i] = {v.buffer, v.offset, v.size ? v.size : 16};
+            writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_BUFFER;
+            writes[i].pBufferInfo = &infos[i];
             continue;
         }
         if (v.size > info.max_storage_buffer_range)

@@ -15,7 +15,7 @@ enum : uint32_t {
     OpTypeSampledImage = 27, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
     OpConstant = 43, OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72,
 };
-enum : uint32_t { DecArrayStride = 6, DecBinding = 33, DecDescriptorSet = 34, DecOffset = 35 };
+enum : uint32_t { DecBlock = 2, DecArrayStride = 6, DecBinding = 33, DecDescriptorSet = 34, DecOffset = 35 };
 enum : uint32_t { ScUniformConstant = 0, ScUniform = 2, ScPushConstant = 9, ScStorageBuffer = 12 };
 constexpr uint32_t kMagic = 0x07230203, kDimBuffer = 5;
 
@@ -29,6 +29,7 @@ struct Module {
     std::map<uint32_t, uint32_t> constants;                  // id -> value (32-bit)
     std::map<uint32_t, std::pair<uint32_t, uint32_t>> vars;  // id -> (pointer type, storage class)
     std::map<uint32_t, uint32_t> binding, set, array_stride;
+    std::map<uint32_t, bool> block;  // struct types decorated Block (uniform blocks in the Uniform class)
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> member_offset;
 };
 
@@ -55,6 +56,7 @@ Module parse(std::span<const uint32_t> w, const std::string& shader) {
             if (n >= 3 && a[1] == DecBinding) m.binding[a[0]] = a[2];
             if (n >= 3 && a[1] == DecDescriptorSet) m.set[a[0]] = a[2];
             if (n >= 3 && a[1] == DecArrayStride) m.array_stride[a[0]] = a[2];
+            if (n >= 2 && a[1] == DecBlock) m.block[a[0]] = true;
             break;
         case OpMemberDecorate:
             if (n >= 4 && a[2] == DecOffset) m.member_offset[{a[0], a[1]}] = a[3];
@@ -97,11 +99,10 @@ uint32_t type_bytes(const Module& m, uint32_t id, const std::string& shader, int
 
 // What a set-0 variable is, from its pointee type and storage class.
 BindingKind kind_of(const Module& m, uint32_t pointee, uint32_t storage) {
-    if (storage == ScUniform || storage == ScStorageBuffer) {
-        // Storage buffers are Uniform + BufferBlock (SPIR-V <= 1.3) or StorageBuffer;
-        // this engine declares no uniform blocks.
-        return BindingKind::StorageBuffer;
-    }
+    // Storage buffers are Uniform + BufferBlock (SPIR-V <= 1.3) or StorageBuffer;
+    // uniform buffers are Uniform + Block.
+    if (storage == ScStorageBuffer) return BindingKind::StorageBuffer;
+    if (storage == ScUniform) return m.block.count(pointee) ? BindingKind::UniformBuffer : BindingKind::StorageBuffer;
     if (storage != ScUniformConstant) return BindingKind::Other;
     auto t = m.types.find(pointee);
     if (t != m.types.end() && t->second.op == OpTypeSampledImage) t = m.types.find(t->second.args.at(0));

@@ -9,7 +9,7 @@
 
 namespace vtloc::rt {
 
-enum class BindingKind { StorageBuffer, TexelBuffer, Other };
+enum class BindingKind { StorageBuffer, TexelBuffer, UniformBuffer, Other };
 
 struct ShaderInterface {
     std::vector<BindingKind> bindings;  // index = binding number in set 0; gaps are Other

@@ -1,5 +1,6 @@
-// Body of point_mlp.comp (texel-buffer reads of the activations and the cloud)
-// and point_mlp_ssbo.comp (storage buffers, for tensors beyond the device's
+// Body of point_mlp.comp (texel-buffer reads of the activations and the cloud),
+// point_mlp_ubo.comp (the same with the weights in a uniform buffer) and
+// point_mlp_ssbo.comp (storage buffers, for tensors beyond the device's
 // texel-buffer limit). They declare bindings 0, 1, 8, 9 and LOAD_A, LOAD_A4,
 // LOAD_F, LOAD_F4.
 //
@@ -17,8 +18,9 @@
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per input channel does TM x TN
 // fmas from TM/4 + TN/4 vec4 loads. The channel block comes from gl_WorkGroupID.y,
-// so the weight and bias loads are uniform across the workgroup (on lavapipe one
-// load instead of a loop over the lanes; on GPUs a broadcast).
+// so the weight and bias loads are uniform across the workgroup (on GPUs a
+// broadcast; on lavapipe one load and a broadcast only from a uniform buffer,
+// point_mlp_ubo.comp: from a storage buffer it is still a loop over the lanes).
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint TM = 4;   // rows per block, multiple of 4
 layout(constant_id = 2) const uint TN = 16;  // channels per invocation, multiple of 4
@@ -31,7 +33,13 @@ layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 #include "act.glsl"
 
 layout(std430, binding = 2) readonly buffer W_ { float W[]; };   // [K][N]
+#ifdef WEIGHTS_UNIFORM
+// point_mlp_ubo.comp: the weights as a uniform buffer, K * N / 4 vec4s (WVEC4 only).
+layout(constant_id = 9) const uint WVECS = 1;
+layout(std140, binding = 3) uniform W4_ { vec4 W4[WVECS]; };
+#else
 layout(std430, binding = 3) readonly buffer W4_ { vec4 W4[]; };
+#endif
 layout(std430, binding = 4) readonly buffer Bias_ { float bias[]; };
 layout(std430, binding = 5) writeonly buffer Out_ { float outv[]; };
 layout(std430, binding = 6) readonly buffer Centre_ { float centre[]; };  // MODE 1: [S][3]

@@ -108,6 +108,8 @@ void wide_cases(std::vector<OpCase>& v) {
         plain.act = ops::kActLeaky;
         plain.slope = 0.1;
         c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain");
+        plain.uniform_weights = false;  // the weights from a storage buffer, as on devices they do not fit
+        c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain_ssbo_weights");
         v.push_back(std::move(c));
     }
 }

@@ -101,6 +101,9 @@ struct GroupLinear {
     Act act = kActNone;
     double slope = 0.01;
     BufferPath path = BufferPath::Texel;
+    // Weights read as a uniform buffer where they fit one (Texel path only);
+    // false keeps them in a storage buffer (tests compare both).
+    bool uniform_weights = true;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // Layer one of a set-abstraction MLP from its per-point part u = group_linear

@@ -2,7 +2,9 @@
 // act) -> shaders/point_mlp.comp. The weight is input-major W^T [K, N] (4 output
 // channels = one vec4), and activations between layers are channel-major [C, M]
 // (4 rows = one vec4), so the shader reads everything as vec4s. Param texel
-// (default 1): read activations and the cloud as texel buffers where the device allows.
+// (default 1): read activations and the cloud as texel buffers where the device allows;
+// param ubo (default 1): then read the weights from a uniform buffer where they fit
+// one (point_mlp_ubo.comp).
 // Param `in` picks the input (optional features always last):
 //   0: x^T [K, M] (channel-major, the previous layer's output): [x^T, W^T, bias]
 //   1: grouping fused (SPEC 2, as point_group): [points [P, D >= 3], centres [S, 3],
@@ -169,10 +171,16 @@ void gpu(const GpuOpArgs& a) {
         if (!texel) return VK_FORMAT_UNDEFINED;
         return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
     };
-    rt::PipelineDesc desc{texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push),
-                          {L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
-                           l.N % 4 == 0},
-                          texel ? 0x303u : 0u};
+    // The weights as a uniform buffer where they fit one (param ubo = 0 forces
+    // the storage buffer): read at one address by every lane, see point_mlp_ubo.comp.
+    const rt::BufferView& wv = a.in[l.w].view;
+    const bool ubo = a.params.get("ubo", 1) != 0 && texel && l.N % 4 == 0 && wv.size <= d.max_uniform_range &&
+                     wv.offset % d.uniform_offset_alignment == 0;
+    std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max,
+                               uint32_t(a.params.get("act", kActNone)), avec4, fvec4, l.N % 4 == 0};
+    if (ubo) spec.push_back(uint32_t(l.K * l.N / 4));
+    rt::PipelineDesc desc{ubo ? "point_mlp_ubo" : texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push), spec,
+                          texel ? 0x303u : 0u, ubo ? 0x8u : 0u};
     // Bindings the mode does not read are filled with the weight buffer.
     const rt::BufferView& filler = a.in[l.w].view;
     const rt::Access R = rt::Access::Read;
@@ -187,7 +195,7 @@ void gpu(const GpuOpArgs& a) {
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
-                        {"in", "feat_begin", "max", "group", "act", "slope", "texel"}};
+                        {"in", "feat_begin", "max", "group", "act", "slope", "texel", "ubo"}};
 
 // W [N, K] (PyTorch Linear / squeezed 1x1 conv) -> W^T [K, N], group_linear's layout.
 HostTensor point_weight_kn(const HostTensor& w) {
