@@ -23,6 +23,32 @@ TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
     CHECK(d.max_storage_buffer_range >= (1u << 27));
     CHECK(d.api_version >= VK_API_VERSION_1_1);
     CHECK(d.max_storage_buffers >= 4);  // Vulkan's guaranteed minimum; pipelines check their own needs
+    CHECK(d.max_uniform_range >= 16384);  // Vulkan's guaranteed minimum
+    CHECK(d.tensor_alignment() % d.uniform_offset_alignment == 0);
+}
+
+TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refused by name", "[runtime]") {
+    rt::Context& ctx = test::gpu();
+    const uint64_t big = ctx.info().max_uniform_range + 16;
+    rt::Buffer buf(ctx, big + 4096, rt::MemoryKind::Device);
+    const rt::Pipeline& p = ctx.pipelines().get(
+        rt::PipelineDesc{"point_mlp_ubo", 10, 48, {8, 8, 16, 0, 0, 0, 1, 1, 1, 4}, 0x303u, 0x8u});
+    auto bindings = [&](rt::BufferView w) {
+        std::vector<rt::Binding> b(10, rt::Binding{rt::BufferView{buf.handle(), 0, 256}});
+        for (int i : {0, 1, 8, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
+        b[3].view = w;
+        b[5].access = rt::Access::Write;
+        return b;
+    };
+    uint32_t push[12] = {};
+    rt::Sequence seq(ctx);
+    seq.begin();
+    REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), 0, big}), push, 48, 1),
+                        Catch::Contains("uniform binding 3 has " + std::to_string(big) + " bytes"));
+    if (ctx.info().uniform_offset_alignment > 1)
+        REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), ctx.info().uniform_offset_alignment / 2, 64}), push, 48, 1),
+                            Catch::Contains("not aligned to minUniformBufferOffsetAlignment"));
+    test::require_no_validation_messages();
 }
 
 TEST_CASE("devices can be listed and picked by name or index", "[runtime]") {
@@ -76,6 +102,13 @@ TEST_CASE("pipelines are checked against the shader's own bindings and push cons
     REQUIRE(conv.bindings.size() == 9);
     for (uint32_t i = 0; i < 9; ++i)
         CHECK((conv.bindings[i] == rt::BindingKind::TexelBuffer) == (i != 5 && i != 7));
+    // point_mlp_ubo reads its weights (binding 3) from a uniform buffer; point_mlp
+    // from a storage buffer.
+    const rt::ShaderInterface ubo = rt::reflect_spirv(rt::find_spirv("point_mlp_ubo"), "point_mlp_ubo");
+    REQUIRE(ubo.bindings.size() == 10);
+    CHECK(ubo.bindings[3] == rt::BindingKind::UniformBuffer);
+    CHECK(ubo.bindings[5] == rt::BindingKind::StorageBuffer);
+    CHECK(rt::reflect_spirv(rt::find_spirv("point_mlp"), "point_mlp").bindings[3] == rt::BindingKind::StorageBuffer);
     // activation: x, y and a push block (n, slope).
     const rt::ShaderInterface act = rt::reflect_spirv(rt::find_spirv("activation"), "activation");
     CHECK(act.bindings.size() == 2);
@@ -86,6 +119,8 @@ TEST_CASE("pipelines are checked against the shader's own bindings and push cons
                         Catch::Contains("shader 'activation' declares 2 bindings; the op passes 1"));
     REQUIRE_THROWS_WITH(ctx.pipelines().get(rt::PipelineDesc{"activation", 2, 8, {32, ops::kActRelu}, 0b01}),
                         Catch::Contains("binding 0 is a storage buffer in the shader, but the op binds a texel buffer"));
+    REQUIRE_THROWS_WITH(ctx.pipelines().get(rt::PipelineDesc{"activation", 2, 8, {32, ops::kActRelu}, 0, 0b10}),
+                        Catch::Contains("binding 1 is a storage buffer in the shader, but the op binds a uniform buffer"));
     REQUIRE_THROWS_WITH(ops::pipeline(ctx, "activation", 2, 16, {32, ops::kActRelu}),
                         Catch::Contains("declares 8 bytes of push constants; the op pushes 16"));
     REQUIRE_THROWS_WITH(rt::reflect_spirv(std::vector<uint32_t>{1, 2, 3, 4, 5, 6}, "junk"),
