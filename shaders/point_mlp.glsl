@@ -49,6 +49,8 @@ layout(push_constant) uniform Push {
     uint P; uint D; uint DF; uint FB; uint CF;
     uint blocks;  // invocations needed along x: row blocks, or groups (MAXPOOL)
     uint chunks;  // MAXPOOL: TM-row blocks per group
+    uint WN;      // columns of the bound weights: N, or one block's (group_linear.cpp)
+    uint n_base;  // the first output channel they hold
 } p;
 
 float acc[TM * TN];
@@ -57,11 +59,11 @@ void fma_row(float a[TM], uint k) {
     float w[TN];
     if (WVEC4) {
         [[unroll]] for (uint j = 0; j < TN / 4; ++j) {
-            vec4 v = W4[(k * p.N) / 4 + min(gl_WorkGroupID.y * TN / 4 + j, p.N / 4 - 1)];
+            vec4 v = W4[(k * p.WN) / 4 + min(gl_WorkGroupID.y * TN / 4 + j, p.WN / 4 - 1)];
             w[4 * j] = v.x, w[4 * j + 1] = v.y, w[4 * j + 2] = v.z, w[4 * j + 3] = v.w;
         }
     } else {
-        [[unroll]] for (uint j = 0; j < TN; ++j) w[j] = W[k * p.N + min(gl_WorkGroupID.y * TN + j, p.N - 1)];
+        [[unroll]] for (uint j = 0; j < TN; ++j) w[j] = W[k * p.WN + min(gl_WorkGroupID.y * TN + j, p.WN - 1)];
     }
     [[unroll]] for (uint i = 0; i < TM; ++i)
         [[unroll]] for (uint j = 0; j < TN; ++j) acc[i * TN + j] = fma(a[i], w[j], acc[i * TN + j]);
@@ -137,15 +139,16 @@ void main() {
     const uint t_all = gl_WorkGroupID.x * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
     const bool live = t_all < p.blocks;
     const uint t = min(t_all, p.blocks - 1u);
-    const uint n0 = gl_WorkGroupID.y * TN;
+    const uint n0 = gl_WorkGroupID.y * TN;  // within the bound weight columns
+    const uint nb = p.n_base + n0;          // the output channel of column n0
     float b[TN];
-    [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
+    [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(nb + j, p.N - 1u)];
     if (!MAXPOOL) {
         const uint m0 = t * TM;
         block(m0, p.M);
         [[unroll]] for (uint j = 0; j < TN; ++j) {
             [[unroll]] for (uint i = 0; i < TM; ++i)
-                if (live && n0 + j < p.N && m0 + i < p.M) outv[(n0 + j) * p.M + m0 + i] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
+                if (live && n0 + j < p.WN && m0 + i < p.M) outv[(nb + j) * p.M + m0 + i] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
         }
         return;
     }
@@ -159,5 +162,5 @@ void main() {
             [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
     }
     [[unroll]] for (uint j = 0; j < TN; ++j)
-        if (live && n0 + j < p.N) outv[t * p.N + n0 + j] = mx[j];
+        if (live && n0 + j < p.WN) outv[t * p.N + nb + j] = mx[j];
 }

@@ -186,7 +186,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     };
     // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
     // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
-    // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: the storage-buffer fallback.
+    // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: two column blocks (128 + 32).
     for (Case c : {Case{20 * 128, 131, 96, 128}, Case{2560, 64, 200, 5}, Case{1001, 37, 37, 13}, Case{36, 8, 8, 12},
                    Case{640, 128, 160, 16}}) {
         WeightStore w;

@@ -32,7 +32,7 @@ TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refus
     const uint64_t big = ctx.info().max_uniform_range + 16;
     rt::Buffer buf(ctx, big + 4096, rt::MemoryKind::Device);
     const rt::Pipeline& p = ctx.pipelines().get(
-        rt::PipelineDesc{"point_mlp_ubo", 10, 48, {8, 8, 16, 0, 0, 0, 1, 1, 1, 4}, 0x303u, 0x8u});
+        rt::PipelineDesc{"point_mlp_ubo", 10, 56, {8, 8, 16, 0, 0, 0, 1, 1, 1, 4}, 0x303u, 0x8u});
     auto bindings = [&](rt::BufferView w) {
         std::vector<rt::Binding> b(10, rt::Binding{rt::BufferView{buf.handle(), 0, 256}});
         for (int i : {0, 1, 8, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
@@ -40,13 +40,13 @@ TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refus
         b[5].access = rt::Access::Write;
         return b;
     };
-    uint32_t push[12] = {};
+    uint32_t push[14] = {};
     rt::Sequence seq(ctx);
     seq.begin();
-    REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), 0, big}), push, 48, 1),
+    REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), 0, big}), push, 56, 1),
                         Catch::Contains("uniform binding 3 has " + std::to_string(big) + " bytes"));
     if (ctx.info().uniform_offset_alignment > 1)
-        REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), ctx.info().uniform_offset_alignment / 2, 64}), push, 48, 1),
+        REQUIRE_THROWS_WITH(seq.dispatch(p, bindings({buf.handle(), ctx.info().uniform_offset_alignment / 2, 64}), push, 56, 1),
                             Catch::Contains("not aligned to minUniformBufferOffsetAlignment"));
     test::require_no_validation_messages();
 }

@@ -98,9 +98,18 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     return l;
 }
 
+// Weights beyond the 16 KiB every Vulkan device's uniform buffers allow get a
+// workspace (output 1): their column blocks, each of which fits the device's
+// range, for point_mlp_ubo.comp one block per dispatch. K N floats, plus up to
+// 256 bytes of alignment padding per block (blocks are >= 4 columns wide).
+constexpr int64_t kGuaranteedUniformBytes = 16384;
+bool has_block_workspace(const Layout& l) { return l.N % 4 == 0 && l.K * l.N * 4 > kGuaranteedUniformBytes; }
+
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l = layout_of(in, p);
-    return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
+    std::vector<TensorDesc> out{TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
+    if (has_block_workspace(l)) out.push_back(TensorDesc{Shape{l.K * l.N + 64 * (l.N / 4)}});
+    return out;
 }
 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
@@ -156,10 +165,10 @@ void gpu(const GpuOpArgs& a) {
         throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
     const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
     const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
-    struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
+    struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks, WN, n_base; } push{
         uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
         uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
-        uint32_t((l.NS + TM - 1) / TM)};
+        uint32_t((l.NS + TM - 1) / TM), uint32_t(l.N), 0};
     // The activations / cloud (bindings 0, 1) and features (8, 9) are read as
     // texel buffers where the device's texel-buffer limit allows (param texel = 0
     // forces storage buffers); bindings 1 and 9 are the same tensors as vec4s.
@@ -171,30 +180,53 @@ void gpu(const GpuOpArgs& a) {
         if (!texel) return VK_FORMAT_UNDEFINED;
         return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
     };
-    // The weights as a uniform buffer where they fit one (param ubo = 0 forces
-    // the storage buffer): read at one address by every lane, see point_mlp_ubo.comp.
+    // The weights as a uniform buffer (param ubo = 0 forces the storage buffer):
+    // read at one address by every lane, see point_mlp_ubo.comp. Whole where they
+    // fit the device's range, else in column blocks of nc columns copied into the
+    // workspace, one dispatch per block.
     const rt::BufferView& wv = a.in[l.w].view;
-    const bool ubo = a.params.get("ubo", 1) != 0 && texel && l.N % 4 == 0 && wv.size <= d.max_uniform_range &&
-                     wv.offset % d.uniform_offset_alignment == 0;
-    std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max,
-                               uint32_t(a.params.get("act", kActNone)), avec4, fvec4, l.N % 4 == 0};
-    if (ubo) spec.push_back(uint32_t(l.K * l.N / 4));
-    rt::PipelineDesc desc{ubo ? "point_mlp_ubo" : texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push), spec,
-                          texel ? 0x303u : 0u, ubo ? 0x8u : 0u};
+    const uint64_t align = std::max<uint64_t>(4, d.uniform_offset_alignment) / 4;  // floats
+    const bool ubo_ok = a.params.get("ubo", 1) != 0 && texel && l.N % 4 == 0 && align <= 64;
+    const bool whole = ubo_ok && wv.size <= d.max_uniform_range && wv.offset % d.uniform_offset_alignment == 0;
+    const int64_t nc = std::min<int64_t>(l.N, int64_t(d.max_uniform_range / 4 / uint64_t(l.K)) / TN * TN);
+    const bool in_blocks = ubo_ok && !whole && a.out.size() == 2 && nc >= TN;
+    const int64_t stride = in_blocks ? (l.K * nc + int64_t(align) - 1) / int64_t(align) * int64_t(align) : 0;
+    if (in_blocks) {
+        struct { uint32_t K, N, nc, stride; } bp{uint32_t(l.K), uint32_t(l.N), uint32_t(nc), uint32_t(stride)};
+        const uint32_t local = elementwise_local_size(d);
+        a.seq.dispatch(pipeline(a.ctx, "weight_blocks", 2, sizeof(bp), {local}),
+                       {{wv, rt::Access::Read}, {a.out[1].view, rt::Access::Write}}, &bp, sizeof(bp),
+                       grid_groups(uint64_t(l.K * l.N), local, d));
+    }
     // Bindings the mode does not read are filled with the weight buffer.
     const rt::BufferView& filler = a.in[l.w].view;
     const rt::Access R = rt::Access::Read;
-    a.seq.dispatch(a.ctx.pipelines().get(desc),
-                   {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)}, {a.in[l.w].view, R},
-                    {a.in[l.w].view, R}, {a.in[l.w + 1].view, R}, {a.out[0].view, rt::Access::Write},
-                    {l.mode == 1 ? a.in[1].view : filler, R}, {l.mode == 1 ? a.in[2].view : filler, R},
-                    {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
-                   &push, sizeof(push), uint32_t(gx), uint32_t(gy));
+    for (int64_t n0 = 0; n0 < l.N; n0 += in_blocks ? nc : l.N) {
+        const int64_t width = in_blocks ? std::min(nc, l.N - n0) : l.N;
+        rt::BufferView w = wv;
+        if (in_blocks)
+            w = rt::BufferView{a.out[1].view.buffer, a.out[1].view.offset + VkDeviceSize(n0 / nc * stride * 4),
+                               VkDeviceSize(l.K * width * 4)};
+        const bool ubo = whole || in_blocks;
+        std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max,
+                                   uint32_t(a.params.get("act", kActNone)), avec4, fvec4, l.N % 4 == 0};
+        if (ubo) spec.push_back(uint32_t(l.K * width / 4));
+        rt::PipelineDesc desc{ubo ? "point_mlp_ubo" : texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push), spec,
+                              texel ? 0x303u : 0u, ubo ? 0x8u : 0u};
+        push.WN = uint32_t(width);
+        push.n_base = uint32_t(n0);
+        a.seq.dispatch(a.ctx.pipelines().get(desc),
+                       {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)}, {w, R}, {w, R},
+                        {a.in[l.w + 1].view, R}, {a.out[0].view, rt::Access::Write},
+                        {l.mode == 1 ? a.in[1].view : filler, R}, {l.mode == 1 ? a.in[2].view : filler, R},
+                        {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
+                       &push, sizeof(push), uint32_t(gx), uint32_t((uint64_t(width) + TN - 1) / TN));
+    }
 }
 
 }  // namespace
 
-const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
+const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 1u << 1,  // output 1: the weight blocks
                         {"in", "feat_begin", "max", "group", "act", "slope", "texel", "ubo"}};
 
 // W [N, K] (PyTorch Linear / squeezed 1x1 conv) -> W^T [K, N], group_linear's layout.
