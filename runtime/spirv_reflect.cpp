@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <map>
+#include <set>
 
 #include "base/error.h"
 
@@ -29,7 +30,7 @@ struct Module {
     std::map<uint32_t, uint32_t> constants;                  // id -> value (32-bit)
     std::map<uint32_t, std::pair<uint32_t, uint32_t>> vars;  // id -> (pointer type, storage class)
     std::map<uint32_t, uint32_t> binding, set, array_stride;
-    std::map<uint32_t, bool> block;  // struct types decorated Block (uniform blocks in the Uniform class)
+    std::set<uint32_t> block;  // struct types decorated Block (uniform blocks in the Uniform class)
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> member_offset;
 };
 
@@ -56,7 +57,7 @@ Module parse(std::span<const uint32_t> w, const std::string& shader) {
             if (n >= 3 && a[1] == DecBinding) m.binding[a[0]] = a[2];
             if (n >= 3 && a[1] == DecDescriptorSet) m.set[a[0]] = a[2];
             if (n >= 3 && a[1] == DecArrayStride) m.array_stride[a[0]] = a[2];
-            if (n >= 2 && a[1] == DecBlock) m.block[a[0]] = true;
+            if (n >= 2 && a[1] == DecBlock) m.block.insert(a[0]);
             break;
         case OpMemberDecorate:
             if (n >= 4 && a[2] == DecOffset) m.member_offset[{a[0], a[1]}] = a[3];

@@ -76,13 +76,17 @@ def pooled(maps):
     return F.avg_pool2d(torch.from_numpy(np.stack(maps).astype(np.float32))[:, None], POOL)[:, 0]
 
 
+def best_similarity(q, db, mask, plane):
+    """NCC of one query map (h x w) with every database descriptor, the best over rotations."""
+    return (descriptors(rotated(q[None]), mask, plane) @ db.t()).max(0).values
+
+
 def knn_predictions(db, db_contacts, queries, ks, mask, plane):
     """For each query map (h x w), the geometric median of the contacts of its
     max(ks) best matches over rotations, for every k of ``ks``: n x len(ks) x 3."""
     out = []
     for q in queries:
-        sim = (descriptors(rotated(q[None]), mask, plane) @ db.t()).max(0).values
-        order = torch.argsort(sim, descending=True).numpy()
+        order = torch.argsort(best_similarity(q, db, mask, plane), descending=True).numpy()
         out.append([geometric_median(db_contacts[order[:k]]) for k in ks])
     return np.array(out)
 
@@ -95,10 +99,20 @@ def _read(path, what):
         raise DatasetError(f"{path}: cannot read the {what} image ({e})") from None
 
 
-def object_maps(obj, touches, source, background):
+def object_maps(obj, touches, source):
+    """Pooled maps of ``touches``: the true indentation, or the frame minus the
+    object's empty-sensor frame averaged over the channels."""
     if source == "depth":
         return pooled([_read(os.path.join(obj.folder, t.image[:-4] + ".depth.png"), "depth") for t in touches])
+    background = _read(os.path.join(obj.folder, "background.png"), "background")
     return pooled([(_read(obj.image_path(t), "frame") - background).mean(-1) for t in touches])
+
+
+def database(obj, touches, source):
+    """(maps, disc mask, plane removal?, descriptors) of ``touches`` by ``source``."""
+    maps = object_maps(obj, touches, source)
+    mask, plane = disc(*maps.shape[-2:]), source == "depth"
+    return maps, mask, plane, descriptors(maps, mask, plane)
 
 
 def evaluate_object(obj, ks, sources=("depth", "frame")):
@@ -112,12 +126,9 @@ def evaluate_object(obj, ks, sources=("depth", "frame")):
     row = {"const": nd(geometric_median(db_c)[None]),
            "nearest": float(100 * np.mean([np.linalg.norm(db_c - c, axis=1).min() for c in truth])
                             / obj.diameter_mm)}
-    bg = _read(os.path.join(obj.folder, "background.png"), "background") if "frame" in sources else None
     for src in sources:
-        db_maps = object_maps(obj, db_t, src, bg)
-        mask = disc(*db_maps.shape[-2:])
-        db = descriptors(db_maps, mask, plane=src == "depth")
-        preds = knn_predictions(db, db_c, object_maps(obj, tests, src, bg), ks, mask, src == "depth")
+        _, mask, plane, db = database(obj, db_t, src)
+        preds = knn_predictions(db, db_c, object_maps(obj, tests, src), ks, mask, plane)
         for j, k in enumerate(ks):
             row[f"{src}@{k}"] = nd(preds[:, j])
     return row
@@ -128,13 +139,10 @@ def same_place_rate(obj, views, source):
     match among the others (over rotations) is a render of the same contact, i.e.
     how well the matcher sees through spin, press, tilt and look."""
     extra = obj.touches_of("extra")
-    bg = _read(os.path.join(obj.folder, "background.png"), "background") if source == "frame" else None
-    maps = object_maps(obj, extra, source, bg)
-    mask = disc(*maps.shape[-2:])
-    db = descriptors(maps, mask, plane=source == "depth")
+    maps, mask, plane, db = database(obj, extra, source)
     hits = 0
     for i in range(len(extra)):
-        sim = (descriptors(rotated(maps[i][None]), mask, source == "depth") @ db.t()).max(0).values
+        sim = best_similarity(maps[i], db, mask, plane)
         sim[i] = -math.inf
         hits += int(sim.argmax()) // views == i // views
     return hits / len(extra)

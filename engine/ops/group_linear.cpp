@@ -25,6 +25,7 @@
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 #include "engine/ops/point_common.h"
+#include "runtime/memory.h"
 
 namespace vtloc::ops {
 namespace {
@@ -190,7 +191,7 @@ void gpu(const GpuOpArgs& a) {
     const bool whole = ubo_ok && wv.size <= d.max_uniform_range && wv.offset % d.uniform_offset_alignment == 0;
     const int64_t nc = std::min<int64_t>(l.N, int64_t(d.max_uniform_range / 4 / uint64_t(l.K)) / TN * TN);
     const bool in_blocks = ubo_ok && !whole && a.out.size() == 2 && nc >= TN;
-    const int64_t stride = in_blocks ? (l.K * nc + int64_t(align) - 1) / int64_t(align) * int64_t(align) : 0;
+    const int64_t stride = in_blocks ? int64_t(rt::align_up(uint64_t(l.K * nc), align)) : 0;
     if (in_blocks) {
         struct { uint32_t K, N, nc, stride; } bp{uint32_t(l.K), uint32_t(l.N), uint32_t(nc), uint32_t(stride)};
         const uint32_t local = elementwise_local_size(d);
