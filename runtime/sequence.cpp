@@ -142,10 +142,11 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
 VkBufferView Sequence::texel_view(const Pipeline& p, uint32_t index, const Binding& b) {
     const DeviceInfo& info = ctx_.info();
     const std::string what = "shader '" + p.desc.shader + "': texel binding " + std::to_string(index);
-    VkDeviceSize texel = b.texel_format == VK_FORMAT_R32_SFLOAT            ? 4
-                         : b.texel_format == VK_FORMAT_R32G32B32A32_SFLOAT ? 16
-                                                                           : 0;
-    if (!texel) throw Error(what + " needs texel_format R32_SFLOAT or R32G32B32A32_SFLOAT");
+    // The formats every Vulkan device supports for uniform texel buffers.
+    VkDeviceSize texel = b.texel_format == VK_FORMAT_R32_SFLOAT || b.texel_format == VK_FORMAT_R32_SINT ? 4
+                         : b.texel_format == VK_FORMAT_R32G32B32A32_SFLOAT                             ? 16
+                                                                                                       : 0;
+    if (!texel) throw Error(what + " needs texel_format R32_SFLOAT, R32_SINT or R32G32B32A32_SFLOAT");
     if (b.access != Access::Read) throw Error(what + " is read-only");
     if (b.view.offset % info.texel_offset_alignment)
         throw Error(what + " is not aligned to minTexelBufferOffsetAlignment");

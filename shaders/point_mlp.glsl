@@ -1,8 +1,9 @@
 // Body of point_mlp.comp (texel-buffer reads of the activations and the cloud),
-// point_mlp_ubo.comp (the same with the weights in a uniform buffer) and
-// point_mlp_ssbo.comp (storage buffers, for tensors beyond the device's
-// texel-buffer limit). They declare bindings 0, 1, 8, 9 and LOAD_A, LOAD_A4,
-// LOAD_F, LOAD_F4.
+// point_mlp_shfl.comp (the same with the weights shared by subgroup shuffles),
+// point_mlp_ubo.comp (the weights in a uniform buffer) and point_mlp_ssbo.comp
+// (storage buffers, for tensors beyond the device's texel-buffer limit); which
+// one runs: group_linear.cpp. They declare bindings 0, 1, 6 - 9 and LOAD_A, LOAD_A4,
+// LOAD_C, LOAD_I, LOAD_F, LOAD_F4 (point_mlp_shfl.comp also binding 2 and LOAD_W).
 //
 // One PointNet++ MLP layer (1x1 conv, BatchNorm folded, act): out = act(A W + b)
 // with W stored [K][N] (input-major, so 4 output channels are one vec4), and the
@@ -16,11 +17,12 @@
 // MAXPOOL: out[g][n] = max over the NS rows of group g (point-major [M / NS][N]);
 //   else out is channel-major [N][M], the next layer's MODE 0 input.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
-// (MAXPOOL: all rows of one group, TM at a time) and per input channel does TM x TN
-// fmas from TM/4 + TN/4 vec4 loads. The channel block comes from gl_WorkGroupID.y,
-// so the weight and bias loads are uniform across the workgroup (on GPUs a
-// broadcast; on lavapipe one load and a broadcast only from a uniform buffer,
-// point_mlp_ubo.comp: from a storage buffer it is still a loop over the lanes).
+// (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
+// 4 x TM x TN fmas (fma_rows). The channel block comes from gl_WorkGroupID.y, so
+// every lane reads the same weights: on GPUs a broadcast; on lavapipe a loop over
+// the lanes from a storage buffer, a gather from a uniform buffer whose offset
+// depends on the loop (Mesa 22.3 takes only constant offsets as uniform), and
+// one gather per subgroup-size weights when shared by shuffles.
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint TM = 4;   // rows per block, multiple of 4
 layout(constant_id = 2) const uint TN = 16;  // channels per invocation, multiple of 4
@@ -32,7 +34,9 @@ layout(constant_id = 7) const bool FVEC4 = true;  // MODE 1/2: feature rows as v
 layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 #include "act.glsl"
 
+#ifndef WEIGHTS_SHUFFLE
 layout(std430, binding = 2) readonly buffer W_ { float W[]; };   // [K][N]
+#endif
 #ifdef WEIGHTS_UNIFORM
 // point_mlp_ubo.comp: the weights as a uniform buffer, K * N / 4 vec4s (WVEC4 only).
 layout(constant_id = 9) const uint WVECS = 1;
@@ -42,31 +46,52 @@ layout(std430, binding = 3) readonly buffer W4_ { vec4 W4[]; };
 #endif
 layout(std430, binding = 4) readonly buffer Bias_ { float bias[]; };
 layout(std430, binding = 5) writeonly buffer Out_ { float outv[]; };
-layout(std430, binding = 6) readonly buffer Centre_ { float centre[]; };  // MODE 1: [S][3]
-layout(std430, binding = 7) readonly buffer Index_ { int idx[]; };       // MODE 1: [S][NS]
 layout(push_constant) uniform Push {
     uint M; uint N; uint K; uint NS; float slope;
     uint P; uint D; uint DF; uint FB; uint CF;
     uint blocks;  // invocations needed along x: row blocks, or groups (MAXPOOL)
     uint chunks;  // MAXPOOL: TM-row blocks per group
-    uint WN;      // columns of the bound weights: N, or one block's (group_linear.cpp)
-    uint n_base;  // the first output channel they hold
 } p;
 
 float acc[TM * TN];
 
-void fma_row(float a[TM], uint k) {
-    float w[TN];
-    if (WVEC4) {
-        [[unroll]] for (uint j = 0; j < TN / 4; ++j) {
-            vec4 v = W4[(k * p.WN) / 4 + min(gl_WorkGroupID.y * TN / 4 + j, p.WN / 4 - 1)];
-            w[4 * j] = v.x, w[4 * j + 1] = v.y, w[4 * j + 2] = v.z, w[4 * j + 3] = v.w;
+#ifdef WEIGHTS_SHUFFLE
+layout(constant_id = 10) const uint SG = 8;  // the device's subgroup size
+const uint WR = (TN + SG - 1u) / SG;         // weights each lane loads per input channel
+#endif
+
+// acc += the products of the 4 input channels k0 .. k0 + 3 (a[i][u]: row i, channel
+// k0 + u; channels past K come with a = 0 and a clamped weight row). Each
+// accumulator takes its 4 products in a row: a CPU driver masks every store to a
+// value a loop carries (load, blend, store), so it pays that once per 4 products.
+void fma_rows(vec4 a[TM], uint k0) {
+    float w[4 * TN];  // weight rows k0 .. k0 + 3 (clamped to K - 1), the block's TN columns
+    [[unroll]] for (uint u = 0; u < 4; ++u) {
+        const uint k = min(k0 + u, p.K - 1u);
+#ifdef WEIGHTS_SHUFFLE
+        // Lane l loads columns l, l + SG, ...; all lanes take them by shuffles at
+        // constant lane indices: one gather per SG weights instead of one per weight.
+        float wl[WR];
+        [[unroll]] for (uint r = 0; r < WR; ++r)
+            wl[r] = LOAD_W(k * p.N + min(gl_WorkGroupID.y * TN + min(r * SG + gl_SubgroupInvocationID, TN - 1u), p.N - 1u));
+        [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl[j / SG], j % SG);
+#else
+        if (WVEC4) {
+            [[unroll]] for (uint j = 0; j < TN / 4; ++j) {
+                vec4 v = W4[(k * p.N) / 4 + min(gl_WorkGroupID.y * TN / 4 + j, p.N / 4 - 1)];
+                [[unroll]] for (uint c = 0; c < 4; ++c) w[u * TN + 4 * j + c] = v[c];
+            }
+        } else {
+            [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = W[k * p.N + min(gl_WorkGroupID.y * TN + j, p.N - 1)];
         }
-    } else {
-        [[unroll]] for (uint j = 0; j < TN; ++j) w[j] = W[k * p.WN + min(gl_WorkGroupID.y * TN + j, p.WN - 1)];
+#endif
     }
     [[unroll]] for (uint i = 0; i < TM; ++i)
-        [[unroll]] for (uint j = 0; j < TN; ++j) acc[i * TN + j] = fma(a[i], w[j], acc[i * TN + j]);
+        [[unroll]] for (uint j = 0; j < TN; ++j) {
+            float s = acc[i * TN + j];
+            [[unroll]] for (uint u = 0; u < 4; ++u) s = fma(a[i][u], w[u * TN + j], s);
+            acc[i * TN + j] = s;
+        }
 }
 
 // acc = A[rows] W for the TM rows m0 .. m0 + TM - 1 (rows past `mend` read row mend - 1).
@@ -74,18 +99,22 @@ void block(uint m0, uint mend) {
     [[unroll]] for (uint i = 0; i < TM * TN; ++i) acc[i] = 0.0;
     uint rows[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) rows[i] = min(m0 + i, mend - 1u);
-    float a[TM];
+    vec4 a[TM];
     if (MODE == 0u) {
-        for (uint k = 0; k < p.K; ++k) {
-            if (AVEC4) {
-                [[unroll]] for (uint i = 0; i < TM / 4; ++i) {
-                    vec4 v = LOAD_A4((k * p.M + rows[4 * i]) / 4);  // rows[4i] is a multiple of 4 here
-                    a[4 * i] = v.x, a[4 * i + 1] = v.y, a[4 * i + 2] = v.z, a[4 * i + 3] = v.w;
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+            [[unroll]] for (uint u = 0; u < 4; ++u) {
+                const uint k = min(k0 + u, p.K - 1u);
+                const bool live = k0 + u < p.K;
+                if (AVEC4) {
+                    [[unroll]] for (uint i = 0; i < TM / 4; ++i) {
+                        vec4 v = live ? LOAD_A4((k * p.M + rows[4 * i]) / 4) : vec4(0.0);  // rows[4i] is a multiple of 4 here
+                        [[unroll]] for (uint c = 0; c < 4; ++c) a[4 * i + c][u] = v[c];
+                    }
+                } else {
+                    [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_A(k * p.M + rows[i]) : 0.0;
                 }
-            } else {
-                [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_A(k * p.M + rows[i]);
             }
-            fma_row(a, k);
+            fma_rows(a, k0);
         }
         return;
     }
@@ -94,42 +123,42 @@ void block(uint m0, uint mend) {
     vec3 xyz[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) {
         if (MODE == 1u) {
-            q[i] = min(uint(idx[rows[i]]), p.P - 1u);  // in range whatever the indices hold
+            q[i] = min(uint(LOAD_I(rows[i])), p.P - 1u);  // in range whatever the indices hold
             uint c = 3u * (rows[i] / p.NS);
-            xyz[i] = vec3(LOAD_A(q[i] * p.D) - centre[c], LOAD_A(q[i] * p.D + 1u) - centre[c + 1u],
-                          LOAD_A(q[i] * p.D + 2u) - centre[c + 2u]);
+            xyz[i] = vec3(LOAD_A(q[i] * p.D) - LOAD_C(c), LOAD_A(q[i] * p.D + 1u) - LOAD_C(c + 1u),
+                          LOAD_A(q[i] * p.D + 2u) - LOAD_C(c + 2u));
         } else {
             q[i] = rows[i];
             const uint d = MODE == 3u ? p.D : 3u;
             xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
         }
     }
+    // The 3 xyz columns, as one step of 4 whose last channel is 0: first for MODE 2,
+    // after the features for MODE 1 and 3.
+    if (MODE == 2u) {
+        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
+        fma_rows(a, 0u);
+    }
     const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
-    if (MODE == 2u)
-        [[unroll]] for (uint c = 0; c < 3; ++c) {
-            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = xyz[i][c];
-            fma_row(a, c);
-        }
     if (FVEC4) {
-        for (uint k = 0; k < p.CF; k += 4u) {
-            vec4 f[TM];
-            [[unroll]] for (uint i = 0; i < TM; ++i) f[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
-            [[unroll]] for (uint c = 0; c < 4; ++c) {
-                [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = f[i][c];
-                fma_row(a, kf + k + c);
-            }
+        for (uint k = 0; k < p.CF; k += 4u) {  // CF % 4 == 0 here
+            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
+            fma_rows(a, kf + k);
         }
     } else {
-        for (uint k = 0; k < p.CF; ++k) {
-            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F(q[i] * p.DF + p.FB + k);
-            fma_row(a, kf + k);
+        for (uint k = 0; k < p.CF; k += 4u) {
+            [[unroll]] for (uint u = 0; u < 4; ++u) {
+                const bool live = k + u < p.CF;
+                const uint c = min(k + u, p.CF - 1u);
+                [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_F(q[i] * p.DF + p.FB + c) : 0.0;
+            }
+            fma_rows(a, kf + k);
         }
     }
-    if (MODE == 1u || MODE == 3u)
-        [[unroll]] for (uint c = 0; c < 3; ++c) {
-            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = xyz[i][c];
-            fma_row(a, p.CF + c);
-        }
+    if (MODE != 2u) {
+        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
+        fma_rows(a, p.CF);
+    }
 }
 
 void main() {
@@ -139,16 +168,15 @@ void main() {
     const uint t_all = gl_WorkGroupID.x * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
     const bool live = t_all < p.blocks;
     const uint t = min(t_all, p.blocks - 1u);
-    const uint n0 = gl_WorkGroupID.y * TN;  // within the bound weight columns
-    const uint nb = p.n_base + n0;          // the output channel of column n0
+    const uint n0 = gl_WorkGroupID.y * TN;
     float b[TN];
-    [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(nb + j, p.N - 1u)];
+    [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
     if (!MAXPOOL) {
         const uint m0 = t * TM;
         block(m0, p.M);
         [[unroll]] for (uint j = 0; j < TN; ++j) {
             [[unroll]] for (uint i = 0; i < TM; ++i)
-                if (live && n0 + j < p.WN && m0 + i < p.M) outv[(nb + j) * p.M + m0 + i] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
+                if (live && n0 + j < p.N && m0 + i < p.M) outv[(n0 + j) * p.M + m0 + i] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
         }
         return;
     }
@@ -162,5 +190,5 @@ void main() {
             [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
     }
     [[unroll]] for (uint j = 0; j < TN; ++j)
-        if (live && n0 + j < p.WN) outv[t * p.N + nb + j] = mx[j];
+        if (live && n0 + j < p.N) outv[t * p.N + n0 + j] = mx[j];
 }

@@ -117,12 +117,27 @@ TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", 
     check_fps_and_balls(cloud_tensor(twice), 504, {{0.5, 9}, {0.25, 3}});
 }
 
+using Weights = ops::GroupLinear::Weights;
+constexpr Weights kWeightPaths[] = {Weights::Shuffle, Weights::Uniform, Weights::Storage};
+const char* weights_name(Weights w) { return w == Weights::Shuffle ? "shuffle" : w == Weights::Uniform ? "uniform" : "storage"; }
+
+// Each weight path the tests ask for is the one that runs on this device (small
+// weights at offset 0), so a sweep cannot pass on a fallback; where the device
+// lacks shuffles the test says so.
+void require_weight_path(Weights w) {
+    const rt::DeviceInfo& d = test::gpu().info();
+    const bool shuffles = ops::has_subgroup_shuffles(d);
+    INFO("device " << d.name << ", subgroup shuffles " << shuffles);
+    CHECK(ops::group_linear_weight_path(d, 40, 64, true, w, 0) == (w == Weights::Shuffle && !shuffles ? Weights::Uniform : w));
+    CHECK(ops::group_linear_weight_path(d, 40, 64, false, w, 0) == Weights::Storage);
+}
+
 TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the CPU reference", "[op][group_linear][point_group][group_max]") {
     for (bool normals : {true, false})
       for (ops::BufferPath path : ops::kBufferPaths)
-      for (bool ubo : {true, false}) {
-        if (path == ops::BufferPath::Storage && !ubo) continue;  // the storage path never uses one
-        INFO("features " << normals << ", " << ops::path_name(path) << ", uniform weights " << ubo);
+      for (Weights ubo : kWeightPaths) {
+        if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;  // it reads storage buffers only
+        INFO("features " << normals << ", " << ops::path_name(path) << ", weights " << weights_name(ubo));
         const int64_t N = 300, S = 37, ns = 12, C1 = 20, C2 = 33, C3 = 24;
         const int64_t K = normals ? 6 : 3;
         WeightStore w;
@@ -147,6 +162,7 @@ TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the 
         const ops::Act relu = ops::kActRelu;
         std::vector<int> gin{x, f[1], ball};
         if (normals) gin.push_back(x);
+        if (path == ops::BufferPath::Texel) require_weight_path(ubo);
         // Unfused: point_group, linear, linear, group_max.
         int grouped = ops::point_group(g, gin, 3);
         g.output(grouped, "grouped");
@@ -186,7 +202,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     };
     // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
     // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
-    // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: two column blocks (128 + 32).
+    // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: the uniform path falls back.
     for (Case c : {Case{20 * 128, 131, 96, 128}, Case{2560, 64, 200, 5}, Case{1001, 37, 37, 13}, Case{36, 8, 8, 12},
                    Case{640, 128, 160, 16}}) {
         WeightStore w;
@@ -197,9 +213,9 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
         using In = ops::GroupLinear::Input;
         for (ops::BufferPath path : ops::kBufferPaths)
-            for (bool ubo : {true, false}) {
-                if (path == ops::BufferPath::Storage && !ubo) continue;
-                const std::string on = std::string(".") + ops::path_name(path) + (ubo ? ".ubo" : "");
+            for (Weights ubo : kWeightPaths) {
+                if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
+                const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo);
                 g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo}),
                          "max_relu" + on);
                 g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo}),

@@ -108,8 +108,10 @@ void wide_cases(std::vector<OpCase>& v) {
         plain.act = ops::kActLeaky;
         plain.slope = 0.1;
         c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain");
-        plain.uniform_weights = false;  // the weights from a storage buffer, as on devices they do not fit
-        c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain_ssbo_weights");
+        plain.weights = ops::GroupLinear::Weights::Uniform;  // as on devices without subgroup shuffles
+        c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain_uniform_weights");
+        plain.weights = ops::GroupLinear::Weights::Storage;  // as where they fit neither
+        c.output(ops::group_linear(c.g, {x, wv, bv}, plain), "plain_storage_weights");
         v.push_back(std::move(c));
     }
 }

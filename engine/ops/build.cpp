@@ -136,7 +136,7 @@ int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::str
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name) {
     Params p{{"in", double(l.input)}, {"act", double(l.act)}, {"slope", l.slope},
              {"texel", flag(l.path == BufferPath::Texel)}};
-    if (!l.uniform_weights) p.set("ubo", 0);
+    if (l.weights != GroupLinear::Weights::Shuffle) p.set("weights", double(l.weights));
     if (l.input == GroupLinear::Input::Gather || l.input == GroupLinear::Input::Points) p.set("feat_begin", d(l.feat_begin));
     if (l.max) p.set("max", 1);
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls

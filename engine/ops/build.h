@@ -101,11 +101,15 @@ struct GroupLinear {
     Act act = kActNone;
     double slope = 0.01;
     BufferPath path = BufferPath::Texel;
-    // Weights read as a uniform buffer where they fit one (Texel path only);
-    // false keeps them in a storage buffer (tests compare both).
-    bool uniform_weights = true;
+    // How the weights reach the lanes on the Texel path (group_linear.cpp); each falls
+    // back to the next where the device lacks what it needs. Tests sweep all three.
+    enum class Weights { Shuffle = 0, Uniform = 1, Storage = 2 } weights = Weights::Shuffle;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
+// The weight path group_linear takes on device `d` for a K x N weight at byte
+// `offset`, asked for `want` (exposed so tests can tell which one ran).
+GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
+                                              GroupLinear::Weights want, uint64_t offset);
 // Layer one of a set-abstraction MLP from its per-point part u = group_linear
 // (Points) of the same weight (sa_gather.cpp): rows of the ball `idx` around `centres`.
 int sa_gather(Graph& g, int u, int centres, int idx, int weight_kn, Act act, const std::string& name = "",

@@ -3,8 +3,14 @@
 // channels = one vec4), and activations between layers are channel-major [C, M]
 // (4 rows = one vec4), so the shader reads everything as vec4s. Param texel
 // (default 1): read activations and the cloud as texel buffers where the device allows;
-// param ubo (default 1): then read the weights from a uniform buffer where they fit
-// one (point_mlp_ubo.comp).
+// then param weights (GroupLinear::Weights, default 0) says how the weights, which
+// every lane of a workgroup reads at the same address, reach the lanes:
+//   0: shared by subgroup shuffles from a texel buffer (point_mlp_shfl.comp), where the
+//      device has shuffles and the matrix fits its texel-buffer limit; else as 1;
+//   1: from a uniform buffer (point_mlp_ubo.comp), where the matrix fits the device's
+//      uniform range; else as 2;
+//   2: from a storage buffer (point_mlp.comp), a broadcast on GPUs but a loop over the
+//      lanes on a CPU driver (README "On CPUs without AVX-512, measured").
 // Param `in` picks the input (optional features always last):
 //   0: x^T [K, M] (channel-major, the previous layer's output): [x^T, W^T, bias]
 //   1: grouping fused (SPEC 2, as point_group): [points [P, D >= 3], centres [S, 3],
@@ -22,6 +28,7 @@
 #include <limits>
 
 #include "base/error.h"
+#include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
 #include "engine/ops/point_common.h"
@@ -29,6 +36,8 @@
 
 namespace vtloc::ops {
 namespace {
+
+using Weights = GroupLinear::Weights;
 
 struct Layout {
     int mode = 0;
@@ -99,18 +108,9 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     return l;
 }
 
-// Weights beyond the 16 KiB every Vulkan device's uniform buffers allow get a
-// workspace (output 1): their column blocks, each of which fits the device's
-// range, for point_mlp_ubo.comp one block per dispatch. K N floats, plus up to
-// 256 bytes of alignment padding per block (blocks are >= 4 columns wide).
-constexpr int64_t kGuaranteedUniformBytes = 16384;
-bool has_block_workspace(const Layout& l) { return l.N % 4 == 0 && l.K * l.N * 4 > kGuaranteedUniformBytes; }
-
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l = layout_of(in, p);
-    std::vector<TensorDesc> out{TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
-    if (has_block_workspace(l)) out.push_back(TensorDesc{Shape{l.K * l.N + 64 * (l.N / 4)}});
-    return out;
+    return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
 }
 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
@@ -166,69 +166,63 @@ void gpu(const GpuOpArgs& a) {
         throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
     const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
     const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
-    struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks, WN, n_base; } push{
+    struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
         uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
         uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
-        uint32_t((l.NS + TM - 1) / TM), uint32_t(l.N), 0};
-    // The activations / cloud (bindings 0, 1) and features (8, 9) are read as
-    // texel buffers where the device's texel-buffer limit allows (param texel = 0
-    // forces storage buffers); bindings 1 and 9 are the same tensors as vec4s.
+        uint32_t((l.NS + TM - 1) / TM)};
+    // The activations / cloud (bindings 0, 1), centres and indices (6, 7) and
+    // features (8, 9) are read as texel buffers where the device's texel-buffer
+    // limit allows (param texel = 0 forces storage buffers); bindings 1 and 9 are
+    // the same tensors as vec4s.
     const GpuTensor& src = a.in[0];
     const GpuTensor& fsrc = l.feat ? a.in.back() : src;  // without features: any texel-able buffer
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(src.shape)) <= d.max_texel_elements &&
-                       uint64_t(numel(fsrc.shape)) <= d.max_texel_elements;
+    const GpuTensor& bias = a.in[l.w + 1];  // also the filler of bindings the mode does not read
+    const GpuTensor& centres = l.mode == 1 ? a.in[1] : bias;
+    const GpuTensor& index = l.mode == 1 ? a.in[2] : bias;
+    bool texel = a.params.get("texel", 1) != 0;
+    for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias})
+        texel = texel && uint64_t(numel(t->shape)) <= d.max_texel_elements;
     auto fmt = [&](const GpuTensor& t, bool vec4) {
         if (!texel) return VK_FORMAT_UNDEFINED;
         return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
     };
-    // The weights as a uniform buffer (param ubo = 0 forces the storage buffer):
-    // read at one address by every lane, see point_mlp_ubo.comp. Whole where they
-    // fit the device's range, else in column blocks of nc columns copied into the
-    // workspace, one dispatch per block.
+    const Weights wp = group_linear_weight_path(d, l.K, l.N, texel, Weights(a.params.get("weights", 0)), a.in[l.w].view.offset);
+    std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
+                               l.N % 4 == 0, uint32_t(l.K * l.N / 4), d.subgroup_size};
+    const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
+                         : texel                ? "point_mlp"
+                                                : "point_mlp_ssbo";
+    const uint32_t texels = texel ? (wp == Weights::Shuffle ? 0x3C7u : 0x3C3u) : 0u;
+    const rt::PipelineDesc desc{shader, 10, sizeof(push), spec, texels, wp == Weights::Uniform ? 0x8u : 0u};
     const rt::BufferView& wv = a.in[l.w].view;
-    const uint64_t align = std::max<uint64_t>(4, d.uniform_offset_alignment) / 4;  // floats
-    const bool ubo_ok = a.params.get("ubo", 1) != 0 && texel && l.N % 4 == 0 && align <= 64;
-    const bool whole = ubo_ok && wv.size <= d.max_uniform_range && wv.offset % d.uniform_offset_alignment == 0;
-    const int64_t nc = std::min<int64_t>(l.N, int64_t(d.max_uniform_range / 4 / uint64_t(l.K)) / TN * TN);
-    const bool in_blocks = ubo_ok && !whole && a.out.size() == 2 && nc >= TN;
-    const int64_t stride = in_blocks ? int64_t(rt::align_up(uint64_t(l.K * nc), align)) : 0;
-    if (in_blocks) {
-        struct { uint32_t K, N, nc, stride; } bp{uint32_t(l.K), uint32_t(l.N), uint32_t(nc), uint32_t(stride)};
-        const uint32_t local = elementwise_local_size(d);
-        a.seq.dispatch(pipeline(a.ctx, "weight_blocks", 2, sizeof(bp), {local}),
-                       {{wv, rt::Access::Read}, {a.out[1].view, rt::Access::Write}}, &bp, sizeof(bp),
-                       grid_groups(uint64_t(l.K * l.N), local, d));
-    }
-    // Bindings the mode does not read are filled with the weight buffer.
-    const rt::BufferView& filler = a.in[l.w].view;
     const rt::Access R = rt::Access::Read;
-    for (int64_t n0 = 0; n0 < l.N; n0 += in_blocks ? nc : l.N) {
-        const int64_t width = in_blocks ? std::min(nc, l.N - n0) : l.N;
-        rt::BufferView w = wv;
-        if (in_blocks)
-            w = rt::BufferView{a.out[1].view.buffer, a.out[1].view.offset + VkDeviceSize(n0 / nc * stride * 4),
-                               VkDeviceSize(l.K * width * 4)};
-        const bool ubo = whole || in_blocks;
-        std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max,
-                                   uint32_t(a.params.get("act", kActNone)), avec4, fvec4, l.N % 4 == 0};
-        if (ubo) spec.push_back(uint32_t(l.K * width / 4));
-        rt::PipelineDesc desc{ubo ? "point_mlp_ubo" : texel ? "point_mlp" : "point_mlp_ssbo", 10, sizeof(push), spec,
-                              texel ? 0x303u : 0u, ubo ? 0x8u : 0u};
-        push.WN = uint32_t(width);
-        push.n_base = uint32_t(n0);
-        a.seq.dispatch(a.ctx.pipelines().get(desc),
-                       {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)}, {w, R}, {w, R},
-                        {a.in[l.w + 1].view, R}, {a.out[0].view, rt::Access::Write},
-                        {l.mode == 1 ? a.in[1].view : filler, R}, {l.mode == 1 ? a.in[2].view : filler, R},
-                        {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
-                       &push, sizeof(push), uint32_t(gx), uint32_t((uint64_t(width) + TN - 1) / TN));
-    }
+    const VkFormat f32 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
+    a.seq.dispatch(a.ctx.pipelines().get(desc),
+                   {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)},
+                    {wv, R, wp == Weights::Shuffle ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED}, {wv, R},
+                    {bias.view, R}, {a.out[0].view, rt::Access::Write},
+                    {centres.view, R, f32}, {index.view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
+                    {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
+                   &push, sizeof(push), uint32_t(gx), uint32_t(gy));
 }
 
 }  // namespace
 
-const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 1u << 1,  // output 1: the weight blocks
-                        {"in", "feat_begin", "max", "group", "act", "slope", "texel", "ubo"}};
+const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
+                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights"}};
+
+GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
+                                              GroupLinear::Weights want, uint64_t offset) {
+    using W = GroupLinear::Weights;
+    const uint64_t bytes = uint64_t(K * N) * 4;
+    if (want == W::Shuffle && texel && has_subgroup_shuffles(d) && uint64_t(K * N) <= d.max_texel_elements)
+        return W::Shuffle;
+    // std140 vec4s: N % 4 == 0; the binding's offset must meet the device's alignment.
+    if (want != W::Storage && texel && N % 4 == 0 && bytes <= d.max_uniform_range &&
+        offset % std::max<uint64_t>(1, d.uniform_offset_alignment) == 0)
+        return W::Uniform;
+    return W::Storage;
+}
 
 // W [N, K] (PyTorch Linear / squeezed 1x1 conv) -> W^T [K, N], group_linear's layout.
 HostTensor point_weight_kn(const HostTensor& w) {

@@ -1,0 +1,13 @@
+#version 450
+#extension GL_EXT_control_flow_attributes : require
+#extension GL_GOOGLE_include_directive : require
+#extension GL_KHR_shader_subgroup_shuffle : require
+// point_mlp.comp with the weights as a texel buffer (binding 2), each weight row
+// loaded once per subgroup: lane l reads columns l, l + SG, ... and the lanes
+// share them by shuffles at constant lane indices (a register permute on a CPU
+// driver), where every lane reading every weight was a gather per weight.
+#include "point_mlp_texel.glsl"
+layout(binding = 2) uniform samplerBuffer WT;  // R32F
+#define LOAD_W(e) texelFetch(WT, int(e)).x
+#define WEIGHTS_SHUFFLE
+#include "point_mlp.glsl"
