@@ -64,6 +64,8 @@ const uint WR = (TN + SG - 1u) / SG;         // weights each lane loads per inpu
 // k0 + u; channels past K come with a = 0 and a clamped weight row). Each
 // accumulator takes its 4 products in a row: a CPU driver masks every store to a
 // value a loop carries (load, blend, store), so it pays that once per 4 products.
+// (The rows are vec4s: an array parameter sized by a spec-constant expression such
+// as 4 * TM came out wrong through glslang and Mesa 22.3.)
 void fma_rows(vec4 a[TM], uint k0) {
     float w[4 * TN];  // weight rows k0 .. k0 + 3 (clamped to K - 1), the block's TN columns
     [[unroll]] for (uint u = 0; u < 4; ++u) {
