@@ -42,10 +42,10 @@ struct Scale {
 
 // FPS then one ball query per scale, on the GPU and the CPU; returns both.
 test::BothRuns fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vector<Scale>& scales,
-                             bool no_registers = false) {
+                             bool no_registers = false, bool tree = false) {
     Graph g;
     int x = g.input("cloud", cloud.shape);
-    std::vector<int> f = ops::fps(g, x, npoint, "fps", no_registers);
+    std::vector<int> f = ops::fps(g, x, npoint, "fps", no_registers, tree);
     g.output(f[0], "fps");
     g.output(f[1], "centres");
     for (size_t s = 0; s < scales.size(); ++s)
@@ -53,14 +53,18 @@ test::BothRuns fps_and_balls(const HostTensor& cloud, int64_t npoint, const std:
     return test::run_both(g, WeightStore{}, {{"cloud", cloud}});
 }
 
+// Both reductions: subgroup operations where the device has them, and the shared-memory tree.
 void check_fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vector<Scale>& scales,
                          bool no_registers = false) {
-    INFO("N " << cloud.shape[0] << " D " << cloud.shape[1] << " npoint " << npoint << " workspace path " << no_registers);
-    test::BothRuns r = fps_and_balls(cloud, npoint, scales, no_registers);
+  for (bool tree : {false, true}) {
+    INFO("N " << cloud.shape[0] << " D " << cloud.shape[1] << " npoint " << npoint << " workspace path " << no_registers
+              << " tree reduction " << tree);
+    test::BothRuns r = fps_and_balls(cloud, npoint, scales, no_registers, tree);
     test::require_same_ints(r.gpu.at("fps"), r.cpu.at("fps"), "fps");
     CHECK(r.gpu.at("centres").data == r.cpu.at("centres").data);
     for (size_t s = 0; s < scales.size(); ++s)
         test::require_same_ints(r.gpu.at("ball." + std::to_string(s)), r.cpu.at("ball." + std::to_string(s)), "ball");
+  }
 }
 
 // Runs tests/point_cases.py (the PyTorch reference's FPS and ball query) into a

@@ -15,11 +15,11 @@ namespace vtloc::check {
 namespace {
 
 OpCase fps_case(int64_t n, int64_t d, int64_t npoint, double radius, int64_t nsample, bool no_registers,
-                const std::string& why) {
+                const std::string& why, bool tree = false) {
     OpCase c("fps", why + ": " + std::to_string(n) + " points [N, " + std::to_string(d) + "] -> " +
                         std::to_string(npoint));
     int x = c.input("cloud", random_tensor({n, d}, uint32_t(n)));
-    std::vector<int> f = ops::fps(c.g, x, npoint, "", no_registers);
+    std::vector<int> f = ops::fps(c.g, x, npoint, "", no_registers, tree);
     c.output(f[0], "fps");
     c.output(f[1], "centres");
     if (nsample > 0) c.output(ops::ball_query(c.g, x, f[1], radius, nsample), "ball");
@@ -150,6 +150,7 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
     std::vector<OpCase> v;
     v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
     v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
+    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "tree reduction", true));
     v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
     for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, "")}) {
         c.op = "ball_query";

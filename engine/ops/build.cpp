@@ -115,9 +115,10 @@ std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, con
                  {{"sigma", b.sigma}, {"sigma_m", b.sigma_m}, {"window", double(b.window)}}, name);
 }
 
-std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace) {
+std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace, bool force_tree) {
     Params p{{"npoint", d(npoint)}};
     if (force_workspace) p.set("no_registers", 1);
+    if (force_tree) p.set("subgroup", 0);
     return g.add("fps", {xyz}, p, name);
 }
 

@@ -85,10 +85,12 @@ std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, con
 
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers
-// path would fit (tests and the self-test cover both).
+// path would fit; force_tree: the shared-memory tree reduction even where the
+// device has subgroup arithmetic (tests and the self-test cover all of them).
 // The normalised frame on the GPU: outputs the cloud and the frame [4].
 std::vector<int> cloud_normalize(Graph& g, int cloud, const std::string& name = "");
-std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name = "", bool force_workspace = false);
+std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name = "", bool force_workspace = false,
+                     bool force_tree = false);
 int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name = "");
 // in: points, centres, ball indices (+ features); feat_begin: first feature column.
 int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name = "");

@@ -1,4 +1,6 @@
-// fps: farthest point sampling (SPEC 2) -> shaders/fps.comp, one workgroup.
+// fps: farthest point sampling (SPEC 2) -> shaders/fps.comp, one workgroup
+// (fps_subgroup.comp where the device has subgroup arithmetic; param subgroup = 0
+// forces fps.comp).
 // Input: points [N, D >= 3] (xyz = columns 0..2, the rest ignored).
 // Param npoint (1..N). Outputs: index I32 [npoint], centres F32 [npoint, 3]
 // (the picked xyz, what the next stage groups around), and a workspace F32 [N]
@@ -66,10 +68,20 @@ void gpu(const GpuOpArgs& a) {
     // Per step: the tree's log2(L) rounds, and a pass over the thread's points
     // unless they sit in registers (a constant trip count the compiler unrolls:
     // 4,097 steps of 5 points each run correctly on lavapipe).
-    check_loop_budget(d, uint64_t(S) * ((regs ? 1 : per) + log_l + 1),
+    // With subgroup arithmetic: one barrier per step and a pass over one entry per
+    // subgroup instead of the tree (fps.glsl).
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    // Its pass takes ceil(L / SG / SG) iterations per step against the tree's
+    // log2(L): on a CPU driver it is used only where that fits the loop budget.
+    const uint64_t tree_iters = uint64_t(S) * ((regs ? 1 : per) + log_l + 1);
+    const uint64_t subgroup_iters = uint64_t(S) * ((regs ? 1 : per) + (L / sg + sg - 1) / sg + 1);
+    const bool subgroup = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
+                          (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && L % sg == 0 &&
+                          (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU || subgroup_iters <= kLoopIterationBudget);
+    check_loop_budget(d, subgroup ? subgroup_iters : tree_iters,
                       "FPS of " + std::to_string(S) + " from " + std::to_string(N) + " points");
     struct { uint32_t N, D, S; } push{N, to_u32(a.in[0].shape[1], "point width"), S};
-    a.seq.dispatch(pipeline(a.ctx, "fps", 4, sizeof(push), {L, regs ? per : 1u, regs ? 1u : 0u}),
+    a.seq.dispatch(pipeline(a.ctx, subgroup ? "fps_subgroup" : "fps", 4, sizeof(push), {L, regs ? per : 1u, regs ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write},
                     {a.out[1].view, rt::Access::Write}, {a.out[2].view, rt::Access::ReadWrite}},
                    &push, sizeof(push), 1);
@@ -77,6 +89,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2, {"npoint", "no_registers"}};  // output 2: the workspace
+const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2, {"npoint", "no_registers", "subgroup"}};  // output 2: the workspace
 
 }  // namespace vtloc::ops
