@@ -49,16 +49,17 @@ test::BothRuns fps_and_balls(const HostTensor& cloud, int64_t npoint, const std:
     g.output(f[0], "fps");
     g.output(f[1], "centres");
     for (size_t s = 0; s < scales.size(); ++s)
-        g.output(ops::ball_query(g, x, f[1], scales[s].radius, scales[s].nsample), "ball." + std::to_string(s));
+        g.output(ops::ball_query(g, x, f[1], scales[s].radius, scales[s].nsample, "", tree), "ball." + std::to_string(s));
     return test::run_both(g, WeightStore{}, {{"cloud", cloud}});
 }
 
-// Both reductions: subgroup operations where the device has them, and the shared-memory tree.
+// Both ways: subgroup operations where the device has them, and the shared-memory
+// shaders (FPS's tree reduction, ball query's tiles).
 void check_fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vector<Scale>& scales,
                          bool no_registers = false) {
   for (bool tree : {false, true}) {
     INFO("N " << cloud.shape[0] << " D " << cloud.shape[1] << " npoint " << npoint << " workspace path " << no_registers
-              << " tree reduction " << tree);
+              << " shared-memory shaders " << tree);
     test::BothRuns r = fps_and_balls(cloud, npoint, scales, no_registers, tree);
     test::require_same_ints(r.gpu.at("fps"), r.cpu.at("fps"), "fps");
     CHECK(r.gpu.at("centres").data == r.cpu.at("centres").data);

@@ -22,7 +22,7 @@ OpCase fps_case(int64_t n, int64_t d, int64_t npoint, double radius, int64_t nsa
     std::vector<int> f = ops::fps(c.g, x, npoint, "", no_registers, tree);
     c.output(f[0], "fps");
     c.output(f[1], "centres");
-    if (nsample > 0) c.output(ops::ball_query(c.g, x, f[1], radius, nsample), "ball");
+    if (nsample > 0) c.output(ops::ball_query(c.g, x, f[1], radius, nsample, "", tree), "ball");
     return c;
 }
 
@@ -150,11 +150,12 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
     std::vector<OpCase> v;
     v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
     v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
-    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "tree reduction", true));
+    v.push_back(fps_case(5000, 3, 512, 0, 0, false, "tree reduction", true));  // the shared-memory shaders
     v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
-    for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, "")}) {
+    for (OpCase c : {fps_case(333, 6, 100, 0.2, 7, false, ""), fps_case(5000, 3, 512, 0.1, 32, false, ""),
+                     fps_case(5000, 3, 512, 0.1, 32, false, "tiles", true)}) {
         c.op = "ball_query";
-        c.variant = "after fps: " + c.variant.substr(2);
+        c.variant = c.variant.rfind(": ", 0) == 0 ? "after fps: " + c.variant.substr(2) : "after fps, " + c.variant;
         v.push_back(std::move(c));
     }
 

@@ -1,6 +1,7 @@
 // ball_query (SPEC 2): for each centre, the first nsample points in index
 // order within radius (d^2 <= r^2), the rest filled with the first found.
-// -> shaders/ball_query.comp, one thread per centre over shared-memory tiles.
+// -> shaders/ball_query.comp, one thread per centre over shared-memory tiles, or
+// ball_query_subgroup.comp (shuffles, no shared memory) where the device has them.
 // Inputs: points [N, D >= 3] (xyz = columns 0..2), centres [S, 3].
 // Params: radius (> 0), nsample (>= 1). Output: index I32 [S, nsample].
 // r^2 = float(r) * float(r) in single precision, as the reference squares it.
@@ -71,14 +72,24 @@ void gpu(const GpuOpArgs& a) {
     // A thread may scan every point (a centre that finds fewer than nsample).
     check_loop_budget(d, uint64_t(push.N) + push.N / L + 2 * uint64_t(push.NS) + 8,
                       "ball query over " + std::to_string(push.N) + " points");
-    a.seq.dispatch(pipeline(a.ctx, "ball_query", 3, sizeof(push), {L}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read},
-                    {a.out[0].view, rt::Access::Write}},
-                   &push, sizeof(push), std::max(1u, groups));
+    // ball_query_subgroup.comp: shuffles instead of shared-memory tiles, the cloud
+    // as texels; param subgroup = 0 forces the tiled shader.
+    const bool subgroup = a.params.get("subgroup", 1) != 0 && shuffles_allowed(a) &&
+                          (d.subgroup_ops & VK_SUBGROUP_FEATURE_VOTE_BIT) && sg <= 32 && L % sg == 0 &&
+                          uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements;
+    const rt::Access R = rt::Access::Read;
+    if (subgroup)
+        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"ball_query_subgroup", 3, sizeof(push), {L, sg}, 0x1u}),
+                       {{a.in[0].view, R, VK_FORMAT_R32_SFLOAT}, {a.in[1].view, R}, {a.out[0].view, rt::Access::Write}},
+                       &push, sizeof(push), std::max(1u, groups));
+    else
+        a.seq.dispatch(pipeline(a.ctx, "ball_query", 3, sizeof(push), {L}),
+                       {{a.in[0].view, R}, {a.in[1].view, R}, {a.out[0].view, rt::Access::Write}}, &push, sizeof(push),
+                       std::max(1u, groups));
 }
 
 }  // namespace
 
-const OpDef op_ball_query{"ball_query", infer, cpu, gpu, 0, {"radius", "nsample"}};
+const OpDef op_ball_query{"ball_query", infer, cpu, gpu, 0, {"radius", "nsample", "subgroup"}};
 
 }  // namespace vtloc::ops

@@ -122,8 +122,10 @@ std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name,
     return g.add("fps", {xyz}, p, name);
 }
 
-int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name) {
-    return g.add1("ball_query", {xyz, centres}, {{"radius", radius}, {"nsample", d(nsample)}}, name);
+int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name, bool force_tiles) {
+    Params p{{"radius", radius}, {"nsample", d(nsample)}};
+    if (force_tiles) p.set("subgroup", 0);
+    return g.add1("ball_query", {xyz, centres}, p, name);
 }
 
 int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name) {

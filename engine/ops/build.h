@@ -91,7 +91,9 @@ std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, con
 std::vector<int> cloud_normalize(Graph& g, int cloud, const std::string& name = "");
 std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name = "", bool force_workspace = false,
                      bool force_tree = false);
-int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name = "");
+// force_tiles: the shared-memory tiles even where the device has subgroup shuffles.
+int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name = "",
+               bool force_tiles = false);
 // in: points, centres, ball indices (+ features); feat_begin: first feature column.
 int point_group(Graph& g, const std::vector<int>& in, int64_t feat_begin, const std::string& name = "");
 int group_max(Graph& g, int x, int64_t group, bool channel_major, const std::string& name = "");
