@@ -65,14 +65,12 @@ void gpu(const GpuOpArgs& a) {
     const bool regs = per <= kMaxPer && !a.params.get("no_registers", 0);
     uint32_t log_l = 0;
     while ((1u << log_l) < L) ++log_l;
-    // Per step: the tree's log2(L) rounds, and a pass over the thread's points
-    // unless they sit in registers (a constant trip count the compiler unrolls:
-    // 4,097 steps of 5 points each run correctly on lavapipe).
-    // With subgroup arithmetic: one barrier per step and a pass over one entry per
-    // subgroup instead of the tree (fps.glsl).
+    // Loop iterations per step: a pass over the thread's points unless they sit in
+    // registers (a constant trip count the compiler unrolls: 4,097 steps of 5 points
+    // each run correctly on lavapipe), then the tree's log2(L) rounds or, with
+    // subgroup arithmetic (one barrier per step, fps.glsl), ceil(L / SG / SG) over
+    // the subgroups' entries; on a CPU driver that path is taken only within the budget.
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    // Its pass takes ceil(L / SG / SG) iterations per step against the tree's
-    // log2(L): on a CPU driver it is used only where that fits the loop budget.
     const uint64_t tree_iters = uint64_t(S) * ((regs ? 1 : per) + log_l + 1);
     const uint64_t subgroup_iters = uint64_t(S) * ((regs ? 1 : per) + (L / sg + sg - 1) / sg + 1);
     const bool subgroup = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&

@@ -94,7 +94,7 @@ void gpu(const GpuOpArgs& a) {
         // Whole subgroups, no more than the rows need: spare lanes redo the last row,
         // which a one-row layer would otherwise pay for 64 times per block.
         uint32_t local = subgroup_group_size(d);
-        while (local / 2 >= uint64_t(M) && (local / 2) % std::max(1u, d.subgroup_size) == 0 && local / 2 > 0) local /= 2;
+        while (local / 2 >= uint64_t(M) && (local / 2) % std::max(1u, d.subgroup_size) == 0) local /= 2;
         const uint64_t gx = (uint64_t(M) + local - 1) / local, gy = (uint64_t(N) + TN - 1) / TN;
         if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
             throw Error("linear of " + std::to_string(M) + " rows and " + std::to_string(N) +
