@@ -282,6 +282,8 @@ TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query
                Catch::Contains("do not split"));
     CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{4, 3}}, TensorDesc{{3}}}, {}),
                Catch::Contains("input-major [3, out]"));
+    CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{3, 4}}, TensorDesc{{4}}}, {{"weights", 3}}),
+               Catch::Contains("weights"));
     // NaN / inf coordinates: the CPU references throw (the GPU path relies on the host check).
     for (float bad : {std::nanf(""), INFINITY}) {
         HostTensor c = random_cloud(50, 7);

@@ -14,6 +14,7 @@ contacts) and the nearest training contact to the truth (how dense the renders a
 """
 
 import argparse
+import functools
 import json
 import math
 import os
@@ -104,8 +105,14 @@ def object_maps(obj, touches, source):
     object's empty-sensor frame averaged over the channels."""
     if source == "depth":
         return pooled([_read(os.path.join(obj.folder, t.image[:-4] + ".depth.png"), "depth") for t in touches])
-    background = _read(os.path.join(obj.folder, "background.png"), "background")
+    background = _background(obj.folder)
     return pooled([(_read(obj.image_path(t), "frame") - background).mean(-1) for t in touches])
+
+
+@functools.lru_cache(maxsize=4)
+def _background(folder):
+    # Read once per object: its training renders and its test touches both subtract it.
+    return _read(os.path.join(folder, "background.png"), "background")
 
 
 def database(obj, touches, source):

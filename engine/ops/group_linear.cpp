@@ -51,6 +51,7 @@ struct Layout {
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l;
     l.mode = p.has("in") ? int(int_param(p, "in", 0, 3)) : 0;
+    if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
     l.max = p.get("max", 0) != 0;
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
@@ -187,8 +188,10 @@ void gpu(const GpuOpArgs& a) {
         return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
     };
     const Weights wp = group_linear_weight_path(d, l.K, l.N, texel, Weights(a.params.get("weights", 0)), a.in[l.w].view.offset);
+    // WVECS (9) only where the shader declares it: elsewhere a weight-shape-dependent
+    // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
-                               l.N % 4 == 0, uint32_t(l.K * l.N / 4), d.subgroup_size};
+                               l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
