@@ -16,7 +16,7 @@
 // first 2,000 runs, flat from 2,000 to 6,000) but would cover a leak of the same
 // size in a 500-run check; pinned, the slope is -0.1 MiB per 1,000 runs.
 // Exit 0 when outputs repeat exactly, GPU memory does not move after the
-// warm-up and host RSS drifts less than --max-drift-mib over the run.
+// warm-up and host RSS grows less than --max-drift-mib over the run.
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -265,7 +265,9 @@ int main(int argc, char** argv) {
             gpu_moved = std::max(gpu_moved, std::abs(gpu[i] - gpu[warmup]));
             rss_lo = std::min(rss_lo, rss[i]), rss_hi = std::max(rss_hi, rss[i]);
         }
-        const bool ok = mismatches == 0 && gpu_moved == 0 && std::abs(rf.drift) < max_drift && validation.empty();
+        // A leak is growth: a falling RSS (glibc handing pages back, -1.5 MiB over 250
+        // runs seen under ctest -j2) passes.
+        const bool ok = mismatches == 0 && gpu_moved == 0 && rf.drift < max_drift && validation.empty();
         std::printf("vtloc-soak: %ld runs (%zu touches) of %zu cases on %s, model %s, %.1f s\n", runs, touches,
                     cases.size(), ctx.device().name.c_str(), model.info().name.c_str(), seconds);
         std::printf("  outputs bit-identical to each case's first run: %s (%zu differ)\n", mismatches ? "NO" : "yes",

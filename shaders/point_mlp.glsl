@@ -32,6 +32,9 @@ layout(constant_id = 5) const uint ACT = 0;  // act.glsl code
 layout(constant_id = 6) const bool AVEC4 = true;  // MODE 0: rows as vec4 (M, and NS when MAXPOOL, % 4 == 0)
 layout(constant_id = 7) const bool FVEC4 = true;  // MODE 1/2: feature rows as vec4 (DF, FB % 4 == 0)
 layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
+// !MAXPOOL, M % 4 == 0: 4 rows a store. A CPU driver stores lane by lane, a branch
+// each: 4x fewer stores took the paper's sa1 widest-scale middle layer from 57 to 37 ms.
+layout(constant_id = 11) const bool OVEC4 = true;
 #include "act.glsl"
 
 #ifndef WEIGHTS_SHUFFLE
@@ -45,7 +48,7 @@ layout(std140, binding = 3) uniform W4_ { vec4 W4[WVECS]; };
 layout(std430, binding = 3) readonly buffer W4_ { vec4 W4[]; };
 #endif
 layout(std430, binding = 4) readonly buffer Bias_ { float bias[]; };
-layout(std430, binding = 5) writeonly buffer Out_ { float outv[]; };
+layout(std430, binding = 5) writeonly buffer Out_ { vec4 outv[]; };
 layout(push_constant) uniform Push {
     uint M; uint N; uint K; uint NS; float slope;
     uint P; uint D; uint DF; uint FB; uint CF;
@@ -177,8 +180,18 @@ void main() {
         const uint m0 = t * TM;
         block(m0, p.M);
         [[unroll]] for (uint j = 0; j < TN; ++j) {
-            [[unroll]] for (uint i = 0; i < TM; ++i)
-                if (live && n0 + j < p.N && m0 + i < p.M) outv[(n0 + j) * p.M + m0 + i] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
+            if (OVEC4) {
+                [[unroll]] for (uint i = 0; i < TM; i += 4u) {
+                    vec4 v;
+                    [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[(i + c) * TN + j] + b[j], ACT, p.slope);
+                    if (live && n0 + j < p.N && m0 + i < p.M) outv[((n0 + j) * p.M + m0 + i) / 4u] = v;
+                }
+            } else {
+                [[unroll]] for (uint i = 0; i < TM; ++i) {
+                    const uint e = (n0 + j) * p.M + m0 + i;
+                    if (live && n0 + j < p.N && m0 + i < p.M) outv[e / 4u][e % 4u] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
+                }
+            }
         }
         return;
     }
@@ -192,5 +205,5 @@ void main() {
             [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
     }
     [[unroll]] for (uint j = 0; j < TN; ++j)
-        if (live && n0 + j < p.N) outv[t * p.N + n0 + j] = mx[j];
+        if (live && n0 + j < p.N) outv[(t * p.N + n0 + j) / 4u][(t * p.N + n0 + j) % 4u] = mx[j];
 }

@@ -302,15 +302,17 @@ TEST_CASE("layer one per source point plus sa_gather equals the gathered layer, 
     // sa_gather takes U[q] - W_xyz c_s per ball row. Both match their CPU
     // references, and together the direct gathered layer (group_linear, Gather):
     // the same sums, grouped differently, so within the default tolerance.
-    const int64_t P = 301, S = 37, NS = 7, N = 10;
+    // NS = 7: 259 rows, one per invocation; NS = 8: 296 rows, 4 per invocation (vec4 stores).
+    const int64_t P = 301, S = 37, N = 10;
     HostTensor cloud = test::random_tensor({P, 6}, 41), centres = test::random_tensor({S, 3}, 42), feat = test::random_tensor({P, 13}, 43);
-    std::vector<int32_t> idx(size_t(S * NS));
-    uint32_t st = 9;
-    for (auto& v : idx) v = int32_t((st = st * 1664525u + 1013904223u) >> 8) % int32_t(P);
+    for (int64_t NS : {7, 8})
     for (bool own_features : {false, true}) {  // the cloud's normals, or a feature tensor from column 2
+        std::vector<int32_t> idx(size_t(S * NS));
+        uint32_t st = 9;
+        for (auto& v : idx) v = int32_t((st = st * 1664525u + 1013904223u) >> 8) % int32_t(P);
         const int64_t fb = own_features ? 2 : 3, CF = own_features ? 11 : 3, K = CF + 3;
         for (ops::BufferPath path : ops::kBufferPaths) {
-            INFO("features " << (own_features ? "separate" : "the cloud's normals") << ", path " << ops::path_name(path));
+            INFO("NS " << NS << ", features " << (own_features ? "separate" : "the cloud's normals") << ", path " << ops::path_name(path));
             Graph g;
             TensorMap in{{"cloud", cloud}, {"centres", centres}, {"idx", HostTensor::from_ints({S, NS}, idx)},
                          {"w", test::random_tensor({K, N}, 44, -0.5f, 0.5f)}, {"b", test::random_tensor({N}, 45)}};

@@ -191,7 +191,8 @@ void gpu(const GpuOpArgs& a) {
     // WVECS (9) only where the shader declares it: elsewhere a weight-shape-dependent
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
-                               l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size};
+                               l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
+                               !l.max && l.M % 4 == 0};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";

@@ -79,11 +79,12 @@ void gpu(const GpuOpArgs& a) {
     // U through a texel buffer where the device's limit allows (a gather on lavapipe).
     const bool texel = a.params.get("texel", 1) != 0 && uint64_t(d.N * d.P) <= dev.max_texel_elements;
     const rt::Access R = rt::Access::Read;
-    rt::PipelineDesc desc{texel ? "sa_gather" : "sa_gather_ssbo", 5, sizeof(push), {local}, texel ? 1u : 0u};
+    const bool row4 = M % 4 == 0;
+    rt::PipelineDesc desc{texel ? "sa_gather" : "sa_gather_ssbo", 5, sizeof(push), {local, row4}, texel ? 1u : 0u};
     a.seq.dispatch(a.ctx.pipelines().get(desc),
                    {{a.in[0].view, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED}, {a.in[1].view, R},
                     {a.in[2].view, R}, {a.in[3].view, R}, {a.out[0].view, rt::Access::Write}},
-                   &push, sizeof(push), grid_groups(M, local, dev));
+                   &push, sizeof(push), grid_groups(row4 ? M / 4 : M, local, dev));
 }
 
 }  // namespace
