@@ -1,5 +1,5 @@
 // Body of sa_gather.comp (U read as a texel buffer) and sa_gather_ssbo.comp (U
-// beyond the texel-buffer limit); they declare binding 0 and LOAD_U.
+// beyond the texel-buffer limit); they declare bindings 0 and 3 and LOAD_U, LOAD_W.
 // Layer one of a set-abstraction MLP from its per-point part (engine/ops/sa_gather.cpp):
 // y[n][m] = act(U[n][q] - W[K-3..K-1][n] . centre[s]), row m = (s, j), q = idx[m].
 // One invocation per row (4 rows where M % 4 == 0) through every channel: the
@@ -11,7 +11,6 @@ layout(constant_id = 1) const bool ROW4 = true;  // M % 4 == 0: 4 rows per invoc
 
 layout(std430, binding = 1) readonly buffer Centre_ { float centre[]; };  // [S, 3]
 layout(std430, binding = 2) readonly buffer Index_ { int idx[]; };     // [S, NS]
-layout(std430, binding = 3) readonly buffer W_ { float W[]; };         // [K, N]
 layout(std430, binding = 4) writeonly buffer Y_ { vec4 Y[]; };         // [N, M]
 layout(push_constant) uniform Push { uint M; uint NS; uint P; uint K; uint N; uint act; float slope; } p;
 
@@ -33,7 +32,7 @@ void main() {
             c[r] = vec3(centre[s], centre[s + 1u], centre[s + 2u]);
         }
         for (uint n = 0u; n < p.N; ++n) {
-            const vec3 wx = vec3(W[(p.K - 3u) * p.N + n], W[(p.K - 2u) * p.N + n], W[(p.K - 1u) * p.N + n]);
+            const vec3 wx = vec3(LOAD_W((p.K - 3u) * p.N + n), LOAD_W((p.K - 2u) * p.N + n), LOAD_W((p.K - 1u) * p.N + n));
             vec4 v;
             for (uint r = 0u; r < R; ++r)
                 v[r] = apply_act(LOAD_U(n * p.P + q[r]) - (wx.x * c[r].x + wx.y * c[r].y + wx.z * c[r].z), p.act, p.slope);

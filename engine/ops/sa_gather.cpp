@@ -6,9 +6,10 @@
 // by that ratio, and this op only gathers and subtracts.
 // Inputs: U [N, P] (channel-major: group_linear's output), centres [S, 3], idx
 // I32 [S, NS] (the ball), W^T [K, N] (the layer's input-major weight; rows K-3..K-1
-// are its xyz part). Params act, slope, texel (0: U from a storage buffer). Output [N, S * NS] channel-major, the
+// are its xyz part). Params act, slope, texel (0: U and W from storage buffers). Output [N, S * NS] channel-major, the
 // next group_linear's Rows input.
 // -> shaders/sa_gather.comp (U as a texel buffer) or sa_gather_ssbo.comp.
+#include <algorithm>
 #include <cmath>
 
 #include "base/error.h"
@@ -76,14 +77,15 @@ void gpu(const GpuOpArgs& a) {
     struct { uint32_t M, NS, P, K, N, act; float slope; } push{uint32_t(M), uint32_t(d.NS), uint32_t(d.P), uint32_t(d.K),
                                                               uint32_t(d.N), uint32_t(a.params.get("act", kActNone)),
                                                               float(a.params.get("slope", 0.01))};
-    // U through a texel buffer where the device's limit allows (a gather on lavapipe).
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(d.N * d.P) <= dev.max_texel_elements;
+    // U and W through texel buffers where the device's limit allows (a gather on lavapipe).
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(std::max(d.N * d.P, d.K * d.N)) <= dev.max_texel_elements;
     const rt::Access R = rt::Access::Read;
     const bool row4 = M % 4 == 0;
-    rt::PipelineDesc desc{texel ? "sa_gather" : "sa_gather_ssbo", 5, sizeof(push), {local, row4}, texel ? 1u : 0u};
+    rt::PipelineDesc desc{texel ? "sa_gather" : "sa_gather_ssbo", 5, sizeof(push), {local, row4}, texel ? 0x9u : 0u};
     a.seq.dispatch(a.ctx.pipelines().get(desc),
                    {{a.in[0].view, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED}, {a.in[1].view, R},
-                    {a.in[2].view, R}, {a.in[3].view, R}, {a.out[0].view, rt::Access::Write}},
+                    {a.in[2].view, R}, {a.in[3].view, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
+                    {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), grid_groups(row4 ? M / 4 : M, local, dev));
 }
 
