@@ -218,16 +218,18 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
         using In = ops::GroupLinear::Input;
         for (ops::BufferPath path : ops::kBufferPaths)
-            for (Weights ubo : kWeightPaths) {
-                if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
-                const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo);
-                g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo}),
-                         "max_relu" + on);
-                g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo}),
-                         "max" + on);  // negative maxima
-                g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo}),
-                         "plain" + on);
-            }
+            for (Weights ubo : kWeightPaths)
+                for (bool big : {false, true}) {  // the device's tile for this size, and CPU devices' big-layer tile
+                    if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
+                    if (big && ubo == Weights::Uniform) continue;  // the tile is the same code on every weight path
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) + (big ? ".big" : "");
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, big}),
+                             "max_relu" + on);
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo, big}),
+                             "max" + on);  // negative maxima
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, big}),
+                             "plain" + on);
+                }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
     }

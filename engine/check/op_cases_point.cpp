@@ -104,6 +104,8 @@ void wide_cases(std::vector<OpCase>& v) {
         max.max = true;
         max.group = k.group;
         c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max");
+        max.big_tile = true;  // the 16 x 32 tile that CPU devices use on big layers
+        c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max_big_tile");
         ops::GroupLinear plain;
         plain.act = ops::kActLeaky;
         plain.slope = 0.1;

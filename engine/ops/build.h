@@ -108,6 +108,9 @@ struct GroupLinear {
     // How the weights reach the lanes on the Texel path (group_linear.cpp); each falls
     // back to the next where the device lacks what it needs. Tests sweep all three.
     enum class Weights { Shuffle = 0, Uniform = 1, Storage = 2 } weights = Weights::Shuffle;
+    // The tile CPU devices use on big layers (16 x 32, group_linear.cpp) whatever the
+    // layer's size or device: lets tests and the self-test reach it on small shapes.
+    bool big_tile = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

@@ -21,7 +21,8 @@
 //   3: per point: [points [M, D >= 3], W^T, bias (, features [M, DF])]; row m is
 //      [features of m from column feat_begin, xyz of m] (a set-abstraction
 //      layer's columns, not centred: sa_gather subtracts the centre's part).
-// Param max = 1: the output is the max over each group of NS consecutive rows,
+// Param tile = 1: the 16 x 32 tile of big layers on CPU devices whatever the layer
+// (tests reach it on small shapes). Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's.
 #include <algorithm>
@@ -52,6 +53,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l;
     l.mode = p.has("in") ? int(int_param(p, "in", 0, 3)) : 0;
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
+    if (p.has("tile")) int_param(p, "tile", 0, 1);
     l.max = p.get("max", 0) != 0;
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
@@ -151,11 +153,20 @@ void gpu(const GpuOpArgs& a) {
     for (size_t i = 0; i < a.in.size(); ++i)
         ds.push_back({a.in[i].shape, a.params.get("in", 0) == 1 && i == 2 ? ElemType::I32 : ElemType::F32});
     const Layout l = layout_of(ds, a.params);
-    // TM x TN accumulators per invocation: 8 rows x 16 channels (fewer channels
-    // for narrow layers), both multiples of 4 (the shader's vec4 granularity). On
-    // lavapipe 8 x 16 and 16 x 16 ran best of 4x16 .. 16x16, 8x32 (more spills).
-    const uint32_t TM = 8;
-    const uint32_t TN = l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
+    // TM x TN accumulators per invocation, both multiples of 4 (the shader's vec4
+    // granularity), fewer channels for narrow layers. GPUs: 8 x 16 (registers).
+    // CPU devices run a subgroup as one SIMD stream and pay for every texel fetch
+    // (a call that spills the live vector registers), so on big layers (rows for
+    // 64 invocations, 1e8 multiply-adds) the tile that fetches least per
+    // multiply-add: 16 x 32. Measured on lavapipe (AVX2) against 8 x 16, 8 x 24,
+    // 8 x 32, 12 x 32, 16 x 16, 16 x 48, 16 x 64 and 32 x 32: 10-25 % faster on
+    // the paper's SA layers, but 2x slower on a 64-row layer, and its unrolled
+    // shader compiles for ~2 s, which small layers never earn back (bench/README.md).
+    const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
+    const bool big = a.params.get("tile", 0) == 1 ||
+                     (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
+    uint32_t TM = big ? 16 : 8;
+    uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
     const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
     // spare invocations redo the last block.
@@ -213,7 +224,7 @@ void gpu(const GpuOpArgs& a) {
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
-                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights"}};
+                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile"}};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
                                               GroupLinear::Weights want, uint64_t offset) {
