@@ -81,6 +81,10 @@ void main() {
         const uint b = step & 1u;
         const float sb = subgroupMax(best);
         const uint si = subgroupMin(best == sb ? best_i : 0xFFFFFFFFu);  // lowest index of the subgroup's ties
+        if (gl_NumSubgroups == 1u) {  // uniform: the subgroup's winner is the step's, no barrier
+            far = min(si, p.N - 1u);
+            continue;
+        }
         if (subgroupElect()) {
             red_d[b][gl_SubgroupID] = sb;
             red_i[b][gl_SubgroupID] = si;

@@ -17,7 +17,8 @@
 namespace vtloc::ops {
 namespace {
 
-constexpr uint32_t kMaxPer = 16;  // points a thread keeps in registers
+constexpr uint32_t kMaxPer = 16;     // points a thread keeps in registers
+constexpr uint32_t kMaxPerCpu = 32;  // the same on CPU devices (see gpu())
 
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 1, 1);
@@ -59,27 +60,50 @@ void gpu(const GpuOpArgs& a) {
     // shared memory (2 x 8 bytes per thread), about 8 points per thread: each
     // step costs log2(L) barriers, so more threads than that only add barriers.
     const uint32_t cap = std::min({1024u, d.max_invocations, d.max_workgroup_size[0], d.max_shared_memory / 16});
-    uint32_t L = 1;
-    while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
-    const uint32_t per = (N + L - 1) / L;
-    const bool regs = per <= kMaxPer && !a.params.get("no_registers", 0);
-    uint32_t log_l = 0;
-    while ((1u << log_l) < L) ++log_l;
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    struct Plan {
+        uint32_t L, per;
+        bool regs;
+        uint64_t tree_iters, subgroup_iters;
+    };
     // Loop iterations per step: a pass over the thread's points unless they sit in
     // registers (a constant trip count the compiler unrolls: 4,097 steps of 5 points
-    // each run correctly on lavapipe), then the tree's log2(L) rounds or, with
+    // each run correctly on lavapipe; past kMaxPer counted as a loop, the unrolling
+    // being the compiler's choice), then the tree's log2(L) rounds or, with
     // subgroup arithmetic (one barrier per step, fps.glsl), ceil(L / SG / SG) over
     // the subgroups' entries; on a CPU driver that path is taken only within the budget.
-    const uint32_t sg = std::max(1u, d.subgroup_size);
-    const uint64_t tree_iters = uint64_t(S) * ((regs ? 1 : per) + log_l + 1);
-    const uint64_t subgroup_iters = uint64_t(S) * ((regs ? 1 : per) + (L / sg + sg - 1) / sg + 1);
-    const bool subgroup = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
-                          (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT) && L % sg == 0 &&
-                          (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU || subgroup_iters <= kLoopIterationBudget);
-    check_loop_budget(d, subgroup ? subgroup_iters : tree_iters,
+    auto plan = [&](uint32_t L, uint32_t max_per) {
+        Plan p{L, (N + L - 1) / L, false, 0, 0};
+        p.regs = p.per <= max_per && !a.params.get("no_registers", 0);
+        uint32_t log_l = 0;
+        while ((1u << log_l) < L) ++log_l;
+        const uint64_t pass = p.regs && p.per <= kMaxPer ? 1 : p.per;
+        p.tree_iters = uint64_t(S) * (pass + log_l + 1);
+        p.subgroup_iters = uint64_t(S) * (pass + (L / sg + sg - 1) / sg + 1);
+        return p;
+    };
+    uint32_t L = 1;
+    while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
+    Plan pl = plan(L, kMaxPer);
+    const bool arithmetic = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
+                            (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT);
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && arithmetic && sg <= cap) {
+        // A CPU driver runs a workgroup's subgroups one after another, switching at
+        // every barrier, while a lane's points cost only SIMD arithmetic: the fewest
+        // subgroups that hold the cloud at 32 points a lane (one subgroup, no shared
+        // memory or barrier, up to 32 x SG points). Measured on lavapipe: FPS of the
+        // paper's SA1 (512 of 1024 points) 8-9 -> 1.9 ms; at 16 or 64 a lane 2.5-4.4 ms.
+        uint32_t Lc = sg;
+        while (Lc * 2 <= cap && uint64_t(Lc) * kMaxPerCpu < N) Lc *= 2;
+        const Plan c = plan(Lc, kMaxPerCpu);
+        if (c.regs && c.subgroup_iters <= kLoopIterationBudget) pl = c;
+    }
+    const bool subgroup = arithmetic && pl.L % sg == 0 &&
+                          (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU || pl.subgroup_iters <= kLoopIterationBudget);
+    check_loop_budget(d, subgroup ? pl.subgroup_iters : pl.tree_iters,
                       "FPS of " + std::to_string(S) + " from " + std::to_string(N) + " points");
     struct { uint32_t N, D, S; } push{N, to_u32(a.in[0].shape[1], "point width"), S};
-    a.seq.dispatch(pipeline(a.ctx, subgroup ? "fps_subgroup" : "fps", 4, sizeof(push), {L, regs ? per : 1u, regs ? 1u : 0u}),
+    a.seq.dispatch(pipeline(a.ctx, subgroup ? "fps_subgroup" : "fps", 4, sizeof(push), {pl.L, pl.regs ? pl.per : 1u, pl.regs ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write},
                     {a.out[1].view, rt::Access::Write}, {a.out[2].view, rt::Access::ReadWrite}},
                    &push, sizeof(push), 1);
