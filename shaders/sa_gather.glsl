@@ -1,10 +1,12 @@
-// Body of sa_gather.comp (U read as a texel buffer) and sa_gather_ssbo.comp (U
-// beyond the texel-buffer limit); they declare bindings 0 and 3 and LOAD_U, LOAD_W.
+// Body of sa_gather.comp (U and W read as texel buffers) and sa_gather_ssbo.comp
+// (beyond the texel-buffer limit); they declare bindings 0 and 3 and LOAD_U, LOAD_W.
 // Layer one of a set-abstraction MLP from its per-point part (engine/ops/sa_gather.cpp):
 // y[n][m] = act(U[n][q] - W[K-3..K-1][n] . centre[s]), row m = (s, j), q = idx[m].
-// One invocation per row (4 rows where M % 4 == 0) through every channel: the
-// rows' indices and centres are read once, the weights are the same for every invocation (the loops' trip
-// counts are uniform: spare invocations redo the last row and store nothing).
+// One invocation per row (4 rows where M % 4 == 0: a CPU driver stores lane by
+// lane, a branch each, so one vec4 store instead of 4) through every channel: the
+// rows' indices and centres are read once, the weights are the same for every
+// invocation (the loops' trip counts are uniform: spare invocations redo the last
+// rows and store nothing).
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const bool ROW4 = true;  // M % 4 == 0: 4 rows per invocation, stored as one vec4
 #include "act.glsl"
@@ -17,7 +19,6 @@ layout(push_constant) uniform Push { uint M; uint NS; uint P; uint K; uint N; ui
 const uint R = ROW4 ? 4u : 1u;
 
 void main() {
-    // A CPU driver stores per lane with a branch each: 4 rows a store.
     const uint units = p.M / R;
     const uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     const uint passes = (units + stride - 1u) / stride;

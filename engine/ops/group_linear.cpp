@@ -21,10 +21,10 @@
 //   3: per point: [points [M, D >= 3], W^T, bias (, features [M, DF])]; row m is
 //      [features of m from column feat_begin, xyz of m] (a set-abstraction
 //      layer's columns, not centred: sa_gather subtracts the centre's part).
-// Param tile = 1: the 16 x 32 tile of big layers on CPU devices whatever the layer
-// (tests reach it on small shapes). Param max = 1: the output is the max over each group of NS consecutive rows,
+// Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
-// else channel-major [N, M]. Params act, slope as linear's.
+// else channel-major [N, M]. Params act, slope as linear's. Param tile = 1: the
+// 16 x 32 tile of big layers on CPU devices, whatever the layer and device (tests).
 #include <algorithm>
 #include <limits>
 
@@ -165,8 +165,8 @@ void gpu(const GpuOpArgs& a) {
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
     const bool big = a.params.get("tile", 0) == 1 ||
                      (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
-    uint32_t TM = big ? 16 : 8;
-    uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
+    const uint32_t TM = big ? 16 : 8;
+    const uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
     const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
     // spare invocations redo the last block.

@@ -6,9 +6,9 @@
 // by that ratio, and this op only gathers and subtracts.
 // Inputs: U [N, P] (channel-major: group_linear's output), centres [S, 3], idx
 // I32 [S, NS] (the ball), W^T [K, N] (the layer's input-major weight; rows K-3..K-1
-// are its xyz part). Params act, slope, texel (0: U and W from storage buffers). Output [N, S * NS] channel-major, the
-// next group_linear's Rows input.
-// -> shaders/sa_gather.comp (U as a texel buffer) or sa_gather_ssbo.comp.
+// are its xyz part). Params act, slope, texel (0: U and W from storage buffers).
+// Output [N, S * NS] channel-major, the next group_linear's Rows input.
+// -> shaders/sa_gather.comp (U and W as texel buffers) or sa_gather_ssbo.comp.
 #include <algorithm>
 #include <cmath>
 
