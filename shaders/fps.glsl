@@ -6,8 +6,9 @@
 // minimum, keep the thread's best) and a reduction of (distance, index) pairs:
 // a shared-memory tree with log2(L) + 1 barriers (fps.comp), or, with
 // SUBGROUP_REDUCE (fps_subgroup.comp), each subgroup's best by subgroup
-// operations and one shared entry per subgroup, one barrier (lavapipe pays for
-// every barrier with a switch between the workgroup's threads). Distances are (dx*dx + dy*dy) + dz*dz in single
+// operations and one shared entry per subgroup, one barrier, none where the
+// workgroup is one subgroup (lavapipe pays for every barrier with a switch
+// between the workgroup's threads). Distances are (dx*dx + dy*dy) + dz*dz in single
 // precision with one rounding per operation (`precise`: no fma), as the
 // PyTorch reference computes them, so the picks agree bit for bit.
 // REGS: a thread's PER points (xyz and running minimum) live in registers
