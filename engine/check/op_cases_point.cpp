@@ -92,7 +92,7 @@ void add_sa_gather_cases(std::vector<OpCase>& v) {
 }
 
 // group_linear on a plain input: the max over groups and a plain leaky layer.
-void wide_cases(std::vector<OpCase>& v) {
+void wide_cases(std::vector<OpCase>& v, bool cpu_device) {
     struct Wide { int64_t M, K, Nout, group; };
     for (Wide k : {Wide{20 * 128, 131, 96, 128}, Wide{1001, 37, 37, 13}}) {
         OpCase c("group_linear", "plain input [" + std::to_string(k.K) + ", " + std::to_string(k.M) + "] -> " +
@@ -104,8 +104,10 @@ void wide_cases(std::vector<OpCase>& v) {
         max.max = true;
         max.group = k.group;
         c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max");
-        max.big_tile = true;  // the 16 x 32 tile that CPU devices use on big layers
-        c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max_big_tile");
+        if (cpu_device) {  // the 16 x 32 tile that CPU devices use on big layers
+            max.big_tile = true;
+            c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max_big_tile");
+        }
         ops::GroupLinear plain;
         plain.act = ops::kActLeaky;
         plain.slope = 0.1;
@@ -148,9 +150,10 @@ void normal_estimate_cases(std::vector<OpCase>& v) {
 
 }  // namespace
 
-std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
+std::vector<OpCase> point_cases(const rt::DeviceInfo& d) {
     std::vector<OpCase> v;
     v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
+    v.push_back(fps_case(200, 3, 64, 0, 0, false, "one subgroup on CPU devices"));  // no barrier there
     v.push_back(fps_case(5000, 3, 512, 0, 0, false, "registers path"));
     v.push_back(fps_case(5000, 3, 512, 0, 0, false, "tree reduction", true));  // the shared-memory shaders
     v.push_back(fps_case(2000, 3, 300, 0, 0, true, "workspace path"));
@@ -167,7 +170,7 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo&) {
     for (ops::BufferPath path : ops::kBufferPaths)
         v.push_back(stage_case("group_linear",
                                std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path", path));
-    wide_cases(v);
+    wide_cases(v, d.type == VK_PHYSICAL_DEVICE_TYPE_CPU);
     add_sa_gather_cases(v);
     cloud_normalize_cases(v);
     normal_estimate_cases(v);
