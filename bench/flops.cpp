@@ -12,9 +12,10 @@ std::map<std::string, double> node_flops(const Graph& g) {
         } else if (n.op == "linear") {  // weight [N, K] on rows [..., K]
             const Shape& x = g.value(n.inputs[0]).shape;
             flops = 2.0 * double(numel(x) / x.back()) * double(numel(g.value(n.inputs[1]).shape));
-        } else if (n.op == "group_linear") {  // rows before the max; weight [K, N]
+        } else if (n.op == "group_linear") {  // rows before the max; weight [K, N] (and W0 [K0, K])
             const int mode = int(n.params.get("in", 0));
-            const double w = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
+            double w = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
+            if (n.params.get("hidden", 0) == 1) w += double(numel(g.value(n.inputs[5]).shape));  // W0^T, then W^T
             const double rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
                                           : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
             flops = 2.0 * rows * w;

@@ -2,8 +2,9 @@
 // point_mlp_shfl.comp (the same with the weights shared by subgroup shuffles),
 // point_mlp_ubo.comp (the weights in a uniform buffer) and point_mlp_ssbo.comp
 // (storage buffers, for tensors beyond the device's texel-buffer limit); which
-// one runs: group_linear.cpp. They declare bindings 0, 1, 6 - 9 and LOAD_A, LOAD_A4,
-// LOAD_C, LOAD_I, LOAD_F, LOAD_F4 (point_mlp_shfl.comp also binding 2 and LOAD_W).
+// one runs: group_linear.cpp. They declare bindings 0, 1, 6 - 11 and LOAD_A, LOAD_A4,
+// LOAD_C, LOAD_I, LOAD_F, LOAD_F4, LOAD_H4, LOAD_HB4 (point_mlp_shfl.comp also
+// binding 2 and LOAD_W).
 //
 // One PointNet++ MLP layer (1x1 conv, BatchNorm folded, act): out = act(A W + b)
 // with W stored [K][N] (input-major, so 4 output channels are one vec4), and the
@@ -16,6 +17,10 @@
 //   point itself, not centred: sa_gather.comp subtracts the centre's share).
 // MAXPOOL: out[g][n] = max over the NS rows of group g (point-major [M / NS][N]);
 //   else out is channel-major [N][M], the next layer's MODE 0 input.
+// HIDDEN (MODE 1 only): the gathered row first goes through a layer of its own,
+//   A = act(row W0 + b0) (W0 [CF + 3][K], K % 4 == 0, CF <= 4), computed 4 channels
+//   at a time in registers and never stored: the first layer of a scale is small
+//   (K = 6 inputs) and was bound by the stores of its output (point_encoder.cpp).
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block comes from gl_WorkGroupID.y, so
@@ -35,6 +40,7 @@ layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 // !MAXPOOL, M % 4 == 0: 4 rows a store. A CPU driver stores lane by lane, a branch
 // each: 4x fewer stores took the paper's sa1 widest-scale middle layer from 57 to 37 ms.
 layout(constant_id = 11) const bool OVEC4 = true;
+layout(constant_id = 12) const bool HIDDEN = false;  // MODE 1: A from the gathered rows' own layer (LOAD_H4, LOAD_HB4)
 #include "act.glsl"
 
 #ifndef WEIGHTS_SHUFFLE
@@ -137,6 +143,27 @@ void block(uint m0, uint mend) {
             const uint d = MODE == 3u ? p.D : 3u;
             xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
         }
+    }
+    if (HIDDEN) {
+        // The row's features (CF <= 4; zeros past CF) stay in registers through every step.
+        vec4 f[TM];
+        [[unroll]] for (uint i = 0; i < TM; ++i)
+            [[unroll]] for (uint u = 0; u < 4; ++u)
+                f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+            vec4 wf[4], wx[3];  // W0 rows of the features and of xyz, channels k0 .. k0 + 3
+            [[unroll]] for (uint u = 0; u < 4; ++u) wf[u] = u < p.CF ? LOAD_H4((u * p.K + k0) / 4u) : vec4(0.0);
+            [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = LOAD_H4(((p.CF + j) * p.K + k0) / 4u);
+            const vec4 b0 = LOAD_HB4(k0 / 4u);
+            [[unroll]] for (uint i = 0; i < TM; ++i) {
+                vec4 h = b0;
+                [[unroll]] for (uint u = 0; u < 4; ++u) h = fma(vec4(f[i][u]), wf[u], h);
+                [[unroll]] for (uint j = 0; j < 3; ++j) h = fma(vec4(xyz[i][j]), wx[j], h);
+                [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
+            }
+            fma_rows(a, k0);
+        }
+        return;
     }
     // The 3 xyz columns, as one step of 4 whose last channel is 0: first for MODE 2,
     // after the features for MODE 1 and 3.

@@ -235,6 +235,65 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     }
 }
 
+TEST_CASE("a gathered first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
+    // The first layer of a set-abstraction scale inside the second (group_linear,
+    // hidden = 1) against the same two layers as separate nodes: 0, 3 and 4 feature
+    // columns (4 from a wider feature tensor), widths 4 .. 64, balls of 5 .. 128,
+    // odd and vec4 output widths, plain and max outputs, every buffer and weight
+    // path and the big-layer tile. Both are checked against the CPU reference.
+    struct Case {
+        int64_t cf, S, ns, C1, C2;
+    };
+    for (Case c : {Case{3, 37, 12, 20, 33}, Case{0, 19, 5, 4, 8}, Case{4, 16, 128, 64, 96}, Case{3, 9, 32, 64, 37}}) {
+        const int64_t N = 300, K0 = c.cf + 3;
+        WeightStore w;
+        w.add("w0", test::random_tensor({K0, c.C1}, 61, -0.5f, 0.5f));
+        w.add("b0", test::random_tensor({c.C1}, 62, -0.2f, 0.2f));
+        w.add("w1", test::random_tensor({c.C1, c.C2}, 63, -0.3f, 0.3f));
+        w.add("b1", test::random_tensor({c.C2}, 64, -0.2f, 0.2f));
+        Graph g;
+        const int x = g.input("cloud", {N, 6}), feat = g.input("feat", {N, 10});
+        std::vector<int> f = ops::fps(g, x, c.S);
+        const int ball = ops::ball_query(g, x, f[1], 0.6, c.ns);
+        const int w0 = g.weight("w0", {K0, c.C1}), b0 = g.weight("b0", {c.C1}), w1 = g.weight("w1", {c.C1, c.C2}),
+                  b1 = g.weight("b1", {c.C2});
+        using In = ops::GroupLinear::Input;
+        std::vector<int> gin{x, f[1], ball};
+        int64_t fb = 0;
+        if (c.cf == 3) gin.push_back(x), fb = 3;  // the normals
+        if (c.cf == 4) gin.push_back(feat), fb = 6;
+        for (ops::BufferPath path : ops::kBufferPaths)
+            for (Weights ubo : kWeightPaths)
+                for (bool big : {false, true}) {
+                    if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
+                    if (path == ops::BufferPath::Texel) require_weight_path(ubo);
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) + (big ? ".big" : "");
+                    for (bool max : {false, true}) {
+                        ops::GroupLinear first{In::Gather, fb, false, 1, ops::kActRelu, 0.01, path, ubo};
+                        std::vector<int> fin = gin;
+                        fin.insert(fin.begin() + 3, {w0, b0});
+                        const int h = ops::group_linear(g, fin, first);
+                        const int two = ops::group_linear(g, {h, w1, b1}, {In::Rows, 0, max, c.ns, ops::kActRelu, 0.01, path, ubo, big});
+                        ops::GroupLinear hid = first;
+                        hid.max = max, hid.big_tile = big, hid.hidden = true;
+                        std::vector<int> hin = gin;
+                        hin.insert(hin.begin() + 3, {w0, b0, w1, b1});
+                        g.output(two, (max ? "two_max" : "two") + on);
+                        g.output(ops::group_linear(g, hin, hid), (max ? "hidden_max" : "hidden") + on);
+                    }
+                }
+        INFO("features " << c.cf << ", " << c.S << " balls of " << c.ns << ", widths " << c.C1 << ", " << c.C2);
+        const TensorMap out =
+            test::run_gpu_and_compare(g, w, {{"cloud", random_cloud(N, 65, 6)}, {"feat", test::random_tensor({N, 10}, 66)}});
+        for (const auto& [name, t] : out)
+            if (name.rfind("hidden", 0) == 0) {
+                const std::string two = "two" + name.substr(6);
+                CHECK(t.shape == out.at(two).shape);
+                test::require_close(t, out.at(two), {}, name + " = " + two);
+            }
+    }
+}
+
 TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {
     for (int64_t N : {1, 2, 1000, 4097}) {
         HostTensor c = test::random_tensor({N, 6}, uint32_t(40 + N), -50.0f, 80.0f);
@@ -286,6 +345,20 @@ TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query
                Catch::Contains("input-major [3, out]"));
     CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{3, 4}}, TensorDesc{{4}}}, {{"weights", 3}}),
                Catch::Contains("weights"));
+    // hidden = 1: gathered rows [cloud [10, 6], centres, idx], W0^T, b0, W^T, b (, features).
+    const TensorDesc cloud{{10, 6}}, centres{{2, 3}}, idx{{2, 4}, ElemType::I32};
+    auto hidden = [&](Shape w0, Shape b0, int64_t feat_begin) {
+        return infer_error("group_linear", {cloud, centres, idx, TensorDesc{w0}, TensorDesc{b0}, TensorDesc{{8, 5}},
+                                            TensorDesc{{5}}, TensorDesc{{10, 9}}},
+                           {{"in", 1}, {"hidden", 1}, {"feat_begin", double(feat_begin)}});
+    };
+    CHECK(hidden({6, 8}, {8}, 6) == "no error");  // 3 features + xyz
+    CHECK_THAT(hidden({6, 6}, {6}, 6), Catch::Contains("hidden width 6 is not a multiple of 4"));
+    CHECK_THAT(hidden({5, 8}, {8}, 6), Catch::Contains("hidden weight [5, 8] must be input-major [6, width]"));
+    CHECK_THAT(hidden({12, 8}, {8}, 0), Catch::Contains("at most 4 feature columns, got 9"));
+    CHECK_THAT(hidden({6, 8}, {6}, 6), Catch::Contains("hidden bias [6] does not match [6, 8]"));
+    CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{3, 4}}, TensorDesc{{4}}}, {{"hidden", 1}}),
+               Catch::Contains("hidden = 1 needs gathered rows (in = 1)"));
     // NaN / inf coordinates: the CPU references throw (the GPU path relies on the host check).
     for (float bad : {std::nanf(""), INFINITY}) {
         HostTensor c = random_cloud(50, 7);

@@ -1,5 +1,5 @@
 // Self-test cases: fps, ball_query, point_group, group_max, group_linear
-// (gather, plain, group-all and per-point inputs; fused max; texel and
+// (gather, plain, group-all and per-point inputs; a hidden first layer; fused max; texel and
 // storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
 // normal_estimate (a sphere sample, as tests/test_normals.cpp).
 #include <cmath>
@@ -63,6 +63,13 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         int fh = ops::group_linear(c.g, fin, gather);
         c.output(fh, "first");
         c.output(ops::group_linear(c.g, {fh, w2t, b2}, rows_max), "fused");
+        // the first layer computed inside the second (hidden), plain and with the max
+        ops::GroupLinear hidden = gather;
+        hidden.hidden = true;
+        const std::vector<int> hin{x, f[1], ball, w1t, b1, w2t, b2, x};
+        c.output(ops::group_linear(c.g, hin, hidden), "hidden");
+        hidden.max = true;
+        c.output(ops::group_linear(c.g, hin, hidden), "hidden_max");
         int one = ops::group_linear(c.g, fin, gather_max);
         c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
     }
@@ -169,7 +176,7 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo& d) {
     v.push_back(stage_case("group_max", "channel-major and point-major, groups of 12", ops::BufferPath::Texel));
     for (ops::BufferPath path : ops::kBufferPaths)
         v.push_back(stage_case("group_linear",
-                               std::string("gather, fused max, group-all; ") + ops::path_name(path) + " path", path));
+                               std::string("gather, hidden first layer, fused max, group-all; ") + ops::path_name(path) + " path", path));
     wide_cases(v, d.type == VK_PHYSICAL_DEVICE_TYPE_CPU);
     add_sa_gather_cases(v);
     cloud_normalize_cases(v);

@@ -56,10 +56,19 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
     }
     int64_t in = si_in.channels + 3;
     const std::vector<int64_t>& widths = st.mlps[s];
+    // Fused, a narrow first layer (<= 4 features + xyz) is computed inside the
+    // second one and never stored: on lavapipe (AVX2) it cost about as much as
+    // its stores of S * NS * width floats (group_linear's hidden input).
+    const bool hidden = fuse && widths.size() > 1 && si_in.channels <= 4 && widths[0] % 4 == 0;
+    std::pair<int, int> first{-1, -1};
     for (size_t l = 0; l < widths.size(); ++l) {
         const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
         auto [wv, bv] = conv_bn(g, w, node, in, widths[l], fuse);
         in = widths[l];
+        if (hidden && l == 0) {
+            first = {wv, bv};
+            continue;
+        }
         if (!fuse) {
             x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
             continue;
@@ -81,13 +90,17 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         ops::GroupLinear gl;
         gl.act = ops::kActRelu;
         std::vector<int> ins{x};
-        if (l == 0) {
+        const bool gather = l == 0 || (hidden && l == 1);
+        if (gather) {
             ins = gather_in;
             gl.input = ops::GroupLinear::Input::Gather;
             gl.feat_begin = fb;
+            gl.hidden = l == 1;
+            if (gl.hidden) ins.insert(ins.end(), {first.first, first.second});
         }
-        ins.insert(ins.end(), {wv, bv});
-        if (l == 0 && feat >= 0) ins.push_back(feat);
+        ins.push_back(wv);
+        ins.push_back(bv);
+        if (gather && feat >= 0) ins.push_back(feat);
         gl.max = l + 1 == widths.size();
         gl.group = ns;
         x = ops::group_linear(g, ins, gl, node);

@@ -111,6 +111,10 @@ struct GroupLinear {
     // The tile CPU devices use on big layers (16 x 32, group_linear.cpp) whatever the
     // layer's size or device: lets tests and the self-test reach it on small shapes.
     bool big_tile = false;
+    // Gather only: inputs [points, centres, idx, W0^T, b0, W^T, bias (, features)];
+    // the gathered rows go through act(row W0^T + b0) in registers, never stored,
+    // and that is the layer's input (W0's width a multiple of 4, <= 4 features).
+    bool hidden = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

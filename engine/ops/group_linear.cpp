@@ -21,6 +21,10 @@
 //   3: per point: [points [M, D >= 3], W^T, bias (, features [M, DF])]; row m is
 //      [features of m from column feat_begin, xyz of m] (a set-abstraction
 //      layer's columns, not centred: sa_gather subtracts the centre's part).
+// Param hidden = 1 (with in = 1): [points, centres, idx, W0^T [CF + 3, K], b0 [K],
+//   W^T, bias (, features)]: the gathered rows first go through act(row W0^T + b0),
+//   computed in registers and never stored, which is the layer's input x^T
+//   (K % 4 == 0 and at most 4 feature columns).
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's. Param tile = 1: the
@@ -47,6 +51,7 @@ struct Layout {
     int64_t M = 0, K = 0, N = 0, NS = 1;
     size_t w = 1;   // index of W^T among the inputs
     bool feat = false;
+    bool hidden = false;  // in = 1: W0^T, b0 at inputs 3, 4; K is their width
 };
 
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
@@ -55,14 +60,26 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
     if (p.has("tile")) int_param(p, "tile", 0, 1);
     l.max = p.get("max", 0) != 0;
+    l.hidden = p.has("hidden") && int_param(p, "hidden", 0, 1) == 1;
+    if (l.hidden && l.mode != 1) throw Error("hidden = 1 needs gathered rows (in = 1)");
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
             throw Error("input " + std::to_string(i) + " has the wrong element type");
     if (l.mode == 1) {
-        expect_input_count(in, 5, 6);
-        l.feat = in.size() == 6;
-        l.g = gather_shape(in[0], in[1], in[2], l.feat ? &in[5] : nullptr, p);
-        l.M = l.g.rows(), l.K = l.g.K(), l.NS = l.g.NS, l.w = 3;
+        const size_t base = l.hidden ? 7 : 5;
+        expect_input_count(in, base, base + 1);
+        l.feat = in.size() == base + 1;
+        l.g = gather_shape(in[0], in[1], in[2], l.feat ? &in[base] : nullptr, p);
+        l.M = l.g.rows(), l.K = l.g.K(), l.NS = l.g.NS, l.w = base - 2;
+        if (l.hidden) {
+            const Shape &w0 = in[3].shape, &b0 = in[4].shape;
+            if (w0.size() != 2 || w0[0] != l.K)
+                throw Error("hidden weight " + shape_str(w0) + " must be input-major [" + std::to_string(l.K) + ", width]");
+            if (w0[1] % 4 != 0) throw Error("hidden width " + std::to_string(w0[1]) + " is not a multiple of 4");
+            if (l.g.CF > 4) throw Error("hidden = 1 takes at most 4 feature columns, got " + std::to_string(l.g.CF));
+            if (b0 != Shape{w0[1]}) throw Error("hidden bias " + shape_str(b0) + " does not match " + shape_str(w0));
+            l.K = w0[1];
+        }
     } else if (l.mode == 3) {
         expect_input_count(in, 3, 4);
         const Shape& x = in[0].shape;
@@ -124,18 +141,27 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const HostTensor* feat = l.feat ? in.back() : nullptr;
     const uint32_t act = uint32_t(p.get("act", kActNone));
     const float slope = float(p.get("slope", 0.01));
-    std::vector<float> row(size_t(l.K));
+    const int64_t K0 = l.hidden ? in[3]->shape[0] : l.K;  // the gathered row's width
+    std::vector<float> row(static_cast<size_t>(K0)), hid(static_cast<size_t>(l.K));
     if (l.max) std::fill(out[0]->data.begin(), out[0]->data.end(), -std::numeric_limits<float>::infinity());
     for (int64_t m = 0; m < l.M; ++m) {
-        for (int64_t k = 0; k < l.K; ++k)
+        for (int64_t k = 0; k < K0; ++k)
             row[size_t(k)] = l.mode == 1   ? gather_value(*in[0], *in[1], *in[2], feat, l.g, m, k)
                              : l.mode == 2 ? (k < 3 ? in[0]->data[size_t(3 * m + k)] : feat->data[size_t(m * l.g.CF + k - 3)])
                              : l.mode == 3 ? (k < l.g.CF ? feat->data[size_t(m * l.g.DF + l.g.FB + k)]
                                                          : in[0]->data[size_t(m * l.g.D + k - l.g.CF)])
                                            : in[0]->data[size_t(k * l.M + m)];
+        if (l.hidden) {  // the hidden layer, as a group_linear of its own would give it
+            for (int64_t n = 0; n < l.K; ++n) {
+                double acc = in[4]->data[size_t(n)];
+                for (int64_t k = 0; k < K0; ++k) acc += double(row[size_t(k)]) * in[3]->data[size_t(k * l.K + n)];
+                hid[size_t(n)] = apply_act(float(acc), act, slope);
+            }
+        }
+        const std::vector<float>& x = l.hidden ? hid : row;
         for (int64_t n = 0; n < l.N; ++n) {
             double acc = b.data[size_t(n)];
-            for (int64_t k = 0; k < l.K; ++k) acc += double(row[size_t(k)]) * w.data[size_t(k * l.N + n)];
+            for (int64_t k = 0; k < l.K; ++k) acc += double(x[size_t(k)]) * w.data[size_t(k * l.N + n)];
             const float v = apply_act(float(acc), act, slope);
             if (l.max) {
                 float& o = out[0]->data[size_t((m / l.NS) * l.N + n)];
@@ -192,7 +218,10 @@ void gpu(const GpuOpArgs& a) {
     const GpuTensor& centres = l.mode == 1 ? a.in[1] : bias;
     const GpuTensor& index = l.mode == 1 ? a.in[2] : bias;
     bool texel = a.params.get("texel", 1) != 0;
-    for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias})
+    // hidden: W0^T and b0 (bindings 10, 11, as vec4s); else the bias fills them.
+    const GpuTensor& w0 = l.hidden ? a.in[3] : bias;
+    const GpuTensor& b0 = l.hidden ? a.in[4] : bias;
+    for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias, &w0})
         texel = texel && uint64_t(numel(t->shape)) <= d.max_texel_elements;
     auto fmt = [&](const GpuTensor& t, bool vec4) {
         if (!texel) return VK_FORMAT_UNDEFINED;
@@ -203,12 +232,12 @@ void gpu(const GpuOpArgs& a) {
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && l.M % 4 == 0};
+                               !l.max && l.M % 4 == 0, l.hidden};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
-    const uint32_t texels = texel ? (wp == Weights::Shuffle ? 0x3C7u : 0x3C3u) : 0u;
-    const rt::PipelineDesc desc{shader, 10, sizeof(push), spec, texels, wp == Weights::Uniform ? 0x8u : 0u};
+    const uint32_t texels = texel ? (wp == Weights::Shuffle ? 0xFC7u : 0xFC3u) : 0u;
+    const rt::PipelineDesc desc{shader, 12, sizeof(push), spec, texels, wp == Weights::Uniform ? 0x8u : 0u};
     const rt::BufferView& wv = a.in[l.w].view;
     const rt::Access R = rt::Access::Read;
     const VkFormat f32 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
@@ -217,14 +246,15 @@ void gpu(const GpuOpArgs& a) {
                     {wv, R, wp == Weights::Shuffle ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED}, {wv, R},
                     {bias.view, R}, {a.out[0].view, rt::Access::Write},
                     {centres.view, R, f32}, {index.view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
-                    {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)}},
+                    {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)},
+                    {w0.view, R, fmt(w0, l.hidden)}, {b0.view, R, fmt(b0, l.hidden)}},
                    &push, sizeof(push), uint32_t(gx), uint32_t(gy));
 }
 
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
-                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile"}};
+                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden"}};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
                                               GroupLinear::Weights want, uint64_t offset) {
