@@ -32,10 +32,10 @@ TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refus
     const uint64_t big = ctx.info().max_uniform_range + 16;
     rt::Buffer buf(ctx, big + 4096, rt::MemoryKind::Device);
     const rt::Pipeline& p = ctx.pipelines().get(
-        rt::PipelineDesc{"point_mlp_ubo", 10, 48, {8, 8, 16, 0, 0, 0, 1, 1, 1, 4}, 0x3C3u, 0x8u});
+        rt::PipelineDesc{"point_mlp_ubo", 12, 48, {8, 8, 16, 0, 0, 0, 1, 1, 1, 4}, 0xFC3u, 0x8u});
     auto bindings = [&](rt::BufferView w) {
-        std::vector<rt::Binding> b(10, rt::Binding{rt::BufferView{buf.handle(), 0, 256}});
-        for (int i : {0, 1, 6, 8, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
+        std::vector<rt::Binding> b(12, rt::Binding{rt::BufferView{buf.handle(), 0, 256}});
+        for (int i : {0, 1, 6, 8, 9, 10, 11}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
         b[7].texel_format = VK_FORMAT_R32_SINT;
         b[3].view = w;
         b[5].access = rt::Access::Write;
@@ -106,14 +106,15 @@ TEST_CASE("pipelines are checked against the shader's own bindings and push cons
     // point_mlp_ubo reads its weights (binding 3) from a uniform buffer; point_mlp
     // from a storage buffer.
     const rt::ShaderInterface ubo = rt::reflect_spirv(rt::find_spirv("point_mlp_ubo"), "point_mlp_ubo");
-    REQUIRE(ubo.bindings.size() == 10);
+    REQUIRE(ubo.bindings.size() == 12);
     CHECK(ubo.bindings[3] == rt::BindingKind::UniformBuffer);
     CHECK(ubo.bindings[5] == rt::BindingKind::StorageBuffer);
     CHECK(rt::reflect_spirv(rt::find_spirv("point_mlp"), "point_mlp").bindings[3] == rt::BindingKind::StorageBuffer);
-    // point_mlp_shfl reads its weights (2) and the ball indices (7, integer texels) as texel buffers.
+    // point_mlp_shfl reads its weights (2), the ball indices (7, integer texels) and a
+    // hidden first layer's weights and bias (10, 11) as texel buffers.
     const rt::ShaderInterface shfl = rt::reflect_spirv(rt::find_spirv("point_mlp_shfl"), "point_mlp_shfl");
-    REQUIRE(shfl.bindings.size() == 10);
-    for (uint32_t i = 0; i < 10; ++i)
+    REQUIRE(shfl.bindings.size() == 12);
+    for (uint32_t i = 0; i < 12; ++i)
         CHECK((shfl.bindings[i] == rt::BindingKind::TexelBuffer) == (i != 3 && i != 4 && i != 5));
     // activation: x, y and a push block (n, slope).
     const rt::ShaderInterface act = rt::reflect_spirv(rt::find_spirv("activation"), "activation");
