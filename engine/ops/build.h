@@ -113,7 +113,7 @@ struct GroupLinear {
     bool big_tile = false;
     // Gather only: inputs [points, centres, idx, W0^T, b0, W^T, bias (, features)];
     // the gathered rows go through act(row W0^T + b0) in registers, never stored,
-    // and that is the layer's input (W0's width a multiple of 4, <= 4 features).
+    // and that is the layer's input (the same act; W0's width a multiple of 4, <= 4 features).
     bool hidden = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
