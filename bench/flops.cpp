@@ -15,7 +15,9 @@ std::map<std::string, double> node_flops(const Graph& g) {
         } else if (n.op == "group_linear") {  // rows before the max; weight [K, N] (and W0 [K0, K])
             const int mode = int(n.params.get("in", 0));
             double w = double(numel(g.value(n.inputs[mode == 1 ? 3 : 1]).shape));
-            if (n.params.get("hidden", 0) == 1) w += double(numel(g.value(n.inputs[5]).shape));  // W0^T, then W^T
+            const int hidden = int(n.params.get("hidden", 0));
+            if (hidden == 1) w += double(numel(g.value(n.inputs[5]).shape));  // W0^T at 3, W^T at 5
+            if (hidden == 2) w = double(numel(g.value(n.inputs[4]).shape));   // W^T (U counts in its own node)
             const double rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
                                           : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
             flops = 2.0 * rows * w;

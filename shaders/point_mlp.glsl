@@ -17,10 +17,13 @@
 //   point itself, not centred: sa_gather.comp subtracts the centre's share).
 // MAXPOOL: out[g][n] = max over the NS rows of group g (point-major [M / NS][N]);
 //   else out is channel-major [N][M], the next layer's MODE 0 input.
-// HIDDEN (MODE 1 only): the gathered row first goes through a layer of its own,
-//   A = act(row W0 + b0) (W0 [CF + 3][K], K % 4 == 0, CF <= 4), computed 4 channels
-//   at a time in registers and never stored: the first layer of a scale is small
-//   (K = 6 inputs) and was bound by the stores of its output (point_encoder.cpp).
+// HIDDEN (MODE 1 only): A is a first layer computed 4 channels at a time in
+//   registers and never stored (K % 4 == 0; W0 [CF + 3][K], its xyz rows from CF):
+//   1: act(row W0 + b0) of the gathered row (CF <= 4): a narrow first layer
+//      (6 inputs) was bound by the stores of its output (point_encoder.cpp);
+//   2: act(U[q] - W0's xyz rows . centre), U (binding 0) = the first layer per
+//      source point, point-major [P][K]: sa_gather's arithmetic, unstored.
+// PMOUT: a plain output point-major [M][N] (4 channels a store), for HIDDEN 2's U.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block comes from gl_WorkGroupID.y, so
@@ -40,7 +43,8 @@ layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 // !MAXPOOL, M % 4 == 0: 4 rows a store. A CPU driver stores lane by lane, a branch
 // each: 4x fewer stores took the paper's sa1 widest-scale middle layer from 57 to 37 ms.
 layout(constant_id = 11) const bool OVEC4 = true;
-layout(constant_id = 12) const bool HIDDEN = false;  // MODE 1: A from the gathered rows' own layer (LOAD_H4, LOAD_HB4)
+layout(constant_id = 12) const uint HIDDEN = 0;  // MODE 1: A from a layer in registers (LOAD_H4, LOAD_HB4)
+layout(constant_id = 13) const bool PMOUT = false;
 #include "act.glsl"
 
 #ifndef WEIGHTS_SHUFFLE
@@ -136,15 +140,30 @@ void block(uint m0, uint mend) {
         if (MODE == 1u) {
             q[i] = min(uint(LOAD_I(rows[i])), p.P - 1u);  // in range whatever the indices hold
             uint c = 3u * (rows[i] / p.NS);
-            xyz[i] = vec3(LOAD_A(q[i] * p.D) - LOAD_C(c), LOAD_A(q[i] * p.D + 1u) - LOAD_C(c + 1u),
-                          LOAD_A(q[i] * p.D + 2u) - LOAD_C(c + 2u));
+            if (HIDDEN == 2u)  // the centre itself
+                xyz[i] = vec3(LOAD_C(c), LOAD_C(c + 1u), LOAD_C(c + 2u));
+            else
+                xyz[i] = vec3(LOAD_A(q[i] * p.D) - LOAD_C(c), LOAD_A(q[i] * p.D + 1u) - LOAD_C(c + 1u),
+                              LOAD_A(q[i] * p.D + 2u) - LOAD_C(c + 2u));
         } else {
             q[i] = rows[i];
             const uint d = MODE == 3u ? p.D : 3u;
             xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
         }
     }
-    if (HIDDEN) {
+    if (HIDDEN == 2u) {
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+            vec4 wx[3];
+            [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = LOAD_H4(((p.CF + j) * p.K + k0) / 4u);
+            [[unroll]] for (uint i = 0; i < TM; ++i) {
+                const vec4 h = LOAD_A4((q[i] * p.K + k0) / 4u) - (xyz[i].x * wx[0] + xyz[i].y * wx[1] + xyz[i].z * wx[2]);
+                [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
+            }
+            fma_rows(a, k0);
+        }
+        return;
+    }
+    if (HIDDEN == 1u) {
         // The row's features (CF <= 4; zeros past CF) stay in registers through every step.
         vec4 f[TM];
         [[unroll]] for (uint i = 0; i < TM; ++i)
@@ -206,6 +225,22 @@ void main() {
     if (!MAXPOOL) {
         const uint m0 = t * TM;
         block(m0, p.M);
+        if (PMOUT) {
+            [[unroll]] for (uint i = 0; i < TM; ++i)
+                [[unroll]] for (uint j = 0; j < TN; j += 4u) {
+                    vec4 v;
+                    [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[i * TN + j + c] + b[j + c], ACT, p.slope);
+                    const uint e = (m0 + i) * p.N + n0 + j;
+                    if (!live || m0 + i >= p.M) continue;
+                    if (WVEC4) {
+                        if (n0 + j < p.N) outv[e / 4u] = v;
+                    } else {
+                        [[unroll]] for (uint c = 0; c < 4; ++c)
+                            if (n0 + j + c < p.N) outv[(e + c) / 4u][(e + c) % 4u] = v[c];
+                    }
+                }
+            return;
+        }
         [[unroll]] for (uint j = 0; j < TN; ++j) {
             if (OVEC4) {
                 [[unroll]] for (uint i = 0; i < TM; i += 4u) {

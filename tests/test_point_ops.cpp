@@ -235,12 +235,14 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     }
 }
 
-TEST_CASE("a gathered first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
-    // The first layer of a set-abstraction scale inside the second (group_linear,
-    // hidden = 1) against the same two layers as separate nodes: 0, 3 and 4 feature
+TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
+    // The first layer of a set-abstraction scale inside the second (group_linear
+    // hidden: from the gathered row, or from that layer per source point, stored
+    // point-major) against the same two layers as separate nodes: 0, 3 and 4 feature
     // columns (4 from a wider feature tensor), widths 4 .. 64, balls of 5 .. 128,
-    // odd and vec4 output widths, plain and max outputs, every buffer and weight
-    // path and the big-layer tile. Both are checked against the CPU reference.
+    // odd and vec4 output widths, plain and max outputs, both buffer paths (and
+    // from the gathered row every weight path and the big-layer tile). All are
+    // checked against the CPU reference.
     struct Case {
         int64_t cf, S, ns, C1, C2;
     };
@@ -251,6 +253,8 @@ TEST_CASE("a gathered first layer computed in registers (hidden) equals the two 
         w.add("b0", test::random_tensor({c.C1}, 62, -0.2f, 0.2f));
         w.add("w1", test::random_tensor({c.C1, c.C2}, 63, -0.3f, 0.3f));
         w.add("b1", test::random_tensor({c.C2}, 64, -0.2f, 0.2f));
+        w.add("w_odd", test::random_tensor({K0, 37}, 67, -0.5f, 0.5f));  // point-major stores of 37 channels
+        w.add("b_odd", test::random_tensor({37}, 68, -0.2f, 0.2f));
         Graph g;
         const int x = g.input("cloud", {N, 6}), feat = g.input("feat", {N, 10});
         std::vector<int> f = ops::fps(g, x, c.S);
@@ -275,21 +279,52 @@ TEST_CASE("a gathered first layer computed in registers (hidden) equals the two 
                         const int h = ops::group_linear(g, fin, first);
                         const int two = ops::group_linear(g, {h, w1, b1}, {In::Rows, 0, max, c.ns, ops::kActRelu, 0.01, path, ubo, big});
                         ops::GroupLinear hid = first;
-                        hid.max = max, hid.big_tile = big, hid.hidden = true;
+                        hid.max = max, hid.big_tile = big, hid.hidden = ops::GroupLinear::Hidden::Gathered;
                         std::vector<int> hin = gin;
                         hin.insert(hin.begin() + 3, {w0, b0, w1, b1});
                         g.output(two, (max ? "two_max" : "two") + on);
                         g.output(ops::group_linear(g, hin, hid), (max ? "hidden_max" : "hidden") + on);
+                        // Layer one per source point (point-major), then the ball rows from it;
+                        // the tile and the weight path are the code tested above (their shaders
+                        // compile for seconds), so once on each buffer path.
+                        if (big || ubo == Weights::Uniform) continue;
+                        ops::GroupLinear per{In::Points, fb, false, 1, ops::kActNone, 0.01, path, ubo};
+                        per.point_major = true;
+                        std::vector<int> pin{x, w0, b0};
+                        if (c.cf > 0) pin.push_back(gin[3]);
+                        const int u = ops::group_linear(g, pin, per);
+                        hid.hidden = ops::GroupLinear::Hidden::PerPoint;
+                        g.output(ops::group_linear(g, {u, f[1], ball, w0, w1, b1}, hid), (max ? "perpoint_max" : "perpoint") + on);
+                        if (max) continue;
+                        g.output(u, "u_pm" + on);
+                        per.point_major = false;
+                        g.output(ops::group_linear(g, pin, per), "u_cm" + on);
+                        pin[1] = g.weight("w_odd", {K0, 37}), pin[2] = g.weight("b_odd", {37});
+                        g.output(ops::group_linear(g, pin, per), "u_cm_odd" + on);
+                        per.point_major = true;
+                        g.output(ops::group_linear(g, pin, per), "u_pm_odd" + on);
                     }
                 }
         INFO("features " << c.cf << ", " << c.S << " balls of " << c.ns << ", widths " << c.C1 << ", " << c.C2);
         const TensorMap out =
             test::run_gpu_and_compare(g, w, {{"cloud", random_cloud(N, 65, 6)}, {"feat", test::random_tensor({N, 10}, 66)}});
         for (const auto& [name, t] : out)
-            if (name.rfind("hidden", 0) == 0) {
-                const std::string two = "two" + name.substr(6);
-                CHECK(t.shape == out.at(two).shape);
-                test::require_close(t, out.at(two), {}, name + " = " + two);
+            for (const std::string fused : {"hidden", "perpoint"})
+                if (name.rfind(fused, 0) == 0) {
+                    const std::string two = "two" + name.substr(fused.size());
+                    CHECK(t.shape == out.at(two).shape);
+                    test::require_close(t, out.at(two), {}, name + " = " + two);
+                }
+        for (const auto& [name, pm] : out)  // point-major [P, C1] = channel-major [C1, P] transposed
+            if (name.rfind("u_pm", 0) == 0) {
+                const HostTensor& cm = out.at("u_cm" + name.substr(4));
+                const int64_t C = cm.shape.at(0);
+                REQUIRE(pm.shape == Shape{N, C});
+                REQUIRE(cm.shape == Shape{C, N});
+                int64_t differ = 0;
+                for (int64_t p = 0; p < N; ++p)
+                    for (int64_t k = 0; k < C; ++k) differ += pm.data[size_t(p * C + k)] != cm.data[size_t(k * N + p)];
+                CHECK(differ == 0);
             }
     }
 }
@@ -359,6 +394,18 @@ TEST_CASE("point ops reject bad inputs with clear errors", "[op][fps][ball_query
     CHECK_THAT(hidden({6, 8}, {6}, 6), Catch::Contains("hidden bias [6] does not match [6, 8]"));
     CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 10}}, TensorDesc{{3, 4}}, TensorDesc{{4}}}, {{"hidden", 1}}),
                Catch::Contains("hidden = 1 needs gathered rows (in = 1)"));
+    // hidden = 2: [U [10, K], centres, idx, W0^T [K0 >= 3, K], W^T [K, 5], b [5]].
+    auto per_point = [&](Shape u, Shape w0) {
+        return infer_error("group_linear", {TensorDesc{u}, centres, idx, TensorDesc{w0}, TensorDesc{{u[1], 5}}, TensorDesc{{5}}},
+                           {{"in", 1}, {"hidden", 2}});
+    };
+    CHECK(per_point({10, 8}, {9, 8}) == "no error");
+    CHECK_THAT(per_point({10, 6}, {9, 6}), Catch::Contains("U [10, 6]: its width is not a multiple of 4"));
+    CHECK_THAT(per_point({10, 8}, {2, 8}), Catch::Contains("hidden weight [2, 8] must be input-major [K0 >= 3, 8]"));
+    CHECK_THAT(per_point({10, 8}, {9, 4}), Catch::Contains("hidden weight [9, 4] must be input-major [K0 >= 3, 8]"));
+    CHECK_THAT(infer_error("group_linear", {TensorDesc{{3, 12}}, TensorDesc{{3, 4}}, TensorDesc{{4}}},
+                           {{"max", 1}, {"group", 3}, {"point_major", 1}}),
+               Catch::Contains("point_major = 1 is for plain outputs"));
     // NaN / inf coordinates: the CPU references throw (the GPU path relies on the host check).
     for (float bad : {std::nanf(""), INFINITY}) {
         HostTensor c = random_cloud(50, 7);

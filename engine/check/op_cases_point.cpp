@@ -1,6 +1,6 @@
 // Self-test cases: fps, ball_query, point_group, group_max, group_linear
-// (gather, plain, group-all and per-point inputs; a hidden first layer; fused max; texel and
-// storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
+// (gather, plain, group-all and per-point inputs; a hidden first layer from the
+// gathered rows or per point; fused max; texel and storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
 // normal_estimate (a sphere sample, as tests/test_normals.cpp).
 #include <cmath>
 
@@ -65,7 +65,7 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         c.output(ops::group_linear(c.g, {fh, w2t, b2}, rows_max), "fused");
         // the first layer computed inside the second (hidden), plain and with the max
         ops::GroupLinear hidden = gather;
-        hidden.hidden = true;
+        hidden.hidden = ops::GroupLinear::Hidden::Gathered;
         const std::vector<int> hin{x, f[1], ball, w1t, b1, w2t, b2, x};
         c.output(ops::group_linear(c.g, hin, hidden), "hidden");
         hidden.max = true;
@@ -91,9 +91,20 @@ void add_sa_gather_cases(std::vector<OpCase>& v) {
         per_point.path = path;
         const int u = ops::group_linear(c.g, {x, w, c.input("b", random_tensor({N}, 45)), x}, per_point);
         c.output(u, "u");
-        c.output(ops::sa_gather(c.g, u, c.input("centres", random_tensor({S, 3}, 42)),
-                                c.input("idx", HostTensor::from_ints({S, NS}, idx)), w, ops::kActRelu, "", path),
-                 "y");
+        const int centres = c.input("centres", random_tensor({S, 3}, 42));
+        const int ball = c.input("idx", HostTensor::from_ints({S, NS}, idx));
+        c.output(ops::sa_gather(c.g, u, centres, ball, w, ops::kActRelu, "", path), "y");
+        // Such rows unstored: U point-major (12 channels: a multiple of 4), then a
+        // layer whose input they are (hidden), with the max.
+        per_point.point_major = true;
+        const int w12 = c.input("w12", random_tensor({K, 12}, 48, -0.5f, 0.5f));
+        const int upm = ops::group_linear(c.g, {x, w12, c.input("b12", random_tensor({12}, 49)), x}, per_point);
+        c.output(upm, "u_point_major");
+        ops::GroupLinear next{ops::GroupLinear::Input::Gather, 0, true, 1, ops::kActRelu, 0.01, path};
+        next.hidden = ops::GroupLinear::Hidden::PerPoint;
+        c.output(ops::group_linear(c.g, {upm, centres, ball, w12, c.weight("w2", random_tensor({12, 6}, 46, -0.5f, 0.5f)),
+                                         c.weight("b2", random_tensor({6}, 47))}, next),
+                 "next_max");
         v.push_back(std::move(c));
     }
 }

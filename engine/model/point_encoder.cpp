@@ -56,51 +56,60 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
     }
     int64_t in = si_in.channels + 3;
     const std::vector<int64_t>& widths = st.mlps[s];
-    // Fused, a narrow first layer (<= 4 features + xyz) is computed inside the
-    // second one and never stored: on lavapipe (AVX2) it cost about as much as
-    // its stores of S * NS * width floats (group_linear's hidden input).
-    const bool hidden = fuse && widths.size() > 1 && si_in.channels <= 4 && widths[0] % 4 == 0;
+    // Fused, layer one is computed inside layer two (group_linear's hidden input)
+    // and never stored: on lavapipe (AVX2) storing it cost more than computing it.
+    // A narrow one (<= 4 features + xyz) from the gathered row; a wide one once
+    // per source point, each ball row then taking its point's value less the
+    // centre's share (as sa_gather.cpp, which is left for widths that are not a
+    // multiple of 4).
+    using Hidden = ops::GroupLinear::Hidden;
+    const bool per_point = si_in.channels + 3 > kFactorFromK && si_in.points < st.npoint * ns;
+    Hidden hidden = Hidden::None;
+    if (fuse && widths.size() > 1 && widths[0] % 4 == 0)
+        hidden = si_in.channels <= 4 ? Hidden::Gathered : per_point ? Hidden::PerPoint : Hidden::None;
     std::pair<int, int> first{-1, -1};
+    int u = -1;  // Hidden::PerPoint: layer one per source point, point-major
     for (size_t l = 0; l < widths.size(); ++l) {
         const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
         auto [wv, bv] = conv_bn(g, w, node, in, widths[l], fuse);
         in = widths[l];
-        if (hidden && l == 0) {
-            first = {wv, bv};
-            continue;
-        }
         if (!fuse) {
             x = ops::linear(g, x, wv, bv, ops::kActRelu, 0.01, node);
             continue;
         }
         // Fused: the first layer gathers its rows from the cloud, the last
         // one keeps only the max over each centre's neighbours.
-        if (l == 0 && widths.size() > 1 && si_in.channels + 3 > kFactorFromK && si_in.points < st.npoint * ns) {
-            // Layer one once per source point, then each ball row takes its
-            // point's value less the centre's share (sa_gather.cpp).
+        if (l == 0 && (per_point || hidden != Hidden::None)) {
+            first = {wv, bv};
+            if (hidden == Hidden::Gathered) continue;
             ops::GroupLinear pl;
             pl.input = ops::GroupLinear::Input::Points;
             pl.feat_begin = fb;
+            pl.point_major = hidden == Hidden::PerPoint;
             std::vector<int> pins{si_in.xyz, wv, bv};
             if (feat >= 0) pins.push_back(feat);
-            const int u = ops::group_linear(g, pins, pl, node + ".points");
-            x = ops::sa_gather(g, u, centres, ball, wv, ops::kActRelu, node);
+            u = ops::group_linear(g, pins, pl, node + ".points");
+            if (hidden == Hidden::None) x = ops::sa_gather(g, u, centres, ball, wv, ops::kActRelu, node);
             continue;
         }
         ops::GroupLinear gl;
         gl.act = ops::kActRelu;
         std::vector<int> ins{x};
-        const bool gather = l == 0 || (hidden && l == 1);
+        const bool gather = l == 0 || (hidden != Hidden::None && l == 1);
         if (gather) {
-            ins = gather_in;
             gl.input = ops::GroupLinear::Input::Gather;
             gl.feat_begin = fb;
-            gl.hidden = l == 1;
-            if (gl.hidden) ins.insert(ins.end(), {first.first, first.second});
+            gl.hidden = l == 1 ? hidden : Hidden::None;
+            if (gl.hidden == Hidden::PerPoint) {
+                ins = {u, centres, ball, first.first};
+            } else {
+                ins = gather_in;
+                if (gl.hidden == Hidden::Gathered) ins.push_back(first.first), ins.push_back(first.second);
+            }
         }
         ins.push_back(wv);
         ins.push_back(bv);
-        if (gather && feat >= 0) ins.push_back(feat);
+        if (gather && feat >= 0 && gl.hidden != Hidden::PerPoint) ins.push_back(feat);
         gl.max = l + 1 == widths.size();
         gl.group = ns;
         x = ops::group_linear(g, ins, gl, node);

@@ -111,10 +111,14 @@ struct GroupLinear {
     // The tile CPU devices use on big layers (16 x 32, group_linear.cpp) whatever the
     // layer's size or device: lets tests and the self-test reach it on small shapes.
     bool big_tile = false;
-    // Gather only: inputs [points, centres, idx, W0^T, b0, W^T, bias (, features)];
-    // the gathered rows go through act(row W0^T + b0) in registers, never stored,
-    // and that is the layer's input (the same act; W0's width a multiple of 4, <= 4 features).
-    bool hidden = false;
+    // Gather only: the layer's input is a first layer computed in registers from
+    // the ball rows, never stored (the same act; W0's width a multiple of 4):
+    //   Gathered: [points, centres, idx, W0^T, b0, W^T, bias (, features)], act(row W0^T + b0)
+    //     of the gathered row (<= 4 features);
+    //   PerPoint: [U, centres, idx, W0^T, W^T, bias], act(U[q] - W0^T's xyz rows . centre),
+    //     U = group_linear(Points, point_major) of W0 (sa_gather's arithmetic).
+    enum class Hidden { None = 0, Gathered = 1, PerPoint = 2 } hidden = Hidden::None;
+    bool point_major = false;  // a plain output as [M, N] instead of [N, M]
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

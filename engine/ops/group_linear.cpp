@@ -21,10 +21,14 @@
 //   3: per point: [points [M, D >= 3], W^T, bias (, features [M, DF])]; row m is
 //      [features of m from column feat_begin, xyz of m] (a set-abstraction
 //      layer's columns, not centred: sa_gather subtracts the centre's part).
-// Param hidden = 1 (with in = 1): [points, centres, idx, W0^T [CF + 3, K], b0 [K],
-//   W^T, bias (, features)]: the gathered rows first go through act(row W0^T + b0),
-//   computed in registers and never stored, which is the layer's input x^T
-//   (K % 4 == 0 and at most 4 feature columns).
+// Param hidden (GroupLinear::Hidden, with in = 1): the layer's input x^T is a first
+// layer computed in registers from the ball rows, never stored (K % 4 == 0):
+//   1: [points, centres, idx, W0^T [CF + 3, K], b0 [K], W^T, bias (, features)]:
+//      act(row W0^T + b0) of the gathered row (at most 4 feature columns);
+//   2: [U [P, K], centres, idx, W0^T [K0 >= 3, K], W^T, bias]: act(U[q] - W0^T's
+//      last 3 rows . centre), U = the same layer per source point (in = 3,
+//      point_major; sa_gather's arithmetic, without its stored output).
+// Param point_major = 1 (not with max): the output is [M, N] instead of [N, M].
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's. Param tile = 1: the
@@ -51,7 +55,8 @@ struct Layout {
     int64_t M = 0, K = 0, N = 0, NS = 1;
     size_t w = 1;   // index of W^T among the inputs
     bool feat = false;
-    bool hidden = false;  // in = 1: W0^T, b0 at inputs 3, 4; K is their width
+    int hidden = 0;       // in = 1: GroupLinear::Hidden; K is W0^T's width
+    bool point_major = false;
 };
 
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
@@ -60,18 +65,29 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
     if (p.has("tile")) int_param(p, "tile", 0, 1);
     l.max = p.get("max", 0) != 0;
-    l.hidden = p.has("hidden") && int_param(p, "hidden", 0, 1) == 1;
-    if (l.hidden && l.mode != 1) throw Error("hidden = 1 needs gathered rows (in = 1)");
+    l.hidden = p.has("hidden") ? int(int_param(p, "hidden", 0, 2)) : 0;
+    if (l.hidden != 0 && l.mode != 1) throw Error("hidden = " + std::to_string(l.hidden) + " needs gathered rows (in = 1)");
+    l.point_major = p.get("point_major", 0) != 0;
+    if (l.point_major && l.max) throw Error("point_major = 1 is for plain outputs (a max is point-major already)");
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
             throw Error("input " + std::to_string(i) + " has the wrong element type");
     if (l.mode == 1) {
-        const size_t base = l.hidden ? 7 : 5;
-        expect_input_count(in, base, base + 1);
+        const size_t base = l.hidden == 1 ? 7 : l.hidden == 2 ? 6 : 5;
+        expect_input_count(in, base, l.hidden == 2 ? base : base + 1);  // hidden 2: U holds the features
         l.feat = in.size() == base + 1;
         l.g = gather_shape(in[0], in[1], in[2], l.feat ? &in[base] : nullptr, p);
         l.M = l.g.rows(), l.K = l.g.K(), l.NS = l.g.NS, l.w = base - 2;
-        if (l.hidden) {
+        if (l.hidden == 2) {
+            const Shape& w0 = in[3].shape;
+            const int64_t k = in[0].shape[1];
+            if (k % 4 != 0) throw Error("U " + shape_str(in[0].shape) + ": its width is not a multiple of 4");
+            if (w0.size() != 2 || w0[0] < 3 || w0[1] != k)
+                throw Error("hidden weight " + shape_str(w0) + " must be input-major [K0 >= 3, " + std::to_string(k) + "]");
+            l.K = k;
+            l.g.CF = w0[0] - 3;  // the row of W0^T where xyz begins (the shader reads it as CF)
+        }
+        if (l.hidden == 1) {
             const Shape &w0 = in[3].shape, &b0 = in[4].shape;
             if (w0.size() != 2 || w0[0] != l.K)
                 throw Error("hidden weight " + shape_str(w0) + " must be input-major [" + std::to_string(l.K) + ", width]");
@@ -130,7 +146,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
 
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l = layout_of(in, p);
-    return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : Shape{l.N, l.M}}};
+    return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : l.point_major ? Shape{l.M, l.N} : Shape{l.N, l.M}}};
 }
 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
@@ -141,7 +157,7 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const HostTensor* feat = l.feat ? in.back() : nullptr;
     const uint32_t act = uint32_t(p.get("act", kActNone));
     const float slope = float(p.get("slope", 0.01));
-    const int64_t K0 = l.hidden ? in[3]->shape[0] : l.K;  // the gathered row's width
+    const int64_t K0 = l.hidden == 1 ? in[3]->shape[0] : l.hidden == 2 ? 0 : l.K;  // the gathered row's width
     std::vector<float> row(static_cast<size_t>(K0)), hid(static_cast<size_t>(l.K));
     if (l.max) std::fill(out[0]->data.begin(), out[0]->data.end(), -std::numeric_limits<float>::infinity());
     for (int64_t m = 0; m < l.M; ++m) {
@@ -151,14 +167,25 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
                              : l.mode == 3 ? (k < l.g.CF ? feat->data[size_t(m * l.g.DF + l.g.FB + k)]
                                                          : in[0]->data[size_t(m * l.g.D + k - l.g.CF)])
                                            : in[0]->data[size_t(k * l.M + m)];
-        if (l.hidden) {  // the hidden layer, as a group_linear of its own would give it
+        if (l.hidden == 2) {  // U[q] less the centre's share, as sa_gather gives it
+            const int32_t q = in[2]->int_at(size_t(m));
+            if (q < 0 || q >= l.g.P)
+                throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(l.g.P) + " points");
+            const float* c = &in[1]->data[size_t(3 * (m / l.NS))];
+            for (int64_t n = 0; n < l.K; ++n) {
+                double share = 0;
+                for (int k = 0; k < 3; ++k) share += double(in[3]->data[size_t((l.g.CF + k) * l.K + n)]) * c[k];
+                hid[size_t(n)] = apply_act(float(in[0]->data[size_t(q * l.K + n)] - share), act, slope);
+            }
+        }
+        if (l.hidden == 1) {  // the hidden layer, as a group_linear of its own would give it
             for (int64_t n = 0; n < l.K; ++n) {
                 double acc = in[4]->data[size_t(n)];
                 for (int64_t k = 0; k < K0; ++k) acc += double(row[size_t(k)]) * in[3]->data[size_t(k * l.K + n)];
                 hid[size_t(n)] = apply_act(float(acc), act, slope);
             }
         }
-        const std::vector<float>& x = l.hidden ? hid : row;
+        const std::vector<float>& x = l.hidden != 0 ? hid : row;
         for (int64_t n = 0; n < l.N; ++n) {
             double acc = b.data[size_t(n)];
             for (int64_t k = 0; k < l.K; ++k) acc += double(x[size_t(k)]) * w.data[size_t(k * l.N + n)];
@@ -167,7 +194,7 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
                 float& o = out[0]->data[size_t((m / l.NS) * l.N + n)];
                 o = std::max(o, v);
             } else {
-                out[0]->data[size_t(n * l.M + m)] = v;
+                out[0]->data[size_t(l.point_major ? m * l.N + n : n * l.M + m)] = v;
             }
         }
     }
@@ -219,8 +246,8 @@ void gpu(const GpuOpArgs& a) {
     const GpuTensor& index = l.mode == 1 ? a.in[2] : bias;
     bool texel = a.params.get("texel", 1) != 0;
     // hidden: W0^T and b0 (bindings 10, 11, as vec4s); else the bias fills them.
-    const GpuTensor& w0 = l.hidden ? a.in[3] : bias;
-    const GpuTensor& b0 = l.hidden ? a.in[4] : bias;
+    const GpuTensor& w0 = l.hidden != 0 ? a.in[3] : bias;
+    const GpuTensor& b0 = l.hidden == 1 ? a.in[4] : bias;
     for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias, &w0})
         texel = texel && uint64_t(numel(t->shape)) <= d.max_texel_elements;
     auto fmt = [&](const GpuTensor& t, bool vec4) {
@@ -232,7 +259,7 @@ void gpu(const GpuOpArgs& a) {
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && l.M % 4 == 0, l.hidden};
+                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -247,14 +274,14 @@ void gpu(const GpuOpArgs& a) {
                     {bias.view, R}, {a.out[0].view, rt::Access::Write},
                     {centres.view, R, f32}, {index.view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
                     {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)},
-                    {w0.view, R, fmt(w0, l.hidden)}, {b0.view, R, fmt(b0, l.hidden)}},
+                    {w0.view, R, fmt(w0, l.hidden != 0)}, {b0.view, R, fmt(b0, l.hidden == 1)}},
                    &push, sizeof(push), uint32_t(gx), uint32_t(gy));
 }
 
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
-                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden"}};
+                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major"}};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
                                               GroupLinear::Weights want, uint64_t offset) {

@@ -9,6 +9,8 @@
 // are its xyz part). Params act, slope, texel (0: U and W from storage buffers).
 // Output [N, S * NS] channel-major, the next group_linear's Rows input.
 // -> shaders/sa_gather.comp (U and W as texel buffers) or sa_gather_ssbo.comp.
+// The point encoder computes these rows inside the next layer instead (group_linear,
+// hidden = 2) wherever the width is a multiple of 4, and uses this op elsewhere.
 #include <algorithm>
 #include <cmath>
 
