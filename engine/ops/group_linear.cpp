@@ -149,6 +149,13 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     return {TensorDesc{l.max ? Shape{l.M / l.NS, l.N} : l.point_major ? Shape{l.M, l.N} : Shape{l.N, l.M}}};
 }
 
+// b[n] + x . column n of the input-major weight w [x.size(), N], in double.
+double dot(const std::vector<float>& x, const HostTensor& w, const HostTensor& b, int64_t N, int64_t n) {
+    double acc = b.data[size_t(n)];
+    for (size_t k = 0; k < x.size(); ++k) acc += double(x[k]) * w.data[k * size_t(N) + size_t(n)];
+    return acc;
+}
+
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
     std::vector<TensorDesc> d;
     for (const HostTensor* t : in) d.push_back({t->shape, t->type});
@@ -168,28 +175,17 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
                                                          : in[0]->data[size_t(m * l.g.D + k - l.g.CF)])
                                            : in[0]->data[size_t(k * l.M + m)];
         if (l.hidden == 2) {  // U[q] less the centre's share, as sa_gather gives it
-            const int32_t q = in[2]->int_at(size_t(m));
-            if (q < 0 || q >= l.g.P)
-                throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(l.g.P) + " points");
+            const int32_t q = ball_point(*in[2], m, l.g.P);
             const float* c = &in[1]->data[size_t(3 * (m / l.NS))];
-            for (int64_t n = 0; n < l.K; ++n) {
-                double share = 0;
-                for (int k = 0; k < 3; ++k) share += double(in[3]->data[size_t((l.g.CF + k) * l.K + n)]) * c[k];
-                hid[size_t(n)] = apply_act(float(in[0]->data[size_t(q * l.K + n)] - share), act, slope);
-            }
+            for (int64_t n = 0; n < l.K; ++n)
+                hid[size_t(n)] =
+                    apply_act(float(in[0]->data[size_t(q * l.K + n)] - centre_share(*in[3], l.g.CF, l.K, n, c)), act, slope);
         }
-        if (l.hidden == 1) {  // the hidden layer, as a group_linear of its own would give it
-            for (int64_t n = 0; n < l.K; ++n) {
-                double acc = in[4]->data[size_t(n)];
-                for (int64_t k = 0; k < K0; ++k) acc += double(row[size_t(k)]) * in[3]->data[size_t(k * l.K + n)];
-                hid[size_t(n)] = apply_act(float(acc), act, slope);
-            }
-        }
+        if (l.hidden == 1)  // the hidden layer, as a group_linear of its own would give it
+            for (int64_t n = 0; n < l.K; ++n) hid[size_t(n)] = apply_act(float(dot(row, *in[3], *in[4], l.K, n)), act, slope);
         const std::vector<float>& x = l.hidden != 0 ? hid : row;
         for (int64_t n = 0; n < l.N; ++n) {
-            double acc = b.data[size_t(n)];
-            for (int64_t k = 0; k < l.K; ++k) acc += double(x[size_t(k)]) * w.data[size_t(k * l.N + n)];
-            const float v = apply_act(float(acc), act, slope);
+            const float v = apply_act(float(dot(x, w, b, l.N, n)), act, slope);
             if (l.max) {
                 float& o = out[0]->data[size_t((m / l.NS) * l.N + n)];
                 o = std::max(o, v);

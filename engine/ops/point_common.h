@@ -80,11 +80,24 @@ inline GatherShape gather_shape(const TensorDesc& points, const TensorDesc& cent
 }
 
 // Element (m, k) of the grouped matrix; the offset in float, as the shader computes it.
+// CPU references: the source point of ball row m, refused when outside the P points.
+inline int32_t ball_point(const HostTensor& idx, int64_t m, int64_t P) {
+    const int32_t q = idx.int_at(size_t(m));
+    if (q < 0 || q >= P) throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(P) + " points");
+    return q;
+}
+
+// CPU references: a centre's share of output channel n of a layer whose input-major
+// weight w [K, N] has its xyz rows from row `xyz_row` (what sa_gather subtracts).
+inline double centre_share(const HostTensor& w, int64_t xyz_row, int64_t N, int64_t n, const float* centre) {
+    double s = 0;
+    for (int k = 0; k < 3; ++k) s += double(w.data[size_t((xyz_row + k) * N + n)]) * centre[k];
+    return s;
+}
+
 inline float gather_value(const HostTensor& pts, const HostTensor& centres, const HostTensor& idx,
                           const HostTensor* feat, const GatherShape& g, int64_t m, int64_t k) {
-    const int32_t q = idx.int_at(size_t(m));
-    if (q < 0 || q >= g.P)
-        throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(g.P) + " points");
+    const int32_t q = ball_point(idx, m, g.P);
     if (k < g.CF) return feat->data[size_t(q * g.DF + g.FB + k)];
     const int64_t c = k - g.CF;
     return pts.data[size_t(q * g.D + c)] - centres.data[size_t(3 * (m / g.NS) + c)];

@@ -17,6 +17,7 @@
 #include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
+#include "engine/ops/point_common.h"
 
 namespace vtloc::ops {
 namespace {
@@ -58,14 +59,11 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const HostTensor &u = *in[0], &c = *in[1], &idx = *in[2], &w = *in[3];
     const int64_t M = d.S * d.NS;
     for (int64_t m = 0; m < M; ++m) {
-        const int32_t q = idx.int_at(size_t(m));
-        if (q < 0 || q >= d.P) throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(d.P) + " points");
+        const int32_t q = ball_point(idx, m, d.P);
         const float* cs = &c.data[size_t(3 * (m / d.NS))];
-        for (int64_t n = 0; n < d.N; ++n) {
-            double share = 0;
-            for (int k = 0; k < 3; ++k) share += double(w.data[size_t((d.K - 3 + k) * d.N + n)]) * cs[k];
-            out[0]->data[size_t(n * M + m)] = apply_act(float(u.data[size_t(n * d.P + q)] - share), act, slope);
-        }
+        for (int64_t n = 0; n < d.N; ++n)
+            out[0]->data[size_t(n * M + m)] =
+                apply_act(float(u.data[size_t(n * d.P + q)] - centre_share(w, d.K - 3, d.N, n, cs)), act, slope);
     }
 }
 
