@@ -90,12 +90,14 @@ namespace {
 
 // shuffles: the search by subgroup shuffles (the default where the device has
 // them) or, false, the shared-memory tiled one.
-TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed, bool shuffles = true) {
+// queries: per thread of the shuffle search (0: the device's choice, 4 on lavapipe).
+TensorMap check_chamfer(const Shape& a, const Shape& b, uint32_t seed, bool shuffles = true, int queries = 0) {
     Graph g;
-    std::vector<int> out = ops::chamfer(g, g.input("a", a), g.input("b", b), "", shuffles);
+    std::vector<int> out = ops::chamfer(g, g.input("a", a), g.input("b", b), "", shuffles, queries);
     g.output(out[0], "chamfer");
     g.output(out[1], "mins");
-    INFO("chamfer " << shape_str(a) << " vs " << shape_str(b) << (shuffles ? ", shuffles where the device has them" : ", shared-memory tiles"));
+    INFO("chamfer " << shape_str(a) << " vs " << shape_str(b) << (shuffles ? ", shuffles where the device has them" : ", shared-memory tiles")
+                    << ", queries per thread " << queries);
     return run_gpu_and_compare(g, WeightStore{},
                                {{"a", random_tensor(a, seed, -1.0f, 1.0f)}, {"b", random_tensor(b, seed + 1, -1.0f, 1.0f)}});
 }
@@ -112,6 +114,29 @@ TEST_CASE("chamfer matches the CPU reference at odd sizes, widths 3 and 6", "[op
         // silently ends a longer loop, and one scan of these 70,000 gave wrong minima.
         check_chamfer({5, 3}, {70000, 3}, 8, shuffles);
     }
+}
+
+TEST_CASE("chamfer gives the same distances at every number of queries per thread", "[op][chamfer]") {
+    // Each query sees the same targets in the same order at any Q, so its minimum
+    // (and NaN flag) is the same float: bit-identical to Q = 1 (the GPU default),
+    // and each also against the CPU reference. Odd sizes leave partial last
+    // workgroups and partial rounds of targets; 70,000 targets cross the chunks.
+    const std::vector<std::pair<Shape, Shape>> sizes{
+        {{37, 3}, {53, 3}}, {{1, 300, 6}, {257, 6}}, {{3, 130, 6}, {61, 6}}, {{1000, 3}, {7, 3}}, {{5, 3}, {70000, 3}}};
+    uint32_t seed = 40;
+    for (const auto& [a, b] : sizes) {
+        TensorMap one = check_chamfer(a, b, seed, true, 1);
+        for (int q : {2, 3, 4, 7, 8}) {
+            TensorMap many = check_chamfer(a, b, seed, true, q);
+            CHECK(many.at("chamfer").data == one.at("chamfer").data);
+            CHECK(many.at("mins").data == one.at("mins").data);
+        }
+        ++seed;
+    }
+    Graph g;
+    int a = g.input("a", {4, 3});
+    REQUIRE_THROWS_WITH(ops::chamfer(g, a, a, "", true, 9), Catch::Contains("queries per thread must be 0"));
+    REQUIRE_THROWS_WITH(ops::chamfer(g, a, a, "", true, -1), Catch::Contains("queries per thread must be 0"));
 }
 
 TEST_CASE("chamfer of a hand case and of identical sets", "[op][chamfer]") {
@@ -172,4 +197,18 @@ TEST_CASE("chamfer rejects empty sets, bad and mismatched widths, NaN", "[op][ch
     float d = GpuExecutor(test::gpu(), g2, WeightStore{}).run({{"a", bad}, {"b", bad}}).at("d").data[0];
     test::require_no_validation_messages();
     CHECK(std::isnan(d));
+    // A NaN in one query marks that query's minimum only, also where a thread
+    // holds several queries (rows 6, 70, 134 share a thread at 64 x 4): every B
+    // row sees it as a target.
+    for (int q : {1, 4}) {
+        Graph g3;
+        std::vector<int> out = ops::chamfer(g3, g3.input("a", {200, 3}), g3.input("b", {9, 3}), "", true, q);
+        g3.output(out[1], "mins");
+        HostTensor a = test::random_tensor({200, 3}, 5), b = test::random_tensor({9, 3}, 6);
+        a.data[70 * 3 + 1] = std::nanf("");
+        std::vector<float> mins = GpuExecutor(test::gpu(), g3, WeightStore{}).run({{"a", a}, {"b", b}}).at("mins").data;
+        test::require_no_validation_messages();
+        INFO("queries per thread " << q);
+        for (int i = 0; i < 209; ++i) CHECK(std::isnan(mins[size_t(i)]) == (i == 70 || i >= 200));
+    }
 }

@@ -77,9 +77,10 @@ int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, con
 
 int gma_decode(Graph& g, int x, const std::string& name) { return g.add1("gma_decode", {x}, {}, name); }
 
-std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name, bool subgroup) {
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name, bool subgroup, int queries) {
     Params p;
     if (!subgroup) p.set("subgroup", 0);
+    if (queries != 0) p.set("queries", queries);
     return g.add("chamfer", {a, b}, p, name);
 }
 

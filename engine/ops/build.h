@@ -60,7 +60,8 @@ int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, con
                 bool subgroup = true);
 int gma_decode(Graph& g, int x, const std::string& name = "");
 // subgroup = false: the shared-memory tiled search even where the device has shuffles.
-std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", bool subgroup = true);
+// queries: queries per thread of the shuffle search, 1..8 (0: the device's choice).
+std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", bool subgroup = true, int queries = 0);
 // lanes: lanes per row of the fused GRU (0: the op's default); subgroup = false
 // keeps the row sums in shared memory even where the device has subgroup
 // shuffles; wave: 1 = the register-resident shader where it applies, 0 = never,

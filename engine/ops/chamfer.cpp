@@ -3,7 +3,8 @@
 // -> shaders/chamfer_nn_subgroup.comp (both nearest-neighbour searches, target
 // rows passed by subgroup shuffles; chamfer_nn.comp tiles them through shared
 // memory on devices without shuffles, or with param subgroup = 0) then
-// shaders/chamfer_sum.comp (the means, one workgroup).
+// shaders/chamfer_sum.comp (the means, one workgroup). Param queries (1..8, 0 =
+// the device's choice) sets the shuffle shader's queries per thread.
 // Outputs: 0 = the distance (a 0-d scalar), 1 = the per-row nearest squared
 // distances [Na + Nb] (A's rows, then B's), which the second pass reduces.
 #include <algorithm>
@@ -17,6 +18,8 @@
 namespace vtloc::ops {
 namespace {
 
+constexpr int kMaxQueries = 8;
+
 // Targets one dispatch scans per query: within kLoopIterationBudget whatever the
 // subgroup size (the shuffle shader adds one round per subgroup of targets).
 constexpr uint32_t kTargetChunk = 32768;
@@ -24,8 +27,12 @@ constexpr uint32_t kTargetChunk = 32768;
 int64_t rows_of(const Shape& s) { return numel(s) / s.back(); }
 int64_t sets_of(const Shape& a) { return a.size() == 3 && a[0] > 1 ? a[0] : 1; }
 
-std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params&) {
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 2, 2);
+    const double q = p.get("queries", 0);
+    if (q != std::floor(q) || q < 0 || q > kMaxQueries)
+        throw Error("queries per thread must be 0 (the device's choice) to " + std::to_string(kMaxQueries) + ", got " +
+                    std::to_string(q));
     expect_f32(in);
     for (size_t i = 0; i < 2; ++i) {
         const Shape& s = in[i].shape;
@@ -100,12 +107,21 @@ void gpu(const GpuOpArgs& a) {
     const bool shuffle = shuffles_allowed(a);
     uint32_t local = shuffle ? subgroup_group_size(d) : elementwise_local_size(d);
     while (!shuffle && local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
-    const uint32_t per_group = shuffle ? local : 2 * local;
+    // Queries per thread of the shuffle shader. On CPU drivers a shuffle costs
+    // several times a distance (a permute or a per-lane loop), so each shuffled
+    // target serves 4 queries: 2.6-2.9 -> 1.0-1.1 ms for vtloc-lite's 256 x 1024
+    // rows of 6 on lavapipe (AVX2). GPUs shuffle in about one instruction and
+    // want the threads, so they keep one query each.
+    uint32_t Q = uint32_t(a.params.get("queries", 0));
+    if (!shuffle) Q = 1;
+    else if (Q == 0) Q = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 4 : 1;
+    const uint32_t per_group = shuffle ? Q * local : 2 * local;
     const uint64_t ga = (Na + per_group - 1) / per_group, gb = (Nb + per_group - 1) / per_group;
     if (ga + gb > d.max_workgroup_count[0])
         throw Error("point sets of " + std::to_string(Na) + " and " + std::to_string(Nb) +
                     " rows need more workgroups than the device allows");
-    const rt::Pipeline& nn = pipeline(a.ctx, shuffle ? "chamfer_nn_subgroup" : "chamfer_nn", 3, 20, {local, D == 6 ? 1u : 0u});
+    const rt::Pipeline& nn = shuffle ? pipeline(a.ctx, "chamfer_nn_subgroup", 3, 20, {local, D == 6 ? 1u : 0u, Q})
+                                     : pipeline(a.ctx, "chamfer_nn", 3, 20, {local, D == 6 ? 1u : 0u});
     for (uint32_t t0 = 0; t0 < std::max(Na, Nb); t0 += kTargetChunk) {
         struct { uint32_t Na, Nb, groups_a, t_begin, t_chunk; } push{Na, Nb, uint32_t(ga), t0, kTargetChunk};
         a.seq.dispatch(nn,
@@ -122,6 +138,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_chamfer{"chamfer", infer, cpu, gpu, 0, {"subgroup"}};
+const OpDef op_chamfer{"chamfer", infer, cpu, gpu, 0, {"subgroup", "queries"}};
 
 }  // namespace vtloc::ops
