@@ -144,6 +144,18 @@ TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]"
     }
 }
 
+TEST_CASE("concat of one row (buffer copies) between two shaders", "[op][concat]") {
+    // The copies must wait for the shader that wrote an input and be waited for by
+    // the one that reads the output (the validation layer checks the barriers); the
+    // same input twice and a width of 1 land in their own slices.
+    Graph g;
+    int a = ops::activation(g, ops::kActTanh, g.input("x0", {1, 29}));
+    int cat = ops::concat(g, {a, g.input("x1", {1, 1}), a, g.input("x2", {1, 64})});
+    g.output(ops::activation(g, ops::kActRelu, cat), "y");
+    run_gpu_and_compare(g, WeightStore{}, {{"x0", random_tensor({1, 29}, 50)}, {"x1", random_tensor({1, 1}, 51)},
+                                           {"x2", random_tensor({1, 64}, 52)}});
+}
+
 TEST_CASE("concat rejects mismatched leading dimensions", "[op][concat]") {
     Graph g;
     int a = g.input("a", {5, 7}), b = g.input("b", {4, 7});
