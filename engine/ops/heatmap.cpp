@@ -110,9 +110,9 @@ void gpu(const GpuOpArgs& a) {
     const uint64_t scan = (push.P + sg - 1) / sg * (2 + uint64_t(push.K) * (1 + std::max(push.T, 1u))) + 64;
     if (shuffles_allowed(a) && scan <= kLoopIterationBudget &&
         uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements) {
-        // Up to 16 centres without symmetry stay in registers (the shader's KR).
+        // Up to 16 centres without symmetry are loaded once into every lane (the shader's KR).
         const uint32_t kr = !sym && push.K <= 16 ? push.K : 0u;
-        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"heatmap_subgroup", 5, 20, {sg, kr, sg}, 0x1u}),
+        a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"heatmap_subgroup", 5, 20, {sg, kr}, 0x1u}),
                        {{a.in[0].view, rt::Access::Read, VK_FORMAT_R32_SFLOAT}, {a.in[1].view, rt::Access::Read},
                         {a.in[2].view, rt::Access::Read}, {(sym ? a.in[3] : a.in[1]).view, rt::Access::Read},
                         {a.out[0].view, rt::Access::ReadWrite}},
