@@ -17,7 +17,7 @@ std::string stage_of(const std::string& op, const std::string& n) {
     if (starts(n, "point.")) return "point";
     if (starts(n, "gma.")) return "gma";
     if (starts(n, "ilu") || starts(n, "mcr.")) return "head";
-    if (op == "topk" || op == "heatmap") return "retrieval";
+    if (op == "topk" || op == "heatmap" || op == "retrieve") return "retrieval";
     return "other";
 }
 

@@ -1,6 +1,6 @@
 // Self-test cases: disentangle (whole and split into row chunks), gma_decode,
 // chamfer (one set and a batch), ilu (1/4/8/16 lanes per row, register-resident), ilu_step, topk (ties;
-// a batch with its heat-maps), heatmap (with and without symmetry) and belief (the shapes of tests/test_gma_ops.cpp,
+// a batch with its heat-maps), heatmap (with and without symmetry), retrieve (both paths) and belief (the shapes of tests/test_gma_ops.cpp,
 // test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
 #include <cmath>
 
@@ -116,6 +116,18 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
         c.output(out[0], "index");
         c.output(out[1], "score");
         c.output(ops::heatmap(c.g, c.input("cloud", random_tensor({513, 6}, 13)), cand, out[0], -1), "heat");
+        v.push_back(std::move(c));
+    }
+
+    for (bool sym : {false, true}) {  // one dispatch without symmetry, the two ops' shaders with it
+        OpCase c("retrieve", std::string("a batch of 3 contacts, 301 candidates, K 5, heat-maps on 1037 points") +
+                                 (sym ? ", symmetry order 3" : ""));
+        const int sym_in = sym ? c.input("sym", symmetry_transforms({0.1, 0.0, -0.1}, {0.2, 1.0, 0.1}, 3)) : -1;
+        std::vector<int> out = ops::retrieve(c.g, c.input("c", random_tensor({3, 3}, 14)), c.input("cand", random_tensor({301, 3}, 15)),
+                                             c.input("cloud", random_tensor({1037, 6}, 16)), sym_in, 5);
+        c.output(out[0], "index");
+        c.output(out[1], "score");
+        c.output(out[2], "heat");
         v.push_back(std::move(c));
     }
 

@@ -77,10 +77,11 @@ Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const Vtlo
     }
     g.output(contact, "contact");
     if (candidates < 0) return g;
-    auto top = ops::topk(g, contact, candidates, k, "topk");
+    // Top-K and heat-map as one node: one dispatch where both fit one subgroup.
+    auto top = ops::retrieve(g, contact, candidates, cloud, symmetry, k, "retrieve");
     g.output(top.at(0), "topk.index");
     g.output(top.at(1), "topk.score");
-    g.output(ops::heatmap(g, cloud, candidates, top.at(0), symmetry, "heatmap"), "heatmap");
+    g.output(top.at(2), "heatmap");
     return g;
 }
 

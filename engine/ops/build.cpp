@@ -111,6 +111,15 @@ int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const 
     return g.add1("heatmap", in, p, name);
 }
 
+std::vector<int> retrieve(Graph& g, int contact, int candidates, int cloud, int symmetry, int64_t k,
+                          const std::string& name, bool subgroup) {
+    std::vector<int> in{contact, candidates, cloud};
+    if (symmetry >= 0) in.push_back(symmetry);
+    Params p{{"k", d(k)}};
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add("retrieve", in, p, name);
+}
+
 std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name) {
     return g.add("belief", {candidates, contacts, motions},
                  {{"sigma", b.sigma}, {"sigma_m", b.sigma_m}, {"window", double(b.window)}}, name);

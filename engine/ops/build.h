@@ -77,6 +77,11 @@ std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const st
 // subgroup = false: the two-pass shaders even where the one-subgroup shader applies.
 int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const std::string& name = "",
             bool subgroup = true);
+// topk then heatmap in one op (one dispatch where both take their subgroup
+// shaders): {index, score, heat-map, workspace}. symmetry: -1 for none;
+// subgroup = false: the two ops' other shaders.
+std::vector<int> retrieve(Graph& g, int contact, int candidates, int cloud, int symmetry, int64_t k,
+                          const std::string& name = "", bool subgroup = true);
 struct Belief {
     double sigma = 0.2, sigma_m = 0.05;
     int window = 4;
