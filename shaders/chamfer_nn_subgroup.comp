@@ -6,11 +6,10 @@
 // between lanes by subgroupShuffle instead of a shared-memory tile: each lane
 // loads one target row per round and every lane of its subgroup reads it from
 // there. No shared memory, no barrier. Why: where a shared-memory load is a loop
-// over the lanes (CPU drivers), reading the tile cost more than the distances;
-// a shuffle by an index every lane shares is a register broadcast. Same layout,
-// outputs, NaN rule and target chunks as chamfer_nn.comp, one query per thread. The workgroup
-// is whole subgroups (the host's choice), and every lane takes part in every
-// shuffle, queries past the end included.
+// over the lanes (CPU drivers), reading the tile cost more than the distances.
+// Same layout, outputs, NaN rule and target chunks as chamfer_nn.comp, Q
+// queries per thread. The workgroup is whole subgroups (the host's choice), and
+// every lane takes part in every shuffle, queries past the end included.
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const bool WIDE = false;  // rows of 6 (xyz + normal), else 3
 // Queries per thread (the workgroup's Q * L queries strided by L): each shuffled
