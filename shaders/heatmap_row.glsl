@@ -9,6 +9,12 @@
 // costs more than the distance it feeds.
 vec3 hm_centre[KR > 0u ? KR : 1u];
 
+// Candidate ci (clamped into the buffer) as centre j.
+void hm_set_centre(uint j, uint ci) {
+    ci = min(ci, p.M - 1u);
+    hm_centre[j] = vec3(cand[ci * 3u], cand[ci * 3u + 1u], cand[ci * 3u + 2u]);
+}
+
 void heat_row(uint row) {
     const uint S = gl_SubgroupSize, lane = gl_SubgroupInvocationID;
     vec2 m = vec2(1.0 / 0.0, -1.0 / 0.0);

@@ -26,9 +26,6 @@ void main() {
     if (gl_SubgroupID != 0u) return;
     const uint row = gl_WorkGroupID.y;
     if (KR > 0u)
-        [[unroll]] for (uint j = 0u; j < KR; ++j) {
-            const uint ci = min(uint(max(index[row * KR + j], 0)), p.M - 1u);
-            hm_centre[j] = vec3(cand[ci * 3u], cand[ci * 3u + 1u], cand[ci * 3u + 2u]);
-        }
+        [[unroll]] for (uint j = 0u; j < KR; ++j) hm_set_centre(j, uint(max(index[row * KR + j], 0)));
     heat_row(row);
 }

@@ -34,8 +34,7 @@ void main() {
             index[row * K + r] = int(m.y);
             score[row * K + r] = uintBitsToFloat(m.x);
         }
-        const uint ci = min(m.y, p.M - 1u);
-        hm_centre[r] = vec3(cand[ci * 3u], cand[ci * 3u + 1u], cand[ci * 3u + 2u]);
+        hm_set_centre(r, m.y);
     }
     heat_row(row);
 }

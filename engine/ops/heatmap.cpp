@@ -107,8 +107,7 @@ void gpu(const GpuOpArgs& a) {
     // fits its texel limit and one lane's scan stays within the loop budget
     // (param subgroup = 0 forces the two passes).
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    const uint64_t scan = (push.P + sg - 1) / sg * (2 + uint64_t(push.K) * (1 + std::max(push.T, 1u))) + 64;
-    if (shuffles_allowed(a) && scan <= kLoopIterationBudget &&
+    if (shuffles_allowed(a) && heatmap_subgroup_iterations(push.P, push.K, push.T, sg) <= kLoopIterationBudget &&
         uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements) {
         // Up to 16 centres without symmetry are loaded once into every lane (the shader's KR).
         const uint32_t kr = !sym && push.K <= 16 ? push.K : 0u;
@@ -131,6 +130,11 @@ void gpu(const GpuOpArgs& a) {
 }
 
 }  // namespace
+
+uint64_t heatmap_subgroup_iterations(int64_t P, int64_t K, int64_t T, uint32_t subgroup) {
+    const uint64_t sg = std::max(1u, subgroup);
+    return (uint64_t(P) + sg - 1) / sg * (2 + uint64_t(K) * uint64_t(1 + std::max<int64_t>(T, 1))) + 64;
+}
 
 const OpDef op_heatmap{"heatmap", infer, cpu, gpu, 0, {"subgroup"}};
 

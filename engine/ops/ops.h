@@ -9,6 +9,12 @@ namespace vtloc::ops {
 // The top-K op sorts at most this many keys per chunk pass (shared-memory bound).
 inline constexpr int64_t kMaxTopK = 256;
 
+// Loop iterations of the one invocation that scans in topk_subgroup.comp (M
+// candidates) and heatmap_subgroup.comp (P points, T symmetry maps), held to
+// kLoopIterationBudget; retrieve_subgroup.comp runs both scans (topk.cpp, heatmap.cpp).
+uint64_t topk_subgroup_iterations(int64_t M, int64_t K, uint32_t subgroup);
+uint64_t heatmap_subgroup_iterations(int64_t P, int64_t K, int64_t T, uint32_t subgroup);
+
 extern const OpDef op_linear;      // linear.cpp
 extern const OpDef op_add;         // binary.cpp
 extern const OpDef op_mul;         // binary.cpp

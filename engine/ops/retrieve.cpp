@@ -34,10 +34,8 @@ void gpu(const GpuOpArgs& a) {
     const uint32_t sg = std::max(1u, d.subgroup_size);
     const int64_t B = a.in[0].shape.size() == 2 ? a.in[0].shape[0] : 1, M = a.in[1].shape[0];
     const int64_t P = a.in[2].shape[0], D = a.in[2].shape[1], K = a.out[0].shape.back();
-    // Loop iterations of the one invocation that scans: topk's and the heat-map's
-    // (as each op counts them), sharing lavapipe's limiter.
-    const uint64_t scans = uint64_t((M + sg - 1) / sg * (K + 1) + K * (K + 8)) +
-                           uint64_t((P + sg - 1) / sg * (2 + 2 * K) + 64);
+    // One invocation runs both scans, which share lavapipe's loop limiter.
+    const uint64_t scans = topk_subgroup_iterations(M, K, sg) + heatmap_subgroup_iterations(P, K, 0, sg);
     if (shuffles_allowed(a) && a.in.size() == 3 && K <= 16 && scans <= kLoopIterationBudget &&
         uint64_t(M) * 3 <= d.max_texel_elements && uint64_t(P * D) <= d.max_texel_elements &&
         B <= int64_t(d.max_workgroup_count[1])) {

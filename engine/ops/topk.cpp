@@ -115,7 +115,7 @@ void gpu(const GpuOpArgs& a) {
     const uint32_t sg = d.subgroup_size;
     if (shuffles_allowed(a) && K <= kSubgroupMaxK &&
         uint64_t(M) * 3 <= d.max_texel_elements &&
-        (uint64_t(M) + sg - 1) / sg * uint64_t(K + 1) + uint64_t(K) * (K + 8) <= kLoopIterationBudget) {
+        topk_subgroup_iterations(M, K, sg) <= kLoopIterationBudget) {
         struct { uint32_t n; } push{uint32_t(M)};
         a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"topk_subgroup", 4, 4, {sg, uint32_t(K)}, 0x2u}),
                        {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read, VK_FORMAT_R32_SFLOAT},
@@ -159,6 +159,11 @@ void gpu(const GpuOpArgs& a) {
 }
 
 }  // namespace
+
+uint64_t topk_subgroup_iterations(int64_t M, int64_t K, uint32_t subgroup) {
+    const uint64_t sg = std::max(1u, subgroup);
+    return (uint64_t(M) + sg - 1) / sg * uint64_t(K + 1) + uint64_t(K) * uint64_t(K + 8);
+}
 
 const OpDef op_topk{"topk", infer, cpu, gpu, 1u << 2, {"k", "subgroup"}};  // output 2: the workspace
 
