@@ -127,6 +127,18 @@ int compute_queue_family(VkPhysicalDevice pd) {
     return best;
 }
 
+// lavapipe's LLVM targets the host CPU's features; AVX-512VL gives its 256-bit
+// code 32 ymm registers instead of AVX2's 16.
+uint32_t host_vector_registers() {
+#if defined(__aarch64__)
+    return 32;
+#elif (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+    return __builtin_cpu_supports("avx512vl") ? 32 : 16;
+#else
+    return 16;
+#endif
+}
+
 DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
@@ -172,6 +184,7 @@ DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     for (uint32_t i = 0; i < mp.memoryHeapCount; ++i)
         if (mp.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
             d.device_local_bytes += mp.memoryHeaps[i].size;
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU) d.host_vector_registers = host_vector_registers();
     return d;
 }
 

@@ -47,6 +47,11 @@ struct DeviceInfo {
     bool has_timestamps = false;
     bool has_compute_queue = false;
     uint64_t device_local_bytes = 0;
+    // CPU devices only (0 for GPUs): the vector registers of the host CPU that the
+    // driver's JIT code runs on, 32 with AVX-512VL or on AArch64, else 16. No Vulkan
+    // limit exposes them, and register tiles sized for 16 spill less there but
+    // fetch more per multiply-add than a machine with 32 needs (group_linear.cpp).
+    uint32_t host_vector_registers = 0;
     // Offset alignment of any tensor: it may be bound as a storage, texel or uniform buffer.
     uint64_t tensor_alignment() const {
         return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment, uniform_offset_alignment});

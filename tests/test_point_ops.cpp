@@ -123,6 +123,7 @@ TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", 
 }
 
 using Weights = ops::GroupLinear::Weights;
+using Tile = ops::GroupLinear::Tile;
 constexpr Weights kWeightPaths[] = {Weights::Shuffle, Weights::Uniform, Weights::Storage};
 const char* weights_name(Weights w) { return w == Weights::Shuffle ? "shuffle" : w == Weights::Uniform ? "uniform" : "storage"; }
 
@@ -219,15 +220,19 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         using In = ops::GroupLinear::Input;
         for (ops::BufferPath path : ops::kBufferPaths)
             for (Weights ubo : kWeightPaths)
-                for (bool big : {false, true}) {  // the device's tile for this size, and CPU devices' big-layer tile
+                // The device's tile for this size, and CPU devices' two big-layer tiles.
+                for (Tile tile : {Tile::Auto, Tile::Big16x32, Tile::Big8x32}) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
-                    if (big && ubo == Weights::Uniform) continue;  // the tile is the same code on every weight path
-                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) + (big ? ".big" : "");
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, big}),
+                    // A tile is the same code on every weight path; 8 x 32 on the one CPU devices take.
+                    if (tile != Tile::Auto && ubo == Weights::Uniform) continue;
+                    if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
+                                           (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile}),
                              "max_relu" + on);
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo, big}),
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo, tile}),
                              "max" + on);  // negative maxima
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, big}),
+                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
                              "plain" + on);
                 }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
@@ -241,7 +246,7 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
     // point-major) against the same two layers as separate nodes: 0, 3 and 4 feature
     // columns (4 from a wider feature tensor), widths 4 .. 64, balls of 5 .. 128,
     // odd and vec4 output widths, plain and max outputs, both buffer paths (and
-    // from the gathered row every weight path and the big-layer tile). All are
+    // from the gathered row every weight path and the big-layer tiles). All are
     // checked against the CPU reference.
     struct Case {
         int64_t cf, S, ns, C1, C2;
@@ -268,18 +273,22 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
         if (c.cf == 4) gin.push_back(feat), fb = 6;
         for (ops::BufferPath path : ops::kBufferPaths)
             for (Weights ubo : kWeightPaths)
-                for (bool big : {false, true}) {
+                for (Tile tile : {Tile::Auto, Tile::Big16x32, Tile::Big8x32}) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
+                    // 8 x 32 differs from the others only in its spec constants: the path CPU devices take.
+                    if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
                     if (path == ops::BufferPath::Texel) require_weight_path(ubo);
-                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) + (big ? ".big" : "");
+                    const bool big = tile != Tile::Auto;
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
+                                           (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
                     for (bool max : {false, true}) {
                         ops::GroupLinear first{In::Gather, fb, false, 1, ops::kActRelu, 0.01, path, ubo};
                         std::vector<int> fin = gin;
                         fin.insert(fin.begin() + 3, {w0, b0});
                         const int h = ops::group_linear(g, fin, first);
-                        const int two = ops::group_linear(g, {h, w1, b1}, {In::Rows, 0, max, c.ns, ops::kActRelu, 0.01, path, ubo, big});
+                        const int two = ops::group_linear(g, {h, w1, b1}, {In::Rows, 0, max, c.ns, ops::kActRelu, 0.01, path, ubo, tile});
                         ops::GroupLinear hid = first;
-                        hid.max = max, hid.big_tile = big, hid.hidden = ops::GroupLinear::Hidden::Gathered;
+                        hid.max = max, hid.tile = tile, hid.hidden = ops::GroupLinear::Hidden::Gathered;
                         std::vector<int> hin = gin;
                         hin.insert(hin.begin() + 3, {w0, b0, w1, b1});
                         g.output(two, (max ? "two_max" : "two") + on);

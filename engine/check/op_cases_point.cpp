@@ -122,9 +122,11 @@ void wide_cases(std::vector<OpCase>& v, bool cpu_device) {
         max.max = true;
         max.group = k.group;
         c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max");
-        if (cpu_device) {  // the 16 x 32 tile that CPU devices use on big layers
-            max.big_tile = true;
+        if (cpu_device) {  // the tiles that CPU devices use on big layers
+            max.tile = ops::GroupLinear::Tile::Big16x32;
             c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max_big_tile");
+            max.tile = ops::GroupLinear::Tile::Big8x32;
+            c.output(ops::group_linear(c.g, {x, wv, bv}, max), "max_big_tile_8x32");
         }
         ops::GroupLinear plain;
         plain.act = ops::kActLeaky;

@@ -152,7 +152,7 @@ int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, con
     if (l.weights != GroupLinear::Weights::Shuffle) p.set("weights", double(l.weights));
     if (l.input == GroupLinear::Input::Gather || l.input == GroupLinear::Input::Points) p.set("feat_begin", d(l.feat_begin));
     if (l.max) p.set("max", 1);
-    if (l.big_tile) p.set("tile", 1);
+    if (l.tile != GroupLinear::Tile::Auto) p.set("tile", double(l.tile));
     if (l.hidden != GroupLinear::Hidden::None) p.set("hidden", double(l.hidden));
     if (l.point_major) p.set("point_major", 1);
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls

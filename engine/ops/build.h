@@ -114,9 +114,10 @@ struct GroupLinear {
     // How the weights reach the lanes on the Texel path (group_linear.cpp); each falls
     // back to the next where the device lacks what it needs. Tests sweep all three.
     enum class Weights { Shuffle = 0, Uniform = 1, Storage = 2 } weights = Weights::Shuffle;
-    // The tile CPU devices use on big layers (16 x 32, group_linear.cpp) whatever the
-    // layer's size or device: lets tests and the self-test reach it on small shapes.
-    bool big_tile = false;
+    // Auto: chosen per device and layer. The others force a tile CPU devices use on
+    // big layers (group_linear.cpp: 16 x 32 with 16 host vector registers, 8 x 32
+    // with 32) whatever the layer or device: tests and the self-test reach both.
+    enum class Tile { Auto = 0, Big16x32 = 1, Big8x32 = 2 } tile = Tile::Auto;
     // Gather only: the layer's input is a first layer computed in registers from
     // the ball rows, never stored (the same act; W0's width a multiple of 4):
     //   Gathered: [points, centres, idx, W0^T, b0, W^T, bias (, features)], act(row W0^T + b0)

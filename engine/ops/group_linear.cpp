@@ -31,8 +31,9 @@
 // Param point_major = 1 (not with max): the output is [M, N] instead of [N, M].
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
-// else channel-major [N, M]. Params act, slope as linear's. Param tile = 1: the
-// 16 x 32 tile of big layers on CPU devices, whatever the layer and device (tests).
+// else channel-major [N, M]. Params act, slope as linear's. Param tile
+// (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, the tiles of big layers on CPU
+// devices, whatever the layer and device (tests).
 #include <algorithm>
 #include <limits>
 
@@ -63,7 +64,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l;
     l.mode = p.has("in") ? int(int_param(p, "in", 0, 3)) : 0;
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
-    if (p.has("tile")) int_param(p, "tile", 0, 1);
+    if (p.has("tile")) int_param(p, "tile", 0, 2);
     l.max = p.get("max", 0) != 0;
     l.hidden = p.has("hidden") ? int(int_param(p, "hidden", 0, 2)) : 0;
     if (l.hidden != 0 && l.mode != 1) throw Error("hidden = " + std::to_string(l.hidden) + " needs gathered rows (in = 1)");
@@ -211,10 +212,15 @@ void gpu(const GpuOpArgs& a) {
     // 8 x 32, 12 x 32, 16 x 16, 16 x 48, 16 x 64 and 32 x 32: 10-25 % faster on
     // the paper's SA layers, but 2x slower on a 64-row layer, and its unrolled
     // shader compiles for ~2 s, which small layers never earn back (bench/README.md).
+    // On a host with 32 vector registers (AVX-512VL) 8 x 32 was 15-17 % faster than
+    // 16 x 32 on three of those layers and level on the fourth; the AVX2 VM had
+    // measured 8 x 32 level or slower there, so the tile follows the register count.
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
-    const bool big = a.params.get("tile", 0) == 1 ||
+    const int tile = int(a.params.get("tile", 0));
+    const bool big = tile != 0 ||
                      (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
-    const uint32_t TM = big ? 16 : 8;
+    const bool narrow = tile == 2 || (tile == 0 && d.host_vector_registers >= 32);
+    const uint32_t TM = big && !narrow ? 16 : 8;
     const uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
     const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
