@@ -31,6 +31,7 @@ py::dict device_dict(const api::DeviceInfo& x) {
     d["max_storage_buffer_bytes"] = x.max_storage_buffer_bytes;
     d["timestamps"] = x.timestamps;
     d["device_local_bytes"] = x.device_local_bytes;
+    d["host_vector_registers"] = x.host_vector_registers;
     return d;
 }
 

@@ -2,6 +2,8 @@
 // automatic barriers (only on hazards) and timestamps.
 #include <catch2/catch.hpp>
 #include <cstring>
+#include <fstream>
+#include <string>
 
 #include "base/error.h"
 #include "engine/ops/build.h"
@@ -25,6 +27,21 @@ TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
     CHECK(d.max_storage_buffers >= 4);  // Vulkan's guaranteed minimum; pipelines check their own needs
     CHECK(d.max_uniform_range >= 16384);  // Vulkan's guaranteed minimum
     CHECK(d.tensor_alignment() % d.uniform_offset_alignment == 0);
+    // A CPU device names the host's vector registers (group_linear's big tile follows
+    // them); on x86 the answer must agree with the kernel's CPU flags. GPUs say 0.
+    if (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU) {
+        CHECK(d.host_vector_registers == 0);
+    } else {
+        CHECK((d.host_vector_registers == 16 || d.host_vector_registers == 32));
+#if defined(__x86_64__)
+        std::ifstream cpuinfo("/proc/cpuinfo");
+        std::string line;
+        bool vl = false, seen = false;
+        while (!seen && std::getline(cpuinfo, line))
+            if (line.rfind("flags", 0) == 0) seen = true, vl = (line + " ").find(" avx512vl ") != std::string::npos;
+        if (seen) CHECK(d.host_vector_registers == (vl ? 32u : 16u));
+#endif
+    }
 }
 
 TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refused by name", "[runtime]") {

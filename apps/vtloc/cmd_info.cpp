@@ -97,7 +97,8 @@ int cmd_devices(Session& s, int argc, char** argv) {
                            {"max_push_constant_bytes", d.max_push_constant_bytes},
                            {"max_texel_buffer_elements", d.max_texel_buffer_elements},
                            {"timestamps", d.timestamps},
-                           {"device_local_bytes", d.device_local_bytes}});
+                           {"device_local_bytes", d.device_local_bytes},
+                           {"host_vector_registers", d.host_vector_registers}});
         std::printf("%s\n", out.dump(2).c_str());
         return 0;
     }

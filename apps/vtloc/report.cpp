@@ -82,6 +82,8 @@ void print_device(const api::DeviceInfo& d, bool chosen) {
                 d.max_workgroup_size[1], d.max_workgroup_size[2], (unsigned long long)(d.max_storage_buffer_bytes >> 20),
                 d.max_storage_buffers, d.max_push_constant_bytes, d.max_texel_buffer_elements,
                 (unsigned long long)(d.device_local_bytes >> 20), d.timestamps ? "yes" : "no");
+    if (d.host_vector_registers > 0)  // a CPU device: its code runs on the host's vector registers
+        std::printf("      host CPU vector registers %u\n", d.host_vector_registers);
 }
 
 void print_touch(const api::TouchResult& r, const std::string& indent) {

@@ -43,6 +43,7 @@ DeviceInfo to_api(const rt::DeviceInfo& d) {
     o.max_texel_buffer_elements = d.max_texel_elements;
     o.timestamps = d.has_timestamps;
     o.device_local_bytes = d.device_local_bytes;
+    o.host_vector_registers = d.host_vector_registers;
     return o;
 }
 

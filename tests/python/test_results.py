@@ -110,6 +110,9 @@ def test_outputs_and_info(tiny, mug, touch, tiny_path, tmp_path):
     info = vtloc.inspect_model(tiny_path)
     assert info["parameter_count"] > 0 and len(info["tensors"]) > 0
     assert any(d["name"] for d in vtloc.list_devices())
+    # CPU devices name the host's vector registers (16 or 32), GPUs 0.
+    assert all(d["host_vector_registers"] == 0 if d["type"] != "CPU" else d["host_vector_registers"] in (16, 32)
+               for d in vtloc.list_devices())
 
 
 def test_cloud_without_normals_equals_the_cli(cli, tiny, tiny_path, mug, touch, tmp_path):

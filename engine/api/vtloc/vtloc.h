@@ -76,6 +76,9 @@ struct DeviceInfo {
     uint32_t max_texel_buffer_elements = 0;
     bool timestamps = false;                // per-node GPU timing possible
     uint64_t device_local_bytes = 0;
+    // CPU devices (lavapipe): vector registers of the host CPU its JIT code runs on,
+    // 32 with AVX-512VL or on AArch64, else 16; some CPU tiles follow it. 0 on GPUs.
+    uint32_t host_vector_registers = 0;
 };
 
 // Every Vulkan device with a compute queue.
