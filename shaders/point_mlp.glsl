@@ -71,6 +71,7 @@ float acc[TM * TN];
 #ifdef WEIGHTS_SHUFFLE
 layout(constant_id = 10) const uint SG = 8;  // the device's subgroup size
 const uint WR = (TN + SG - 1u) / SG;         // weights each lane loads per input channel
+const uint WR4 = (TN / 4u + SG - 1u) / SG;   // the same in vec4s (WVEC4: binding 2 is RGBA32F)
 #endif
 
 // acc += the products of the 4 input channels k0 .. k0 + 3 (a[i][u]: row i, channel
@@ -86,10 +87,21 @@ void fma_rows(vec4 a[TM], uint k0) {
 #ifdef WEIGHTS_SHUFFLE
         // Lane l loads columns l, l + SG, ...; all lanes take them by shuffles at
         // constant lane indices: one gather per SG weights instead of one per weight.
-        float wl[WR];
-        [[unroll]] for (uint r = 0; r < WR; ++r)
-            wl[r] = LOAD_W(k * p.N + min(gl_WorkGroupID.y * TN + min(r * SG + gl_SubgroupInvocationID, TN - 1u), p.N - 1u));
-        [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl[j / SG], j % SG);
+        // With WVEC4, lane l loads the vec4 of columns 4l .. 4l + 3, ...: one fetch
+        // per 4 SG weights. A CPU driver's texel fetch is a call, and the weight
+        // fetches were most of a big layer's calls.
+        if (WVEC4) {
+            vec4 wl4[WR4];
+            [[unroll]] for (uint r = 0; r < WR4; ++r)
+                wl4[r] = LOAD_WV4((k * p.N) / 4u + min(gl_WorkGroupID.y * TN / 4u + min(r * SG + gl_SubgroupInvocationID, TN / 4u - 1u),
+                                                      p.N / 4u - 1u));
+            [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl4[j / 4u / SG][j % 4u], (j / 4u) % SG);
+        } else {
+            float wl[WR];
+            [[unroll]] for (uint r = 0; r < WR; ++r)
+                wl[r] = LOAD_W(k * p.N + min(gl_WorkGroupID.y * TN + min(r * SG + gl_SubgroupInvocationID, TN - 1u), p.N - 1u));
+            [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl[j / SG], j % SG);
+        }
 #else
         if (WVEC4) {
             [[unroll]] for (uint j = 0; j < TN / 4; ++j) {

@@ -7,7 +7,8 @@
 // share them by shuffles at constant lane indices (a register permute on a CPU
 // driver), where every lane reading every weight was a gather per weight.
 #include "point_mlp_texel.glsl"
-layout(binding = 2) uniform samplerBuffer WT;  // R32F
+layout(binding = 2) uniform samplerBuffer WT;  // R32F, or RGBA32F where N % 4 == 0 (WVEC4)
 #define LOAD_W(e) texelFetch(WT, int(e)).x
+#define LOAD_WV4(e) texelFetch(WT, int(e))
 #define WEIGHTS_SHUFFLE
 #include "point_mlp.glsl"

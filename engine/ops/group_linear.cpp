@@ -272,7 +272,10 @@ void gpu(const GpuOpArgs& a) {
     const VkFormat f32 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
     a.seq.dispatch(a.ctx.pipelines().get(desc),
                    {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)},
-                    {wv, R, wp == Weights::Shuffle ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED}, {wv, R},
+                    {wv, R, wp != Weights::Shuffle ? VK_FORMAT_UNDEFINED
+                            : l.N % 4 == 0     ? VK_FORMAT_R32G32B32A32_SFLOAT  // whole vec4 rows (WVEC4)
+                                               : VK_FORMAT_R32_SFLOAT},
+                    {wv, R},
                     {bias.view, R}, {a.out[0].view, rt::Access::Write},
                     {centres.view, R, f32}, {index.view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
                     {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)},
