@@ -128,11 +128,11 @@ int compute_queue_family(VkPhysicalDevice pd) {
 }
 
 // lavapipe's LLVM targets the host CPU's features; AVX-512VL gives its 256-bit
-// code 32 ymm registers instead of AVX2's 16.
+// code 32 ymm registers instead of AVX2's 16 (x86-64 only: 32-bit mode has 8).
 uint32_t host_vector_registers() {
 #if defined(__aarch64__)
     return 32;
-#elif (defined(__x86_64__) || defined(__i386__)) && (defined(__GNUC__) || defined(__clang__))
+#elif defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
     return __builtin_cpu_supports("avx512vl") ? 32 : 16;
 #else
     return 16;

@@ -4,7 +4,7 @@
 // (storage buffers, for tensors beyond the device's texel-buffer limit); which
 // one runs: group_linear.cpp. They declare bindings 0, 1, 6 - 11 and LOAD_A, LOAD_A4,
 // LOAD_C, LOAD_I, LOAD_F, LOAD_F4, LOAD_H4, LOAD_HB4 (point_mlp_shfl.comp also
-// binding 2 and LOAD_W).
+// binding 2 and LOAD_W, LOAD_WV4).
 //
 // One PointNet++ MLP layer (1x1 conv, BatchNorm folded, act): out = act(A W + b)
 // with W stored [K][N] (input-major, so 4 output channels are one vec4), and the
@@ -30,7 +30,8 @@
 // every lane reads the same weights: on GPUs a broadcast; on lavapipe a loop over
 // the lanes from a storage buffer, a gather from a uniform buffer whose offset
 // depends on the loop (Mesa 22.3 takes only constant offsets as uniform), and
-// one gather per subgroup-size weights when shared by shuffles.
+// one gather per subgroup-size weights (per 4 x subgroup-size where N % 4 == 0)
+// when shared by shuffles.
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const uint TM = 4;   // rows per block, multiple of 4
 layout(constant_id = 2) const uint TN = 16;  // channels per invocation, multiple of 4

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>
+#include <map>
 #include <unistd.h>
 #include <random>
 
@@ -226,6 +227,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                     // A tile is the same code on every weight path; 8 x 32 on the one CPU devices take.
                     if (tile != Tile::Auto && ubo == Weights::Uniform) continue;
                     if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
+                    if (path == ops::BufferPath::Texel) require_weight_path(ubo);
                     const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
                                            (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
                     g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile}),
@@ -238,6 +240,29 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
     }
+}
+
+TEST_CASE("group_linear's big-layer tile follows the host's vector registers", "[op][group_linear]") {
+    // A layer with rows for 128 invocations and 1.3e8 multiply-adds (a big layer
+    // on CPU devices) and a small one; the tile is spec constants 1 (rows) and 2
+    // (channels) of the dispatch. Recording is enough: nothing runs.
+    const rt::DeviceInfo& d = test::gpu().info();
+    WeightStore w;
+    w.add("w", test::random_tensor({128, 64}, 3));
+    w.add("b", test::random_tensor({64}, 4));
+    Graph g;
+    const int wv = g.weight("w", {128, 64}), bv = g.weight("b", {64});
+    ops::GroupLinear max;
+    max.max = true, max.group = 128;
+    g.output(ops::group_linear(g, {g.input("big", {128, 128 * 128}), wv, bv}, max, "big"), "big");
+    g.output(ops::group_linear(g, {g.input("small", {128, 256}), wv, bv}, {}, "small"), "small");
+    GpuExecutor exec(test::gpu(), g, w);
+    std::map<std::string, std::pair<uint32_t, uint32_t>> tile;
+    for (const auto& r : exec.sequence().dispatch_log()) tile[r.node] = {r.spec.at(1), r.spec.at(2)};
+    INFO(d.name << ", host vector registers " << d.host_vector_registers);
+    const bool cpu = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+    CHECK(tile.at("big") == std::make_pair(cpu ? (d.host_vector_registers >= 32 ? 8u : 16u) : 8u, cpu ? 32u : 16u));
+    CHECK(tile.at("small") == std::make_pair(8u, 16u));
 }
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {

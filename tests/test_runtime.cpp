@@ -39,7 +39,10 @@ TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
         bool vl = false, seen = false;
         while (!seen && std::getline(cpuinfo, line))
             if (line.rfind("flags", 0) == 0) seen = true, vl = (line + " ").find(" avx512vl ") != std::string::npos;
-        if (seen) CHECK(d.host_vector_registers == (vl ? 32u : 16u));
+        if (seen)
+            CHECK(d.host_vector_registers == (vl ? 32u : 16u));
+        else
+            WARN("no flags line in /proc/cpuinfo: host_vector_registers not checked against the CPU's flags");
 #endif
     }
 }
