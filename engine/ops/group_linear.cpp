@@ -212,7 +212,7 @@ void gpu(const GpuOpArgs& a) {
     // 8 x 32, 12 x 32, 16 x 16, 16 x 48, 16 x 64 and 32 x 32: 10-25 % faster on
     // the paper's SA layers, but 2x slower on a 64-row layer, and its unrolled
     // shader compiles for ~2 s, which small layers never earn back (bench/README.md).
-    // On a host with 32 vector registers (AVX-512VL) 8 x 32 was 15-17 % faster than
+    // On a host with 32 vector registers (AVX-512VL) 8 x 32 was 12-17 % faster than
     // 16 x 32 on three of those layers and level on the fourth; the AVX2 VM had
     // measured 8 x 32 level or slower there, so the tile follows the register count.
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
@@ -233,6 +233,7 @@ void gpu(const GpuOpArgs& a) {
         throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
     const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
     const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
+    const bool wvec4 = l.N % 4 == 0;  // weight rows of whole vec4s: spec constant WVEC4 and binding 2's format
     struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
         uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
         uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
@@ -260,7 +261,7 @@ void gpu(const GpuOpArgs& a) {
     // WVECS (9) only where the shader declares it: elsewhere a weight-shape-dependent
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
-                               l.N % 4 == 0, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
+                               wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
                                !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
@@ -273,7 +274,7 @@ void gpu(const GpuOpArgs& a) {
     a.seq.dispatch(a.ctx.pipelines().get(desc),
                    {{src.view, R, fmt(src, false)}, {src.view, R, fmt(src, true)},
                     {wv, R, wp != Weights::Shuffle ? VK_FORMAT_UNDEFINED
-                            : l.N % 4 == 0     ? VK_FORMAT_R32G32B32A32_SFLOAT  // whole vec4 rows (WVEC4)
+                            : wvec4            ? VK_FORMAT_R32G32B32A32_SFLOAT
                                                : VK_FORMAT_R32_SFLOAT},
                     {wv, R},
                     {bias.view, R}, {a.out[0].view, rt::Access::Write},
