@@ -1,6 +1,6 @@
 // Self-test cases: disentangle (whole and split into row chunks), gma_decode,
 // chamfer (one set and a batch), ilu (1/4/8/16 lanes per row, register-resident), ilu_step, topk (ties;
-// a batch with its heat-maps), heatmap (with and without symmetry), retrieve (both paths) and belief (the shapes of tests/test_gma_ops.cpp,
+// a batch with its heat-maps), heatmap (with and without symmetry), retrieve and ilu_retrieve (both paths) and belief (the shapes of tests/test_gma_ops.cpp,
 // test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
 #include <cmath>
 
@@ -128,6 +128,23 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
         c.output(out[0], "index");
         c.output(out[1], "score");
         c.output(out[2], "heat");
+        v.push_back(std::move(c));
+    }
+
+    for (bool sym : {false, true}) {  // one dispatch without symmetry, the two ops' shaders with it
+        OpCase c("ilu_retrieve", std::string("a batch of 3 touches, C 64, hidden 32, N 16, 301 candidates, K 5, ") +
+                                     "heat-maps on 1037 points" + (sym ? ", symmetry order 3" : ""));
+        add_ilu_weights(c, 64, 32, 67);
+        std::vector<int> in{c.input("ft", random_tensor({3, 64}, 7, -2.0f, 2.0f)),
+                            c.input("fp", random_tensor({1, 64}, 8, -2.0f, 2.0f)), c.input("iters", ilu_iters_input(16, 16))};
+        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+            in.push_back(c.g.weight(n, c.w.get(n).shape));
+        const int sym_in = sym ? c.input("sym", symmetry_transforms({0.0, 0.0, 0.0}, {0.2, 1.0, 0.1}, 3)) : -1;
+        std::vector<int> out = ops::ilu_retrieve(c.g, in, 16, c.input("cand", random_tensor({301, 3}, 15, -0.5f, 0.5f)),
+                                                 c.input("cloud", random_tensor({1037, 6}, 16, -0.5f, 0.5f)), sym_in, 5);
+        const char* names[] = {"c", "contact", "index", "score", "heat"};
+        for (int i = 0; i < 5; ++i) c.output(out[size_t(i)], names[i]);
         v.push_back(std::move(c));
     }
 

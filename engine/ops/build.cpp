@@ -97,6 +97,18 @@ std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, i
     return g.add("ilu_step", in, {{"max_iters", double(max_iters)}, {"step", double(step)}}, name);
 }
 
+std::vector<int> ilu_retrieve(Graph& g, const std::vector<int>& in, int max_iters, int candidates, int cloud,
+                              int symmetry, int64_t k, const std::string& name, bool fuse, int wave) {
+    std::vector<int> all = in;
+    all.push_back(candidates);
+    all.push_back(cloud);
+    if (symmetry >= 0) all.push_back(symmetry);
+    Params p{{"max_iters", double(max_iters)}, {"k", d(k)}};
+    if (!fuse) p.set("fuse", 0);
+    if (wave != 1) p.set("wave", double(wave));
+    return g.add("ilu_retrieve", all, p, name);
+}
+
 std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name, bool subgroup) {
     Params p{{"k", d(k)}};
     if (!subgroup) p.set("subgroup", 0);

@@ -70,6 +70,12 @@ std::vector<int> chamfer(Graph& g, int a, int b, const std::string& name = "", b
 std::vector<int> ilu(Graph& g, const std::vector<int>& in, int max_iters, const std::string& name = "", int lanes = 0,
                      bool subgroup = true, int wave = 1);
 std::vector<int> ilu_step(Graph& g, const std::vector<int>& in, int max_iters, int step, const std::string& name = "");
+// ilu then retrieve on its contact, one op (one dispatch where both take their
+// register shaders): {c, contact, index, score, heat-map, workspace}. in: the
+// ILU's 13 inputs; symmetry: -1 for none; fuse = false: the two ops' own
+// dispatches always (tests and the bench compare both).
+std::vector<int> ilu_retrieve(Graph& g, const std::vector<int>& in, int max_iters, int candidates, int cloud,
+                              int symmetry, int64_t k, const std::string& name = "", bool fuse = true, int wave = 1);
 // subgroup = false: the shared-memory sort even where the register shader applies (K <= 16).
 std::vector<int> topk(Graph& g, int contact, int candidates, int64_t k, const std::string& name = "",
                       bool subgroup = true);

@@ -55,13 +55,15 @@ void choose_wave(const GpuOpArgs& a, Launch& l) {
     // Loop iterations of one invocation at max_iters (every loop counted, unrolled or not).
     const uint64_t CB = l.C / 4, per_iter = 3 * CB * (1 + RB) + CB * (1 + HB) + 4 * RB + 5 * HB + 16;
     const uint64_t iters = uint64_t(a.params.get("max_iters", 0));
-    if (iters * per_iter + 2 * CB * (1 + RB) + RB + HB + 3 * iters + 16 > kLoopIterationBudget)
+    const uint64_t loops = iters * per_iter + 2 * CB * (1 + RB) + RB + HB + 3 * iters + 16;
+    if (loops > kLoopIterationBudget)
         return no("would run " + std::to_string(iters * per_iter) + " loop iterations in one invocation, over the " +
                   std::to_string(kLoopIterationBudget) + " budget");
     l.wave = true;
     l.wave_L = L;
     l.RB = RB;
     l.HB = HB;
+    l.wave_loops = loops;
 }
 
 }  // namespace

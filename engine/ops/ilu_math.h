@@ -42,6 +42,7 @@ struct Launch {
     bool subgroup;
     bool wave = false;
     uint32_t wave_L = 0, RB = 0, HB = 0;
+    uint64_t wave_loops = 0;  // the wave shader's loop iterations in one invocation (kLoopIterationBudget)
 };
 Launch launch(const GpuOpArgs& a);
 

@@ -39,6 +39,7 @@ extern const OpDef op_ilu_step;     // ilu_step.cpp
 extern const OpDef op_topk;         // topk.cpp
 extern const OpDef op_heatmap;      // heatmap.cpp
 extern const OpDef op_retrieve;     // retrieve.cpp (topk + heatmap)
+extern const OpDef op_ilu_retrieve; // ilu_retrieve.cpp (ilu + retrieve)
 extern const OpDef op_belief;       // belief.cpp
 extern const OpDef op_fps;              // fps.cpp (point cloud)
 extern const OpDef op_ball_query;       // ball_query.cpp

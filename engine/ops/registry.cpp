@@ -29,6 +29,7 @@ const OpDef* const kOps[] = {
     &ops::op_topk,
     &ops::op_heatmap,
     &ops::op_retrieve,
+    &ops::op_ilu_retrieve,
     &ops::op_belief,
     &ops::op_fps,
     &ops::op_ball_query,

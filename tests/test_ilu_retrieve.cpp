@@ -1,0 +1,123 @@
+// ilu_retrieve: the ILU with top-K and heat-map as its epilogue. Against the CPU
+// references of ilu and retrieve (the ILU's default tolerance, 1e-4 + 1e-4|ref|;
+// top-K indices exact) and against the two ops' own dispatches (indices exact,
+// floats at the same tolerance), one dispatch where it fuses and two where it
+// cannot (symmetry maps, K > 16, an ILU workgroup narrower than a subgroup).
+#include <catch2/catch.hpp>
+
+
+#include "engine/model/heads.h"
+#include "engine/ops/build.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+using vtloc::test::random_tensor;
+
+namespace {
+
+WeightStore random_ilu(int64_t C, int64_t H, uint32_t seed) {
+    WeightStore w;
+    float g = 1.0f / std::sqrt(float(3 * C)), hb = 1.0f / std::sqrt(float(C)), ob = 1.0f / std::sqrt(float(H));
+    uint32_t s = seed;
+    for (const char* gate : {"convz", "convr", "convq"}) {
+        w.add(std::string("ilu.") + gate + ".weight", random_tensor({C, 3 * C}, ++s, -g, g));
+        w.add(std::string("ilu.") + gate + ".bias", random_tensor({C}, ++s, -g, g));
+    }
+    w.add("ilu.head.0.weight", random_tensor({H, C}, ++s, -hb, hb));
+    w.add("ilu.head.0.bias", random_tensor({H}, ++s, -hb, hb));
+    w.add("ilu.head.2.weight", random_tensor({3, H}, ++s, -ob, ob));
+    w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
+    return w;
+}
+
+struct Case {
+    int64_t B = 1, C = 64, H = 32, M = 301, P = 1037, D = 6, K = 5, T = 0;
+    int iters = 16, wave = 1;
+};
+
+struct Built {
+    Graph g;
+    TensorMap inputs;
+};
+
+// Candidates and cloud near the origin, where the ILU's contacts land (its
+// outputs are sums of small head outputs), so the top-K is not decided by a tie.
+Built build(const WeightStore& w, const Case& c, bool fuse) {
+    Built r;
+    Graph& g = r.g;
+    std::vector<int> in{g.input("ft", {c.B, c.C}), g.input("fp", {1, c.C}),
+                        g.input("iters", {1}, ElemType::I32)};
+    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+        in.push_back(g.weight(n, w.get(n).shape));
+    const int sym = c.T > 0 ? g.input("sym", {c.T, 12}) : -1;
+    std::vector<int> out = ops::ilu_retrieve(g, in, c.iters, g.input("cand", {c.M, 3}), g.input("cloud", {c.P, c.D}), sym,
+                                             c.K, "ilu", fuse, c.wave);
+    const char* names[] = {"c", "contact", "index", "score", "heat"};
+    for (int i = 0; i < 5; ++i) g.output(out[size_t(i)], names[i]);
+    r.inputs = {{"ft", random_tensor({c.B, c.C}, 3, -2.0f, 2.0f)},
+                {"fp", random_tensor({1, c.C}, 4, -2.0f, 2.0f)},
+                {"iters", ilu_iters_input(c.iters, c.iters)},
+                {"cand", random_tensor({c.M, 3}, 5, -0.5f, 0.5f)},
+                {"cloud", random_tensor({c.P, c.D}, 6, -0.5f, 0.5f)}};
+    if (c.T > 0) {
+        HostTensor s({c.T, 12});
+        for (int64_t t = 0; t < c.T; ++t)  // rotations about z by 2 pi t / T
+            for (int i = 0; i < 12; ++i) {
+                const double a = 6.283185307179586 * double(t) / double(c.T);
+                const double m[12] = {std::cos(a), -std::sin(a), 0, 0, std::sin(a), std::cos(a), 0, 0, 0, 0, 1, 0};
+                s.data[size_t(t * 12 + i)] = float(m[i]);
+            }
+        r.inputs["sym"] = s;
+    }
+    return r;
+}
+
+size_t dispatches(const GpuExecutor& e) { return e.sequence().dispatch_log().size(); }
+
+}  // namespace
+
+TEST_CASE("ilu_retrieve matches the CPU references, fused and apart, bit-identical to each other", "[op][ilu_retrieve][ilu][retrieve]") {
+    const uint32_t sg = test::gpu().info().subgroup_size;
+    std::vector<Case> cases;
+    cases.push_back(Case{});                                               // the lite model's head shape
+    cases.push_back(Case{3, 20, 12, 37, 41, 3, 7, 0, 9, 1});               // a batch; odd cloud and candidate counts
+    cases.push_back(Case{2, 64, 64, 1000, 513, 6, 16, 0, 5, int(2 * sg)});  // ILU over two subgroups, K = 16
+    cases.push_back(Case{1, 16, 8, 5, 3, 3, 5, 0, 0, 1});                   // N = 0, every candidate kept
+    for (const Case& c : cases) {
+        INFO("B " << c.B << " C " << c.C << " H " << c.H << " M " << c.M << " P " << c.P << " K " << c.K << " N "
+                  << c.iters << " wave " << c.wave);
+        WeightStore w = random_ilu(c.C, c.H, uint32_t(c.C + c.M));
+        Built fused = build(w, c, true), apart = build(w, c, false);
+        TensorMap a = test::run_gpu_and_compare(fused.g, w, fused.inputs);
+        TensorMap b = test::run_gpu_and_compare(apart.g, w, apart.inputs);
+        // Not bit for bit: a driver may round the ILU's sums differently in the
+        // two shaders (lavapipe does at subgroup size 4 with two subgroups).
+        CHECK(a.at("index").ints() == b.at("index").ints());
+        for (const char* n : {"c", "contact", "score", "heat"}) test::require_close(a.at(n), b.at(n), {}, n);
+        GpuExecutor ef(test::gpu(), fused.g, w), ea(test::gpu(), apart.g, w);
+        CHECK(dispatches(ef) == 1);
+        CHECK(dispatches(ea) == 2);
+        CHECK(ef.sequence().dispatch_log().at(0).shader == "ilu_retrieve");
+    }
+}
+
+TEST_CASE("ilu_retrieve records the two ops' dispatches where it cannot fuse", "[op][ilu_retrieve][ilu][retrieve]") {
+    const uint32_t sg = test::gpu().info().subgroup_size;
+    std::vector<std::pair<Case, std::string>> cases{
+        {Case{2, 20, 12, 37, 41, 3, 5, 3, 6, 1}, "symmetry maps"},
+        {Case{1, 20, 12, 300, 41, 3, 17, 0, 6, 1}, "K 17"},
+    };
+    if (sg >= 2) cases.push_back({Case{1, 20, 12, 37, 41, 3, 5, 0, 6, int(sg / 2)}, "an ILU workgroup of half a subgroup"});
+    for (const auto& [c, why] : cases) {
+        INFO(why);
+        WeightStore w = random_ilu(c.C, c.H, 9);
+        Built f = build(w, c, true);
+        test::run_gpu_and_compare(f.g, w, f.inputs);
+        GpuExecutor e(test::gpu(), f.g, w);
+        std::vector<std::string> shaders;
+        for (const auto& d : e.sequence().dispatch_log()) shaders.push_back(d.shader);
+        CHECK(shaders.size() >= 2);
+        for (const std::string& s : shaders) CHECK(s != "ilu_retrieve");
+    }
+}
