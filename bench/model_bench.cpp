@@ -161,6 +161,37 @@ json ilu_stepped(VtlocRunner& r, const EncodedObject& obj, const ModelBenchInput
     return out;
 }
 
+// Where the ILU ends in retrieval's dispatch (engine/ops/ilu_retrieve.cpp), the
+// retrieval's cost is what it adds to the head node: the head as built, then
+// with retrieval in a node of its own, profiled in turns so that drift on a
+// shared machine falls on both. On the CPU reference the same split times
+// the reference retrieval alone.
+json retrieval_split(VtlocRunner& r, const EncodedObject& obj, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
+    auto run = [&] { r.localize(obj, {in.image}, TouchOptions{}); };
+    auto of = [](const Profile& p, const char* st) {
+        return median_of(sums(p, [&](const std::string& l) { return stage(p, l) == st; }));
+    };
+    std::vector<double> fused, head, node;
+    for (int round = 0, rounds = r.on_gpu() ? 3 : 1; round < rounds; ++round) {  // the reference is slow and steady
+        Profile f = profile(r, opt.profile_reps, run);
+        r.set_retrieval_apart(true);
+        Profile a;
+        try {
+            a = profile(r, opt.profile_reps, run);
+        } catch (...) {
+            r.set_retrieval_apart(false);
+            throw;
+        }
+        r.set_retrieval_apart(false);
+        if (of(f, "retrieval") > 0) return nullptr;  // not fused in this graph: the stage table has it
+        fused.push_back(of(f, "head"));
+        head.push_back(of(a, "head"));
+        node.push_back(of(a, "retrieval"));
+    }
+    const double fm = median_of(fused), hm = median_of(head);
+    return {{"fused_head_ms", fm}, {"head_alone_ms", hm}, {"epilogue_ms", fm - hm}, {"node_ms", median_of(node)}};
+}
+
 json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
     json rows = json::array();
     for (int64_t n : opt.points) {
@@ -244,6 +275,9 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
         progress("ILU sweep over N");
         out["ilu"] = ilu_sweep(r, in, opt);
         if (opt.stepped_iters > 0) out["ilu"]["stepped"] = ilu_stepped(r, obj, in, opt);
+        progress("retrieval in the ILU's dispatch and apart");
+        json split = retrieval_split(r, obj, in, opt);
+        if (!split.is_null()) out["retrieval_split"] = split;
     }
     if (!opt.points.empty()) progress("point sweep");
     if (!opt.points.empty()) out["points"] = point_sweep(r, in, opt);

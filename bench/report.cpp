@@ -82,6 +82,13 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
                          s["per_iteration_ms"]["p90"].get<double>(), med(s["first_step_ms"]), med(s["pass_through_step_ms"]));
         }
     }
+    if (b.contains("retrieval_split")) {
+        const json& s = b["retrieval_split"];
+        std::fprintf(f, "\n  retrieval in the ILU's dispatch: +%.4f ms (head %.4f ms with it, %.4f ms without);"
+                        " as a node of its own %.4f ms\n",
+                     s["epilogue_ms"].get<double>(), s["fused_head_ms"].get<double>(), s["head_alone_ms"].get<double>(),
+                     s["node_ms"].get<double>());
+    }
     if (b.contains("points")) {
         std::fprintf(f, "\n  point branch   encode ms (wall)   node sum ms   FPS ms   ball ms   MLP GFLOP/s\n");
         for (const json& r : b["points"])

@@ -208,6 +208,10 @@ json ratios(const json& gpu, const json& cpu) {
     put("cached_touch", med(cpu["cached_touch_ms"]), med(gpu["cached_touch_ms"]));
     for (auto& [k, v] : gpu["stages_ms"].items())
         if (cpu["stages_ms"].contains(k)) put("stage " + k, med(cpu["stages_ms"][k]), med(v));
+    // The reference's retrieval node against what retrieval adds to the GPU's ILU dispatch.
+    if (gpu.contains("retrieval_split") && cpu.contains("retrieval_split"))
+        put("retrieval in the ILU", cpu["retrieval_split"]["node_ms"].get<double>(),
+            gpu["retrieval_split"]["epilogue_ms"].get<double>());
     return r;
 }
 

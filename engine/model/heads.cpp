@@ -32,6 +32,13 @@ IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, 
     return {out[0], out[1]};
 }
 
+IluRetrieveOutputs build_ilu_retrieve(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters,
+                                      int candidates, int cloud, int symmetry, int64_t k) {
+    std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);
+    std::vector<int> out = ops::ilu_retrieve(g, in, max_iters, candidates, cloud, symmetry, k, "ilu");
+    return {{out[0], out[1]}, out[2], out[3], out[4]};
+}
+
 IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
     std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);
     if (max_iters < 1) throw Error("a stepped ILU needs max_iters >= 1");

@@ -24,6 +24,16 @@ IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, 
 // has a timestamp between iterations. Same outputs as build_ilu.
 IluOutputs build_ilu_stepped(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters);
 
+// build_ilu followed by the top-K and heat-map on its contact as one node, "ilu"
+// (engine/ops/ilu_retrieve.cpp: one dispatch where both fit their register
+// shaders). symmetry: -1 for none.
+struct IluRetrieveOutputs {
+    IluOutputs ilu;
+    int index = -1, score = -1, heat = -1;
+};
+IluRetrieveOutputs build_ilu_retrieve(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters,
+                                      int candidates, int cloud, int symmetry, int64_t k);
+
 // The run-time input for `iters`; throws unless 0 <= n <= max_iters.
 HostTensor ilu_iters_input(int n, int max_iters);
 

@@ -67,6 +67,17 @@ Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const Vtlo
         g.output(ops::chamfer(g, pd, gma_target, "gma.chamfer").at(0), "gma.chamfer");
     }
     int contact = -1;
+    if (cfg.head == Head::Ilu && !spec.ilu_stepped && !spec.retrieval_apart && candidates >= 0) {
+        // The ILU and retrieval as one node: one dispatch where both fit their
+        // register shaders (engine/ops/ilu_retrieve.cpp).
+        IluRetrieveOutputs r = build_ilu_retrieve(g, w, ft, fp, iters, spec.max_iters, candidates, cloud, symmetry, k);
+        g.output(r.ilu.c, "ilu.c");
+        g.output(r.ilu.contact, "contact");
+        g.output(r.index, "topk.index");
+        g.output(r.score, "topk.score");
+        g.output(r.heat, "heatmap");
+        return g;
+    }
     if (cfg.head == Head::Ilu) {
         IluOutputs ilu = spec.ilu_stepped ? build_ilu_stepped(g, w, ft, fp, iters, spec.max_iters)
                                            : build_ilu(g, w, ft, fp, iters, spec.max_iters);

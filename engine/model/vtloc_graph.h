@@ -39,6 +39,7 @@ struct VtlocGraphSpec {
     int max_iters = limits::kMaxIters;                        // ILU: N may be 0..max_iters per run
     int symmetry_order = 0;                     // > 1: heat-map with the symmetry prior
     bool ilu_stepped = false;                   // bench: one dispatch per ILU iteration (build_ilu_stepped)
+    bool retrieval_apart = false;               // bench: ILU and retrieval as nodes of their own (ilu, retrieve)
 };
 
 // Builds the graph from weights made by prepare_weights (engine/model/prepared_weights.h).

@@ -46,7 +46,8 @@ VtlocRunner::~VtlocRunner() = default;
 TensorMap VtlocRunner::run(const VtlocGraphSpec& spec_in, const TensorMap& inputs) {
     VtlocGraphSpec spec = spec_in;
     spec.ilu_stepped = ilu_stepped_ && spec.image_height > 0 && spec.max_iters > 0;
-    return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : ""),
+    spec.retrieval_apart = retrieval_apart_;
+    return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : "") + (retrieval_apart_ ? "/apart" : ""),
                      [&] { return build_vtloc_graph(config_, weights_, spec); }, inputs);
 }
 

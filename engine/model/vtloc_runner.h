@@ -125,6 +125,9 @@ public:
     // Bench diagnostics: record the ILU head one dispatch per iteration
     // (engine/model/heads.h build_ilu_stepped), so profiling times each iteration.
     void set_ilu_stepped(bool on) { ilu_stepped_ = on; }
+    // Bench diagnostics: retrieval in a dispatch of its own rather than as the
+    // ILU's epilogue (engine/ops/ilu_retrieve.cpp), to time it apart.
+    void set_retrieval_apart(bool on) { retrieval_apart_ = on; }
 
     // The graph of the last run, and on the GPU the device memory it holds.
     struct MemoryUse {
@@ -154,6 +157,7 @@ private:
     rt::Context* gpu_;
     bool profile_ = false;
     bool ilu_stepped_ = false;
+    bool retrieval_apart_ = false;
     struct Compiled;
     // Weights on the GPU, once for every graph shape (made at the first GPU run).
     std::shared_ptr<ResidentWeights> resident_;
