@@ -26,7 +26,7 @@
 // PMOUT: a plain output point-major [M][N] (4 channels a store), for HIDDEN 2's U.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
-// 4 x TM x TN fmas (fma_rows). The channel block comes from gl_WorkGroupID.y, so
+// 4 x TM x TN fmas (fma_rows). The channel block is uniform in a workgroup (CBLOCK), so
 // every lane reads the same weights: on GPUs a broadcast; on lavapipe a loop over
 // the lanes from a storage buffer, a gather from a uniform buffer whose offset
 // depends on the loop (Mesa 22.3 takes only constant offsets as uniform), and
@@ -46,6 +46,10 @@ layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 layout(constant_id = 11) const bool OVEC4 = true;
 layout(constant_id = 12) const uint HIDDEN = 0;  // MODE 1: A from a layer in registers (LOAD_H4, LOAD_HB4)
 layout(constant_id = 13) const bool PMOUT = false;
+// The channel block along x and the row block along y (group_linear.cpp says why), or the reverse.
+layout(constant_id = 14) const bool CB_FIRST = false;
+#define CBLOCK (CB_FIRST ? gl_WorkGroupID.x : gl_WorkGroupID.y)
+#define RBLOCK (CB_FIRST ? gl_WorkGroupID.y : gl_WorkGroupID.x)
 #include "act.glsl"
 
 #ifndef WEIGHTS_SHUFFLE
@@ -94,23 +98,23 @@ void fma_rows(vec4 a[TM], uint k0) {
         if (WVEC4) {
             vec4 wl4[WR4];
             [[unroll]] for (uint r = 0; r < WR4; ++r)
-                wl4[r] = LOAD_WV4((k * p.N) / 4u + min(gl_WorkGroupID.y * TN / 4u + min(r * SG + gl_SubgroupInvocationID, TN / 4u - 1u),
+                wl4[r] = LOAD_WV4((k * p.N) / 4u + min(CBLOCK * TN / 4u + min(r * SG + gl_SubgroupInvocationID, TN / 4u - 1u),
                                                       p.N / 4u - 1u));
             [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl4[j / 4u / SG][j % 4u], (j / 4u) % SG);
         } else {
             float wl[WR];
             [[unroll]] for (uint r = 0; r < WR; ++r)
-                wl[r] = LOAD_W(k * p.N + min(gl_WorkGroupID.y * TN + min(r * SG + gl_SubgroupInvocationID, TN - 1u), p.N - 1u));
+                wl[r] = LOAD_W(k * p.N + min(CBLOCK * TN + min(r * SG + gl_SubgroupInvocationID, TN - 1u), p.N - 1u));
             [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = subgroupShuffle(wl[j / SG], j % SG);
         }
 #else
         if (WVEC4) {
             [[unroll]] for (uint j = 0; j < TN / 4; ++j) {
-                vec4 v = W4[(k * p.N) / 4 + min(gl_WorkGroupID.y * TN / 4 + j, p.N / 4 - 1)];
+                vec4 v = W4[(k * p.N) / 4 + min(CBLOCK * TN / 4 + j, p.N / 4 - 1)];
                 [[unroll]] for (uint c = 0; c < 4; ++c) w[u * TN + 4 * j + c] = v[c];
             }
         } else {
-            [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = W[k * p.N + min(gl_WorkGroupID.y * TN + j, p.N - 1)];
+            [[unroll]] for (uint j = 0; j < TN; ++j) w[u * TN + j] = W[k * p.N + min(CBLOCK * TN + j, p.N - 1)];
         }
 #endif
     }
@@ -229,10 +233,10 @@ void main() {
     // Spare invocations redo the last block and store nothing: no early return,
     // so every loop below has a uniform trip count (its counters stay uniform
     // and the weight loads with them).
-    const uint t_all = gl_WorkGroupID.x * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
+    const uint t_all = RBLOCK * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
     const bool live = t_all < p.blocks;
     const uint t = min(t_all, p.blocks - 1u);
-    const uint n0 = gl_WorkGroupID.y * TN;
+    const uint n0 = CBLOCK * TN;
     float b[TN];
     [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
     if (!MAXPOOL) {

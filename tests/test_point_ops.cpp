@@ -236,6 +236,13 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                              "max" + on);  // negative maxima
                     g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
                              "plain" + on);
+                    if (tile != Tile::Auto) continue;
+                    // The other workgroup grid: row blocks along x.
+                    ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
+                    rx.rows_in_x = true;
+                    g.output(ops::group_linear(g, {x, wv, bv}, rx), "max_relu.rows_in_x" + on);
+                    rx.max = false, rx.group = 1;
+                    g.output(ops::group_linear(g, {x, wv, bv}, rx), "plain.rows_in_x" + on);
                 }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
@@ -258,7 +265,13 @@ TEST_CASE("group_linear's big-layer tile follows the host's vector registers", "
     g.output(ops::group_linear(g, {g.input("small", {128, 256}), wv, bv}, {}, "small"), "small");
     GpuExecutor exec(test::gpu(), g, w);
     std::map<std::string, std::pair<uint32_t, uint32_t>> tile;
-    for (const auto& r : exec.sequence().dispatch_log()) tile[r.node] = {r.spec.at(1), r.spec.at(2)};
+    for (const auto& r : exec.sequence().dispatch_log()) {
+        tile[r.node] = {r.spec.at(1), r.spec.at(2)};
+        // Channel blocks along x (spec constant 14), row blocks along y.
+        CHECK(r.spec.at(14) == 1u);
+        CHECK(r.groups[0] == (64 + r.spec.at(2) - 1) / r.spec.at(2));
+        if (r.node == "big") CHECK(r.groups[1] > 1u);  // 128 groups of 128 rows
+    }
     INFO(d.name << ", host vector registers " << d.host_vector_registers);
     const bool cpu = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU;
     CHECK(tile.at("big") == std::make_pair(cpu ? (d.host_vector_registers >= 32 ? 8u : 16u) : 8u, cpu ? 32u : 16u));

@@ -132,6 +132,9 @@ struct GroupLinear {
     //     U = group_linear(Points, point_major) of W0 (sa_gather's arithmetic).
     enum class Hidden { None = 0, Gathered = 1, PerPoint = 2 } hidden = Hidden::None;
     bool point_major = false;  // a plain output as [M, N] instead of [N, M]
+    // The workgroup grid: channel blocks along x where the device's limits allow
+    // (group_linear.cpp says why); true keeps row blocks along x (tests run both).
+    bool rows_in_x = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

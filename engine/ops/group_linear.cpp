@@ -229,7 +229,14 @@ void gpu(const GpuOpArgs& a) {
     const uint32_t sg = std::max(1u, d.subgroup_size);
     while (L > sg && L / 2 >= blocks) L /= 2;
     const uint64_t gx = (blocks + L - 1) / L, gy = (uint64_t(l.N) + TN - 1) / TN;
-    if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
+    // Channel blocks along x, so that the workgroups a driver runs one after the
+    // other (x first on lavapipe) read the same input rows while they are still in
+    // cache, instead of every channel block streaming all rows from memory: the
+    // paper's SA1 and SA2 max layers re-read 25 and 8 MB inputs 4 and 8 times.
+    // Param rows_in_x (tests) or a row count past the y limit keeps rows along x.
+    const bool cb_first =
+        a.params.get("rows_in_x", 0) == 0 && gx <= d.max_workgroup_count[1] && gy <= d.max_workgroup_count[0];
+    if (!cb_first && (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1]))
         throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
     const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
     const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
@@ -262,7 +269,7 @@ void gpu(const GpuOpArgs& a) {
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major};
+                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -281,13 +288,14 @@ void gpu(const GpuOpArgs& a) {
                     {centres.view, R, f32}, {index.view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
                     {fsrc.view, R, fmt(fsrc, false)}, {fsrc.view, R, fmt(fsrc, true)},
                     {w0.view, R, fmt(w0, l.hidden != 0)}, {b0.view, R, fmt(b0, l.hidden == 1)}},
-                   &push, sizeof(push), uint32_t(gx), uint32_t(gy));
+                   &push, sizeof(push), uint32_t(cb_first ? gy : gx), uint32_t(cb_first ? gx : gy));
 }
 
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
-                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major"}};
+                            {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
+                             "rows_in_x"}};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
                                               GroupLinear::Weights want, uint64_t offset) {
