@@ -127,18 +127,6 @@ int compute_queue_family(VkPhysicalDevice pd) {
     return best;
 }
 
-// lavapipe's LLVM targets the host CPU's features; AVX-512VL gives its 256-bit
-// code 32 ymm registers instead of AVX2's 16 (x86-64 only: 32-bit mode has 8).
-uint32_t host_vector_registers() {
-#if defined(__aarch64__)
-    return 32;
-#elif defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-    return __builtin_cpu_supports("avx512vl") ? 32 : 16;
-#else
-    return 16;
-#endif
-}
-
 DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
@@ -227,6 +215,26 @@ size_t choose_device(const std::vector<DeviceInfo>& devs, const std::string& wan
 }
 
 }  // namespace
+
+// lavapipe's LLVM targets the host CPU's features; AVX-512VL gives its 256-bit
+// code 32 ymm registers instead of AVX2's 16 (x86-64 only: 32-bit mode has 8).
+// Mesa lets a user hold its JIT below the CPU (util/u_cpu_detect.c): each
+// GALLIUM_OVERRIDE_CPU_CAPS level it knows, and GALLIUM_NOSSE, turn AVX-512 off.
+uint32_t host_vector_registers() {
+#if defined(__aarch64__)
+    return 32;
+#elif defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
+    if (const char* o = std::getenv("GALLIUM_OVERRIDE_CPU_CAPS"))
+        for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"})
+            if (std::strcmp(o, level) == 0) return 16;
+    if (const char* n = std::getenv("GALLIUM_NOSSE"))
+        for (const char* yes : {"1", "y", "yes", "t", "true", "Y", "YES", "T", "TRUE"})
+            if (std::strcmp(n, yes) == 0) return 16;
+    return __builtin_cpu_supports("avx512vl") ? 32 : 16;
+#else
+    return 16;
+#endif
+}
 
 std::vector<DeviceInfo> Context::list_devices() {
     VkInstance inst = make_instance(false);

@@ -51,12 +51,18 @@ struct DeviceInfo {
     // driver's JIT code runs on, 32 with AVX-512VL or on AArch64, else 16. No Vulkan
     // limit exposes them, and register tiles sized for 16 spill less there but
     // fetch more per multiply-add than a machine with 32 needs (group_linear.cpp).
-    uint32_t host_vector_registers = 0;
+    uint32_t host_vector_registers = 0;  // rt::host_vector_registers()
     // Offset alignment of any tensor: it may be bound as a storage, texel or uniform buffer.
     uint64_t tensor_alignment() const {
         return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment, uniform_offset_alignment});
     }
 };
+
+// The host's vector registers as lavapipe's JIT code sees them (DeviceInfo's
+// host_vector_registers on CPU devices): 32 with AVX-512VL or on AArch64, else
+// 16, and 16 where GALLIUM_OVERRIDE_CPU_CAPS (nosse .. avx) or GALLIUM_NOSSE
+// holds Mesa's JIT below AVX-512.
+uint32_t host_vector_registers();
 
 const char* device_type_name(VkPhysicalDeviceType t);
 

@@ -1,9 +1,11 @@
 // The Vulkan runtime: device choice, embedded shaders, pipeline cache,
 // automatic barriers (only on hazards) and timestamps.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <cstring>
 #include <fstream>
 #include <string>
+#include <vector>
 
 #include "base/error.h"
 #include "engine/ops/build.h"
@@ -39,12 +41,60 @@ TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
         bool vl = false, seen = false;
         while (!seen && std::getline(cpuinfo, line))
             if (line.rfind("flags", 0) == 0) seen = true, vl = (line + " ").find(" avx512vl ") != std::string::npos;
-        if (seen)
+        // Unless the environment holds Mesa's JIT below AVX-512 (next test).
+        const std::string o = std::getenv("GALLIUM_OVERRIDE_CPU_CAPS") ? std::getenv("GALLIUM_OVERRIDE_CPU_CAPS") : "-";
+        const std::string nosse = std::getenv("GALLIUM_NOSSE") ? std::getenv("GALLIUM_NOSSE") : "0";
+        bool held = nosse == "1" || nosse == "y" || nosse == "yes" || nosse == "t" || nosse == "true";
+        for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"}) held = held || o == level;
+        if (seen && !held)
             CHECK(d.host_vector_registers == (vl ? 32u : 16u));
+        else if (seen)
+            CHECK(d.host_vector_registers == 16u);
         else
             WARN("no flags line in /proc/cpuinfo: host_vector_registers not checked against the CPU's flags");
 #endif
     }
+}
+
+TEST_CASE("host_vector_registers follows Mesa's CPU-caps override as lavapipe's JIT does", "[runtime]") {
+#if defined(__x86_64__)
+    // Mesa (util/u_cpu_detect.c) clears AVX-512 for each level it knows and
+    // ignores other values; the same must hold here, or a held-back JIT would get
+    // the 32-register tile.
+    struct Saved {
+        std::string name;
+        bool had;
+        std::string value;
+    };
+    std::vector<Saved> saved;
+    for (const char* n : {"GALLIUM_OVERRIDE_CPU_CAPS", "GALLIUM_NOSSE"}) {
+        const char* v = std::getenv(n);
+        saved.push_back({n, v != nullptr, v ? v : ""});
+        unsetenv(n);
+    }
+    const uint32_t free_jit = rt::host_vector_registers();
+    for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"}) {
+        setenv("GALLIUM_OVERRIDE_CPU_CAPS", level, 1);
+        INFO(level);
+        CHECK(rt::host_vector_registers() == 16u);
+    }
+    for (const char* other : {"", "avx2", "bogus"}) {
+        setenv("GALLIUM_OVERRIDE_CPU_CAPS", other, 1);
+        INFO("'" << other << "'");
+        CHECK(rt::host_vector_registers() == free_jit);
+    }
+    unsetenv("GALLIUM_OVERRIDE_CPU_CAPS");
+    setenv("GALLIUM_NOSSE", "1", 1);
+    CHECK(rt::host_vector_registers() == 16u);
+    setenv("GALLIUM_NOSSE", "0", 1);
+    CHECK(rt::host_vector_registers() == free_jit);
+    for (const Saved& s : saved) {
+        if (s.had) setenv(s.name.c_str(), s.value.c_str(), 1);
+        else unsetenv(s.name.c_str());
+    }
+#else
+    CHECK((rt::host_vector_registers() == 16u || rt::host_vector_registers() == 32u));
+#endif
 }
 
 TEST_CASE("a uniform binding beyond maxUniformBufferRange or misaligned is refused by name", "[runtime]") {
