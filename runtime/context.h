@@ -49,8 +49,9 @@ struct DeviceInfo {
     uint64_t device_local_bytes = 0;
     // CPU devices only (0 for GPUs): the vector registers of the host CPU that the
     // driver's JIT code runs on, 32 with AVX-512VL or on AArch64, else 16. No Vulkan
-    // limit exposes them, and register tiles sized for 16 spill less there but
-    // fetch more per multiply-add than a machine with 32 needs (group_linear.cpp).
+    // limit exposes them; a CPU driver's speed depends on them, so `vtloc devices`,
+    // `vtloc check` and the bench report them (group_linear's tile read them until
+    // 8 x 32 measured best with 16 as well: group_linear.cpp).
     uint32_t host_vector_registers = 0;  // rt::host_vector_registers()
     // Offset alignment of any tensor: it may be bound as a storage, texel or uniform buffer.
     uint64_t tensor_alignment() const {

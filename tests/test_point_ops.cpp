@@ -249,7 +249,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     }
 }
 
-TEST_CASE("group_linear's big-layer tile follows the host's vector registers", "[op][group_linear]") {
+TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_linear]") {
     // A layer with rows for 128 invocations and 1.3e8 multiply-adds (a big layer
     // on CPU devices) and a small one; the tile is spec constants 1 (rows) and 2
     // (channels) of the dispatch. Recording is enough: nothing runs.
@@ -263,6 +263,8 @@ TEST_CASE("group_linear's big-layer tile follows the host's vector registers", "
     max.max = true, max.group = 128;
     g.output(ops::group_linear(g, {g.input("big", {128, 128 * 128}), wv, bv}, max, "big"), "big");
     g.output(ops::group_linear(g, {g.input("small", {128, 256}), wv, bv}, {}, "small"), "small");
+    max.tile = ops::GroupLinear::Tile::Big16x32;  // forced: the same on every device
+    g.output(ops::group_linear(g, {g.input("forced", {128, 128 * 128}), wv, bv}, max, "forced"), "forced");
     GpuExecutor exec(test::gpu(), g, w);
     std::map<std::string, std::pair<uint32_t, uint32_t>> tile;
     for (const auto& r : exec.sequence().dispatch_log()) {
@@ -270,11 +272,12 @@ TEST_CASE("group_linear's big-layer tile follows the host's vector registers", "
         // Channel blocks along x (spec constant 14), row blocks along y.
         CHECK(r.spec.at(14) == 1u);
         CHECK(r.groups[0] == (64 + r.spec.at(2) - 1) / r.spec.at(2));
-        if (r.node == "big") CHECK(r.groups[1] > 1u);  // 128 groups of 128 rows
+        if (r.node != "small") CHECK(r.groups[1] > 1u);  // 128 groups of 128 rows
     }
     INFO(d.name << ", host vector registers " << d.host_vector_registers);
     const bool cpu = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU;
-    CHECK(tile.at("big") == std::make_pair(cpu ? (d.host_vector_registers >= 32 ? 8u : 16u) : 8u, cpu ? 32u : 16u));
+    CHECK(tile.at("big") == std::make_pair(8u, cpu ? 32u : 16u));
+    CHECK(tile.at("forced") == std::make_pair(16u, 32u));
     CHECK(tile.at("small") == std::make_pair(8u, 16u));
 }
 

@@ -120,9 +120,10 @@ struct GroupLinear {
     // How the weights reach the lanes on the Texel path (group_linear.cpp); each falls
     // back to the next where the device lacks what it needs. Tests sweep all three.
     enum class Weights { Shuffle = 0, Uniform = 1, Storage = 2 } weights = Weights::Shuffle;
-    // Auto: chosen per device and layer. The others force a tile CPU devices use on
-    // big layers (group_linear.cpp: 16 x 32 with 16 host vector registers, 8 x 32
-    // with 32) whatever the layer or device: tests and the self-test reach both.
+    // Auto: chosen per device and layer (CPU devices: 8 x 32 on big layers,
+    // group_linear.cpp). The others force a big-layer tile whatever the layer or
+    // device: 16 x 32 (the earlier choice with 16 host vector registers) or 8 x 32;
+    // tests and the self-test reach both.
     enum class Tile { Auto = 0, Big16x32 = 1, Big8x32 = 2 } tile = Tile::Auto;
     // Gather only: the layer's input is a first layer computed in registers from
     // the ball rows, never stored (the same act; W0's width a multiple of 4):

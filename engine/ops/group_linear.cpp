@@ -212,15 +212,16 @@ void gpu(const GpuOpArgs& a) {
     // 8 x 32, 12 x 32, 16 x 16, 16 x 48, 16 x 64 and 32 x 32: 10-25 % faster on
     // the paper's SA layers, but 2x slower on a 64-row layer, and its unrolled
     // shader compiles for ~2 s, which small layers never earn back (bench/README.md).
-    // On a host with 32 vector registers (AVX-512VL) 8 x 32 was 12-17 % faster than
-    // 16 x 32 on three of those layers and level on the fourth; the AVX2 VM had
-    // measured 8 x 32 level or slower there, so the tile follows the register count.
+    // Since weights are fetched as vec4s and channel blocks run back to back, 8 x 32
+    // is faster still, with 32 vector registers (AVX-512VL: 12-17 % on three of
+    // those layers) and with 16 (the same host with Mesa's JIT held to AVX2: the
+    // point encoder 20 % faster), so it is the big-layer tile on every CPU device;
+    // param tile 1 keeps 16 x 32 for tests and comparisons (bench/README.md).
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
     const int tile = int(a.params.get("tile", 0));
     const bool big = tile != 0 ||
                      (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
-    const bool narrow = tile == 2 || (tile == 0 && d.host_vector_registers >= 32);
-    const uint32_t TM = big && !narrow ? 16 : 8;
+    const uint32_t TM = big && tile == 1 ? 16 : 8;
     const uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
     const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
