@@ -114,6 +114,10 @@ void print_report(const json& r, std::FILE* f) {
         }
         std::fprintf(f, "host: %s, %d cores, SIMD: %s\n", r["host"]["cpu"].get<std::string>().c_str(),
                      r["host"]["cores"].get<int>(), simd.empty() ? "none listed" : simd.c_str());
+        if (r["host"].contains("jit_override"))
+            for (auto& [k, v] : r["host"]["jit_override"].items())
+                std::fprintf(f, "      Mesa's JIT held by %s=%s (host_vector_registers %d)\n", k.c_str(),
+                             v.get<std::string>().c_str(), r["device"].value("host_vector_registers", 0));
     }
     const json& m = r["model"];
     std::fprintf(f, "model: %s (%s): %lld parameters = %.2f MiB fp32\n", m["source"].get<std::string>().c_str(),

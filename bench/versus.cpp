@@ -33,8 +33,13 @@ json host_cpu() {
                 if (wanted.count(w)) flags.insert(w);
         }
     }
-    return {{"cpu", model}, {"cores", std::thread::hardware_concurrency()},
-            {"simd", std::vector<std::string>(flags.begin(), flags.end())}};
+    json host{{"cpu", model}, {"cores", std::thread::hardware_concurrency()},
+              {"simd", std::vector<std::string>(flags.begin(), flags.end())}};
+    // Mesa's JIT held below the CPU (bench/README.md, "Measuring the AVX2 code
+    // paths"): the flags above are the CPU's, not what lavapipe's code uses.
+    for (const char* v : {"GALLIUM_OVERRIDE_CPU_CAPS", "GALLIUM_NOSSE"})
+        if (const char* s = std::getenv(v)) host["jit_override"][v] = s;
+    return host;
 }
 
 json run_pytorch(const TorchRun& t) {

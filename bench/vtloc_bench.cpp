@@ -194,7 +194,8 @@ json device_json(const rt::DeviceInfo& d) {
                                 std::to_string(VK_API_VERSION_MINOR(d.api_version)) + "." +
                                 std::to_string(VK_API_VERSION_PATCH(d.api_version))},
             {"subgroup_size", d.subgroup_size}, {"max_shared_memory", d.max_shared_memory},
-            {"max_invocations", d.max_invocations}, {"device_local_bytes", d.device_local_bytes}};
+            {"max_invocations", d.max_invocations}, {"device_local_bytes", d.device_local_bytes},
+            {"host_vector_registers", d.host_vector_registers}};
 }
 
 double med(const json& s) { return s.is_object() ? s["median"].get<double>() : 0.0; }
