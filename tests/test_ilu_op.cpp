@@ -8,26 +8,13 @@
 #include "engine/model/heads.h"
 #include "engine/ops/build.h"
 #include "tests/harness.h"
+#include "tests/ilu_test_util.h"
 
 using namespace vtloc;
+using vtloc::test::random_ilu;
 using vtloc::test::random_tensor;
 
 namespace {
-
-WeightStore random_ilu(int64_t C, int64_t H, uint32_t seed) {
-    WeightStore w;
-    float g = 1.0f / std::sqrt(float(3 * C)), hb = 1.0f / std::sqrt(float(C)), ob = 1.0f / std::sqrt(float(H));
-    uint32_t s = seed;
-    for (const char* gate : {"convz", "convr", "convq"}) {
-        w.add(std::string("ilu.") + gate + ".weight", random_tensor({C, 3 * C}, ++s, -g, g));
-        w.add(std::string("ilu.") + gate + ".bias", random_tensor({C}, ++s, -g, g));
-    }
-    w.add("ilu.head.0.weight", random_tensor({H, C}, ++s, -hb, hb));
-    w.add("ilu.head.0.bias", random_tensor({H}, ++s, -hb, hb));
-    w.add("ilu.head.2.weight", random_tensor({3, H}, ++s, -ob, ob));
-    w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
-    return w;
-}
 
 struct IluGraph {
     Graph g;
@@ -69,11 +56,7 @@ TEST_CASE("ilu matches the CPU reference with 1, 4, 8 and 16 lanes per row, both
     for (auto [lanes, subgroup] : {std::pair{1, true}, {4, true}, {8, true}, {8, false}, {16, true}}) {
         INFO("lanes " << lanes << ", subgroup sums allowed " << subgroup);
         Graph g;
-        std::vector<int> in{g.input("ft", {1, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
-        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-            in.push_back(g.weight(n, w.get(n).shape));
-        std::vector<int> out = ops::ilu(g, in, 5, "", lanes, subgroup);
+        std::vector<int> out = ops::ilu(g, test::ilu_graph_inputs(g, w, 1, C), 5, "", lanes, subgroup);
         g.output(out[0], "c");
         test::run_gpu_and_compare(g, w, {{"ft", random_tensor({1, C}, 1, -2.0f, 2.0f)},
                                          {"fp", random_tensor({1, C}, 2, -2.0f, 2.0f)}, {"iters", ilu_iters_input(5, 5)}});
@@ -84,11 +67,7 @@ namespace {
 
 // The fused op on explicit inputs, with the shader variant chosen by `wave`.
 std::vector<int> ilu_nodes(Graph& g, const WeightStore& w, int64_t B, int64_t C, int max_iters, int wave) {
-    std::vector<int> in{g.input("ft", {B, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
-    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-        in.push_back(g.weight(n, w.get(n).shape));
-    return ops::ilu(g, in, max_iters, "", 0, true, wave);
+    return ops::ilu(g, test::ilu_graph_inputs(g, w, B, C), max_iters, "", 0, true, wave);
 }
 
 }  // namespace

@@ -9,26 +9,13 @@
 #include "engine/model/heads.h"
 #include "engine/ops/build.h"
 #include "tests/harness.h"
+#include "tests/ilu_test_util.h"
 
 using namespace vtloc;
+using vtloc::test::random_ilu;
 using vtloc::test::random_tensor;
 
 namespace {
-
-WeightStore random_ilu(int64_t C, int64_t H, uint32_t seed) {
-    WeightStore w;
-    float g = 1.0f / std::sqrt(float(3 * C)), hb = 1.0f / std::sqrt(float(C)), ob = 1.0f / std::sqrt(float(H));
-    uint32_t s = seed;
-    for (const char* gate : {"convz", "convr", "convq"}) {
-        w.add(std::string("ilu.") + gate + ".weight", random_tensor({C, 3 * C}, ++s, -g, g));
-        w.add(std::string("ilu.") + gate + ".bias", random_tensor({C}, ++s, -g, g));
-    }
-    w.add("ilu.head.0.weight", random_tensor({H, C}, ++s, -hb, hb));
-    w.add("ilu.head.0.bias", random_tensor({H}, ++s, -hb, hb));
-    w.add("ilu.head.2.weight", random_tensor({3, H}, ++s, -ob, ob));
-    w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
-    return w;
-}
 
 struct Case {
     int64_t B = 1, C = 64, H = 32, M = 301, P = 1037, D = 6, K = 5, T = 0;
@@ -45,11 +32,7 @@ struct Built {
 Built build(const WeightStore& w, const Case& c, bool fuse) {
     Built r;
     Graph& g = r.g;
-    std::vector<int> in{g.input("ft", {c.B, c.C}), g.input("fp", {1, c.C}),
-                        g.input("iters", {1}, ElemType::I32)};
-    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-        in.push_back(g.weight(n, w.get(n).shape));
+    std::vector<int> in = test::ilu_graph_inputs(g, w, c.B, c.C);
     const int sym = c.T > 0 ? g.input("sym", {c.T, 12}) : -1;
     std::vector<int> out = ops::ilu_retrieve(g, in, c.iters, g.input("cand", {c.M, 3}), g.input("cloud", {c.P, c.D}), sym,
                                              c.K, "ilu", fuse, c.wave);
