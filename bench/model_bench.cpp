@@ -161,19 +161,21 @@ json ilu_stepped(VtlocRunner& r, const EncodedObject& obj, const ModelBenchInput
     return out;
 }
 
-// Where the ILU ends in retrieval's dispatch (engine/ops/ilu_retrieve.cpp), the
-// retrieval's cost is what it adds to the head node: the head as built, then
-// with retrieval in a node of its own, profiled in turns so that drift on a
-// shared machine falls on both. On the CPU reference the same split times
-// the reference retrieval alone.
+// Where the ILU and retrieval are one node (engine/ops/ilu_retrieve.cpp: one
+// dispatch where the device allows), the retrieval's cost is what it adds to
+// the head node: the head as built, then with retrieval in a node of its own,
+// profiled in turns so that drift on a shared machine falls on both. On the CPU
+// reference the same split times the reference retrieval alone.
 json retrieval_split(VtlocRunner& r, const EncodedObject& obj, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
     auto run = [&] { r.localize(obj, {in.image}, TouchOptions{}); };
     auto of = [](const Profile& p, const char* st) {
         return median_of(sums(p, [&](const std::string& l) { return stage(p, l) == st; }));
     };
     std::vector<double> fused, head, node;
+    bool one_dispatch = false;
     for (int round = 0, rounds = r.on_gpu() ? 3 : 1; round < rounds; ++round) {  // the reference is slow and steady
         Profile f = profile(r, opt.profile_reps, run);
+        for (const std::string& s : r.last_dispatch_shaders()) one_dispatch = one_dispatch || s == "ilu_retrieve";
         r.set_retrieval_apart(true);
         Profile a;
         try {
@@ -189,7 +191,9 @@ json retrieval_split(VtlocRunner& r, const EncodedObject& obj, const ModelBenchI
         node.push_back(of(a, "retrieval"));
     }
     const double fm = median_of(fused), hm = median_of(head);
-    return {{"fused_head_ms", fm}, {"head_alone_ms", hm}, {"epilogue_ms", fm - hm}, {"node_ms", median_of(node)}};
+    json out{{"fused_head_ms", fm}, {"head_alone_ms", hm}, {"epilogue_ms", fm - hm}, {"node_ms", median_of(node)}};
+    if (r.on_gpu()) out["one_dispatch"] = one_dispatch;  // false: the two ops' dispatches inside the node
+    return out;
 }
 
 json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {

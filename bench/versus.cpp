@@ -1,5 +1,6 @@
 #include "bench/versus.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <filesystem>
 #include <fstream>
@@ -79,7 +80,8 @@ json engine_over_pytorch(const json& e, const json& t) {
     // what it adds there (model_bench.cpp retrieval_split).
     double epilogue = 0.0;
     if (!es.contains("retrieval") && e.contains("retrieval_split")) {
-        epilogue = e["retrieval_split"]["epilogue_ms"].get<double>();
+        // Noise can make the difference <= 0: then neither ratio takes it.
+        epilogue = std::max(0.0, e["retrieval_split"]["epilogue_ms"].get<double>());
         put("stage retrieval", epilogue, med(ts["retrieval"]));
     }
     // The reference's "heads" is GMA and the contact head together.

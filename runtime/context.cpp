@@ -4,6 +4,7 @@
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
+#include <strings.h>
 #include <utility>
 
 #include "base/error.h"
@@ -220,16 +221,21 @@ size_t choose_device(const std::vector<DeviceInfo>& devs, const std::string& wan
 // code 32 ymm registers instead of AVX2's 16 (x86-64 only: 32-bit mode has 8).
 // Mesa lets a user hold its JIT below the CPU (util/u_cpu_detect.c): each
 // GALLIUM_OVERRIDE_CPU_CAPS level it knows, and GALLIUM_NOSSE, turn AVX-512 off.
+bool mesa_jit_below_avx512() {
+    if (const char* o = std::getenv("GALLIUM_OVERRIDE_CPU_CAPS"))
+        for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"})
+            if (std::strcmp(o, level) == 0) return true;
+    if (const char* n = std::getenv("GALLIUM_NOSSE"))  // Mesa's boolean words, any case
+        for (const char* yes : {"1", "y", "yes", "t", "true"})
+            if (strcasecmp(n, yes) == 0) return true;
+    return false;
+}
+
 uint32_t host_vector_registers() {
 #if defined(__aarch64__)
     return 32;
 #elif defined(__x86_64__) && (defined(__GNUC__) || defined(__clang__))
-    if (const char* o = std::getenv("GALLIUM_OVERRIDE_CPU_CAPS"))
-        for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"})
-            if (std::strcmp(o, level) == 0) return 16;
-    if (const char* n = std::getenv("GALLIUM_NOSSE"))
-        for (const char* yes : {"1", "y", "yes", "t", "true", "Y", "YES", "T", "TRUE"})
-            if (std::strcmp(n, yes) == 0) return 16;
+    if (mesa_jit_below_avx512()) return 16;
     return __builtin_cpu_supports("avx512vl") ? 32 : 16;
 #else
     return 16;

@@ -64,6 +64,8 @@ struct DeviceInfo {
 // 16, and 16 where GALLIUM_OVERRIDE_CPU_CAPS (nosse .. avx) or GALLIUM_NOSSE
 // holds Mesa's JIT below AVX-512.
 uint32_t host_vector_registers();
+// GALLIUM_OVERRIDE_CPU_CAPS or GALLIUM_NOSSE holds Mesa's JIT below AVX-512.
+bool mesa_jit_below_avx512();
 
 const char* device_type_name(VkPhysicalDeviceType t);
 

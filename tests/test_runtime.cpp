@@ -42,10 +42,7 @@ TEST_CASE("the device reports the limits shaders depend on", "[runtime]") {
         while (!seen && std::getline(cpuinfo, line))
             if (line.rfind("flags", 0) == 0) seen = true, vl = (line + " ").find(" avx512vl ") != std::string::npos;
         // Unless the environment holds Mesa's JIT below AVX-512 (next test).
-        const std::string o = std::getenv("GALLIUM_OVERRIDE_CPU_CAPS") ? std::getenv("GALLIUM_OVERRIDE_CPU_CAPS") : "-";
-        const std::string nosse = std::getenv("GALLIUM_NOSSE") ? std::getenv("GALLIUM_NOSSE") : "0";
-        bool held = nosse == "1" || nosse == "y" || nosse == "yes" || nosse == "t" || nosse == "true";
-        for (const char* level : {"nosse", "sse", "sse2", "sse3", "ssse3", "sse4.1", "avx"}) held = held || o == level;
+        const bool held = rt::mesa_jit_below_avx512();
         if (seen && !held)
             CHECK(d.host_vector_registers == (vl ? 32u : 16u));
         else if (seen)
@@ -84,10 +81,18 @@ TEST_CASE("host_vector_registers follows Mesa's CPU-caps override as lavapipe's 
         CHECK(rt::host_vector_registers() == free_jit);
     }
     unsetenv("GALLIUM_OVERRIDE_CPU_CAPS");
-    setenv("GALLIUM_NOSSE", "1", 1);
-    CHECK(rt::host_vector_registers() == 16u);
-    setenv("GALLIUM_NOSSE", "0", 1);
-    CHECK(rt::host_vector_registers() == free_jit);
+    for (const char* yes : {"1", "y", "Yes", "TRUE", "t"}) {
+        setenv("GALLIUM_NOSSE", yes, 1);
+        INFO("GALLIUM_NOSSE=" << yes);
+        CHECK(rt::mesa_jit_below_avx512());
+        CHECK(rt::host_vector_registers() == 16u);
+    }
+    for (const char* no : {"0", "no", "false", "maybe"}) {
+        setenv("GALLIUM_NOSSE", no, 1);
+        INFO("GALLIUM_NOSSE=" << no);
+        CHECK(!rt::mesa_jit_below_avx512());
+        CHECK(rt::host_vector_registers() == free_jit);
+    }
     for (const Saved& s : saved) {
         if (s.had) setenv(s.name.c_str(), s.value.c_str(), 1);
         else unsetenv(s.name.c_str());

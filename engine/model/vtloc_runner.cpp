@@ -80,6 +80,13 @@ std::vector<std::pair<std::string, double>> VtlocRunner::last_node_times() const
 
 const Graph* VtlocRunner::last_graph() const { return last_ ? &last_->graph : nullptr; }
 
+std::vector<std::string> VtlocRunner::last_dispatch_shaders() const {
+    std::vector<std::string> out;
+    if (last_ && last_->gpu)
+        for (const auto& d : last_->gpu->sequence().dispatch_log()) out.push_back(d.shader);
+    return out;
+}
+
 VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
     MemoryUse m;
     if (!last_ || !last_->gpu) return m;

@@ -138,6 +138,8 @@ public:
     };
     const Graph* last_graph() const;
     MemoryUse last_memory() const;
+    // The shaders the last run's recording dispatches, in order (empty on the CPU).
+    std::vector<std::string> last_dispatch_shaders() const;
     // Every graph shape this runner has built on the GPU so far.
     struct AllMemory {
         size_t graphs = 0;

@@ -32,8 +32,9 @@
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's. Param tile
-// (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, the tiles of big layers on CPU
-// devices, whatever the layer and device (tests).
+// (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, big-layer tiles, whatever the layer
+// and device (tests). Param rows_in_x = 1: row blocks along x, channel blocks along
+// y (tests; the default is the reverse, see gpu()).
 #include <algorithm>
 #include <limits>
 
@@ -206,16 +207,16 @@ void gpu(const GpuOpArgs& a) {
     // TM x TN accumulators per invocation, both multiples of 4 (the shader's vec4
     // granularity), fewer channels for narrow layers. GPUs: 8 x 16 (registers).
     // CPU devices run a subgroup as one SIMD stream and pay for every texel fetch
-    // (a call that spills the live vector registers), so on big layers (rows for
-    // 64 invocations, 1e8 multiply-adds) the tile that fetches least per
-    // multiply-add: 16 x 32. Measured on lavapipe (AVX2) against 8 x 16, 8 x 24,
+    // (a call that spills the live vector registers), so big layers (rows for 64
+    // invocations, 1e8 multiply-adds) take a bigger tile. History: 16 x 32 was
+    // chosen first, measured on lavapipe (AVX2) against 8 x 16, 8 x 24,
     // 8 x 32, 12 x 32, 16 x 16, 16 x 48, 16 x 64 and 32 x 32: 10-25 % faster on
     // the paper's SA layers, but 2x slower on a 64-row layer, and its unrolled
     // shader compiles for ~2 s, which small layers never earn back (bench/README.md).
-    // Since weights are fetched as vec4s and channel blocks run back to back, 8 x 32
-    // is faster still, with 32 vector registers (AVX-512VL: 12-17 % on three of
-    // those layers) and with 16 (the same host with Mesa's JIT held to AVX2: the
-    // point encoder 20 % faster), so it is the big-layer tile on every CPU device;
+    // 8 x 32 measured faster later: with 32 vector registers (AVX-512VL: 12-17 % on
+    // three of those layers), and once weights were fetched as vec4s and channel
+    // blocks ran back to back, with 16 too (the same host with Mesa's JIT held to
+    // AVX2: the point encoder 20 % faster), so it is the big-layer tile on every CPU device;
     // param tile 1 keeps 16 x 32 for tests and comparisons (bench/README.md).
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
     const int tile = int(a.params.get("tile", 0));
