@@ -24,6 +24,7 @@ layout(std430, binding = 18) readonly buffer Sym_ { float sym[]; };    // unused
 layout(std430, binding = 19) buffer Heat_ { float heat[]; };           // [B, P]
 layout(binding = 20) uniform samplerBuffer tk_cand;                    // the candidates again, R32F
 layout(std430, binding = 21) writeonly buffer Score_ { float score[]; };  // [B, K]
+// 15-21: retrieve_subgroup.comp's 0-6 (retrieve.cpp's subgroup_bindings).
 
 #include "topk_select.glsl"
 #include "heatmap_row.glsl"

@@ -16,9 +16,10 @@ layout(std430, binding = 1) readonly buffer Cand_ { float cand[]; }; // [M, 3]
 layout(std430, binding = 2) buffer Index_ { int index[]; };          // [B, K], written here
 layout(std430, binding = 3) readonly buffer Sym_ { float sym[]; };   // unused (no symmetry), any buffer
 layout(std430, binding = 4) buffer Heat_ { float heat[]; };          // [B, P]
-layout(std430, binding = 5) readonly buffer Contact_ { float contact[]; };  // [B, 3]
-layout(binding = 6) uniform samplerBuffer tk_cand;                   // the candidates again, R32F
-layout(std430, binding = 7) writeonly buffer Score_ { float score[]; };    // [B, K]
+layout(binding = 5) uniform samplerBuffer tk_cand;                   // the candidates again, R32F
+layout(std430, binding = 6) writeonly buffer Score_ { float score[]; };    // [B, K]
+// Bindings 0-6 are ilu_retrieve.comp's 15-21 (retrieve.cpp's subgroup_bindings).
+layout(std430, binding = 7) readonly buffer Contact_ { float contact[]; };  // [B, 3]
 layout(push_constant) uniform Push { uint P; uint D; uint M; uint K; uint T; } p;
 
 #include "topk_select.glsl"

@@ -73,7 +73,7 @@ DeviceReport device_report(rt::Context& ctx) {
                 {"max texel buffer elements", std::to_string(d.max_texel_elements)},
                 {"push constants", std::to_string(d.max_push_constants) + " bytes"},
                 {"timestamps", d.has_timestamps ? "yes" : "no"}};
-    if (d.host_vector_registers > 0)  // CPU devices: group_linear's big-layer tile follows it
+    if (d.host_vector_registers > 0)  // CPU devices: lavapipe's speed depends on it
         r.limits.push_back({"host CPU vector registers", std::to_string(d.host_vector_registers)});
     return r;
 }

@@ -41,6 +41,13 @@ void add_ilu_weights(OpCase& c, int64_t C, int64_t H, uint32_t seed) {
     c.w.add("ilu.head.2.bias", random_tensor({3}, ++s, -ob, ob));
 }
 
+// The ten weights after F^t, F^p and N: the ilu / ilu_retrieve inputs.
+void add_ilu_weight_inputs(OpCase& c, std::vector<int>& in) {
+    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
+                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
+        in.push_back(c.g.weight(n, c.w.get(n).shape));
+}
+
 OpCase ilu_case(int64_t C, int64_t H, int iters, bool stepped, double lanes) {
     OpCase c(stepped ? "ilu_step" : "ilu", "C " + std::to_string(C) + ", hidden " + std::to_string(H) + ", N " +
                                                std::to_string(iters) +
@@ -50,9 +57,7 @@ OpCase ilu_case(int64_t C, int64_t H, int iters, bool stepped, double lanes) {
     int iters_in = c.input("iters", ilu_iters_input(iters, iters));
     if (lanes > 0) {
         std::vector<int> in{ft, fp, iters_in};
-        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-            in.push_back(c.g.weight(n, c.w.get(n).shape));
+        add_ilu_weight_inputs(c, in);
         c.output(ops::ilu(c.g, in, iters, "", int(lanes))[0], "c");
         return c;
     }
@@ -137,9 +142,7 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
         add_ilu_weights(c, 64, 32, 67);
         std::vector<int> in{c.input("ft", random_tensor({3, 64}, 7, -2.0f, 2.0f)),
                             c.input("fp", random_tensor({1, 64}, 8, -2.0f, 2.0f)), c.input("iters", ilu_iters_input(16, 16))};
-        for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                              "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-            in.push_back(c.g.weight(n, c.w.get(n).shape));
+        add_ilu_weight_inputs(c, in);
         const int sym_in = sym ? c.input("sym", symmetry_transforms({0.0, 0.0, 0.0}, {0.2, 1.0, 0.1}, 3)) : -1;
         std::vector<int> out = ops::ilu_retrieve(c.g, in, 16, c.input("cand", random_tensor({301, 3}, 15, -0.5f, 0.5f)),
                                                  c.input("cloud", random_tensor({1037, 6}, 16, -0.5f, 0.5f)), sym_in, 5);

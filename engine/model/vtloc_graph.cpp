@@ -67,20 +67,19 @@ Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const Vtlo
         g.output(ops::chamfer(g, pd, gma_target, "gma.chamfer").at(0), "gma.chamfer");
     }
     int contact = -1;
-    if (cfg.head == Head::Ilu && !spec.ilu_stepped && !spec.retrieval_apart && candidates >= 0) {
-        // The ILU and retrieval as one node: one dispatch where both fit their
-        // register shaders (engine/ops/ilu_retrieve.cpp).
-        IluRetrieveOutputs r = build_ilu_retrieve(g, w, ft, fp, iters, spec.max_iters, candidates, cloud, symmetry, k);
-        g.output(r.ilu.c, "ilu.c");
-        g.output(r.ilu.contact, "contact");
-        g.output(r.index, "topk.index");
-        g.output(r.score, "topk.score");
-        g.output(r.heat, "heatmap");
-        return g;
-    }
+    std::vector<int> top;  // top-K index, score, heat-map
     if (cfg.head == Head::Ilu) {
-        IluOutputs ilu = spec.ilu_stepped ? build_ilu_stepped(g, w, ft, fp, iters, spec.max_iters)
-                                           : build_ilu(g, w, ft, fp, iters, spec.max_iters);
+        IluOutputs ilu;
+        if (!spec.ilu_stepped && !spec.retrieval_apart && candidates >= 0) {
+            // The ILU and retrieval as one node: one dispatch where both fit their
+            // register shaders (engine/ops/ilu_retrieve.cpp).
+            IluRetrieveOutputs r = build_ilu_retrieve(g, w, ft, fp, iters, spec.max_iters, candidates, cloud, symmetry, k);
+            ilu = r.ilu;
+            top = {r.index, r.score, r.heat};
+        } else {
+            ilu = spec.ilu_stepped ? build_ilu_stepped(g, w, ft, fp, iters, spec.max_iters)
+                                   : build_ilu(g, w, ft, fp, iters, spec.max_iters);
+        }
         g.output(ilu.c, "ilu.c");
         contact = ilu.contact;
     } else {
@@ -89,7 +88,7 @@ Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const Vtlo
     g.output(contact, "contact");
     if (candidates < 0) return g;
     // Top-K and heat-map as one node: one dispatch where both fit one subgroup.
-    auto top = ops::retrieve(g, contact, candidates, cloud, symmetry, k, "retrieve");
+    if (top.empty()) top = ops::retrieve(g, contact, candidates, cloud, symmetry, k, "retrieve");
     g.output(top.at(0), "topk.index");
     g.output(top.at(1), "topk.score");
     g.output(top.at(2), "heatmap");

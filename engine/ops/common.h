@@ -39,6 +39,14 @@ constexpr uint64_t kLoopIterationBudget = 60000;
 // For a shader with no alternative: on a CPU device (where the limiter lives),
 // refuses by name a dispatch whose invocations may loop more than the budget.
 void check_loop_budget(const rt::DeviceInfo& d, uint64_t iterations, const std::string& what);
+// retrieve.cpp: whether retrieve's one-subgroup shader applies to the op `a`
+// (inputs contact, candidates, cloud[, symmetry]; outputs index, score, heat-map)
+// after `loops_before` loop iterations of the same invocation (ilu_retrieve's ILU),
+// and its bindings but the contact: cloud, candidates, index, symmetry slot,
+// heat-map, candidates as texels, score (retrieve_subgroup.comp 0-6).
+bool retrieve_fits_subgroup(const GpuOpArgs& a, uint64_t loops_before);
+std::vector<rt::Binding> retrieve_subgroup_bindings(const GpuOpArgs& a);
+constexpr uint32_t kRetrieveSubgroupTexels = 0x21u;  // bindings 0 and 5 of those
 // Workgroup count for a grid-stride loop over n items.
 uint32_t grid_groups(uint64_t n, uint32_t local_size, const rt::DeviceInfo& d);
 

@@ -52,18 +52,15 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 void gpu(const GpuOpArgs& a) {
     const ilu_math::Launch l = ilu_math::launch(a);
     uint32_t max_iters = uint32_t(a.params.get("max_iters", 0));
+    const uint32_t rows = to_u32(numel(a.in[0].shape) / a.in[0].shape.back(), "ILU batch");
+    if (l.wave) {
+        rt::PipelineDesc desc{"ilu_wave", 15, 4, {l.wave_L, l.C, l.H, l.RB, l.HB}, ilu_math::kWaveTexels};
+        a.seq.dispatch(a.ctx.pipelines().get(desc), ilu_math::wave_bindings(a), &max_iters, 4, rows);
+        return;
+    }
     std::vector<rt::Binding> b;
     for (const GpuTensor& t : a.in) b.push_back({t.view, rt::Access::Read});
     for (const GpuTensor& t : a.out) b.push_back({t.view, rt::Access::Write});
-    const uint32_t rows = to_u32(numel(a.in[0].shape) / a.in[0].shape.back(), "ILU batch");
-    if (l.wave) {
-        // Gate and head weights as texels: vec4s of 4 inputs of one row; head.2 as floats.
-        for (int i : {3, 5, 7, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
-        b[11].texel_format = VK_FORMAT_R32_SFLOAT;
-        rt::PipelineDesc desc{"ilu_wave", 15, 4, {l.wave_L, l.C, l.H, l.RB, l.HB}, 0xAA8u};
-        a.seq.dispatch(a.ctx.pipelines().get(desc), b, &max_iters, 4, rows);
-        return;
-    }
     a.seq.dispatch(pipeline(a.ctx, l.subgroup ? "ilu_subgroup" : "ilu", 15, 4, {l.L, l.C, l.H, l.G}), b, &max_iters, 4,
                    rows);
 }

@@ -129,6 +129,15 @@ void iterate(const std::vector<const HostTensor*>& in, State& s) {
     for (int j = 0; j < 3; ++j) s.c[j] += delta[size_t(j)];
 }
 
+std::vector<rt::Binding> wave_bindings(const GpuOpArgs& a) {
+    std::vector<rt::Binding> b;
+    for (const GpuTensor& t : a.in) b.push_back({t.view, rt::Access::Read});
+    for (const GpuTensor& t : a.out) b.push_back({t.view, rt::Access::Write});
+    for (int i : {3, 5, 7, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
+    b[11].texel_format = VK_FORMAT_R32_SFLOAT;
+    return b;
+}
+
 Launch launch(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     Launch l;

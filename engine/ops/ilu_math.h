@@ -8,6 +8,7 @@
 
 #include "engine/op.h"
 #include "engine/tensor.h"
+#include "runtime/sequence.h"
 
 namespace vtloc::ops::ilu_math {
 
@@ -45,5 +46,9 @@ struct Launch {
     uint64_t wave_loops = 0;  // the wave shader's loop iterations in one invocation (kLoopIterationBudget)
 };
 Launch launch(const GpuOpArgs& a);
+// The wave shader's (ilu_wave.glsl) 15 bindings: the inputs, then c and contact;
+// gate and head.0 weights as vec4 texels, head.2 as floats (kWaveTexels).
+std::vector<rt::Binding> wave_bindings(const GpuOpArgs& a);
+constexpr uint32_t kWaveTexels = 0xAA8u;  // bindings 3, 5, 7, 9, 11
 
 }  // namespace vtloc::ops::ilu_math

@@ -41,46 +41,27 @@ void gpu(const GpuOpArgs& a) {
     std::vector<GpuTensor> ret_in{a.out[1]};
     ret_in.insert(ret_in.end(), a.in.begin() + kIluInputs, a.in.end());
     const std::vector<GpuTensor> ret_out(a.out.begin() + 2, a.out.end());
+    const GpuOpArgs ilu{a.ctx, a.seq, ilu_in, ilu_out, a.params}, ret{a.ctx, a.seq, ret_in, ret_out, a.params};
 
     const rt::DeviceInfo& d = a.ctx.info();
-    const uint32_t sg = std::max(1u, d.subgroup_size);
-    const ilu_math::Launch l = ilu_math::launch({a.ctx, a.seq, ilu_in, ilu_out, a.params});
-    const GpuTensor &cand = a.in[kIluInputs], &cloud = a.in[kIluInputs + 1];
-    const int64_t M = cand.shape[0], P = cloud.shape[0], D = cloud.shape[1], K = a.out[2].shape.back();
-    // One invocation runs the ILU and both scans, which share lavapipe's loop limiter.
-    const uint64_t loops = l.wave_loops + topk_subgroup_iterations(M, K, sg) + heatmap_subgroup_iterations(P, K, 0, sg);
+    const ilu_math::Launch l = ilu_math::launch(ilu);
     const uint32_t storage_buffers = 15;  // ilu_retrieve.comp: 22 bindings, 7 of them texel buffers
-    if (a.params.get("fuse", 1) != 0 && l.wave && l.wave_L % sg == 0 && shuffles_allowed(a) &&
-        a.in.size() == kIluInputs + 2 && K <= 16 && loops <= kLoopIterationBudget &&
-        storage_buffers <= d.max_storage_buffers && uint64_t(M) * 3 <= d.max_texel_elements &&
-        uint64_t(P * D) <= d.max_texel_elements) {
-        std::vector<rt::Binding> b;
-        for (const GpuTensor& t : ilu_in) b.push_back({t.view, rt::Access::Read});
-        for (const GpuTensor& t : ilu_out) b.push_back({t.view, rt::Access::Write});
-        // As ilu.cpp: gate and head weights as vec4 texels, head.2 as floats.
-        for (int i : {3, 5, 7, 9}) b[size_t(i)].texel_format = VK_FORMAT_R32G32B32A32_SFLOAT;
-        b[11].texel_format = VK_FORMAT_R32_SFLOAT;
-        // As retrieve.cpp, from binding 15.
-        const VkFormat r32 = VK_FORMAT_R32_SFLOAT;
-        for (rt::Binding r : std::initializer_list<rt::Binding>{
-                 {cloud.view, rt::Access::Read, r32},
-                 {cand.view, rt::Access::Read},
-                 {a.out[2].view, rt::Access::Write},
-                 {cand.view, rt::Access::Read},
-                 {a.out[4].view, rt::Access::ReadWrite},
-                 {cand.view, rt::Access::Read, r32},
-                 {a.out[3].view, rt::Access::Write}})
-            b.push_back(r);
+    // One invocation runs the ILU, then both scans: lavapipe's loop limiter counts them together.
+    if (a.params.get("fuse", 1) != 0 && l.wave && l.wave_L % std::max(1u, d.subgroup_size) == 0 &&
+        storage_buffers <= d.max_storage_buffers && retrieve_fits_subgroup(ret, l.wave_loops)) {
+        std::vector<rt::Binding> b = ilu_math::wave_bindings(ilu);
+        for (const rt::Binding& r : retrieve_subgroup_bindings(ret)) b.push_back(r);  // from binding 15
+        const int64_t P = ret_in[2].shape[0], D = ret_in[2].shape[1], M = ret_in[1].shape[0], K = a.out[2].shape.back();
         struct { uint32_t max_iters, P, D, M, K, T; } push{uint32_t(a.params.get("max_iters", 0)), uint32_t(P),
                                                            uint32_t(D), uint32_t(M), uint32_t(K), 0u};
         const uint32_t rows = to_u32(numel(a.in[0].shape) / a.in[0].shape.back(), "ILU batch");
         rt::PipelineDesc desc{"ilu_retrieve", 22, sizeof(push), {l.wave_L, l.C, l.H, l.RB, l.HB, uint32_t(K)},
-                              0x108AA8u};
+                              ilu_math::kWaveTexels | kRetrieveSubgroupTexels << 15};
         a.seq.dispatch(a.ctx.pipelines().get(desc), b, &push, sizeof(push), rows);
         return;
     }
-    op_ilu.gpu({a.ctx, a.seq, ilu_in, ilu_out, a.params});
-    op_retrieve.gpu({a.ctx, a.seq, ret_in, ret_out, a.params});
+    op_ilu.gpu(ilu);
+    op_retrieve.gpu(ret);
 }
 
 }  // namespace

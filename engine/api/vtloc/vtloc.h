@@ -77,7 +77,8 @@ struct DeviceInfo {
     bool timestamps = false;                // per-node GPU timing possible
     uint64_t device_local_bytes = 0;
     // CPU devices (lavapipe): vector registers of the host CPU its JIT code runs on,
-    // 32 with AVX-512VL or on AArch64, else 16; some CPU tiles follow it. 0 on GPUs.
+    // 32 with AVX-512VL or on AArch64, else 16 (16 where GALLIUM_OVERRIDE_CPU_CAPS holds
+    // Mesa's JIT below AVX-512); a CPU driver's speed depends on it. 0 on GPUs.
     uint32_t host_vector_registers = 0;
 };
 
