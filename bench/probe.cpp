@@ -24,6 +24,7 @@ Stats summarize(std::vector<double> s) {
     st.p10 = at(0.1);
     st.p90 = at(0.9);
     st.min = s.front();
+    st.max = s.back();
     return st;
 }
 

@@ -12,7 +12,7 @@ class Context;
 namespace vtloc::bench {
 
 struct Stats {
-    double median = 0, p10 = 0, p90 = 0, min = 0;
+    double median = 0, p10 = 0, p90 = 0, min = 0, max = 0;
 };
 Stats summarize(std::vector<double> samples);
 // Least-squares slope of y over x (0 when x does not vary).

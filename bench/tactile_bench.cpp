@@ -13,6 +13,7 @@
 
 #include "bench/flops.h"
 #include "bench/probe.h"
+#include "bench/validation.h"
 #include "bench/random_weights.h"
 #include "base/error.h"
 #include "engine/executor.h"
@@ -119,6 +120,7 @@ int main(int argc, char** argv) {
         t0 = std::chrono::steady_clock::now();
         run_cpu(g, w, in);
         std::printf("CPU reference (plain loops, one thread): %.0f ms for one run\n", ms_since(t0));
+        bench::check_validation(ctx, "vtloc-bench-tactile");
     } catch (const Error& e) {
         std::fprintf(stderr, "vtloc-bench-tactile: %s\n", e.what());
         return 1;

@@ -13,6 +13,7 @@
 
 #include "bench/model_bench.h"
 #include "bench/probe.h"
+#include "bench/validation.h"
 #include "bench/report.h"
 #include "bench/versus.h"
 #include "base/error.h"
@@ -328,9 +329,7 @@ int run(int argc, char** argv) {
     }
 
     if (ctx) {  // with VTLOC_VALIDATION=1 (the smoke test), a validation message fails the run
-        std::vector<rt::ValidationMessage> msgs = ctx->take_validation_messages();
-        for (const auto& m : msgs) std::fprintf(stderr, "vtloc-bench: validation layer: %s: %s\n", m.severity.c_str(), m.text.c_str());
-        if (!msgs.empty()) throw Error(std::to_string(msgs.size()) + " validation message(s); the numbers are not trusted");
+        bench::check_validation(*ctx, "vtloc-bench");
     }
     write_report(report, a);
     return 0;

@@ -15,8 +15,10 @@ assert t["blas"]["built_with"] and t["blas"]["loaded"], t["blas"]
 assert t["end_to_end_ms"]["median"] > 0 and t["points"] == rep["inputs"]["points"]
 assert set(t["stages_ms"]) == {"preprocess", "tactile", "point", "heads", "retrieval"}, t["stages_ms"]
 r = rep["engine_over_pytorch"]
-for k in ("end_to_end", "stage tactile", "stage point", "stage gma + head"):
+for k in ("end_to_end", "end_to_end_fastest", "stage tactile", "stage point", "stage gma + head"):
     assert r[k] > 0, (k, r)
+fastest = rep["gpu"]["end_to_end_ms"]["min"] / t["end_to_end_ms"]["min"]
+assert abs(r["end_to_end_fastest"] - fastest) <= 1e-12 * fastest, (r["end_to_end_fastest"], fastest)
 # Retrieval runs in the ILU's dispatch: its ratio is what it adds there, which
 # timing noise can hide on a model this small (then the split is reported and
 # the ratio left out); a retrieval node of its own must have its ratio.
