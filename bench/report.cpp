@@ -54,6 +54,8 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
         std::fprintf(f, "  %-4s %.2f GFLOP in %.2f ms = %.1f GFLOP/s", k, e["gflop"].get<double>(), e["ms"].get<double>(),
                      e["gflops"].get<double>());
         if (!e["fraction_of_peak"].is_null()) std::fprintf(f, " = %.0f%% of the probe", 100 * e["fraction_of_peak"].get<double>());
+        std::fprintf(f, "; fastest nodes %.2f ms = %.1f GFLOP/s", e["fastest_ms"].get<double>(), e["gflops_fastest"].get<double>());
+        if (!e["fraction_of_peak_fastest"].is_null()) std::fprintf(f, " = %.0f%%", 100 * e["fraction_of_peak_fastest"].get<double>());
         std::fprintf(f, "\n");
     }
 

@@ -51,8 +51,10 @@ def backend(b, name, reps, profile_reps, iters, batches, points, ilu):
         need(n["ms"] >= 0, f"{name}: negative node time {n}")
     for k in ("conv", "mlp"):
         e = b["efficiency"][k]
-        for f in ("gflop", "ms", "gflops"):
+        for f in ("gflop", "ms", "gflops", "fastest_ms", "gflops_fastest"):
             positive(e[f], f"{name}.efficiency.{k}.{f}")
+        # each node's fastest run, summed, can never exceed the median of the run sums
+        need(e["fastest_ms"] <= e["ms"] * (1 + 1e-12), f"{name}.efficiency.{k}: fastest {e['fastest_ms']} > median {e['ms']}")
     need([r["batch"] for r in b["batch"]] == batches, f"{name}: batches {b['batch']}")
     for r in b["batch"]:
         stats(r["ms"], f"{name}.batch{r['batch']}", reps)
@@ -108,6 +110,8 @@ def main(path, plot, reps, iters, batches, points):
     for k in ("conv", "mlp"):
         f = g["efficiency"][k]["fraction_of_peak"]
         need(abs(f - g["efficiency"][k]["gflops"] / p["gflops"]) < 1e-9, f"fraction_of_peak {k}")
+        f = g["efficiency"][k]["fraction_of_peak_fastest"]
+        need(abs(f - g["efficiency"][k]["gflops_fastest"] / p["gflops"]) < 1e-9, f"fraction_of_peak_fastest {k}")
     if ilu:
         st = g["ilu"]["stepped"]
         need(st["n"] == s["stepped"] and len(st["step_ms"]) == st["n"], f"stepped {st}")
