@@ -235,6 +235,7 @@ void measure_gpu(json& report, const Args& a, const WeightStore& weights, const 
         report["probe"]["gflops"] = peak;
         auto refresh = [&](json& e) {
             e["fraction_of_peak"] = e["gflops"].get<double>() / peak;
+            if (e.contains("gflops_fastest")) e["fraction_of_peak_fastest"] = e["gflops_fastest"].get<double>() / peak;
         };
         refresh(report["gpu"]["efficiency"]["conv"]);
         refresh(report["gpu"]["efficiency"]["mlp"]);
