@@ -3,10 +3,10 @@
 // points: median ms per run, the share of FPS and ball query in the profiled GPU
 // time, and the GFLOP/s of the MLP part (1x1 convolutions = GEMMs and the head,
 // 2 FLOPs per multiply-add) as a fraction of the fma probe measured in the same
-// run, in VTLOC_BENCH_ROUNDS rounds (default 5) of probe + profiled run; which
-// sizes: VTLOC_BENCH_POINTS=N (one size). Without a weight file it uses random weights of the vtloc-r18 shapes
-// (timing does not depend on the values; the cloud is a unit sphere, so ball
-// queries fill as on real objects).
+// run, in VTLOC_BENCH_ROUNDS rounds (default 5) of probe + profiled run;
+// VTLOC_BENCH_POINTS=N measures one size. Without a weight file it uses random
+// weights of the vtloc-r18 shapes (timing does not depend on the values; the
+// cloud is a unit sphere, so ball queries fill as on real objects).
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -16,8 +16,8 @@
 
 #include "bench/flops.h"
 #include "bench/probe.h"
-#include "bench/validation.h"
 #include "bench/random_weights.h"
+#include "bench/validation.h"
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/point_encoder.h"
