@@ -13,8 +13,8 @@
 
 #include "bench/flops.h"
 #include "bench/probe.h"
-#include "bench/validation.h"
 #include "bench/random_weights.h"
+#include "bench/validation.h"
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/model/tactile_encoder.h"

@@ -13,8 +13,8 @@
 
 #include "bench/model_bench.h"
 #include "bench/probe.h"
-#include "bench/validation.h"
 #include "bench/report.h"
+#include "bench/validation.h"
 #include "bench/versus.h"
 #include "base/error.h"
 #include "engine/io/image.h"
