@@ -83,21 +83,28 @@ json efficiency(const Profile& p, const std::string& st, double probe) {
     const double ms = median_of(sums(p, [&](const std::string& l) { return p.flops.count(l) && stage(p, l) == st; }));
     // Also each node's fastest run, summed: on a shared host busy phases only slow
     // nodes down, so this is the undisturbed estimate (bench/README.md).
+    std::map<std::string, double> best;
+    for (const NodeRun& run : p.runs)
+        for (auto& [label, t] : run)
+            if (p.flops.count(label) && stage(p, label) == st) best[label] = best.count(label) ? std::min(best[label], t) : t;
     double fastest = 0;
-    for (auto& [label, f] : p.flops) {
-        if (stage(p, label) != st) continue;
-        double best = -1;
-        for (const NodeRun& run : p.runs)
-            if (run.count(label)) best = best < 0 ? run.at(label) : std::min(best, run.at(label));
-        fastest += std::max(0.0, best);
-    }
+    for (auto& [label, t] : best) fastest += t;
     json j{{"gflop", flops * 1e-9}, {"ms", ms}, {"fastest_ms", fastest}};
     j["gflops"] = ms > 0 ? flops / (ms * 1e-3) * 1e-9 : 0.0;
     j["gflops_fastest"] = fastest > 0 ? flops / (fastest * 1e-3) * 1e-9 : 0.0;
-    j["fraction_of_peak"] = probe > 0 ? json(j["gflops"].get<double>() / probe) : json(nullptr);
-    j["fraction_of_peak_fastest"] = probe > 0 ? json(j["gflops_fastest"].get<double>() / probe) : json(nullptr);
+    set_fractions_of_peak(j, probe);
     return j;
 }
+
+}  // namespace
+
+void set_fractions_of_peak(json& e, double probe) {
+    for (const char* k : {"", "_fastest"})
+        e[std::string("fraction_of_peak") + k] =
+            probe > 0 ? json(e[std::string("gflops") + k].get<double>() / probe) : json(nullptr);
+}
+
+namespace {
 
 json nodes_json(const Profile& p) {
     json out = json::array();

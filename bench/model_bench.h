@@ -30,6 +30,11 @@ struct ModelBenchInputs {
 
 nlohmann::json stats_json(const std::vector<double>& samples_ms);
 
+// An efficiency entry's fractions of the probe (fraction_of_peak, and
+// fraction_of_peak_fastest), null without a probe; measure_model sets them with the
+// probe taken before, vtloc-bench again with the higher of before and after.
+void set_fractions_of_peak(nlohmann::json& efficiency, double probe_gflops);
+
 // Everything on one backend: end to end, per stage, per node, the ILU sweep and
 // per-iteration times, cached touches, batches, memory and the point sweep.
 nlohmann::json measure_model(VtlocRunner& runner, const ModelBenchInputs& in, const ModelBenchOptions& opt);

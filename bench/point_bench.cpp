@@ -88,8 +88,7 @@ int main(int argc, char** argv) {
         const ModelConfig cfg = config_of(file);
         const WeightStore w = prepare_weights(cfg, file);
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");
-        const double probe = bench::peak_gflops(ctx);
-        std::printf("fma probe at start: %.1f GFLOP/s\n\n", probe);
+        std::printf("fma probe: taken in rounds with each size (below)\n\n");
         std::printf("%7s %10s %8s %8s %8s %9s %9s %8s\n", "points", "median ms", "p10", "p90", "FPS %", "ball %",
                     "MLP GF/s", "of peak");
         std::vector<int64_t> sizes{1024, 4096, 16384};

@@ -233,14 +233,10 @@ void measure_gpu(json& report, const Args& a, const WeightStore& weights, const 
         report["probe"]["after"] = after;
         const double peak = std::max(in.probe_gflops, after);
         report["probe"]["gflops"] = peak;
-        auto refresh = [&](json& e) {
-            e["fraction_of_peak"] = e["gflops"].get<double>() / peak;
-            if (e.contains("gflops_fastest")) e["fraction_of_peak_fastest"] = e["gflops_fastest"].get<double>() / peak;
-        };
-        refresh(report["gpu"]["efficiency"]["conv"]);
-        refresh(report["gpu"]["efficiency"]["mlp"]);
+        bench::set_fractions_of_peak(report["gpu"]["efficiency"]["conv"], peak);
+        bench::set_fractions_of_peak(report["gpu"]["efficiency"]["mlp"], peak);
         if (report["gpu"].contains("points"))
-            for (json& row : report["gpu"]["points"]) refresh(row["mlp"]);
+            for (json& row : report["gpu"]["points"]) bench::set_fractions_of_peak(row["mlp"], peak);
     }
 }
 
