@@ -28,7 +28,7 @@ struct Profile {
 
 // `reps` profiled runs of f after one to build the profiled recording.
 template <class F>
-Profile profile(VtlocRunner& r, int reps, F&& f) {
+Profile profile(VtlocRunner& r, int reps, F&& f, const std::map<std::string, HostTensor>& balls = {}) {
     Profile p;
     r.set_profiling(true);
     try {
@@ -50,9 +50,15 @@ Profile profile(VtlocRunner& r, int reps, F&& f) {
     if (const Graph* g = r.last_graph()) {
         for (const Node& n : g->nodes())
             if (!p.op.count(n.name)) p.op[n.name] = n.op;
-        p.flops = node_flops(*g);
+        p.flops = node_flops(*g, balls);
     }
     return p;
+}
+
+// The balls of the point branch for `cloud` (node_flops: layers that skip ball padding).
+std::map<std::string, HostTensor> balls_of(VtlocRunner& r, const HostTensor& image, const HostTensor& cloud) {
+    VtlocRunner::Prepared p = r.prepare_once(image, cloud, nullptr);
+    return ball_indices(p.graph, r.weights(), p.inputs);
 }
 
 double median_of(std::vector<double> v) { return v.empty() ? 0.0 : summarize(std::move(v)).median; }
@@ -220,7 +226,7 @@ json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOpt
     for (int64_t n : opt.points) {
         HostTensor cloud = io::load_object(in.object, n);
         const std::vector<double> t = time_ms([&] { r.encode_object(cloud); }, 1, opt.reps);
-        Profile p = profile(r, opt.profile_reps, [&] { r.encode_object(cloud); });
+        Profile p = profile(r, opt.profile_reps, [&] { r.encode_object(cloud); }, balls_of(r, in.image, cloud));
         auto of_op = [&](const char* op) {
             return median_of(sums(p, [&](const std::string& l) { return p.op.count(l) && p.op.at(l) == op; }));
         };
@@ -267,7 +273,7 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
                      {"total_bytes", mem.weight_bytes + mem.arena_bytes}};
 
     progress("per stage and per node");
-    Profile p = profile(r, opt.profile_reps, once);
+    Profile p = profile(r, opt.profile_reps, once, balls_of(r, in.image, in.cloud));
     json stages = json::object();
     for (const std::string& st : stage_names()) {
         std::vector<double> v = sums(p, [&](const std::string& l) { return stage(p, l) == st; });

@@ -115,7 +115,8 @@ int main(int argc, char** argv) {
             prof.run(in);
             std::map<std::string, std::string> op_of;
             for (const Node& nd : g.nodes()) op_of[nd.name] = nd.op;
-            const std::map<std::string, double> flops = bench::node_flops(g);  // group_linear and linear
+            // group_linear and linear; layers that skip ball padding count their real rows
+            const std::map<std::string, double> flops = bench::node_flops(g, bench::ball_indices(g, w, in));
             std::map<std::string, double> node_ms;  // per node: the fastest over the rounds
             std::vector<double> round_gf, round_probe, round_frac;
             for (int r = 0; r < rounds; ++r) {

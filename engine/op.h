@@ -44,6 +44,11 @@ struct OpDef {
     // misspelt one is an error, not a silent default (engine/ops/build.h
     // makes it a compile error for typed callers).
     std::vector<std::string_view> params;
+    // Where an output holds elements its op leaves unspecified (e.g. group_linear's
+    // skipped ball padding): copies the reference's values there into the GPU's
+    // output, so node-by-node checks compare only what the op defines. Null: none.
+    void (*take_unspecified)(const std::vector<const HostTensor*>& in, const Params& p, const HostTensor& ref,
+                             HostTensor& gpu_out) = nullptr;
 };
 
 const OpDef& find_op(std::string_view name);

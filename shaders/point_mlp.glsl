@@ -24,6 +24,12 @@
 //   2: act(U[q] - W0's xyz rows . centre), U (binding 0) = the first layer per
 //      source point, point-major [P][K]: sa_gather's arithmetic, unstored.
 // PMOUT: a plain output point-major [M][N] (4 channels a store), for HIDDEN 2's U.
+// PAD: ball padding (SPEC 2 fills a ball's free slots with its first index, so such
+//   a row repeats row 0's input and output) is work skipped: a row past a group's
+//   first whose index (binding 7, [M / NS][NS]) equals the first's is left out of the
+//   max, and a plain output leaves a block unwritten where every row of the subgroup's
+//   blocks is padding (point_mlp_shfl.comp only: it needs a subgroup vote; the
+//   others compute those rows). A layer that reads such an output takes PAD as well.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block is uniform in a workgroup (CBLOCK), so
@@ -48,6 +54,12 @@ layout(constant_id = 12) const uint HIDDEN = 0;  // MODE 1: A from a layer in re
 layout(constant_id = 13) const bool PMOUT = false;
 // The channel block along x and the row block along y (group_linear.cpp says why), or the reverse.
 layout(constant_id = 14) const bool CB_FIRST = false;
+layout(constant_id = 15) const bool PAD = false;
+#ifdef SUBGROUP_VOTE
+#define ANY_LANE(x) subgroupAny(x)
+#else
+#define ANY_LANE(x) true
+#endif
 #define CBLOCK (CB_FIRST ? gl_WorkGroupID.x : gl_WorkGroupID.y)
 #define RBLOCK (CB_FIRST ? gl_WorkGroupID.y : gl_WorkGroupID.x)
 #include "act.glsl"
@@ -229,6 +241,12 @@ void block(uint m0, uint mend) {
     }
 }
 
+// Row r (< M) repeats its group's first row's index (PAD).
+bool padding_row(uint r) {
+    const uint r0 = r / p.NS * p.NS;
+    return r != r0 && LOAD_I(r) == LOAD_I(r0);
+}
+
 void main() {
     // Spare invocations redo the last block and store nothing: no early return,
     // so every loop below has a uniform trip count (its counters stay uniform
@@ -241,6 +259,11 @@ void main() {
     [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
     if (!MAXPOOL) {
         const uint m0 = t * TM;
+        if (PAD) {  // a subgroup-uniform return: the shuffles below see every lane
+            bool need = false;
+            [[unroll]] for (uint i = 0; i < TM; ++i) need = need || (m0 + i < p.M && !padding_row(m0 + i));
+            if (!ANY_LANE(live && need)) return;
+        }
         block(m0, p.M);
         if (PMOUT) {
             [[unroll]] for (uint i = 0; i < TM; ++i)
@@ -278,10 +301,21 @@ void main() {
     [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = uintBitsToFloat(0xFF800000u);  // -inf
     const uint g0 = t * p.NS, gend = g0 + p.NS;
     for (uint c = 0; c < p.chunks; ++c) {
+        bool pad[TM];
+        [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = false;
+        if (PAD) {  // padding rows may hold anything (PAD's plain output): left out, never used
+            bool need = false;
+            [[unroll]] for (uint i = 0; i < TM; ++i) {
+                pad[i] = padding_row(min(g0 + c * TM + i, gend - 1u));
+                need = need || !pad[i];
+            }
+            if (!ANY_LANE(need)) continue;  // subgroup-uniform, as the return above
+        }
         block(g0 + c * TM, gend);
         // Rows past the group's end repeat its last row: harmless for a max.
         [[unroll]] for (uint i = 0; i < TM; ++i)
-            [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
+            [[unroll]] for (uint j = 0; j < TN; ++j)
+                if (!pad[i]) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
     }
     [[unroll]] for (uint j = 0; j < TN; ++j)
         if (live && n0 + j < p.N) outv[(t * p.N + n0 + j) / 4u][(t * p.N + n0 + j) % 4u] = mx[j];

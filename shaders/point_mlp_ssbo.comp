@@ -5,7 +5,7 @@
 layout(std430, binding = 0) readonly buffer A_ { float A[]; };
 layout(std430, binding = 1) readonly buffer A4_ { vec4 A4[]; };  // binding 0 as vec4
 layout(std430, binding = 6) readonly buffer C_ { float centre[]; };  // MODE 1: [S][3]
-layout(std430, binding = 7) readonly buffer I_ { int idx[]; };       // MODE 1: [S][NS]
+layout(std430, binding = 7) readonly buffer I_ { int idx[]; };       // MODE 1 (and PAD): [S][NS]
 layout(std430, binding = 8) readonly buffer F_ { float feat[]; };
 layout(std430, binding = 9) readonly buffer F4_ { vec4 feat4[]; };
 layout(std430, binding = 10) readonly buffer H4_ { vec4 h4[]; };   // HIDDEN: W0 [CF + 3][K]

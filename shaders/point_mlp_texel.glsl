@@ -4,7 +4,7 @@
 layout(binding = 0) uniform samplerBuffer A;    // R32F
 layout(binding = 1) uniform samplerBuffer A4;   // binding 0 again, RGBA32F
 layout(binding = 6) uniform samplerBuffer C;    // R32F, MODE 1: the centres [S][3]
-layout(binding = 7) uniform isamplerBuffer I;   // R32I, MODE 1: the ball indices [S][NS]
+layout(binding = 7) uniform isamplerBuffer I;   // R32I, MODE 1 (and PAD): the ball indices [S][NS]
 layout(binding = 8) uniform samplerBuffer F;    // R32F
 layout(binding = 9) uniform samplerBuffer F4;   // binding 8 again, RGBA32F
 layout(binding = 10) uniform samplerBuffer H4;  // RGBA32F, HIDDEN: W0 [CF + 3][K]

@@ -133,7 +133,7 @@ const char* weights_name(Weights w) { return w == Weights::Shuffle ? "shuffle" :
 // lacks shuffles the test says so.
 void require_weight_path(Weights w) {
     const rt::DeviceInfo& d = test::gpu().info();
-    const bool shuffles = ops::has_subgroup_shuffles(d);
+    const bool shuffles = ops::has_subgroup_shuffles(d) && (d.subgroup_ops & VK_SUBGROUP_FEATURE_VOTE_BIT);
     INFO("device " << d.name << ", subgroup shuffles " << shuffles);
     CHECK(ops::group_linear_weight_path(d, 40, 64, true, w, 0) == (w == Weights::Shuffle && !shuffles ? Weights::Uniform : w));
     CHECK(ops::group_linear_weight_path(d, 40, 64, false, w, 0) == Weights::Storage);

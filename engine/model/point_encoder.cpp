@@ -112,6 +112,12 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         if (gather && feat >= 0 && gl.hidden != Hidden::PerPoint) ins.push_back(feat);
         gl.max = l + 1 == widths.size();
         gl.group = ns;
+        // Ball padding (a ball's free slots repeat its first point) is skipped:
+        // the max leaves it out, and a gathering layer right before it leaves it
+        // unwritten (not one with rows layers between: they would carry whatever
+        // the skipped rows hold). README "Ball padding".
+        gl.skip_padding = gl.max || (gather && l + 2 == widths.size());
+        if (!gather && gl.max) ins.push_back(ball);
         x = ops::group_linear(g, ins, gl, node);
     }
     if (!fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);

@@ -136,6 +136,11 @@ struct GroupLinear {
     // The workgroup grid: channel blocks along x where the device's limits allow
     // (group_linear.cpp says why); true keeps row blocks along x (tests run both).
     bool rows_in_x = false;
+    // Ball padding (SPEC 2: free slots repeat the ball's first index) skipped:
+    // left out of a max, unspecified in a plain output (Gather only), so set it on
+    // every layer of a scale after the first. A max over Rows then takes the ball
+    // as its last input, idx [M / group, group].
+    bool skip_padding = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

@@ -29,6 +29,12 @@
 //      last 3 rows . centre), U = the same layer per source point (in = 3,
 //      point_major; sa_gather's arithmetic, without its stored output).
 // Param point_major = 1 (not with max): the output is [M, N] instead of [N, M].
+// Param pad = 1 (GroupLinear::skip_padding): a row j > 0 of a ball whose index equals
+// the ball's first (SPEC 2's padding: row 0's input again) is work to skip. A max
+// leaves such rows out (the same max wherever they repeat row 0, and what makes
+// skipping safe); a plain output (in = 1 only) holds anything in them. in = 1 takes the
+// ball from its idx; a max over in = 0 rows takes it as a last input, idx I32 [M / group,
+// group]. The point encoder sets it on both layers of a scale after its first.
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's. Param tile
@@ -59,7 +65,17 @@ struct Layout {
     bool feat = false;
     int hidden = 0;       // in = 1: GroupLinear::Hidden; K is W0^T's width
     bool point_major = false;
+    bool pad = false;     // param pad: ball padding skipped
 };
+
+// Input i is I32: a gather's ball, or a max's ball (pad) after x^T, W^T and bias.
+bool index_input(const Layout& l, size_t i) { return (l.mode == 1 && i == 2) || (l.mode == 0 && l.pad && i == 3); }
+
+// Row m repeats its group's first index (param pad): raw indices, as the shader compares them.
+bool padding_row(const HostTensor& idx, int64_t m, int64_t NS) {
+    const int64_t m0 = m / NS * NS;
+    return m != m0 && idx.int_at(size_t(m)) == idx.int_at(size_t(m0));
+}
 
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     Layout l;
@@ -71,8 +87,12 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     if (l.hidden != 0 && l.mode != 1) throw Error("hidden = " + std::to_string(l.hidden) + " needs gathered rows (in = 1)");
     l.point_major = p.get("point_major", 0) != 0;
     if (l.point_major && l.max) throw Error("point_major = 1 is for plain outputs (a max is point-major already)");
+    l.pad = p.get("pad", 0) != 0;
+    if (l.pad && !(l.mode == 1 || (l.mode == 0 && l.max)))
+        throw Error("pad = 1 needs ball rows (in = 1) or a max over rows with their ball (in = 0, max = 1)");
+    if (l.pad && l.point_major) throw Error("pad = 1 is for channel-major outputs and maxes");
     for (size_t i = 0; i < in.size(); ++i)
-        if (in[i].type != (l.mode == 1 && i == 2 ? ElemType::I32 : ElemType::F32))
+        if (in[i].type != (index_input(l, i) ? ElemType::I32 : ElemType::F32))
             throw Error("input " + std::to_string(i) + " has the wrong element type");
     if (l.mode == 1) {
         const size_t base = l.hidden == 1 ? 7 : l.hidden == 2 ? 6 : 5;
@@ -114,7 +134,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
         l.K = l.g.CF + 3;
         if (l.max) l.NS = int_param(p, "group", 1, std::max<int64_t>(1, l.M));
     } else {
-        expect_input_count(in, 3, l.mode == 2 ? 4 : 3);
+        expect_input_count(in, l.pad ? 4 : 3, l.mode == 2 || l.pad ? 4 : 3);
         const Shape& x = in[0].shape;
         if (x.size() != 2 || (l.mode == 2 && x[1] != 3))
             throw Error(std::string(l.mode == 2 ? "xyz must be [M, 3]" : "x must be channel-major [K, M]") + ", got " +
@@ -133,6 +153,9 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
             l.K = 3 + l.g.CF;
         }
         if (l.max) l.NS = int_param(p, "group", 1, std::max<int64_t>(1, l.M));
+        if (l.pad && in[3].shape != Shape{l.M / l.NS, l.NS})
+            throw Error("ball " + shape_str(in[3].shape) + " must be [" + std::to_string(l.M / l.NS) + ", " +
+                        std::to_string(l.NS) + "]: one index per row");
     }
     if (l.M == 0) throw Error("no rows");
     if (l.M % l.NS != 0) throw Error(std::to_string(l.M) + " rows do not split into groups of " + std::to_string(l.NS));
@@ -169,7 +192,9 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     const int64_t K0 = l.hidden == 1 ? in[3]->shape[0] : l.hidden == 2 ? 0 : l.K;  // the gathered row's width
     std::vector<float> row(static_cast<size_t>(K0)), hid(static_cast<size_t>(l.K));
     if (l.max) std::fill(out[0]->data.begin(), out[0]->data.end(), -std::numeric_limits<float>::infinity());
+    const HostTensor* ball = l.mode == 1 ? in[2] : l.pad ? in[3] : nullptr;
     for (int64_t m = 0; m < l.M; ++m) {
+        if (l.pad && l.max && padding_row(*ball, m, l.NS)) continue;  // a plain output computes it: any value will do
         for (int64_t k = 0; k < K0; ++k)
             row[size_t(k)] = l.mode == 1   ? gather_value(*in[0], *in[1], *in[2], feat, l.g, m, k)
                              : l.mode == 2 ? (k < 3 ? in[0]->data[size_t(3 * m + k)] : feat->data[size_t(m * l.g.CF + k - 3)])
@@ -201,8 +226,9 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     std::vector<TensorDesc> ds;
+    const bool pad0 = a.params.get("in", 0) == 0 && a.params.get("pad", 0) != 0;  // a max's ball: input 3
     for (size_t i = 0; i < a.in.size(); ++i)
-        ds.push_back({a.in[i].shape, a.params.get("in", 0) == 1 && i == 2 ? ElemType::I32 : ElemType::F32});
+        ds.push_back({a.in[i].shape, (a.params.get("in", 0) == 1 && i == 2) || (pad0 && i == 3) ? ElemType::I32 : ElemType::F32});
     const Layout l = layout_of(ds, a.params);
     // TM x TN accumulators per invocation, both multiples of 4 (the shader's vec4
     // granularity), fewer channels for narrow layers. GPUs: 8 x 16 (registers).
@@ -255,7 +281,7 @@ void gpu(const GpuOpArgs& a) {
     const GpuTensor& fsrc = l.feat ? a.in.back() : src;  // without features: any texel-able buffer
     const GpuTensor& bias = a.in[l.w + 1];  // also the filler of bindings the mode does not read
     const GpuTensor& centres = l.mode == 1 ? a.in[1] : bias;
-    const GpuTensor& index = l.mode == 1 ? a.in[2] : bias;
+    const GpuTensor& index = l.mode == 1 ? a.in[2] : l.pad ? a.in[3] : bias;
     bool texel = a.params.get("texel", 1) != 0;
     // hidden: W0^T and b0 (bindings 10, 11, as vec4s); else the bias fills them.
     const GpuTensor& w0 = l.hidden != 0 ? a.in[3] : bias;
@@ -271,7 +297,7 @@ void gpu(const GpuOpArgs& a) {
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first};
+                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first, l.pad};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -293,17 +319,31 @@ void gpu(const GpuOpArgs& a) {
                    &push, sizeof(push), uint32_t(cb_first ? gy : gx), uint32_t(cb_first ? gx : gy));
 }
 
+// A plain output's padding rows (param pad) are unspecified: the reference's values there.
+void take_unspecified(const std::vector<const HostTensor*>& in, const Params& p, const HostTensor& ref, HostTensor& out) {
+    if (p.get("pad", 0) == 0 || p.get("max", 0) != 0 || in.size() < 3 || out.shape != ref.shape || out.shape.size() != 2) return;
+    const HostTensor& ball = *in[2];
+    const int64_t M = out.shape[1], NS = ball.shape.size() == 2 ? ball.shape[1] : 0;
+    if (NS <= 0 || ball.size() != M) return;
+    for (int64_t m = 0; m < M; ++m)
+        if (padding_row(ball, m, NS))
+            for (int64_t k = 0; k < out.shape[0]; ++k) out.data[size_t(k * M + m)] = ref.data[size_t(k * M + m)];
+}
+
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
                             {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
-                             "rows_in_x"}};
+                             "rows_in_x", "pad"},
+                            take_unspecified};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
                                               GroupLinear::Weights want, uint64_t offset) {
     using W = GroupLinear::Weights;
     const uint64_t bytes = uint64_t(K * N) * 4;
-    if (want == W::Shuffle && texel && has_subgroup_shuffles(d) && uint64_t(K * N) <= d.max_texel_elements)
+    // point_mlp_shfl.comp also votes (param pad): shuffles without votes are rare enough to fall back.
+    if (want == W::Shuffle && texel && has_subgroup_shuffles(d) && (d.subgroup_ops & VK_SUBGROUP_FEATURE_VOTE_BIT) &&
+        uint64_t(K * N) <= d.max_texel_elements)
         return W::Shuffle;
     // std140 vec4s: N % 4 == 0; the binding's offset must meet the device's alignment.
     if (want != W::Storage && texel && N % 4 == 0 && bytes <= d.max_uniform_range &&

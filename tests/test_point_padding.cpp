@@ -1,0 +1,269 @@
+// group_linear's param pad (GroupLinear::skip_padding): a ball's padding rows (its
+// free slots, which repeat its first index) are left out of the max and may stay
+// unwritten in a plain output. The maxes must equal, bit for bit, the same layers
+// without it (the rows left out repeat row 0) and the CPU reference within the
+// default fp32 tolerance; a plain output's real rows must equal the reference's.
+#include <catch2/catch.hpp>
+
+#include <string>
+
+#include "base/error.h"
+#include "engine/check/fault_injection.h"
+#include "engine/check/graph_check.h"
+#include "engine/ops/build.h"
+#include "engine/ops/common.h"
+#include "tests/harness.h"
+#include "tests/run_both.h"
+
+using namespace vtloc;
+
+namespace {
+
+using In = ops::GroupLinear::Input;
+using Hidden = ops::GroupLinear::Hidden;
+using Weights = ops::GroupLinear::Weights;
+using Tile = ops::GroupLinear::Tile;
+
+// Rows j > 0 of a ball whose index is the ball's first.
+std::vector<bool> padding_rows(const HostTensor& ball) {
+    const int64_t S = ball.shape.at(0), NS = ball.shape.at(1);
+    std::vector<bool> pad(size_t(S * NS), false);
+    for (int64_t s = 0; s < S; ++s)
+        for (int64_t j = 1; j < NS; ++j) pad[size_t(s * NS + j)] = ball.int_at(size_t(s * NS + j)) == ball.int_at(size_t(s * NS));
+    return pad;
+}
+
+std::string infer_error(std::vector<TensorDesc> in, Params p) {
+    try {
+        find_op("group_linear").infer(in, p);
+    } catch (const Error& e) {
+        return e.what();
+    }
+    return "no error";
+}
+
+}  // namespace
+
+TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear]") {
+    // Balls of 16 .. 128 around 8 .. 64 centres of 300 points: a small radius pads
+    // most slots (whole subgroups of rows are padding), a large one few. Three
+    // layers (the paper's shape), as the point encoder builds them: a gathered
+    // layer (plain, or with layer one in registers from the row or per source point),
+    // a plain rows layer between, a max. Every weight path, both buffer paths.
+    struct Case {
+        int64_t S, ns;
+        double radius;
+        int64_t C1, C2, C3;
+    };
+    for (Case c : {Case{37, 32, 0.25, 16, 20, 33}, Case{64, 128, 0.4, 64, 96, 128}, Case{8, 16, 1.5, 8, 12, 8},
+                   Case{19, 40, 0.3, 12, 37, 16}}) {
+        const int64_t N = 300, K0 = 6;
+        WeightStore w;
+        w.add("w0", test::random_tensor({K0, c.C1}, 71, -0.5f, 0.5f));
+        w.add("b0", test::random_tensor({c.C1}, 72, -0.2f, 0.2f));
+        w.add("w1", test::random_tensor({c.C1, c.C2}, 73, -0.3f, 0.3f));
+        w.add("b1", test::random_tensor({c.C2}, 74, -0.2f, 0.2f));
+        w.add("w2", test::random_tensor({c.C2, c.C3}, 75, -0.3f, 0.3f));
+        w.add("b2", test::random_tensor({c.C3}, 76, -0.2f, 0.2f));
+        Graph g;
+        const int x = g.input("cloud", {N, 6});
+        std::vector<int> f = ops::fps(g, x, c.S);
+        const int ball = ops::ball_query(g, x, f[1], c.radius, c.ns);
+        g.output(ball, "ball");
+        const int w0 = g.weight("w0", {K0, c.C1}), b0 = g.weight("b0", {c.C1}), w1 = g.weight("w1", {c.C1, c.C2}),
+                  b1 = g.weight("b1", {c.C2}), w2 = g.weight("w2", {c.C2, c.C3}), b2 = g.weight("b2", {c.C3});
+        std::vector<std::string> plain_names;
+        for (ops::BufferPath path : ops::kBufferPaths)
+            for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
+                for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
+                    if (path == ops::BufferPath::Storage && wp != Weights::Shuffle) continue;
+                    if (tile != Tile::Auto && wp != Weights::Shuffle) continue;
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
+                                           (tile == Tile::Auto ? "" : ".big8");
+                    ops::GroupLinear u_layer{In::Points, 3, false, 1, ops::kActNone, 0.01, path, wp};
+                    u_layer.point_major = true;
+                    const int u = ops::group_linear(g, {x, w0, b0, x}, u_layer);
+                    for (Hidden hidden : {Hidden::None, Hidden::Gathered, Hidden::PerPoint})
+                        for (bool pad : {false, true}) {
+                            // Layer one (gathered rows: normals, then xyz less the centre) and two.
+                            ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu, 0.01, path, wp, tile};
+                            first.skip_padding = pad;
+                            int h = -1;
+                            if (hidden == Hidden::None) {
+                                const int h0 = ops::group_linear(g, {x, f[1], ball, w0, b0, x}, first);
+                                ops::GroupLinear two{In::Rows, 0, false, 1, ops::kActRelu, 0.01, path, wp, tile};
+                                h = ops::group_linear(g, {h0, w1, b1}, two);  // a plain rows layer after a skipping one
+                            } else {
+                                first.hidden = hidden;
+                                h = hidden == Hidden::Gathered ? ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, first)
+                                                               : ops::group_linear(g, {u, f[1], ball, w0, w1, b1}, first);
+                                if (pad) {
+                                    const std::string name = "plain." + std::to_string(int(hidden)) + on;
+                                    g.output(h, name);
+                                    plain_names.push_back(name);
+                                }
+                            }
+                            ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
+                            last.skip_padding = pad;
+                            std::vector<int> in{h, w2, b2};
+                            if (pad) in.push_back(ball);
+                            g.output(ops::group_linear(g, in, last), std::string(pad ? "pad" : "full") + "." +
+                                                                        std::to_string(int(hidden)) + on);
+                        }
+                    // One gathered layer that is also the max.
+                    for (bool pad : {false, true}) {
+                        ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu, 0.01, path, wp, tile};
+                        one.skip_padding = pad;
+                        g.output(ops::group_linear(g, {x, f[1], ball, w0, b0, x}, one), std::string(pad ? "pad" : "full") + ".one" + on);
+                    }
+                }
+        INFO(c.S << " balls of " << c.ns << ", radius " << c.radius << ", widths " << c.C1 << ", " << c.C2 << ", " << c.C3);
+        const test::BothRuns r = test::run_both(g, w, {{"cloud", test::random_tensor({N, 6}, 77)}});
+        test::require_same_ints(r.gpu.at("ball"), r.cpu.at("ball"), "ball");
+        const std::vector<bool> pad = padding_rows(r.cpu.at("ball"));
+        int64_t padded = 0, padded_blocks = 0;  // padding rows, and 64-row runs of only padding
+        for (size_t m = 0; m < pad.size(); ++m) padded += pad[m];
+        for (size_t m0 = 0; m0 + 64 <= pad.size(); m0 += 64) {
+            bool all = true;
+            for (size_t m = m0; m < m0 + 64; ++m) all = all && pad[m];
+            padded_blocks += all;
+        }
+        INFO(padded << " of " << pad.size() << " rows are padding, " << padded_blocks << " runs of 64");
+        if (c.radius < 1.0) CHECK(padded * 2 > int64_t(pad.size()));  // the case pads as meant
+        if (c.ns == 128) CHECK(padded_blocks > 0);
+        int64_t maxes = 0;
+        for (const auto& [name, t] : r.gpu) {
+            if (name.rfind("pad.", 0) != 0) continue;
+            const std::string full = "full" + name.substr(3);
+            INFO(name);
+            CHECK(t.data == r.gpu.at(full).data);  // bit for bit: the rows left out repeat row 0
+            test::require_close(t, r.cpu.at(name), {}, name + " against the CPU reference");
+            test::require_close(r.gpu.at(full), r.cpu.at(full), {}, full + " against the CPU reference");
+            ++maxes;
+        }
+        CHECK(maxes == 6 * 4);  // texel: 3 weight paths + the big tile; storage: both tiles
+        for (const std::string& name : plain_names) {  // channel-major [C2, M]: real rows only
+            const HostTensor &got = r.gpu.at(name), &want = r.cpu.at(name);
+            REQUIRE(got.shape == want.shape);
+            const int64_t M = got.shape.at(1);
+            REQUIRE(M == int64_t(pad.size()));
+            HostTensor a(got.shape), b(got.shape);
+            for (int64_t k = 0; k < got.shape.at(0); ++k)
+                for (int64_t m = 0; m < M; ++m)
+                    if (!pad[size_t(m)]) {
+                        const size_t e = size_t(k * M + m);
+                        a.data[e] = got.data[e], b.data[e] = want.data[e];
+                    }
+            test::require_close(a, b, {}, name + " (real rows) against the CPU reference");
+        }
+        CHECK(plain_names.size() == 6 * 2);
+
+        // A max over rows whose padding holds poison (what a skipped block may hold):
+        // left out, so it equals the max without pad over the clean rows (padding =
+        // row 0 again) bit for bit, and the CPU reference on the poisoned rows.
+        const HostTensor& ball_t = r.cpu.at("ball");
+        const int64_t M = c.S * c.ns;
+        HostTensor clean = test::random_tensor({c.C2, M}, 78), poisoned = clean;
+        for (int64_t k = 0; k < c.C2; ++k)
+            for (int64_t m = 0; m < M; ++m)
+                if (pad[size_t(m)]) {
+                    const size_t e = size_t(k * M + m);
+                    clean.data[e] = clean.data[size_t(k * M + m / c.ns * c.ns)];
+                    // Large, not NaN: a max would drop a NaN row by itself.
+                    poisoned.data[e] = (m + k) % 2 == 0 ? 1e6f : -1e6f;
+                }
+        Graph pg;
+        const int xc = pg.input("clean", {c.C2, M}), xp = pg.input("poisoned", {c.C2, M}),
+                  bi = pg.input("ball", ball_t.shape, ElemType::I32);
+        const int pw = pg.weight("w2", {c.C2, c.C3}), pb = pg.weight("b2", {c.C3});
+        for (ops::BufferPath path : ops::kBufferPaths)
+            for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
+                for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
+                    if (path == ops::BufferPath::Storage && wp != Weights::Shuffle) continue;
+                    if (tile != Tile::Auto && wp != Weights::Shuffle) continue;
+                    const std::string on = std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
+                                           (tile == Tile::Auto ? "" : ".big8");
+                    ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
+                    pg.output(ops::group_linear(pg, {xc, pw, pb}, last), "clean" + on);
+                    last.skip_padding = true;
+                    pg.output(ops::group_linear(pg, {xp, pw, pb, bi}, last), "poisoned" + on);
+                }
+        const test::BothRuns pr = test::run_both(pg, w, {{"clean", clean}, {"poisoned", poisoned}, {"ball", ball_t}});
+        int64_t poisoned_maxes = 0;
+        for (const auto& [name, t] : pr.gpu) {
+            if (name.rfind("poisoned", 0) != 0) continue;
+            INFO(name);
+            CHECK(t.data == pr.gpu.at("clean" + name.substr(8)).data);
+            test::require_close(t, pr.cpu.at(name), {}, name + " against the CPU reference");
+            ++poisoned_maxes;
+        }
+        CHECK(poisoned_maxes == 6);
+    }
+}
+
+TEST_CASE("pad = 1 names what it needs", "[op][group_linear]") {
+    const TensorDesc x{{3, 8}}, w{{3, 4}}, b{{4}};
+    CHECK(infer_error({x, w, b, TensorDesc{{2, 4}, ElemType::I32}}, {{"max", 1}, {"group", 4}, {"pad", 1}}) == "no error");
+    CHECK_THAT(infer_error({x, w, b}, {{"pad", 1}}), Catch::Contains("pad = 1 needs ball rows (in = 1) or a max"));
+    CHECK_THAT(infer_error({x, w, b}, {{"max", 1}, {"group", 4}, {"pad", 1}}), Catch::Contains("takes 4 inputs, got 3"));
+    CHECK_THAT(infer_error({x, w, b, TensorDesc{{4, 2}, ElemType::I32}}, {{"max", 1}, {"group", 4}, {"pad", 1}}),
+               Catch::Contains("ball [4, 2] must be [2, 4]: one index per row"));
+    CHECK_THAT(infer_error({x, w, b, TensorDesc{{2, 4}}}, {{"max", 1}, {"group", 4}, {"pad", 1}}),
+               Catch::Contains("input 3 has the wrong element type"));
+    CHECK_THAT(infer_error({TensorDesc{{10, 6}}, TensorDesc{{2, 3}}, TensorDesc{{2, 4}, ElemType::I32}, TensorDesc{{6, 4}},
+                            TensorDesc{{4}}},
+                           {{"in", 1}, {"pad", 1}, {"point_major", 1}}),
+               Catch::Contains("pad = 1 is for channel-major outputs and maxes"));
+}
+
+TEST_CASE("the node-by-node check compares a skipping layer's real rows only", "[op][group_linear][check]") {
+    // The point encoder's pair: a gathering layer (layer one in registers) that
+    // skips padding, then the max; vtloc check must pass it, and must still see a
+    // wrong real row.
+    const int64_t N = 200, S = 16, NS = 64;
+    WeightStore w;
+    w.add("w0", test::random_tensor({6, 16}, 81, -0.5f, 0.5f));
+    w.add("b0", test::random_tensor({16}, 82, -0.2f, 0.2f));
+    w.add("w1", test::random_tensor({16, 24}, 83, -0.3f, 0.3f));
+    w.add("b1", test::random_tensor({24}, 84, -0.2f, 0.2f));
+    w.add("w2", test::random_tensor({24, 32}, 85, -0.3f, 0.3f));
+    w.add("b2", test::random_tensor({32}, 86, -0.2f, 0.2f));
+    Graph g;
+    const int x = g.input("cloud", {N, 6});
+    std::vector<int> f = ops::fps(g, x, S);
+    const int ball = ops::ball_query(g, x, f[1], 0.3, NS);
+    ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu};
+    first.hidden = Hidden::Gathered, first.skip_padding = true;
+    const int h = ops::group_linear(g, {x, f[1], ball, g.weight("w0", {6, 16}), g.weight("b0", {16}), g.weight("w1", {16, 24}),
+                                        g.weight("b1", {24}), x},
+                                    first, "plain");
+    ops::GroupLinear last{In::Rows, 0, true, NS, ops::kActRelu};
+    last.skip_padding = true;
+    g.output(ops::group_linear(g, {h, g.weight("w2", {24, 32}), g.weight("b2", {32}), ball}, last, "max"), "max");
+    const TensorMap in{{"cloud", test::random_tensor({N, 6}, 87)}};
+    const check::GraphCheck ok = check::check_graph(test::gpu(), g, w, in);
+    CHECK(ok.ok());
+    // A wrong real row of the plain output fails the check at that node; a wrong
+    // padding row (unspecified) does not.
+    Graph gb = g;
+    gb.output(ball, "ball");
+    const HostTensor balls = run_cpu(gb, w, in).at("ball");
+    int64_t pad_row = -1;
+    for (int64_t m = 0; m < S * NS && pad_row < 0; ++m)
+        if (m % NS != 0 && balls.int_at(size_t(m)) == balls.int_at(size_t(m / NS * NS))) pad_row = m;
+    REQUIRE(pad_row > 0);
+    for (int64_t row : {int64_t(0), pad_row}) {
+        INFO("row " << row << " of the plain output corrupted");
+        check::testing::set_fault("plain", [&](HostTensor& t) { t.data[size_t(row)] += 1.0f; });  // channel 0
+        const check::GraphCheck r = check::check_graph(test::gpu(), g, w, in);
+        check::testing::clear_fault();
+        if (row == 0) {
+            CHECK_FALSE(r.ok());
+            REQUIRE(r.first_failure >= 0);
+            CHECK(r.nodes[size_t(r.first_failure)].node == "plain");
+        } else {
+            CHECK(r.ok());
+        }
+    }
+    test::require_no_validation_messages();
+}
