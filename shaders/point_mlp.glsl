@@ -27,9 +27,9 @@
 // PAD: ball padding (SPEC 2 fills a ball's free slots with its first index, so such
 //   a row repeats row 0's input and output) is work skipped: a row past a group's
 //   first whose index (binding 7, [M / NS][NS]) equals the first's is left out of the
-//   max, and a plain output leaves a block unwritten where every row of the subgroup's
-//   blocks is padding (point_mlp_shfl.comp only: it needs a subgroup vote; the
-//   others compute those rows). A layer that reads such an output takes PAD as well.
+//   max, and a plain output leaves a block unwritten where the subgroup's blocks
+//   (row_block) are all padding (point_mlp_shfl.comp only: it needs a subgroup vote;
+//   the others compute those rows). A layer that reads such an output takes PAD as well.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block is uniform in a workgroup (CBLOCK), so
@@ -247,6 +247,22 @@ bool padding_row(uint r) {
     return r != r0 && LOAD_I(r) == LOAD_I(r0);
 }
 
+// The row block invocation t computes. PAD, plain output (the vote shader): lane i of
+// a subgroup takes block b of group chunk * SG + i, so a subgroup skips block b where
+// none of its SG balls has a real row there (a block of 8 rows where rows in order
+// would need a subgroup's 8 blocks, 64 rows, all padding). Groups that do not fill a
+// subgroup keep the rows in order. A permutation: any subgroup layout stays exact.
+uint row_block(uint t) {
+#ifdef SUBGROUP_VOTE
+    const uint B = p.NS / TM, full = p.M / p.NS / SG * SG * B;  // blocks per group; blocks of whole-subgroup chunks
+    if (PAD && p.NS % TM == 0 && t < full) {
+        const uint r = t % (SG * B);
+        return ((t / (SG * B)) * SG + r % SG) * B + r / SG;
+    }
+#endif
+    return t;
+}
+
 void main() {
     // Spare invocations redo the last block and store nothing: no early return,
     // so every loop below has a uniform trip count (its counters stay uniform
@@ -258,7 +274,7 @@ void main() {
     float b[TN];
     [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
     if (!MAXPOOL) {
-        const uint m0 = t * TM;
+        const uint m0 = row_block(t) * TM;
         if (PAD) {  // a subgroup-uniform return: the shuffles below see every lane
             bool need = false;
             [[unroll]] for (uint i = 0; i < TM; ++i) need = need || (m0 + i < p.M && !padding_row(m0 + i));
