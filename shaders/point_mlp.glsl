@@ -57,8 +57,10 @@ layout(constant_id = 14) const bool CB_FIRST = false;
 layout(constant_id = 15) const bool PAD = false;
 #ifdef SUBGROUP_VOTE
 #define ANY_LANE(x) subgroupAny(x)
+const bool SKIP_BLOCKS = PAD;
 #else
 #define ANY_LANE(x) true
+const bool SKIP_BLOCKS = false;  // without a vote every lane computes its block
 #endif
 #define CBLOCK (CB_FIRST ? gl_WorkGroupID.x : gl_WorkGroupID.y)
 #define RBLOCK (CB_FIRST ? gl_WorkGroupID.y : gl_WorkGroupID.x)
@@ -275,7 +277,7 @@ void main() {
     [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
     if (!MAXPOOL) {
         const uint m0 = row_block(t) * TM;
-        if (PAD) {  // a subgroup-uniform return: the shuffles below see every lane
+        if (SKIP_BLOCKS) {  // a subgroup-uniform return: the shuffles below see every lane
             bool need = false;
             [[unroll]] for (uint i = 0; i < TM; ++i) need = need || (m0 + i < p.M && !padding_row(m0 + i));
             if (!ANY_LANE(live && need)) return;

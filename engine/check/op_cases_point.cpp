@@ -1,6 +1,6 @@
 // Self-test cases: fps, ball_query, point_group, group_max, group_linear
 // (gather, plain, group-all and per-point inputs; a hidden first layer from the
-// gathered rows or per point; fused max; texel and storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
+// gathered rows or per point; fused max; ball padding skipped; texel and storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
 // normal_estimate (a sphere sample, as tests/test_normals.cpp).
 #include <cmath>
 
@@ -72,6 +72,17 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         c.output(ops::group_linear(c.g, hin, hidden), "hidden_max");
         int one = ops::group_linear(c.g, fin, gather_max);
         c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
+        // ball padding skipped (pad): the max after a skipping hidden layer, and a gathered max
+        ops::GroupLinear hidden_pad = gather;
+        hidden_pad.hidden = ops::GroupLinear::Hidden::Gathered;
+        hidden_pad.skip_padding = true;
+        ops::GroupLinear rows_pad = rows_max;
+        rows_pad.skip_padding = true;
+        const int w4t = c.weight("w4t", ops::point_weight_kn(random_tensor({C3, C2}, 17, -0.3f, 0.3f)));
+        c.output(ops::group_linear(c.g, {ops::group_linear(c.g, hin, hidden_pad), w4t, b3, ball}, rows_pad), "pad_max");
+        ops::GroupLinear gather_max_pad = gather_max;
+        gather_max_pad.skip_padding = true;
+        c.output(ops::group_linear(c.g, fin, gather_max_pad), "gather_max_pad");
     }
     return c;
 }

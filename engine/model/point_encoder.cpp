@@ -41,7 +41,8 @@ struct StageInput {
 // Scale `s` of a set-abstraction stage: the ball around each centre, its shared MLP and the
 // max over the ball's points.
 int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, const std::string& pre,
-             const StageInput& si_in, int centres, bool fuse, PointEncoderOutputs& out) {
+             const StageInput& si_in, int centres, const PointEncoderOptions& opt, PointEncoderOutputs& out) {
+    const bool fuse = opt.fuse;
     const std::string si = std::to_string(s), ball_name = pre + ".ball." + si;
     const int64_t ns = st.nsample[s];
     int ball = ops::ball_query(g, si_in.xyz, centres, st.radii[s], ns, ball_name);
@@ -116,8 +117,8 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         // the max leaves it out, and a gathering layer right before it leaves it
         // unwritten (not one with rows layers between: they would carry whatever
         // the skipped rows hold). README "Ball padding".
-        gl.skip_padding = gl.max || (gather && l + 2 == widths.size());
-        if (!gather && gl.max) ins.push_back(ball);
+        gl.skip_padding = opt.skip_padding && (gl.max || (gather && l + 2 == widths.size()));
+        if (gl.skip_padding && !gather && gl.max) ins.push_back(ball);
         x = ops::group_linear(g, ins, gl, node);
     }
     if (!fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);
@@ -179,7 +180,7 @@ PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const Mo
         std::vector<int> scales;
         int64_t next_channels = 0;
         for (size_t s = 0; s < st.radii.size(); ++s) {
-            scales.push_back(sa_scale(g, w, st, s, pre, st_in, centres, options.fuse, out));
+            scales.push_back(sa_scale(g, w, st, s, pre, st_in, centres, options, out));
             next_channels += st.mlps[s].back();
         }
         const int feat = scales.size() == 1 ? scales[0] : ops::concat(g, scales, pre + ".concat");

@@ -24,6 +24,10 @@ struct PointEncoderOptions {
     // neighbours inside the last. Unfused (false): point_group, linear, group_max
     // as separate nodes; the same numbers, kept as a cross-check.
     bool fuse = true;
+    // Fused only: ball padding (a ball's free slots, which repeat its first point)
+    // left out of the work, exactly (README "Ball padding"); false computes every
+    // row (vtloc-bench-point's A/B).
+    bool skip_padding = true;
 };
 
 // cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in
