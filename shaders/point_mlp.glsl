@@ -266,9 +266,9 @@ uint row_block(uint t) {
 }
 
 void main() {
-    // Spare invocations redo the last block and store nothing: no early return,
-    // so every loop below has a uniform trip count (its counters stay uniform
-    // and the weight loads with them).
+    // Spare invocations redo the last block and store nothing: no early return
+    // (but PAD's, taken by whole subgroups), so every loop below has a uniform trip
+    // count (its counters stay uniform and the weight loads with them).
     const uint t_all = RBLOCK * gl_WorkGroupSize.x + gl_LocalInvocationID.x;
     const bool live = t_all < p.blocks;
     const uint t = min(t_all, p.blocks - 1u);
