@@ -18,12 +18,18 @@ double real_rows(const HostTensor& ball) {
     return n;
 }
 
-}  // namespace
-
-std::map<std::string, HostTensor> ball_indices(const Graph& g, const WeightStore& w, const TensorMap& inputs) {
+// The node that writes each value (-1: an input or weight).
+std::vector<int> producers(const Graph& g) {
     std::vector<int> producer(g.values().size(), -1);
     for (size_t i = 0; i < g.nodes().size(); ++i)
         for (int id : g.nodes()[i].outputs) producer[size_t(id)] = int(i);
+    return producer;
+}
+
+}  // namespace
+
+std::map<std::string, HostTensor> ball_indices(const Graph& g, const WeightStore& w, const TensorMap& inputs) {
+    const std::vector<int> producer = producers(g);
     std::set<int> need;  // the ball_query nodes and every node they depend on
     std::vector<int> todo;
     for (size_t i = 0; i < g.nodes().size(); ++i)
@@ -65,9 +71,7 @@ std::map<std::string, HostTensor> ball_indices(const Graph& g, const WeightStore
 }
 
 std::map<std::string, double> node_flops(const Graph& g, const std::map<std::string, HostTensor>& balls) {
-    std::vector<int> producer(g.values().size(), -1);
-    for (size_t i = 0; i < g.nodes().size(); ++i)
-        for (int id : g.nodes()[i].outputs) producer[size_t(id)] = int(i);
+    const std::vector<int> producer = producers(g);
     std::map<std::string, double> f;
     for (const Node& n : g.nodes()) {
         double flops = 0;

@@ -33,6 +33,27 @@ std::vector<bool> padding_rows(const HostTensor& ball) {
     return pad;
 }
 
+// The layer variants the tests sweep: every weight path on texel buffers, storage
+// buffers, and the big-layer tile on the shuffle path of each.
+struct Variant {
+    ops::BufferPath path;
+    Weights weights;
+    Tile tile;
+    std::string suffix;  // of output names
+};
+std::vector<Variant> variants() {
+    std::vector<Variant> v;
+    for (ops::BufferPath path : ops::kBufferPaths)
+        for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
+            for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
+                if (path == ops::BufferPath::Storage && wp != Weights::Shuffle) continue;
+                if (tile != Tile::Auto && wp != Weights::Shuffle) continue;
+                v.push_back({path, wp, tile, std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
+                                                 (tile == Tile::Auto ? "" : ".big8")});
+            }
+    return v;
+}
+
 std::string infer_error(std::vector<TensorDesc> in, Params p) {
     try {
         find_op("group_linear").infer(in, p);
@@ -73,50 +94,48 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
         const int w0 = g.weight("w0", {K0, c.C1}), b0 = g.weight("b0", {c.C1}), w1 = g.weight("w1", {c.C1, c.C2}),
                   b1 = g.weight("b1", {c.C2}), w2 = g.weight("w2", {c.C2, c.C3}), b2 = g.weight("b2", {c.C3});
         std::vector<std::string> plain_names;
-        for (ops::BufferPath path : ops::kBufferPaths)
-            for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
-                for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
-                    if (path == ops::BufferPath::Storage && wp != Weights::Shuffle) continue;
-                    if (tile != Tile::Auto && wp != Weights::Shuffle) continue;
-                    const std::string on = std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
-                                           (tile == Tile::Auto ? "" : ".big8");
-                    ops::GroupLinear u_layer{In::Points, 3, false, 1, ops::kActNone, 0.01, path, wp};
-                    u_layer.point_major = true;
-                    const int u = ops::group_linear(g, {x, w0, b0, x}, u_layer);
-                    for (Hidden hidden : {Hidden::None, Hidden::Gathered, Hidden::PerPoint})
-                        for (bool pad : {false, true}) {
-                            // Layer one (gathered rows: normals, then xyz less the centre) and two.
-                            ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu, 0.01, path, wp, tile};
-                            first.skip_padding = pad;
-                            int h = -1;
-                            if (hidden == Hidden::None) {
-                                const int h0 = ops::group_linear(g, {x, f[1], ball, w0, b0, x}, first);
-                                ops::GroupLinear two{In::Rows, 0, false, 1, ops::kActRelu, 0.01, path, wp, tile};
-                                h = ops::group_linear(g, {h0, w1, b1}, two);  // a plain rows layer after a skipping one
-                            } else {
-                                first.hidden = hidden;
-                                h = hidden == Hidden::Gathered ? ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, first)
-                                                               : ops::group_linear(g, {u, f[1], ball, w0, w1, b1}, first);
-                                if (pad) {
-                                    const std::string name = "plain." + std::to_string(int(hidden)) + on;
-                                    g.output(h, name);
-                                    plain_names.push_back(name);
-                                }
-                            }
-                            ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
-                            last.skip_padding = pad;
-                            std::vector<int> in{h, w2, b2};
-                            if (pad) in.push_back(ball);
-                            g.output(ops::group_linear(g, in, last), std::string(pad ? "pad" : "full") + "." +
-                                                                        std::to_string(int(hidden)) + on);
+        for (const Variant& v : variants()) {
+            const ops::BufferPath path = v.path;
+            const Weights wp = v.weights;
+            const Tile tile = v.tile;
+            const std::string& on = v.suffix;
+            ops::GroupLinear u_layer{In::Points, 3, false, 1, ops::kActNone, 0.01, path, wp};
+            u_layer.point_major = true;
+            const int u = ops::group_linear(g, {x, w0, b0, x}, u_layer);
+            for (Hidden hidden : {Hidden::None, Hidden::Gathered, Hidden::PerPoint})
+                for (bool pad : {false, true}) {
+                    // Layer one (gathered rows: normals, then xyz less the centre) and two.
+                    ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu, 0.01, path, wp, tile};
+                    first.skip_padding = pad;
+                    int h = -1;
+                    if (hidden == Hidden::None) {
+                        const int h0 = ops::group_linear(g, {x, f[1], ball, w0, b0, x}, first);
+                        ops::GroupLinear two{In::Rows, 0, false, 1, ops::kActRelu, 0.01, path, wp, tile};
+                        h = ops::group_linear(g, {h0, w1, b1}, two);  // a plain rows layer after a skipping one
+                    } else {
+                        first.hidden = hidden;
+                        h = hidden == Hidden::Gathered ? ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, first)
+                                                       : ops::group_linear(g, {u, f[1], ball, w0, w1, b1}, first);
+                        if (pad) {
+                            const std::string name = "plain." + std::to_string(int(hidden)) + on;
+                            g.output(h, name);
+                            plain_names.push_back(name);
                         }
-                    // One gathered layer that is also the max.
-                    for (bool pad : {false, true}) {
-                        ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu, 0.01, path, wp, tile};
-                        one.skip_padding = pad;
-                        g.output(ops::group_linear(g, {x, f[1], ball, w0, b0, x}, one), std::string(pad ? "pad" : "full") + ".one" + on);
                     }
+                    ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
+                    last.skip_padding = pad;
+                    std::vector<int> in{h, w2, b2};
+                    if (pad) in.push_back(ball);
+                    g.output(ops::group_linear(g, in, last), std::string(pad ? "pad" : "full") + "." +
+                                                                std::to_string(int(hidden)) + on);
                 }
+            // One gathered layer that is also the max.
+            for (bool pad : {false, true}) {
+                ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu, 0.01, path, wp, tile};
+                one.skip_padding = pad;
+                g.output(ops::group_linear(g, {x, f[1], ball, w0, b0, x}, one), std::string(pad ? "pad" : "full") + ".one" + on);
+            }
+        }
         INFO(c.S << " balls of " << c.ns << ", radius " << c.radius << ", widths " << c.C1 << ", " << c.C2 << ", " << c.C3);
         const test::BothRuns r = test::run_both(g, w, {{"cloud", test::random_tensor({N, 6}, 77)}});
         test::require_same_ints(r.gpu.at("ball"), r.cpu.at("ball"), "ball");
@@ -176,18 +195,16 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
         const int xc = pg.input("clean", {c.C2, M}), xp = pg.input("poisoned", {c.C2, M}),
                   bi = pg.input("ball", ball_t.shape, ElemType::I32);
         const int pw = pg.weight("w2", {c.C2, c.C3}), pb = pg.weight("b2", {c.C3});
-        for (ops::BufferPath path : ops::kBufferPaths)
-            for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
-                for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
-                    if (path == ops::BufferPath::Storage && wp != Weights::Shuffle) continue;
-                    if (tile != Tile::Auto && wp != Weights::Shuffle) continue;
-                    const std::string on = std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
-                                           (tile == Tile::Auto ? "" : ".big8");
-                    ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
-                    pg.output(ops::group_linear(pg, {xc, pw, pb}, last), "clean" + on);
-                    last.skip_padding = true;
-                    pg.output(ops::group_linear(pg, {xp, pw, pb, bi}, last), "poisoned" + on);
-                }
+        for (const Variant& v : variants()) {
+            const ops::BufferPath path = v.path;
+            const Weights wp = v.weights;
+            const Tile tile = v.tile;
+            const std::string& on = v.suffix;
+            ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
+            pg.output(ops::group_linear(pg, {xc, pw, pb}, last), "clean" + on);
+            last.skip_padding = true;
+            pg.output(ops::group_linear(pg, {xp, pw, pb, bi}, last), "poisoned" + on);
+        }
         const test::BothRuns pr = test::run_both(pg, w, {{"clean", clean}, {"poisoned", poisoned}, {"ball", ball_t}});
         int64_t poisoned_maxes = 0;
         for (const auto& [name, t] : pr.gpu) {
