@@ -29,7 +29,7 @@
 //   first whose index (binding 7, [M / NS][NS]) equals the first's is left out of the
 //   max, and a plain output leaves a block unwritten where the subgroup's blocks
 //   (row_block) are all padding (point_mlp_shfl.comp only: it needs a subgroup vote;
-//   the others compute those rows). A layer that reads such an output takes PAD as well.
+//   the others compute those rows). The max after such an output takes PAD as well.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block is uniform in a workgroup (CBLOCK), so

@@ -72,17 +72,21 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         c.output(ops::group_linear(c.g, hin, hidden), "hidden_max");
         int one = ops::group_linear(c.g, fin, gather_max);
         c.output(ops::group_linear(c.g, {f[1], w3t, b3, one}, all_max), "all");
-        // ball padding skipped (pad): the max after a skipping hidden layer, and a gathered max
+        // ball padding skipped (pad), on balls of 16 that are mostly padding (whole
+        // blocks skipped): the max after a skipping hidden layer, and a gathered max
+        const int64_t pns = 16;
+        const int pball = ops::ball_query(c.g, x, f[1], 0.3, pns);
         ops::GroupLinear hidden_pad = gather;
         hidden_pad.hidden = ops::GroupLinear::Hidden::Gathered;
         hidden_pad.skip_padding = true;
-        ops::GroupLinear rows_pad = rows_max;
+        ops::GroupLinear rows_pad{In::Rows, 0, true, pns, relu, 0.01, path};
         rows_pad.skip_padding = true;
         const int w4t = c.weight("w4t", ops::point_weight_kn(random_tensor({C3, C2}, 17, -0.3f, 0.3f)));
-        c.output(ops::group_linear(c.g, {ops::group_linear(c.g, hin, hidden_pad), w4t, b3, ball}, rows_pad), "pad_max");
+        const int hp = ops::group_linear(c.g, {x, f[1], pball, w1t, b1, w2t, b2, x}, hidden_pad);
+        c.output(ops::group_linear(c.g, {hp, w4t, b3, pball}, rows_pad), "pad_max");
         ops::GroupLinear gather_max_pad = gather_max;
         gather_max_pad.skip_padding = true;
-        c.output(ops::group_linear(c.g, fin, gather_max_pad), "gather_max_pad");
+        c.output(ops::group_linear(c.g, {x, f[1], pball, w1t, b1, x}, gather_max_pad), "gather_max_pad");
     }
     return c;
 }

@@ -137,9 +137,10 @@ struct GroupLinear {
     // (group_linear.cpp says why); true keeps row blocks along x (tests run both).
     bool rows_in_x = false;
     // Ball padding (SPEC 2: free slots repeat the ball's first index) skipped:
-    // left out of a max, unspecified in a plain output (Gather only), so set it on
-    // every layer of a scale after the first. A max over Rows then takes the ball
-    // as its last input, idx [M / group, group].
+    // left out of a max (Gather, or Rows with the ball as a last input, idx
+    // [M / group, group]), unspecified in a plain Gather output; the max must then
+    // take it too. The point encoder sets it on the max and the gathering layer
+    // right before it.
     bool skip_padding = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");

@@ -34,7 +34,8 @@
 // leaves such rows out (the same max wherever they repeat row 0, and what makes
 // skipping safe); a plain output (in = 1 only) holds anything in them. in = 1 takes the
 // ball from its idx; a max over in = 0 rows takes it as a last input, idx I32 [M / group,
-// group]. The point encoder sets it on both layers of a scale after its first.
+// group]. A max after a plain output with pad must take it too. The point encoder sets it
+// on the max and on the gathering layer right before it.
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M]. Params act, slope as linear's. Param tile
