@@ -5,16 +5,15 @@
 
 #include "base/error.h"
 #include "engine/op.h"
+#include "engine/ops/point_common.h"
 
 namespace vtloc::bench {
 namespace {
 
-// Rows of `ball` [S, NS] that are not padding (a slot past the first that repeats the first index).
+// Rows of `ball` [S, NS] that are not padding.
 double real_rows(const HostTensor& ball) {
-    const int64_t S = ball.shape.at(0), NS = ball.shape.at(1);
     double n = 0;
-    for (int64_t s = 0; s < S; ++s)
-        for (int64_t j = 0; j < NS; ++j) n += j == 0 || ball.int_at(size_t(s * NS + j)) != ball.int_at(size_t(s * NS));
+    for (int64_t m = 0; m < ball.size(); ++m) n += !ops::padding_row(ball, m, ball.shape.at(1));
     return n;
 }
 

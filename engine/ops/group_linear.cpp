@@ -70,12 +70,9 @@ struct Layout {
 };
 
 // Input i is I32: a gather's ball, or a max's ball (pad) after x^T, W^T and bias.
-bool index_input(const Layout& l, size_t i) { return (l.mode == 1 && i == 2) || (l.mode == 0 && l.pad && i == 3); }
-
-// Row m repeats its group's first index (param pad): raw indices, as the shader compares them.
-bool padding_row(const HostTensor& idx, int64_t m, int64_t NS) {
-    const int64_t m0 = m / NS * NS;
-    return m != m0 && idx.int_at(size_t(m)) == idx.int_at(size_t(m0));
+bool index_input(const Params& p, size_t i) {
+    const double mode = p.get("in", 0);
+    return (mode == 1 && i == 2) || (mode == 0 && p.get("pad", 0) != 0 && i == 3);
 }
 
 Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
@@ -93,7 +90,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
         throw Error("pad = 1 needs ball rows (in = 1) or a max over rows with their ball (in = 0, max = 1)");
     if (l.pad && l.point_major) throw Error("pad = 1 is for channel-major outputs and maxes");
     for (size_t i = 0; i < in.size(); ++i)
-        if (in[i].type != (index_input(l, i) ? ElemType::I32 : ElemType::F32))
+        if (in[i].type != (index_input(p, i) ? ElemType::I32 : ElemType::F32))
             throw Error("input " + std::to_string(i) + " has the wrong element type");
     if (l.mode == 1) {
         const size_t base = l.hidden == 1 ? 7 : l.hidden == 2 ? 6 : 5;
@@ -227,9 +224,7 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     std::vector<TensorDesc> ds;
-    const bool pad0 = a.params.get("in", 0) == 0 && a.params.get("pad", 0) != 0;  // a max's ball: input 3
-    for (size_t i = 0; i < a.in.size(); ++i)
-        ds.push_back({a.in[i].shape, (a.params.get("in", 0) == 1 && i == 2) || (pad0 && i == 3) ? ElemType::I32 : ElemType::F32});
+    for (size_t i = 0; i < a.in.size(); ++i) ds.push_back({a.in[i].shape, index_input(a.params, i) ? ElemType::I32 : ElemType::F32});
     const Layout l = layout_of(ds, a.params);
     // TM x TN accumulators per invocation, both multiples of 4 (the shader's vec4
     // granularity), fewer channels for narrow layers. GPUs: 8 x 16 (registers).
