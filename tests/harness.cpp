@@ -24,6 +24,8 @@ rt::Context& gpu() {
 
 bool gpu_created() { return g_ctx != nullptr; }
 
+void release_gpu() { g_ctx.reset(); }
+
 void require_no_validation_messages() {
     if (!g_ctx) return;
     auto msgs = g_ctx->take_validation_messages();

@@ -14,6 +14,10 @@ namespace vtloc::test {
 // The process-wide context, created on first use with the Khronos validation layer on.
 rt::Context& gpu();
 bool gpu_created();
+// Destroys the shared context. main() calls it before returning: a real driver
+// (NVIDIA's, seen on an H200) is unloaded by its own exit handlers before static
+// destructors run, and a context destroyed after that crashes the process.
+void release_gpu();
 
 // Fails the current test (CHECK) if the validation layer said anything since the last call.
 void require_no_validation_messages();

@@ -28,5 +28,6 @@ CATCH_REGISTER_LISTENER(ValidationListener)
 int main(int argc, char** argv) {
     setenv("VTLOC_VALIDATION", "1", 1);
     int result = Catch::Session().run(argc, argv);
+    vtloc::test::release_gpu();
     return result != 0 ? result : (g_unreported_messages ? 1 : 0);
 }
