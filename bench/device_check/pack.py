@@ -1,0 +1,146 @@
+#!/usr/bin/env python3
+"""Packs a built tree for a Linux x86-64 GPU machine that has a Vulkan driver but
+none of our -dev packages (robot or CI GPUs, a lent test machine):
+the test runner, the CLI and the benches, the libraries they load, the Khronos
+validation layer, and the test list split into shards. run.sh runs it there.
+
+Usage: python3 bench/device_check/pack.py [--build build] [--out .devcheck]
+Needs the Debian 12 build machine's packages and its apt archive (for the
+Vulkan loader and the reference LAPACK, fetched as .deb files, not installed).
+
+OpenCV's imgcodecs links GDAL, GDCM and OpenEXR (~150 MB with their own
+dependencies). The engine never decodes those formats, so they are replaced by
+stub libraries of the same soname whose every imported function returns 0
+(imgcodecs is linked with BIND_NOW: each symbol must exist, none is called
+for PNG/JPEG). LAPACK/BLAS are real (OpenCV's cv::solve uses them; the
+reality check's position floor came out NaN with stubs)."""
+import argparse, os, re, shutil, subprocess, sys, tempfile
+
+ap = argparse.ArgumentParser()
+ap.add_argument('--build', default='build')
+ap.add_argument('--out', default='.devcheck')
+args = ap.parse_args()
+B = os.path.abspath(args.build)
+OUT = os.path.abspath(args.out)
+LIBDIRS = ['/lib/x86_64-linux-gnu', '/usr/lib/x86_64-linux-gnu']
+# Every Linux x86-64 system has these (and newer ones are compatible).
+SYSTEM = {'libc.so.6', 'libm.so.6', 'libstdc++.so.6', 'libgcc_s.so.1', 'libpthread.so.0', 'libdl.so.2',
+          'librt.so.1', 'ld-linux-x86-64.so.2', 'libz.so.1'}
+STUBS = ['libgdal.so.32', 'libgdcmMSFF.so.3.0', 'libgdcmDSED.so.3.0', 'libOpenEXR-3_1.so.30']
+DEBS = {'liblapack3': {'liblapack.so.3': 'lapack/liblapack.so.3'}, 'libblas3': {'libblas.so.3': 'blas/libblas.so.3'},
+        'libgfortran5': {'libgfortran.so.5': 'libgfortran.so.5'}, 'libquadmath0': {'libquadmath.so.0': 'libquadmath.so.0'}}
+GL_DEBS = ['libvulkan1', 'libglvnd0', 'libglx0', 'libegl1', 'libgl1', 'libopengl0', 'libgles2']
+BINS = ['tests/vtloc_tests', 'vtloc', 'vtloc-bench', 'vtloc-bench-point', 'vtloc-bench-tactile', 'vtloc-bench-probe']
+LAYER = '/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so'
+LAYER_JSON = '/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json'
+
+
+def sh(cmd, **kw):
+    return subprocess.run(cmd, check=True, capture_output=True, text=True, **kw).stdout
+
+
+def needed(path):
+    return re.findall(r'Shared library: \[(.+?)\]', sh(['readelf', '-d', path]))
+
+
+def find_lib(name):
+    for d in LIBDIRS:
+        if os.path.exists(os.path.join(d, name)):
+            return os.path.realpath(os.path.join(d, name))
+    sys.exit(f'pack: {name} not found in {LIBDIRS}')
+
+
+def apt_download(pkgs, dest):
+    os.makedirs(dest, exist_ok=True)
+    lists = tempfile.mkdtemp()
+    os.makedirs(lists + '/partial')
+    o = ['-oAPT::Architecture=amd64', '-oAPT::Architectures=amd64', '-oDir::State::Lists=' + lists]
+    sh(['apt-get', *o, 'update'])
+    sh(['apt-get', *o, 'download', *pkgs], cwd=dest)
+
+
+def make_stub(lib, wanted, dest):
+    """A library named `lib` defining each symbol of `wanted` that the real one defines."""
+    asm = ['.text']
+    count = 0
+    for line in sh(['nm', '-D', '-S', '--defined-only', find_lib(lib)]).splitlines():
+        f = line.split()
+        if len(f) < 3 or f[-1] not in wanted:
+            continue
+        name, kind, count = f[-1], f[-2], count + 1
+        if kind in 'TtWi':
+            asm += [f'.globl "{name}"', f'.type "{name}",@function', f'"{name}":', 'xor %eax,%eax', 'ret']
+        else:
+            size = int(f[1], 16) if len(f) == 4 else 8
+            asm += ['.data', f'.globl "{name}"', f'.type "{name}",@object', f'.size "{name}",{size}', f'"{name}":',
+                    f'.zero {max(size, 8)}', '.text']
+    with tempfile.NamedTemporaryFile('w', suffix='.s', delete=False) as s:
+        s.write('\n'.join(asm) + '\n')
+    sh(['gcc', '-shared', '-nostdlib', '-o', os.path.join(dest, lib), '-Wl,-soname,' + lib, s.name])
+    os.unlink(s.name)
+    return count
+
+
+def main():
+    work = tempfile.mkdtemp()
+    root = os.path.join(work, 'bundle')
+    for d in ('bin', 'lib', 'layer'):
+        os.makedirs(os.path.join(root, d))
+    real = {}
+    debdir = os.path.join(work, 'debs')
+    apt_download(list(DEBS), debdir)
+    for f in os.listdir(debdir):
+        sh(['dpkg', '-x', os.path.join(debdir, f), os.path.join(work, 'x')])
+    for libs in DEBS.values():
+        for name, rel in libs.items():
+            real[name] = os.path.join(work, 'x/usr/lib/x86_64-linux-gnu', rel)
+    # The closure of what the programs and the layer load, minus system, stubbed and deb libraries.
+    carried, todo = {}, [os.path.join(B, b) for b in BINS] + [LAYER]
+    while todo:
+        for n in needed(todo.pop()):
+            if n in SYSTEM or n in STUBS or n in real or n in carried:
+                continue
+            carried[n] = find_lib(n)
+            todo.append(carried[n])
+    for b in BINS:
+        dst = os.path.join(root, 'bin', os.path.basename(b))
+        shutil.copy(os.path.join(B, b), dst)
+        sh(['strip', dst])
+    for n, p in list(carried.items()) + list(real.items()) + [(os.path.basename(LAYER), LAYER)]:
+        dst = os.path.join(root, 'lib', n)
+        shutil.copy(p, dst)
+        sh(['strip', '--strip-unneeded', dst])
+    shutil.copy(LAYER_JSON, os.path.join(root, 'layer'))
+    imported = set()
+    for d in ('bin', 'lib'):
+        for f in os.listdir(os.path.join(root, d)):
+            for line in sh(['nm', '-D', '--undefined-only', os.path.join(root, d, f)]).splitlines():
+                if line.split():
+                    imported.add(line.split()[-1].split('@')[0])
+    for lib in STUBS:
+        print(f'stub {lib}: {make_stub(lib, imported, os.path.join(root, "lib"))} symbols')
+    # The test runner has the source directory compiled in (VTLOC_SOURCE_DIR); run.sh links it.
+    cache = open(os.path.join(B, 'CMakeCache.txt')).read()
+    src = re.search(r'^CMAKE_HOME_DIRECTORY:INTERNAL=(.*)$', cache, re.M).group(1)
+    open(os.path.join(root, 'source_dir'), 'w').write(src + '\n')
+    os.makedirs(OUT, exist_ok=True)
+    # Shards of the test list (Catch2 v2 has no --shard; -f takes escaped names, one per line).
+    # (Catch2 v2's --list exits with the number of tests.)
+    listed = subprocess.run([os.path.join(B, 'tests/vtloc_tests'), '--list-test-names-only', '~[golden]'],
+                            capture_output=True, text=True).stdout
+    names = [n for n in listed.splitlines() if n]
+    esc = lambda n: re.sub(r'([\\,\[\]*"~])', r'\\\1', n)
+    for k in range(12):
+        open(os.path.join(OUT, f'shard{k}.txt'), 'w').write('\n'.join(esc(n) for n in names[k::12]) + '\n')
+    sh(['tar', '-cJf', os.path.join(OUT, 'bundle.tar.xz'), '-C', root, '.'])
+    gl = os.path.join(OUT, 'gl')
+    shutil.rmtree(gl, ignore_errors=True)
+    apt_download(GL_DEBS, gl)
+    shutil.copy(os.path.join(os.path.dirname(os.path.abspath(__file__)), 'run.sh'), OUT)
+    shutil.rmtree(work)
+    mb = os.path.getsize(os.path.join(OUT, 'bundle.tar.xz')) / 2**20
+    print(f'{OUT}: bundle.tar.xz {mb:.1f} MiB ({len(carried)} libraries carried, {len(names)} tests in 12 shards), '
+          f'gl/ (Vulkan loader and GL dispatch .debs), run.sh')
+
+
+main()
