@@ -14,9 +14,10 @@ namespace vtloc::test {
 // The process-wide context, created on first use with the Khronos validation layer on.
 rt::Context& gpu();
 bool gpu_created();
-// Destroys the shared context. main() calls it before returning: a real driver
-// (NVIDIA's, seen on an H200) is unloaded by its own exit handlers before static
-// destructors run, and a context destroyed after that crashes the process.
+// Destroys the shared context. main() calls it before returning: g_ctx's
+// destructor was registered before main, so exit() would run it after the
+// handlers the driver registered when it was loaded, and on NVIDIA's driver
+// that crashed.
 void release_gpu();
 
 // Fails the current test (CHECK) if the validation layer said anything since the last call.

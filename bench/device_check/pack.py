@@ -1,19 +1,13 @@
 #!/usr/bin/env python3
 """Packs a built tree for a Linux x86-64 GPU machine that has a Vulkan driver but
-none of our -dev packages (robot or CI GPUs, a lent test machine):
-the test runner, the CLI and the benches, the libraries they load, the Khronos
-validation layer, and the test list split into shards. run.sh runs it there.
+none of our -dev packages (a robot's computer, a lent test machine): the test
+runner, the CLI and the benches, the libraries they load, the Khronos validation
+layer, and the test list in shards. run.sh (copied beside the pack) runs it there.
 
 Usage: python3 bench/device_check/pack.py [--build build] [--out .devcheck]
-Needs the Debian 12 build machine's packages and its apt archive (for the
-Vulkan loader and the reference LAPACK, fetched as .deb files, not installed).
-
-OpenCV's imgcodecs links GDAL, GDCM and OpenEXR (~150 MB with their own
-dependencies). The engine never decodes those formats, so they are replaced by
-stub libraries of the same soname whose every imported function returns 0
-(imgcodecs is linked with BIND_NOW: each symbol must exist, none is called
-for PNG/JPEG). LAPACK/BLAS are real (OpenCV's cv::solve uses them; the
-reality check's position floor came out NaN with stubs)."""
+Needs the Debian 12 build machine's packages and its apt archive (for the Vulkan
+loader and the reference LAPACK, fetched as .deb files and unpacked, not
+installed). Why some libraries are stubs: bench/README.md, "device_check/"."""
 import argparse, os, re, shutil, subprocess, sys, tempfile
 
 ap = argparse.ArgumentParser()
@@ -23,7 +17,8 @@ args = ap.parse_args()
 B = os.path.abspath(args.build)
 OUT = os.path.abspath(args.out)
 LIBDIRS = ['/lib/x86_64-linux-gnu', '/usr/lib/x86_64-linux-gnu']
-# Every Linux x86-64 system has these (and newer ones are compatible).
+# Left to the machine: glibc 2.35+ and libstdc++ of GCC 12+ (Debian 12, Ubuntu
+# 22.04 or newer; the packed files need GLIBC_2.35 and GLIBCXX_3.4.30), and zlib.
 SYSTEM = {'libc.so.6', 'libm.so.6', 'libstdc++.so.6', 'libgcc_s.so.1', 'libpthread.so.0', 'libdl.so.2',
           'librt.so.1', 'ld-linux-x86-64.so.2', 'libz.so.1'}
 STUBS = ['libgdal.so.32', 'libgdcmMSFF.so.3.0', 'libgdcmDSED.so.3.0', 'libOpenEXR-3_1.so.30']
@@ -32,6 +27,7 @@ DEBS = {'liblapack3': {'liblapack.so.3': 'lapack/liblapack.so.3'}, 'libblas3': {
 GL_DEBS = ['libvulkan1', 'libglvnd0', 'libglx0', 'libegl1', 'libgl1', 'libopengl0', 'libgles2']
 BINS = ['tests/vtloc_tests', 'vtloc', 'vtloc-bench', 'vtloc-bench-point', 'vtloc-bench-tactile', 'vtloc-bench-probe']
 LAYER = '/usr/lib/x86_64-linux-gnu/libVkLayer_khronos_validation.so'
+SHARDS = 12  # test processes at once on the GPU machine
 LAYER_JSON = '/usr/share/vulkan/explicit_layer.d/VkLayer_khronos_validation.json'
 
 
@@ -51,12 +47,15 @@ def find_lib(name):
 
 
 def apt_download(pkgs, dest):
+    """Fetches `pkgs` as .deb files into `dest` with lists and cache of its own."""
     os.makedirs(dest, exist_ok=True)
-    lists = tempfile.mkdtemp()
-    os.makedirs(lists + '/partial')
-    o = ['-oAPT::Architecture=amd64', '-oAPT::Architectures=amd64', '-oDir::State::Lists=' + lists]
-    sh(['apt-get', *o, 'update'])
-    sh(['apt-get', *o, 'download', *pkgs], cwd=dest)
+    with tempfile.TemporaryDirectory() as state:
+        os.makedirs(state + '/lists/partial')
+        os.makedirs(state + '/cache/archives/partial')
+        o = ['-oAPT::Architecture=amd64', '-oAPT::Architectures=amd64', '-oDir::State::Lists=' + state + '/lists',
+             '-oDir::Cache=' + state + '/cache']
+        sh(['apt-get', *o, 'update'])
+        sh(['apt-get', *o, 'download', *pkgs], cwd=dest)
 
 
 def make_stub(lib, wanted, dest):
@@ -82,7 +81,11 @@ def make_stub(lib, wanted, dest):
 
 
 def main():
-    work = tempfile.mkdtemp()
+    with tempfile.TemporaryDirectory() as work:
+        pack(work)
+
+
+def pack(work):
     root = os.path.join(work, 'bundle')
     for d in ('bin', 'lib', 'layer'):
         os.makedirs(os.path.join(root, d))
@@ -119,28 +122,35 @@ def main():
                     imported.add(line.split()[-1].split('@')[0])
     for lib in STUBS:
         print(f'stub {lib}: {make_stub(lib, imported, os.path.join(root, "lib"))} symbols')
-    # The test runner has the source directory compiled in (VTLOC_SOURCE_DIR); run.sh links it.
+    # The test runner has the source and goldens folders compiled in (VTLOC_SOURCE_DIR,
+    # VTLOC_BUILD_GOLDENS_DIR); run.sh links the first and writes the goldens into the second.
     cache = open(os.path.join(B, 'CMakeCache.txt')).read()
-    src = re.search(r'^CMAKE_HOME_DIRECTORY:INTERNAL=(.*)$', cache, re.M).group(1)
-    open(os.path.join(root, 'source_dir'), 'w').write(src + '\n')
+    for name, key in (('source_dir', 'CMAKE_HOME_DIRECTORY:INTERNAL'), ('goldens_dir', 'VTLOC_GOLDENS_DIR:PATH')):
+        value = re.search('^' + key + '=(.*)$', cache, re.M).group(1)
+        open(os.path.join(root, name), 'w').write(value + '\n')
+    # Debian's Vulkan loader and GL dispatch libraries (an NVIDIA ICD loads them), unpacked.
+    gl = os.path.join(work, 'gl')
+    apt_download(GL_DEBS, gl)
+    for f in os.listdir(gl):
+        sh(['dpkg', '-x', os.path.join(gl, f), os.path.join(root, 'gl')])
     os.makedirs(OUT, exist_ok=True)
+    for f in os.listdir(OUT):  # an earlier pack's shards and loader folder
+        if re.fullmatch(r'shard\d+\.txt', f):
+            os.unlink(os.path.join(OUT, f))
+    shutil.rmtree(os.path.join(OUT, 'gl'), ignore_errors=True)
     # Shards of the test list (Catch2 v2 has no --shard; -f takes escaped names, one per line).
     # (Catch2 v2's --list exits with the number of tests.)
     listed = subprocess.run([os.path.join(B, 'tests/vtloc_tests'), '--list-test-names-only', '~[golden]'],
                             capture_output=True, text=True).stdout
     names = [n for n in listed.splitlines() if n]
     esc = lambda n: re.sub(r'([\\,\[\]*"~])', r'\\\1', n)
-    for k in range(12):
-        open(os.path.join(OUT, f'shard{k}.txt'), 'w').write('\n'.join(esc(n) for n in names[k::12]) + '\n')
+    for k in range(SHARDS):
+        open(os.path.join(OUT, f'shard{k}.txt'), 'w').write('\n'.join(esc(n) for n in names[k::SHARDS]) + '\n')
     sh(['tar', '-cJf', os.path.join(OUT, 'bundle.tar.xz'), '-C', root, '.'])
-    gl = os.path.join(OUT, 'gl')
-    shutil.rmtree(gl, ignore_errors=True)
-    apt_download(GL_DEBS, gl)
     shutil.copy(os.path.join(os.path.dirname(os.path.abspath(__file__)), 'run.sh'), OUT)
-    shutil.rmtree(work)
     mb = os.path.getsize(os.path.join(OUT, 'bundle.tar.xz')) / 2**20
-    print(f'{OUT}: bundle.tar.xz {mb:.1f} MiB ({len(carried)} libraries carried, {len(names)} tests in 12 shards), '
-          f'gl/ (Vulkan loader and GL dispatch .debs), run.sh')
+    print(f'{OUT}: bundle.tar.xz {mb:.1f} MiB ({len(carried)} libraries carried, {len(names)} tests in '
+          f'{SHARDS} shards), run.sh')
 
 
 main()

@@ -104,10 +104,10 @@ struct ContextOptions {
     uint64_t memory_budget = 0;
 };
 
-// Destroy a context before main() returns, or hold it in a function-local
-// static: one held by a namespace-scope object (a global smart pointer filled
-// later) is destroyed after a driver's own exit handlers have run, which
-// crashed every test process at exit on NVIDIA's driver (H200, 2026-11-27).
+// Destroy a context before main() returns. One held by a namespace-scope object
+// (a global smart pointer filled later) is destroyed by exit() after the exit
+// handlers the driver registered when the context loaded it, and NVIDIA's
+// driver crashes then.
 class Context {
 public:
     explicit Context(const ContextOptions& options = {});
