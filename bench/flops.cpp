@@ -1,9 +1,7 @@
 #include "bench/flops.h"
 
-#include <set>
 #include <vector>
 
-#include "base/error.h"
 #include "engine/op.h"
 #include "engine/ops/point_common.h"
 
@@ -17,60 +15,21 @@ double real_rows(const HostTensor& ball) {
     return n;
 }
 
-// The node that writes each value (-1: an input or weight).
-std::vector<int> producers(const Graph& g) {
-    std::vector<int> producer(g.values().size(), -1);
-    for (size_t i = 0; i < g.nodes().size(); ++i)
-        for (int id : g.nodes()[i].outputs) producer[size_t(id)] = int(i);
-    return producer;
-}
-
 }  // namespace
 
 std::map<std::string, HostTensor> ball_indices(const Graph& g, const WeightStore& w, const TensorMap& inputs) {
-    const std::vector<int> producer = producers(g);
-    std::set<int> need;  // the ball_query nodes and every node they depend on
-    std::vector<int> todo;
-    for (size_t i = 0; i < g.nodes().size(); ++i)
-        if (g.nodes()[i].op == "ball_query") todo.push_back(int(i));
-    while (!todo.empty()) {
-        const int n = todo.back();
-        todo.pop_back();
-        if (!need.insert(n).second) continue;
-        for (int id : g.nodes()[size_t(n)].inputs)
-            if (producer[size_t(id)] >= 0) todo.push_back(producer[size_t(id)]);
-    }
-    std::vector<HostTensor> vals(g.values().size());
-    std::vector<const HostTensor*> ptr(g.values().size(), nullptr);
-    for (size_t i = 0; i < g.values().size(); ++i) {
-        const Value& v = g.values()[i];
-        if (v.kind == ValueKind::Input && inputs.count(v.name)) ptr[i] = &inputs.at(v.name);
-    }
+    std::vector<int> ids;
+    std::vector<std::string> names;
+    for (const Node& n : g.nodes())
+        if (n.op == "ball_query") ids.push_back(n.outputs[0]), names.push_back(n.name);
+    const std::map<int, HostTensor> vals = run_cpu_values(g, w, inputs, ids);
     std::map<std::string, HostTensor> balls;
-    for (int ni : g.topo_order()) {
-        if (!need.count(ni)) continue;
-        const Node& n = g.nodes()[size_t(ni)];
-        std::vector<const HostTensor*> in;
-        std::vector<HostTensor*> out;
-        for (int id : n.inputs) {
-            const Value& v = g.value(id);
-            if (!ptr[size_t(id)] && v.kind == ValueKind::Weight) ptr[size_t(id)] = &w.get(v.name, v.shape);
-            if (!ptr[size_t(id)]) throw Error("ball_indices: node '" + n.name + "' needs input '" + v.name + "', not given");
-            in.push_back(ptr[size_t(id)]);
-        }
-        for (int id : n.outputs) {
-            vals[size_t(id)] = HostTensor(g.value(id).shape, g.value(id).type);
-            ptr[size_t(id)] = &vals[size_t(id)];
-            out.push_back(&vals[size_t(id)]);
-        }
-        find_op(n.op).cpu(in, out, n.params);
-        if (n.op == "ball_query") balls[n.name] = vals[size_t(n.outputs[0])];
-    }
+    for (size_t k = 0; k < ids.size(); ++k) balls[names[k]] = vals.at(ids[k]);
     return balls;
 }
 
 std::map<std::string, double> node_flops(const Graph& g, const std::map<std::string, HostTensor>& balls) {
-    const std::vector<int> producer = producers(g);
+    const std::vector<int> producer = g.producers();
     std::map<std::string, double> f;
     for (const Node& n : g.nodes()) {
         double flops = 0;

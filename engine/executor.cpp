@@ -36,37 +36,85 @@ void check_inputs(const Graph& g, const TensorMap& inputs) {
         }
 }
 
-TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs, std::vector<NodeMs>* node_ms) {
-    if (node_ms) node_ms->clear();
-    check_inputs(g, inputs);
+namespace {
+
+// Runs the CPU reference of the nodes marked in `run`, in schedule order, into
+// vals; an input or weight is looked up when a node first reads it.
+std::vector<HostTensor> run_nodes(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                                  const std::vector<char>& run, std::vector<NodeMs>* node_ms) {
     std::vector<HostTensor> vals(g.values().size());
     std::vector<const HostTensor*> ptr(g.values().size(), nullptr);
-    for (size_t i = 0; i < g.values().size(); ++i) {
-        const Value& v = g.values()[i];
-        if (v.kind == ValueKind::Input) ptr[i] = &inputs.at(v.name);
-        if (v.kind == ValueKind::Weight) ptr[i] = &weights.get(v.name, v.shape);
-    }
     for (int ni : g.topo_order()) {
+        if (!run[size_t(ni)]) continue;
         const Node& n = g.nodes()[size_t(ni)];
         std::vector<const HostTensor*> in;
         std::vector<HostTensor*> out;
-        for (int id : n.inputs) in.push_back(ptr[size_t(id)]);
+        for (int id : n.inputs) {
+            const Value& v = g.value(id);
+            if (!ptr[size_t(id)] && v.kind == ValueKind::Weight) ptr[size_t(id)] = &weights.get(v.name, v.shape);
+            if (!ptr[size_t(id)] && v.kind == ValueKind::Input) {
+                auto it = inputs.find(v.name);
+                if (it == inputs.end()) throw Error("node '" + n.name + "' needs input '" + v.name + "', not given");
+                ptr[size_t(id)] = &it->second;
+            }
+            in.push_back(ptr[size_t(id)]);
+        }
         for (int id : n.outputs) {
             vals[size_t(id)] = HostTensor(g.value(id).shape, g.value(id).type);
             ptr[size_t(id)] = &vals[size_t(id)];
             out.push_back(&vals[size_t(id)]);
         }
-        if (!node_ms) {
-            find_op(n.op).cpu(in, out, n.params);
-            continue;
-        }
         const auto t0 = std::chrono::steady_clock::now();
         find_op(n.op).cpu(in, out, n.params);
-        node_ms->push_back({n.name, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()});
+        if (node_ms)
+            node_ms->push_back({n.name, std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count()});
     }
+    return vals;  // inputs and weights stay where they are: callers look them up
+}
+
+// Value `id` after run_nodes: a node's output, or an input or weight itself.
+const HostTensor& value_of(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                           const std::vector<HostTensor>& vals, int id) {
+    const Value& v = g.value(id);
+    if (v.kind == ValueKind::Weight) return weights.get(v.name, v.shape);
+    if (v.kind == ValueKind::Input) {
+        auto it = inputs.find(v.name);
+        if (it == inputs.end()) throw Error("input '" + v.name + "' is not given");
+        return it->second;
+    }
+    return vals[size_t(id)];
+}
+
+}  // namespace
+
+TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs, std::vector<NodeMs>* node_ms) {
+    if (node_ms) node_ms->clear();
+    check_inputs(g, inputs);
+    const std::vector<HostTensor> vals = run_nodes(g, weights, inputs, std::vector<char>(g.nodes().size(), 1), node_ms);
     TensorMap result;
-    for (auto& [name, id] : g.outputs()) result[name] = *ptr[size_t(id)];
+    for (auto& [name, id] : g.outputs()) result[name] = value_of(g, weights, inputs, vals, id);
     return result;
+}
+
+std::map<int, HostTensor> run_cpu_values(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                                         const std::vector<int>& wanted) {
+    const std::vector<int> producer = g.producers();
+    std::vector<char> run(g.nodes().size(), 0);
+    std::vector<int> todo;
+    for (int id : wanted)
+        if (producer[size_t(id)] >= 0) todo.push_back(producer[size_t(id)]);
+    while (!todo.empty()) {
+        const int n = todo.back();
+        todo.pop_back();
+        if (run[size_t(n)]) continue;
+        run[size_t(n)] = 1;
+        for (int id : g.nodes()[size_t(n)].inputs)
+            if (producer[size_t(id)] >= 0) todo.push_back(producer[size_t(id)]);
+    }
+    const std::vector<HostTensor> vals = run_nodes(g, weights, inputs, run, nullptr);
+    std::map<int, HostTensor> out;
+    for (int id : wanted) out[id] = value_of(g, weights, inputs, vals, id);
+    return out;
 }
 
 MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share) {

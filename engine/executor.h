@@ -32,6 +32,11 @@ struct NodeMs {
 };
 TensorMap run_cpu(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
                   std::vector<NodeMs>* node_ms = nullptr);
+// The CPU reference of only the nodes that the values `wanted` depend on; returns
+// those values by id. Inputs and weights that no such node reads may be absent
+// (the benches read a graph's ball indices without running its MLPs).
+std::map<int, HostTensor> run_cpu_values(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                                         const std::vector<int>& wanted);
 
 // Where each input/intermediate value lives in the activation arena. Values
 // whose lifetimes (first write .. last read, in schedule order) do not overlap

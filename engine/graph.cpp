@@ -73,11 +73,16 @@ void Graph::output(int value, const std::string& name) {
     outputs_.push_back({name, value});
 }
 
-std::vector<int> Graph::topo_order() const {
-    // Kahn's algorithm, taking ready nodes in insertion order for a stable schedule.
+std::vector<int> Graph::producers() const {
     std::vector<int> producer(values_.size(), -1);
     for (size_t i = 0; i < nodes_.size(); ++i)
         for (int o : nodes_[i].outputs) producer[size_t(o)] = int(i);
+    return producer;
+}
+
+std::vector<int> Graph::topo_order() const {
+    // Kahn's algorithm, taking ready nodes in insertion order for a stable schedule.
+    const std::vector<int> producer = producers();
     std::vector<int> missing(nodes_.size(), 0);
     std::vector<std::vector<int>> consumers(nodes_.size());
     for (size_t i = 0; i < nodes_.size(); ++i)

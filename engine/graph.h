@@ -65,6 +65,8 @@ public:
     const std::vector<Node>& nodes() const { return nodes_; }
     const std::vector<std::pair<std::string, int>>& outputs() const { return outputs_; }
 
+    // Per value, the index of the node that writes it (-1: an input or weight).
+    std::vector<int> producers() const;
     // Node indices such that every node comes after the producers of its inputs.
     std::vector<int> topo_order() const;
 

@@ -228,16 +228,27 @@ TEST_CASE("pad = 1 names what it needs", "[op][group_linear]") {
                Catch::Contains("pad = 1 is for channel-major outputs and maxes"));
 }
 
+namespace {
+
+// w0 [6, 16], b0, w1 [16, 24], b1: a hidden first layer and a gathering layer
+// (the point encoder's pair), random from seeds `seed` to `seed` + 3.
+WeightStore two_layers(uint32_t seed) {
+    WeightStore w;
+    w.add("w0", test::random_tensor({6, 16}, seed, -0.5f, 0.5f));
+    w.add("b0", test::random_tensor({16}, seed + 1, -0.2f, 0.2f));
+    w.add("w1", test::random_tensor({16, 24}, seed + 2, -0.3f, 0.3f));
+    w.add("b1", test::random_tensor({24}, seed + 3, -0.2f, 0.2f));
+    return w;
+}
+
+}  // namespace
+
 TEST_CASE("the node-by-node check compares a skipping layer's real rows only", "[op][group_linear][check]") {
     // The point encoder's pair: a gathering layer (layer one in registers) that
     // skips padding, then the max; vtloc check must pass it, and must still see a
     // wrong real row.
     const int64_t N = 200, S = 16, NS = 64;
-    WeightStore w;
-    w.add("w0", test::random_tensor({6, 16}, 81, -0.5f, 0.5f));
-    w.add("b0", test::random_tensor({16}, 82, -0.2f, 0.2f));
-    w.add("w1", test::random_tensor({16, 24}, 83, -0.3f, 0.3f));
-    w.add("b1", test::random_tensor({24}, 84, -0.2f, 0.2f));
+    WeightStore w = two_layers(81);
     w.add("w2", test::random_tensor({24, 32}, 85, -0.3f, 0.3f));
     w.add("b2", test::random_tensor({32}, 86, -0.2f, 0.2f));
     Graph g;
@@ -292,11 +303,7 @@ TEST_CASE("the vote shader leaves padding blocks unwritten", "[op][group_linear]
         return;
     }
     const int64_t N = 300, S = 64, NS = 128;
-    WeightStore w;
-    w.add("w0", test::random_tensor({6, 16}, 91, -0.5f, 0.5f));
-    w.add("b0", test::random_tensor({16}, 92, -0.2f, 0.2f));
-    w.add("w1", test::random_tensor({16, 24}, 93, -0.3f, 0.3f));
-    w.add("b1", test::random_tensor({24}, 94, -0.2f, 0.2f));
+    WeightStore w = two_layers(91);
     Graph g;
     const int x = g.input("cloud", {N, 6});
     std::vector<int> f = ops::fps(g, x, S);

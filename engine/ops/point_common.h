@@ -79,8 +79,6 @@ inline GatherShape gather_shape(const TensorDesc& points, const TensorDesc& cent
     return g;
 }
 
-// Element (m, k) of the grouped matrix; the offset in float, as the shader computes it.
-// CPU references: the source point of ball row m, refused when outside the P points.
 // Row m of a ball [S, NS] is padding (SPEC 2: a free slot repeats the ball's first
 // index): raw indices, as point_mlp.glsl compares them (group_linear's param pad).
 inline bool padding_row(const HostTensor& idx, int64_t m, int64_t NS) {
@@ -88,6 +86,8 @@ inline bool padding_row(const HostTensor& idx, int64_t m, int64_t NS) {
     return m != m0 && idx.int_at(size_t(m)) == idx.int_at(size_t(m0));
 }
 
+// Element (m, k) of the grouped matrix; the offset in float, as the shader computes it.
+// CPU references: the source point of ball row m, refused when outside the P points.
 inline int32_t ball_point(const HostTensor& idx, int64_t m, int64_t P) {
     const int32_t q = idx.int_at(size_t(m));
     if (q < 0 || q >= P) throw Error("ball index " + std::to_string(q) + " is outside the " + std::to_string(P) + " points");
