@@ -12,6 +12,20 @@
 
 namespace vtloc {
 
+namespace {
+
+void check_input(const Value& v, const HostTensor& t) {
+    if (t.shape != v.shape)
+        throw Error("graph input '" + v.name + "' has shape " + shape_str(t.shape) + ", expected " + shape_str(v.shape));
+    if (t.type != v.type)
+        throw Error("graph input '" + v.name + "' has element type " + elem_type_name(t.type) + ", expected " +
+                    elem_type_name(v.type));
+    if (int64_t(t.data.size()) != numel(v.shape))
+        throw Error("graph input '" + v.name + "': data size does not match its shape");
+}
+
+}  // namespace
+
 void check_inputs(const Graph& g, const TensorMap& inputs) {
     size_t n = 0;
     for (const Value& v : g.values()) {
@@ -19,14 +33,7 @@ void check_inputs(const Graph& g, const TensorMap& inputs) {
         ++n;
         auto it = inputs.find(v.name);
         if (it == inputs.end()) throw Error("graph input '" + v.name + "' was not given");
-        if (it->second.shape != v.shape)
-            throw Error("graph input '" + v.name + "' has shape " + shape_str(it->second.shape) +
-                        ", expected " + shape_str(v.shape));
-        if (it->second.type != v.type)
-            throw Error("graph input '" + v.name + "' has element type " + elem_type_name(it->second.type) +
-                        ", expected " + elem_type_name(v.type));
-        if (int64_t(it->second.data.size()) != numel(v.shape))
-            throw Error("graph input '" + v.name + "': data size does not match its shape");
+        check_input(v, it->second);
     }
     if (inputs.size() != n)
         for (auto& [name, t] : inputs) {
@@ -55,6 +62,7 @@ std::vector<HostTensor> run_nodes(const Graph& g, const WeightStore& weights, co
             if (!ptr[size_t(id)] && v.kind == ValueKind::Input) {
                 auto it = inputs.find(v.name);
                 if (it == inputs.end()) throw Error("node '" + n.name + "' needs input '" + v.name + "', not given");
+                check_input(v, it->second);  // run_cpu_values checks only the inputs it reads
                 ptr[size_t(id)] = &it->second;
             }
             in.push_back(ptr[size_t(id)]);
@@ -80,6 +88,7 @@ const HostTensor& value_of(const Graph& g, const WeightStore& weights, const Ten
     if (v.kind == ValueKind::Input) {
         auto it = inputs.find(v.name);
         if (it == inputs.end()) throw Error("input '" + v.name + "' is not given");
+        check_input(v, it->second);
         return it->second;
     }
     return vals[size_t(id)];
@@ -101,8 +110,12 @@ std::map<int, HostTensor> run_cpu_values(const Graph& g, const WeightStore& weig
     const std::vector<int> producer = g.producers();
     std::vector<char> run(g.nodes().size(), 0);
     std::vector<int> todo;
-    for (int id : wanted)
+    for (int id : wanted) {
+        if (id < 0 || size_t(id) >= g.values().size())
+            throw Error("run_cpu_values: value id " + std::to_string(id) + " is not in this graph (" +
+                        std::to_string(g.values().size()) + " values)");
         if (producer[size_t(id)] >= 0) todo.push_back(producer[size_t(id)]);
+    }
     while (!todo.empty()) {
         const int n = todo.back();
         todo.pop_back();

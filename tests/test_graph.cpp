@@ -143,3 +143,48 @@ TEST_CASE("a weight missing from the file is named", "[graph]") {
     g.output(ops::linear(g, g.input("x", {1, 3}), g.weight("nope.weight", {2, 3}), -1), "y");
     REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, WeightStore{}), Catch::Contains("'nope.weight' is missing"));
 }
+
+// run_cpu_values runs only what the wanted values depend on: the benches read a
+// graph's ball indices through it without the MLPs' inputs or weights.
+TEST_CASE("run_cpu_values computes only what the wanted values need", "[graph]") {
+    const WeightStore full = WeightStore::load(write_mlp_file("mlp-values.safetensors"));
+    Graph g = mlp_graph(5);
+    const int z = g.input("z", {5, 3});  // read by no node that "hidden" needs
+    g.output(ops::activation(g, ops::kActRelu, z, 0.01, "relu_z"), "z_relu");
+    auto id_of = [&](const std::string& name) {
+        for (auto& [n, id] : g.outputs())
+            if (n == name) return id;
+        for (size_t i = 0; i < g.values().size(); ++i)
+            if (g.values()[i].kind == ValueKind::Input && g.values()[i].name == name) return int(i);
+        FAIL("no value " << name);
+        return -1;
+    };
+    const int hidden = id_of("hidden"), y = id_of("y"), x = id_of("x");
+    const TensorMap in{{"x", random_tensor({5, 24}, 3)}, {"z", random_tensor({5, 3}, 4)}};
+    const TensorMap want = run_cpu(g, full, in);
+
+    // "hidden" needs fc0 and relu0 only: the later layers' weights and z may be absent.
+    WeightStore first;
+    first.add("mlp.0.weight", full.get("mlp.0.weight"));
+    first.add("mlp.0.bias", full.get("mlp.0.bias"));
+    const TensorMap only_x{{"x", in.at("x")}};
+    const std::map<int, HostTensor> got = run_cpu_values(g, first, only_x, {hidden, x});
+    REQUIRE(got.size() == 2);
+    // The same CPU code on the same data: equal bit for bit.
+    CHECK(got.at(hidden).data == want.at("hidden").data);
+    CHECK(got.at(hidden).shape == want.at("hidden").shape);
+    CHECK(got.at(x).data == in.at("x").data);  // an input is returned as given
+
+    // All of them at once equals run_cpu.
+    const std::map<int, HostTensor> all = run_cpu_values(g, full, in, {y, hidden});
+    CHECK(all.at(y).data == want.at("y").data);
+
+    REQUIRE_THROWS_WITH(run_cpu_values(g, first, only_x, {y}), Catch::Contains("'mlp.2.weight'"));
+    REQUIRE_THROWS_WITH(run_cpu_values(g, full, only_x, {id_of("z_relu")}),
+                        Catch::Contains("node 'relu_z' needs input 'z', not given"));
+    REQUIRE_THROWS_WITH(run_cpu_values(g, full, {{"x", HostTensor({5, 23})}}, {hidden}),
+                        Catch::Contains("shape [5, 23], expected [5, 24]"));
+    REQUIRE_THROWS_WITH(run_cpu_values(g, full, {}, {z}), Catch::Contains("input 'z' is not given"));
+    REQUIRE_THROWS_WITH(run_cpu_values(g, full, in, {int(g.values().size())}), Catch::Contains("is not in this graph"));
+    REQUIRE_THROWS_WITH(run_cpu_values(g, full, in, {-1}), Catch::Contains("is not in this graph"));
+}
