@@ -17,6 +17,7 @@
 #include "bench/validation.h"
 #include "bench/versus.h"
 #include "base/error.h"
+#include "base/python.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
 #include "engine/model/model_config.h"
@@ -159,8 +160,7 @@ std::string random_export(const std::string& name) {
     if (fs::exists(out)) return out.string();
     fs::create_directories(out.parent_path());
     const fs::path tmp = out.string() + ".tmp";
-    const char* env = std::getenv("VTLOC_PYTHON");  // a Python with torch; default: the one CMake found
-    const std::string python = env && *env ? env : VTLOC_PYTHON;
+    const std::string python = python_interpreter(VTLOC_PYTHON);
     const std::string cmd = "cd '" + data_dir().string() + "' && '" + python + "' -m weights_tools.export --config '" + name +
                             "' --seed 0 -o '" + tmp.string() + "' >&2";
     std::fprintf(stderr, "exporting random %s weights: %s\n", name.c_str(), cmd.c_str());
@@ -317,8 +317,7 @@ int run(int argc, char** argv) {
     if (a.backend != "gpu") measure_cpu(report, a, weights, cfg, in);
 
     if (a.vs_pytorch) {
-        const char* env = std::getenv("VTLOC_PYTHON");
-        bench::TorchRun t{env && *env ? env : VTLOC_PYTHON, data_dir().string(), fs::absolute(weights_path).string(),
+        bench::TorchRun t{python_interpreter(VTLOC_PYTHON), data_dir().string(), fs::absolute(weights_path).string(),
                           fs::absolute(image_path).string(), cloud, a.opt.reps, a.opt.warmup};
         report["pytorch"] = bench::run_pytorch(t);
         report["engine_over_pytorch"] = bench::engine_over_pytorch(report.contains("gpu") ? report["gpu"] : report["cpu"],

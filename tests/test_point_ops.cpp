@@ -13,6 +13,7 @@
 #include <random>
 
 #include "base/error.h"
+#include "base/python.h"
 #include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
@@ -71,12 +72,10 @@ void check_fps_and_balls(const HostTensor& cloud, int64_t npoint, const std::vec
 
 // Runs tests/point_cases.py (the PyTorch reference's FPS and ball query) into a
 // file of this process's own: the sg4/ copy of the test may run at the same time.
-// The interpreter: $VTLOC_PYTHON (as for vtloc-bench; a packed device check sets
-// it), else the one CMake found.
+// The interpreter: python_interpreter (as for vtloc-bench).
 std::string point_cases_file() {
     const std::string path = test::temp_path("point_cases." + std::to_string(::getpid()) + ".safetensors");
-    const char* env = std::getenv("VTLOC_PYTHON");
-    const std::string python = env && *env ? env : VTLOC_PYTHON;
+    const std::string python = python_interpreter(VTLOC_PYTHON);
     const std::string cmd = "cd '" VTLOC_SOURCE_DIR "' && PYTHONDONTWRITEBYTECODE=1 '" + python +
                             "' tests/point_cases.py '" + path + "'";
     INFO("writing the PyTorch reference cases: " << cmd);
