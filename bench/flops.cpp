@@ -45,8 +45,9 @@ std::map<std::string, double> node_flops(const Graph& g, const std::map<std::str
             const int hidden = int(n.params.get("hidden", 0));
             if (hidden == 1) w += double(numel(g.value(n.inputs[5]).shape));  // W0^T at 3, W^T at 5
             if (hidden == 2) w = double(numel(g.value(n.inputs[4]).shape));   // W^T (U counts in its own node)
+            const bool x_pm = n.params.get("x_point_major", 0) != 0;  // x [M, K] instead of [K, M]
             double rows = mode == 1 ? double(numel(g.value(n.inputs[2]).shape))
-                                    : double(g.value(n.inputs[0]).shape[mode == 0 ? 1 : 0]);
+                                    : double(g.value(n.inputs[0]).shape[mode == 0 && !x_pm ? 1 : 0]);
             if (n.params.get("pad", 0) != 0) {  // the ball: input 2 (in = 1) or 3 (a max over rows)
                 const int p = producer[size_t(n.inputs[mode == 1 ? 2 : 3])];
                 auto it = p >= 0 ? balls.find(g.nodes()[size_t(p)].name) : balls.end();

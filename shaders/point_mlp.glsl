@@ -9,7 +9,8 @@
 // One PointNet++ MLP layer (1x1 conv, BatchNorm folded, act): out = act(A W + b)
 // with W stored [K][N] (input-major, so 4 output channels are one vec4), and the
 // grouping fused into the input or the neighbour max into the output:
-// MODE 0: A is the previous layer's output, channel-major [K][M] (4 rows = one vec4).
+// MODE 0: A is the previous layer's output, channel-major [K][M] (4 rows = one vec4),
+//   or with XPM point-major [M][K] (4 channels = one vec4; AVEC4 then means K % 4 == 0).
 // MODE 1 (gather): row m = (centre m / NS, slot) is [features of q, xyz of q - centre],
 //   q = idx[m], read straight from the cloud (SPEC 2: features first).
 // MODE 2 (group all): row m is [xyz of m, features of m] (xyz first, not centred).
@@ -44,7 +45,7 @@ layout(constant_id = 2) const uint TN = 16;  // channels per invocation, multipl
 layout(constant_id = 3) const uint MODE = 0;
 layout(constant_id = 4) const bool MAXPOOL = false;
 layout(constant_id = 5) const uint ACT = 0;  // act.glsl code
-layout(constant_id = 6) const bool AVEC4 = true;  // MODE 0: rows as vec4 (M, and NS when MAXPOOL, % 4 == 0)
+layout(constant_id = 6) const bool AVEC4 = true;  // MODE 0: x as vec4 (M, and NS when MAXPOOL, % 4 == 0; XPM: K % 4 == 0)
 layout(constant_id = 7) const bool FVEC4 = true;  // MODE 1/2: feature rows as vec4 (DF, FB % 4 == 0)
 layout(constant_id = 8) const bool WVEC4 = true;  // N % 4 == 0
 // !MAXPOOL, M % 4 == 0: 4 rows a store. A CPU driver stores lane by lane, a branch
@@ -55,6 +56,7 @@ layout(constant_id = 13) const bool PMOUT = false;
 // The channel block along x and the row block along y (group_linear.cpp says why), or the reverse.
 layout(constant_id = 14) const bool CB_FIRST = false;
 layout(constant_id = 15) const bool PAD = false;
+layout(constant_id = 16) const bool XPM = false;
 #ifdef SUBGROUP_VOTE
 #define ANY_LANE(x) subgroupAny(x)
 const bool SKIP_BLOCKS = PAD;
@@ -146,6 +148,20 @@ void block(uint m0, uint mend) {
     uint rows[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) rows[i] = min(m0 + i, mend - 1u);
     vec4 a[TM];
+    if (MODE == 0u && XPM) {
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+            [[unroll]] for (uint i = 0; i < TM; ++i) {
+                if (AVEC4) {
+                    a[i] = LOAD_A4((rows[i] * p.K + k0) / 4u);
+                } else {
+                    [[unroll]] for (uint u = 0; u < 4; ++u)
+                        a[i][u] = k0 + u < p.K ? LOAD_A(rows[i] * p.K + min(k0 + u, p.K - 1u)) : 0.0;
+                }
+            }
+            fma_rows(a, k0);
+        }
+        return;
+    }
     if (MODE == 0u) {
         for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             [[unroll]] for (uint u = 0; u < 4; ++u) {

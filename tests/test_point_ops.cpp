@@ -219,7 +219,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         w.add("w", test::random_tensor({c.K, c.N}, 31, -0.15f, 0.15f));
         w.add("b", test::random_tensor({c.N}, 32, -0.1f, 0.1f));
         Graph g;
-        int x = g.input("x", {c.K, c.M});
+        int x = g.input("x", {c.K, c.M}), xt = g.input("xt", {c.M, c.K});  // xt: the same rows point-major
         int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
         using In = ops::GroupLinear::Input;
         for (ops::BufferPath path : ops::kBufferPaths)
@@ -239,6 +239,14 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                              "max" + on);  // negative maxima
                     g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
                              "plain" + on);
+                    // The rows point-major (x [M, K]): the same sums in the same order.
+                    ops::GroupLinear pm{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
+                    pm.x_point_major = true;
+                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "max_relu.pm" + on);
+                    pm.max = false, pm.group = 1, pm.act = ops::kActLeaky, pm.slope = 0.1;
+                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm" + on);
+                    pm.point_major = true;  // and out as [M, N]
+                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm_out" + on);
                     if (tile != Tile::Auto) continue;
                     // The other workgroup grid: row blocks along x.
                     ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
@@ -248,7 +256,30 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                     g.output(ops::group_linear(g, {x, wv, bv}, rx), "plain.rows_in_x" + on);
                 }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
-        test::run_gpu_and_compare(g, w, {{"x", test::random_tensor({c.K, c.M}, 33)}});
+        const HostTensor xv = test::random_tensor({c.K, c.M}, 33);
+        HostTensor xtv({c.M, c.K});
+        for (int64_t k = 0; k < c.K; ++k)
+            for (int64_t m = 0; m < c.M; ++m) xtv.data[size_t(m * c.K + k)] = xv.data[size_t(k * c.M + m)];
+        const TensorMap out = test::run_gpu_and_compare(g, w, {{"x", xv}, {"xt", xtv}});
+        int64_t pairs = 0;
+        for (const auto& [name, t] : out) {
+            const size_t at = name.find(".pm");
+            if (at == std::string::npos) continue;
+            INFO(name);
+            const bool out_pm = name.compare(at, 7, ".pm_out") == 0;
+            const HostTensor& cm = out.at(name.substr(0, at) + name.substr(at + (out_pm ? 7 : 3)));
+            if (!out_pm) {
+                CHECK(t.data == cm.data);
+            } else {  // [M, N] against [N, M]
+                REQUIRE(t.shape == Shape{cm.shape.at(1), cm.shape.at(0)});
+                bool same = true;
+                for (int64_t n = 0; n < c.N; ++n)
+                    for (int64_t m = 0; m < c.M; ++m) same = same && t.data[size_t(m * c.N + n)] == cm.data[size_t(n * c.M + m)];
+                CHECK(same);
+            }
+            ++pairs;
+        }
+        CHECK(pairs == 3 * 9);  // 3 outputs on 9 path / weights / tile variants
     }
 }
 

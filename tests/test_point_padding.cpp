@@ -104,32 +104,37 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
             u_layer.point_major = true;
             const int u = ops::group_linear(g, {x, w0, b0, x}, u_layer);
             for (Hidden hidden : {Hidden::None, Hidden::Gathered, Hidden::PerPoint})
-                for (bool pad : {false, true}) {
+                for (bool pad : {false, true})
+                    for (bool pm : {false, true}) {  // rows between layers channel- or point-major
+                    const std::string lay = pm ? ".pm" : "";
                     // Layer one (gathered rows: normals, then xyz less the centre) and two.
                     ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu, 0.01, path, wp, tile};
                     first.skip_padding = pad;
+                    first.point_major = pm;
                     int h = -1;
                     if (hidden == Hidden::None) {
                         const int h0 = ops::group_linear(g, {x, f[1], ball, w0, b0, x}, first);
                         ops::GroupLinear two{In::Rows, 0, false, 1, ops::kActRelu, 0.01, path, wp, tile};
+                        two.x_point_major = two.point_major = pm;
                         h = ops::group_linear(g, {h0, w1, b1}, two);  // a plain rows layer after a skipping one
                     } else {
                         first.hidden = hidden;
                         h = hidden == Hidden::Gathered ? ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, first)
                                                        : ops::group_linear(g, {u, f[1], ball, w0, w1, b1}, first);
                         if (pad) {
-                            const std::string name = "plain." + std::to_string(int(hidden)) + on;
+                            const std::string name = "plain." + std::to_string(int(hidden)) + lay + on;
                             g.output(h, name);
                             plain_names.push_back(name);
                         }
                     }
                     ops::GroupLinear last{In::Rows, 0, true, c.ns, ops::kActRelu, 0.01, path, wp, tile};
                     last.skip_padding = pad;
+                    last.x_point_major = pm;
                     std::vector<int> in{h, w2, b2};
                     if (pad) in.push_back(ball);
                     g.output(ops::group_linear(g, in, last), std::string(pad ? "pad" : "full") + "." +
-                                                                std::to_string(int(hidden)) + on);
-                }
+                                                                std::to_string(int(hidden)) + lay + on);
+                    }
             // One gathered layer that is also the max.
             for (bool pad : {false, true}) {
                 ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu, 0.01, path, wp, tile};
@@ -153,24 +158,27 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
             CHECK(t.data == r.gpu.at(full).data);  // bit for bit: the rows left out repeat row 0
             test::require_close(t, r.cpu.at(name), {}, name + " against the CPU reference");
             test::require_close(r.gpu.at(full), r.cpu.at(full), {}, full + " against the CPU reference");
+            if (const size_t at = name.find(".pm"); at != std::string::npos)  // the same sums in the same order
+                CHECK(t.data == r.gpu.at(name.substr(0, at) + name.substr(at + 3)).data);
             ++maxes;
         }
-        CHECK(maxes == 6 * 4);  // texel: 3 weight paths + the big tile; storage: both tiles
-        for (const std::string& name : plain_names) {  // channel-major [C2, M]: real rows only
+        CHECK(maxes == 6 * (3 * 2 + 1));  // texel: 3 weight paths + the big tile; storage: both tiles; 3 hidden x 2 row layouts + one
+        for (const std::string& name : plain_names) {  // [C2, M], or [M, C2] (.pm): real rows only
             const HostTensor &got = r.gpu.at(name), &want = r.cpu.at(name);
             REQUIRE(got.shape == want.shape);
-            const int64_t M = got.shape.at(1);
+            const bool pm = name.find(".pm") != std::string::npos;
+            const int64_t M = got.shape.at(pm ? 0 : 1), C = got.shape.at(pm ? 1 : 0);
             REQUIRE(M == int64_t(pad.size()));
             HostTensor a(got.shape), b(got.shape);
-            for (int64_t k = 0; k < got.shape.at(0); ++k)
+            for (int64_t k = 0; k < C; ++k)
                 for (int64_t m = 0; m < M; ++m)
                     if (!pad[size_t(m)]) {
-                        const size_t e = size_t(k * M + m);
+                        const size_t e = size_t(pm ? m * C + k : k * M + m);
                         a.data[e] = got.data[e], b.data[e] = want.data[e];
                     }
             test::require_close(a, b, {}, name + " (real rows) against the CPU reference");
         }
-        CHECK(plain_names.size() == 6 * 2);
+        CHECK(plain_names.size() == 6 * 2 * 2);
 
         // A max over rows whose padding holds poison (what a skipped block may hold):
         // left out, so it equals the max without pad over the clean rows (padding =
@@ -186,9 +194,16 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
                     // Large, not NaN: a max would drop a NaN row by itself.
                     poisoned.data[e] = (m + k) % 2 == 0 ? 1e6f : -1e6f;
                 }
+        HostTensor clean_pm({M, c.C2}), poisoned_pm({M, c.C2});  // the same rows point-major
+        for (int64_t k = 0; k < c.C2; ++k)
+            for (int64_t m = 0; m < M; ++m) {
+                clean_pm.data[size_t(m * c.C2 + k)] = clean.data[size_t(k * M + m)];
+                poisoned_pm.data[size_t(m * c.C2 + k)] = poisoned.data[size_t(k * M + m)];
+            }
         Graph pg;
         const int xc = pg.input("clean", {c.C2, M}), xp = pg.input("poisoned", {c.C2, M}),
                   bi = pg.input("ball", ball_t.shape, ElemType::I32);
+        const int xc_pm = pg.input("clean_pm", {M, c.C2}), xp_pm = pg.input("poisoned_pm", {M, c.C2});
         const int pw = pg.weight("w2", {c.C2, c.C3}), pb = pg.weight("b2", {c.C3});
         for (const Variant& v : variants()) {
             const ops::BufferPath path = v.path;
@@ -199,8 +214,13 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
             pg.output(ops::group_linear(pg, {xc, pw, pb}, last), "clean" + on);
             last.skip_padding = true;
             pg.output(ops::group_linear(pg, {xp, pw, pb, bi}, last), "poisoned" + on);
+            last.x_point_major = true;
+            pg.output(ops::group_linear(pg, {xp_pm, pw, pb, bi}, last), "poisoned.pm" + on);
+            last.skip_padding = false;
+            pg.output(ops::group_linear(pg, {xc_pm, pw, pb}, last), "clean.pm" + on);
         }
-        const test::BothRuns pr = test::run_both(pg, w, {{"clean", clean}, {"poisoned", poisoned}, {"ball", ball_t}});
+        const test::BothRuns pr = test::run_both(pg, w, {{"clean", clean}, {"poisoned", poisoned}, {"ball", ball_t},
+                                                         {"clean_pm", clean_pm}, {"poisoned_pm", poisoned_pm}});
         int64_t poisoned_maxes = 0;
         for (const auto& [name, t] : pr.gpu) {
             if (name.rfind("poisoned", 0) != 0) continue;
@@ -209,11 +229,11 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
             test::require_close(t, pr.cpu.at(name), {}, name + " against the CPU reference");
             ++poisoned_maxes;
         }
-        CHECK(poisoned_maxes == 6);
+        CHECK(poisoned_maxes == 6 * 2);
     }
 }
 
-TEST_CASE("pad = 1 names what it needs", "[op][group_linear]") {
+TEST_CASE("pad = 1 and x_point_major = 1 name what they need", "[op][group_linear]") {
     const TensorDesc x{{3, 8}}, w{{3, 4}}, b{{4}};
     CHECK(infer_error({x, w, b, TensorDesc{{2, 4}, ElemType::I32}}, {{"max", 1}, {"group", 4}, {"pad", 1}}) == "no error");
     CHECK_THAT(infer_error({x, w, b}, {{"pad", 1}}), Catch::Contains("pad = 1 needs ball rows (in = 1) or a max"));
@@ -222,10 +242,18 @@ TEST_CASE("pad = 1 names what it needs", "[op][group_linear]") {
                Catch::Contains("ball [4, 2] must be [2, 4]: one index per row"));
     CHECK_THAT(infer_error({x, w, b, TensorDesc{{2, 4}}}, {{"max", 1}, {"group", 4}, {"pad", 1}}),
                Catch::Contains("input 3 has the wrong element type"));
-    CHECK_THAT(infer_error({TensorDesc{{10, 6}}, TensorDesc{{2, 3}}, TensorDesc{{2, 4}, ElemType::I32}, TensorDesc{{6, 4}},
+    CHECK(infer_error({TensorDesc{{10, 6}}, TensorDesc{{2, 3}}, TensorDesc{{2, 4}, ElemType::I32}, TensorDesc{{3, 4}},
+                       TensorDesc{{4}}},
+                      {{"in", 1}, {"pad", 1}, {"point_major", 1}}) == "no error");  // a point-major plain output
+    CHECK_THAT(infer_error({TensorDesc{{10, 6}}, TensorDesc{{2, 3}}, TensorDesc{{2, 4}, ElemType::I32}, TensorDesc{{3, 4}},
                             TensorDesc{{4}}},
-                           {{"in", 1}, {"pad", 1}, {"point_major", 1}}),
-               Catch::Contains("pad = 1 is for channel-major outputs and maxes"));
+                           {{"in", 1}, {"x_point_major", 1}}),
+               Catch::Contains("x_point_major = 1 is for a previous layer's rows (in = 0)"));
+    CHECK_THAT(infer_error({TensorDesc{{8, 5}}, w, b}, {{"x_point_major", 1}}),
+               Catch::Contains("weight [3, 4] must be input-major [5, out]"));  // x [M = 8, K = 5]
+    CHECK_THAT(infer_error({TensorDesc{{8}}, w, b}, {{"x_point_major", 1}}), Catch::Contains("x must be point-major [M, K], got [8]"));
+    CHECK(infer_error({TensorDesc{{8, 3}}, w, b, TensorDesc{{2, 4}, ElemType::I32}},
+                      {{"max", 1}, {"group", 4}, {"pad", 1}, {"x_point_major", 1}}) == "no error");
 }
 
 namespace {

@@ -87,6 +87,11 @@ OpCase stage_case(const std::string& op, const std::string& why, ops::BufferPath
         ops::GroupLinear gather_max_pad = gather_max;
         gather_max_pad.skip_padding = true;
         c.output(ops::group_linear(c.g, {x, f[1], pball, w1t, b1, x}, gather_max_pad), "gather_max_pad");
+        // the same pair passing its rows point-major (the point encoder's default)
+        hidden_pad.point_major = true;
+        rows_pad.x_point_major = true;
+        const int hpm = ops::group_linear(c.g, {x, f[1], pball, w1t, b1, w2t, b2, x}, hidden_pad);
+        c.output(ops::group_linear(c.g, {hpm, w4t, b3, pball}, rows_pad), "pad_max_point_major");
     }
     return c;
 }

@@ -70,6 +70,7 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         hidden = si_in.channels <= 4 ? Hidden::Gathered : per_point ? Hidden::PerPoint : Hidden::None;
     std::pair<int, int> first{-1, -1};
     int u = -1;  // Hidden::PerPoint: layer one per source point, point-major
+    bool x_pm = false;  // x is point-major rows [M, C] (a group_linear's, opt.point_major_rows)
     for (size_t l = 0; l < widths.size(); ++l) {
         const std::string node = pre + ".conv_blocks." + si + "." + std::to_string(l);
         auto [wv, bv] = conv_bn(g, w, node, in, widths[l], fuse);
@@ -113,6 +114,8 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         if (gather && feat >= 0 && gl.hidden != Hidden::PerPoint) ins.push_back(feat);
         gl.max = l + 1 == widths.size();
         gl.group = ns;
+        gl.x_point_major = !gather && x_pm;
+        gl.point_major = !gl.max && opt.point_major_rows;
         // Ball padding (a ball's free slots repeat its first point) is skipped:
         // the max leaves it out, and a gathering layer right before it leaves it
         // unwritten (not one with rows layers between: they would compute on
@@ -120,6 +123,7 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         gl.skip_padding = opt.skip_padding && (gl.max || (gather && l + 2 == widths.size()));
         if (gl.skip_padding && !gather && gl.max) ins.push_back(ball);
         x = ops::group_linear(g, ins, gl, node);
+        x_pm = gl.point_major;
     }
     if (!fuse) x = ops::group_max(g, x, ns, false, pre + ".max." + si);
     return x;

@@ -28,6 +28,9 @@ struct PointEncoderOptions {
     // left out of the work, exactly (README "Ball padding"); false computes every
     // row (vtloc-bench-point's A/B).
     bool skip_padding = true;
+    // Fused only: a scale's layers pass their rows point-major ([M, C]) instead of
+    // channel-major ([C, M]); faster on lavapipe (README "Point-major rows").
+    bool point_major_rows = true;
 };
 
 // cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in

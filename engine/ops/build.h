@@ -133,6 +133,11 @@ struct GroupLinear {
     //     U = group_linear(Points, point_major) of W0 (sa_gather's arithmetic).
     enum class Hidden { None = 0, Gathered = 1, PerPoint = 2 } hidden = Hidden::None;
     bool point_major = false;  // a plain output as [M, N] instead of [N, M]
+    // Rows only: x is point-major [M, K] (a layer before with point_major) instead of
+    // channel-major [K, M]. On a CPU driver a lane then reads its own rows' channels
+    // as contiguous vec4s, where channel-major rows sit a whole row of M apart per
+    // channel (README "Point-major rows").
+    bool x_point_major = false;
     // The workgroup grid: channel blocks along x where the device's limits allow
     // (group_linear.cpp says why); true keeps row blocks along x (tests run both).
     bool rows_in_x = false;

@@ -1,7 +1,9 @@
 // group_linear: one PointNet++ MLP layer (1x1 conv with BatchNorm folded, then
 // act) -> shaders/point_mlp.comp. The weight is input-major W^T [K, N] (4 output
 // channels = one vec4), and activations between layers are channel-major [C, M]
-// (4 rows = one vec4), so the shader reads everything as vec4s. Param texel
+// (4 rows = one vec4) or point-major [M, C] (4 channels = one vec4: params
+// point_major / x_point_major, the point encoder's choice), so the shader reads
+// everything as vec4s. Param texel
 // (default 1): read activations and the cloud as texel buffers where the device allows;
 // then param weights (GroupLinear::Weights, default 0) says how the weights, which
 // every lane of a workgroup reads at the same address, reach the lanes:
@@ -29,6 +31,7 @@
 //      last 3 rows . centre), U = the same layer per source point (in = 3,
 //      point_major; sa_gather's arithmetic, without its stored output).
 // Param point_major = 1 (not with max): the output is [M, N] instead of [N, M].
+// Param x_point_major = 1 (in = 0): x is [M, K] (a point_major output) instead of x^T.
 // Param pad = 1 (GroupLinear::skip_padding): a row j > 0 of a ball whose index equals
 // the ball's first (SPEC 2's padding: row 0's input again) is work to skip. A max
 // leaves such rows out (the same max wherever they repeat row 0, and what makes
@@ -66,6 +69,7 @@ struct Layout {
     bool feat = false;
     int hidden = 0;       // in = 1: GroupLinear::Hidden; K is W0^T's width
     bool point_major = false;
+    bool x_point_major = false;  // in = 0: x is [M, K]
     bool pad = false;     // param pad: ball padding skipped
 };
 
@@ -88,7 +92,8 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     l.pad = p.get("pad", 0) != 0;
     if (l.pad && !(l.mode == 1 || (l.mode == 0 && l.max)))
         throw Error("pad = 1 needs ball rows (in = 1) or a max over rows with their ball (in = 0, max = 1)");
-    if (l.pad && l.point_major) throw Error("pad = 1 is for channel-major outputs and maxes");
+    l.x_point_major = p.get("x_point_major", 0) != 0;
+    if (l.x_point_major && l.mode != 0) throw Error("x_point_major = 1 is for a previous layer's rows (in = 0)");
     for (size_t i = 0; i < in.size(); ++i)
         if (in[i].type != (index_input(p, i) ? ElemType::I32 : ElemType::F32))
             throw Error("input " + std::to_string(i) + " has the wrong element type");
@@ -135,10 +140,12 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
         expect_input_count(in, l.pad ? 4 : 3, l.mode == 2 || l.pad ? 4 : 3);
         const Shape& x = in[0].shape;
         if (x.size() != 2 || (l.mode == 2 && x[1] != 3))
-            throw Error(std::string(l.mode == 2 ? "xyz must be [M, 3]" : "x must be channel-major [K, M]") + ", got " +
-                        shape_str(x));
+            throw Error(std::string(l.mode == 2              ? "xyz must be [M, 3]"
+                                    : l.x_point_major ? "x must be point-major [M, K]"
+                                                      : "x must be channel-major [K, M]") +
+                        ", got " + shape_str(x));
         if (l.mode == 0) {
-            l.K = x[0], l.M = x[1];
+            l.K = x[l.x_point_major ? 1 : 0], l.M = x[l.x_point_major ? 0 : 1];
         } else {
             l.feat = in.size() == 4;
             l.M = x[0];
@@ -198,7 +205,8 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
                              : l.mode == 2 ? (k < 3 ? in[0]->data[size_t(3 * m + k)] : feat->data[size_t(m * l.g.CF + k - 3)])
                              : l.mode == 3 ? (k < l.g.CF ? feat->data[size_t(m * l.g.DF + l.g.FB + k)]
                                                          : in[0]->data[size_t(m * l.g.D + k - l.g.CF)])
-                                           : in[0]->data[size_t(k * l.M + m)];
+                             : l.x_point_major ? in[0]->data[size_t(m * l.K + k)]
+                                               : in[0]->data[size_t(k * l.M + m)];
         if (l.hidden == 2) {  // U[q] less the centre's share, as sa_gather gives it
             const int32_t q = ball_point(*in[2], m, l.g.P);
             const float* c = &in[1]->data[size_t(3 * (m / l.NS))];
@@ -262,7 +270,8 @@ void gpu(const GpuOpArgs& a) {
         a.params.get("rows_in_x", 0) == 0 && gx <= d.max_workgroup_count[1] && gy <= d.max_workgroup_count[0];
     if (!cb_first && (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1]))
         throw Error("point-MLP layer of " + std::to_string(l.M) + " rows needs more workgroups than the device allows");
-    const bool avec4 = l.mode == 0 && l.M % 4 == 0 && (!l.max || l.NS % 4 == 0);
+    // vec4 reads of x: 4 rows of a channel (channel-major), or 4 channels of a row.
+    const bool avec4 = l.mode == 0 && (l.x_point_major ? l.K % 4 == 0 : l.M % 4 == 0 && (!l.max || l.NS % 4 == 0));
     const bool fvec4 = l.feat && l.g.DF % 4 == 0 && l.g.FB % 4 == 0;
     const bool wvec4 = l.N % 4 == 0;  // weight rows of whole vec4s: spec constant WVEC4 and binding 2's format
     struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
@@ -293,7 +302,8 @@ void gpu(const GpuOpArgs& a) {
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first, l.pad};
+                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first, l.pad,
+                               l.x_point_major};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -319,18 +329,22 @@ void gpu(const GpuOpArgs& a) {
 void take_unspecified(const std::vector<const HostTensor*>& in, const Params& p, const HostTensor& ref, HostTensor& out) {
     if (p.get("pad", 0) == 0 || p.get("max", 0) != 0 || in.size() < 3 || out.shape != ref.shape || out.shape.size() != 2) return;
     const HostTensor& ball = *in[2];
-    const int64_t M = out.shape[1], NS = ball.shape.size() == 2 ? ball.shape[1] : 0;
+    const bool pm = p.get("point_major", 0) != 0;  // [M, N], else [N, M]
+    const int64_t M = out.shape[pm ? 0 : 1], N = out.shape[pm ? 1 : 0], NS = ball.shape.size() == 2 ? ball.shape[1] : 0;
     if (NS <= 0 || ball.size() != M) return;
     for (int64_t m = 0; m < M; ++m)
         if (padding_row(ball, m, NS))
-            for (int64_t k = 0; k < out.shape[0]; ++k) out.data[size_t(k * M + m)] = ref.data[size_t(k * M + m)];
+            for (int64_t n = 0; n < N; ++n) {
+                const size_t e = size_t(pm ? m * N + n : n * M + m);
+                out.data[e] = ref.data[e];
+            }
 }
 
 }  // namespace
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
                             {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
-                             "rows_in_x", "pad"},
+                             "x_point_major", "rows_in_x", "pad"},
                             take_unspecified};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
