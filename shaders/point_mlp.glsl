@@ -17,14 +17,16 @@
 // MODE 3 (per point): row m is [features of m, xyz of m] (MODE 1's columns for the
 //   point itself, not centred: sa_gather.comp subtracts the centre's share).
 // MAXPOOL: out[g][n] = max over the NS rows of group g (point-major [M / NS][N]);
-//   else out is channel-major [N][M], the next layer's MODE 0 input.
+//   else out is channel-major [N][M], or point-major [M][N] with PMOUT: the next
+//   layer's MODE 0 input (XPM when point-major).
 // HIDDEN (MODE 1 only): A is a first layer computed 4 channels at a time in
 //   registers and never stored (K % 4 == 0; W0 [CF + 3][K], its xyz rows from CF):
 //   1: act(row W0 + b0) of the gathered row (CF <= 4): a narrow first layer
 //      (6 inputs) was bound by the stores of its output (point_encoder.cpp);
 //   2: act(U[q] - W0's xyz rows . centre), U (binding 0) = the first layer per
 //      source point, point-major [P][K]: sa_gather's arithmetic, unstored.
-// PMOUT: a plain output point-major [M][N] (4 channels a store), for HIDDEN 2's U.
+// PMOUT: a plain output point-major [M][N] (4 channels a store): HIDDEN 2's U, and
+//   the rows between a scale's layers (any MODE, with or without PAD).
 // PAD: ball padding (SPEC 2 fills a ball's free slots with its first index, so such
 //   a row repeats row 0's input and output) is work skipped: a row past a group's
 //   first whose index (binding 7, [M / NS][NS]) equals the first's is left out of the

@@ -114,3 +114,30 @@ TEST_CASE("point encoder rejects bad clouds and configs", "[point]") {
     bad["point"].erase("group_all_mlp");
     CHECK_THROWS_WITH(ModelConfig::parse(bad, "t"), Catch::Contains("'point.group_all_mlp' is missing"));
 }
+
+// PointEncoderOptions::point_major_rows changes where the rows between a scale's
+// layers sit in memory, not the sums: F^p and every index equal the channel-major
+// encoder's bit for bit (the paper config reaches the hidden-layer and padding paths).
+TEST_CASE("point encoder: point-major and channel-major rows give the same F^p bit for bit", "[point][golden]") {
+    for (auto [dir, name] : {std::pair{test::goldens_dir(), "vtloc-tiny"}, std::pair{test::goldens_dir(), "vtloc-mcr-tiny"},
+                             std::pair{test::build_goldens_dir(), "vtloc-r18"}}) {
+        INFO(name);
+        const WeightStore file = WeightStore::load(test::require_golden_file(dir, std::string(name) + ".safetensors"));
+        const WeightStore w = prepare_weights(config_of(file), file);
+        test::Golden gold(test::require_golden_file(dir, std::string(name) + ".golden.safetensors"));
+        const HostTensor cloud = gold.f32("point.cloud");
+        TensorMap out[2];
+        for (bool pm : {false, true}) {
+            PointEncoderOptions opt;
+            opt.point_major_rows = pm;
+            Graph g;
+            g.output(build_point_encoder(g, w, config_of(w), g.input("point.cloud", cloud.shape), opt).feature, "f");
+            int64_t readers = 0;  // the option must reach the layers
+            for (const Node& n : g.nodes()) readers += n.params.get("x_point_major", 0) != 0;
+            CHECK((readers > 0) == pm);
+            out[pm] = GpuExecutor(test::gpu(), g, w).run({{"point.cloud", cloud}});
+        }
+        CHECK(out[0].at("f").data == out[1].at("f").data);
+    }
+    test::require_no_validation_messages();
+}

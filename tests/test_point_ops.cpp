@@ -247,6 +247,8 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                     g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm" + on);
                     pm.point_major = true;  // and out as [M, N]
                     g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm_out" + on);
+                    pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
+                    g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
                     if (tile != Tile::Auto) continue;
                     // The other workgroup grid: row blocks along x.
                     ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
@@ -263,11 +265,13 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         const TensorMap out = test::run_gpu_and_compare(g, w, {{"x", xv}, {"xt", xtv}});
         int64_t pairs = 0;
         for (const auto& [name, t] : out) {
-            const size_t at = name.find(".pm");
+            size_t at = name.find(".pm");
             if (at == std::string::npos) continue;
             INFO(name);
             const bool out_pm = name.compare(at, 7, ".pm_out") == 0;
-            const HostTensor& cm = out.at(name.substr(0, at) + name.substr(at + (out_pm ? 7 : 3)));
+            size_t len = out_pm ? 7 : 3;
+            if (name.find(".cm_in.pm_out") != std::string::npos) at = name.find(".cm_in"), len = 13;
+            const HostTensor& cm = out.at(name.substr(0, at) + name.substr(at + len));
             if (!out_pm) {
                 CHECK(t.data == cm.data);
             } else {  // [M, N] against [N, M]
@@ -279,7 +283,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
             }
             ++pairs;
         }
-        CHECK(pairs == 3 * 9);  // 3 outputs on 9 path / weights / tile variants
+        CHECK(pairs == 4 * 9);  // 4 outputs on 9 path / weights / tile variants
     }
 }
 

@@ -78,7 +78,7 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
         int64_t C1, C2, C3;
     };
     for (Case c : {Case{37, 32, 0.25, 16, 20, 33}, Case{64, 128, 0.4, 64, 96, 128}, Case{8, 16, 1.5, 8, 12, 8},
-                   Case{19, 40, 0.3, 12, 37, 16}}) {
+                   Case{19, 40, 0.3, 12, 37, 16}, Case{23, 20, 0.3, 12, 20, 16}}) {  // 20: not a multiple of the row tiles
         const int64_t N = 300, K0 = 6;
         WeightStore w;
         w.add("w0", test::random_tensor({K0, c.C1}, 71, -0.5f, 0.5f));
@@ -279,17 +279,19 @@ TEST_CASE("the node-by-node check compares a skipping layer's real rows only", "
     WeightStore w = two_layers(81);
     w.add("w2", test::random_tensor({24, 32}, 85, -0.3f, 0.3f));
     w.add("b2", test::random_tensor({32}, 86, -0.2f, 0.2f));
+    for (bool pm : {false, true}) {  // the rows between channel- or point-major
+    INFO((pm ? "point-major" : "channel-major") << " rows");
     Graph g;
     const int x = g.input("cloud", {N, 6});
     std::vector<int> f = ops::fps(g, x, S);
     const int ball = ops::ball_query(g, x, f[1], 0.3, NS);
     ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu};
-    first.hidden = Hidden::Gathered, first.skip_padding = true;
+    first.hidden = Hidden::Gathered, first.skip_padding = true, first.point_major = pm;
     const int h = ops::group_linear(g, {x, f[1], ball, g.weight("w0", {6, 16}), g.weight("b0", {16}), g.weight("w1", {16, 24}),
                                         g.weight("b1", {24}), x},
                                     first, "plain");
     ops::GroupLinear last{In::Rows, 0, true, NS, ops::kActRelu};
-    last.skip_padding = true;
+    last.skip_padding = true, last.x_point_major = pm;
     g.output(ops::group_linear(g, {h, g.weight("w2", {24, 32}), g.weight("b2", {32}), ball}, last, "max"), "max");
     const TensorMap in{{"cloud", test::random_tensor({N, 6}, 87)}};
     const check::GraphCheck ok = check::check_graph(test::gpu(), g, w, in);
@@ -305,7 +307,7 @@ TEST_CASE("the node-by-node check compares a skipping layer's real rows only", "
     REQUIRE(pad_row > 0);
     for (int64_t row : {int64_t(0), pad_row}) {
         INFO("row " << row << " of the plain output corrupted");
-        check::testing::set_fault("plain", [&](HostTensor& t) { t.data[size_t(row)] += 1.0f; });  // channel 0
+        check::testing::set_fault("plain", [&](HostTensor& t) { t.data[size_t(pm ? row * 24 : row)] += 1.0f; });  // channel 0
         const check::GraphCheck r = check::check_graph(test::gpu(), g, w, in);
         check::testing::clear_fault();
         if (row == 0) {
@@ -315,6 +317,7 @@ TEST_CASE("the node-by-node check compares a skipping layer's real rows only", "
         } else {
             CHECK(r.ok());
         }
+    }
     }
     test::require_no_validation_messages();
 }
@@ -341,16 +344,22 @@ TEST_CASE("the vote shader leaves padding blocks unwritten", "[op][group_linear]
     ops::GroupLinear layer{In::Gather, 3, false, 1, ops::kActRelu};
     layer.hidden = Hidden::Gathered, layer.skip_padding = true;
     g.output(ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, layer), "plain");
+    layer.point_major = true;  // the same, as [M, C]
+    g.output(ops::group_linear(g, {x, f[1], ball, w0, b0, w1, b1, x}, layer), "plain.pm");
     const test::BothRuns r = test::run_both(g, w, {{"cloud", test::random_tensor({N, 6}, 95)}});
     const std::vector<bool> pad = padding_rows(r.cpu.at("ball"));
-    const HostTensor &got = r.gpu.at("plain"), &want = r.cpu.at("plain");
+    for (bool pm : {false, true}) {
+    INFO((pm ? "point-major" : "channel-major") << " output");
+    const std::string name = pm ? "plain.pm" : "plain";
+    const HostTensor &got = r.gpu.at(name), &want = r.cpu.at(name);
     const int64_t M = S * NS, C = 24;
-    REQUIRE(got.shape == (Shape{C, M}));
+    REQUIRE(got.shape == (pm ? Shape{M, C} : Shape{C, M}));
     int64_t padded = 0, unwritten = 0, wrong_real = 0;
     for (int64_t m = 0; m < M; ++m) {
         bool differs = false;
         for (int64_t k = 0; k < C; ++k) {
-            const float a = got.data[size_t(k * M + m)], b = want.data[size_t(k * M + m)];
+            const size_t e = size_t(pm ? m * C + k : k * M + m);
+            const float a = got.data[e], b = want.data[e];
             differs = differs || !(std::fabs(a - b) <= 1e-4f + 1e-4f * std::fabs(b));
         }
         padded += pad[size_t(m)];
@@ -359,4 +368,5 @@ TEST_CASE("the vote shader leaves padding blocks unwritten", "[op][group_linear]
     INFO(padded << " of " << M << " rows are padding, " << unwritten << " of them left unwritten");
     CHECK(wrong_real == 0);
     CHECK(unwritten * 4 > padded);  // most of them: 64 balls of 8 rows a block, 8 balls to a subgroup
+    }
 }

@@ -14,7 +14,8 @@
 //   2: from a storage buffer (point_mlp.comp), a broadcast on GPUs but a loop over the
 //      lanes on a CPU driver (README "On CPUs without AVX-512, measured").
 // Param `in` picks the input (optional features always last):
-//   0: x^T [K, M] (channel-major, the previous layer's output): [x^T, W^T, bias]
+//   0: x^T [K, M] (channel-major, the previous layer's output), or x [M, K] with
+//      param x_point_major: [x^T, W^T, bias (, idx I32 [M / group, group] with pad and max)]
 //   1: grouping fused (SPEC 2, as point_group): [points [P, D >= 3], centres [S, 3],
 //      idx I32 [S, NS], W^T, bias (, features [P, DF])]; row m = s * NS + j is
 //      [features of q from column feat_begin, xyz of q - centre s], q = idx[s, j].
@@ -41,7 +42,7 @@
 // on the max and on the gathering layer right before it.
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
-// else channel-major [N, M]. Params act, slope as linear's. Param tile
+// else channel-major [N, M] (point_major: [M, N]). Params act, slope as linear's. Param tile
 // (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, big-layer tiles, whatever the layer
 // and device (tests). Param rows_in_x = 1: row blocks along x, channel blocks along
 // y (tests; the default is the reverse, see gpu()).
