@@ -30,43 +30,6 @@ using namespace vtloc;
 
 namespace {
 
-WeightStore random_weights(const nlohmann::json& json) {
-    const ModelConfig cfg = ModelConfig::parse(json, "bench");
-    const PointConfig& p = cfg.point;
-    WeightStore w;
-    w.set_config(json);
-    bench::RandomWeights r(w, 11);
-    int64_t ch = 3;
-    for (size_t i = 0; i < p.sa.size(); ++i) {
-        const std::string sa = "point.sa" + std::to_string(i + 1);
-        int64_t next = 0;
-        for (size_t s = 0; s < p.sa[i].mlps.size(); ++s) {
-            int64_t in = ch + 3;
-            for (size_t l = 0; l < p.sa[i].mlps[s].size(); ++l) {
-                std::string at = ".";  // built piecewise: GCC 12's -Wrestrict false positive on "." + string
-                at.append(std::to_string(s)).append(".").append(std::to_string(l));
-                const int64_t out = p.sa[i].mlps[s][l];
-                r.conv_bn(sa + ".conv_blocks" + at, sa + ".bn_blocks" + at, {out, in, 1, 1}, true);
-                in = out;
-            }
-            next += in;
-        }
-        ch = next;
-    }
-    int64_t in = ch + 3;
-    const std::string ga = "point.sa" + std::to_string(p.sa.size() + 1);
-    for (size_t l = 0; l < p.group_all.size(); ++l) {
-        const int64_t out = p.group_all[l];
-        r.conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), {out, in, 1, 1}, true);
-        in = out;
-    }
-    std::vector<int64_t> sizes{in};
-    sizes.insert(sizes.end(), p.mlp.begin(), p.mlp.end());
-    sizes.push_back(cfg.C);
-    r.mlp("point.mlp", sizes);
-    return w;
-}
-
 // N points uniformly on the unit sphere with their normals: an object's
 // surface in the normalised frame.
 HostTensor sphere_cloud(int64_t n, uint32_t seed) {
@@ -86,7 +49,7 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
 int main(int argc, char** argv) {
     try {
         rt::Context ctx;
-        const WeightStore file = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));
+        const WeightStore file = argc > 1 ? WeightStore::load(argv[1]) : bench::random_point_weights(nlohmann::json::parse(bench::kR18Config), 11);
         const ModelConfig cfg = config_of(file);
         const WeightStore w = prepare_weights(cfg, file);
         std::printf("device: %s\nweights: %s\n", ctx.info().name.c_str(), argc > 1 ? argv[1] : "random, vtloc-r18 shapes");

@@ -2,6 +2,8 @@
 
 #include <cmath>
 
+#include "engine/model/model_config.h"
+
 namespace vtloc::bench {
 
 const char* const kR18Config = R"({"name": "vtloc-r18", "C": 128, "K": 5,
@@ -39,6 +41,43 @@ void RandomWeights::mlp(const std::string& prefix, const std::vector<int64_t>& s
         normal(l + ".weight", {sizes[i + 1], sizes[i]}, 1.0 / std::sqrt(double(sizes[i])));
         normal(l + ".bias", {sizes[i + 1]}, 0.1);
     }
+}
+
+WeightStore random_point_weights(const nlohmann::json& json, uint32_t seed) {
+    const ModelConfig cfg = ModelConfig::parse(json, "random weights");
+    const PointConfig& p = cfg.point;
+    WeightStore w;
+    w.set_config(json);
+    RandomWeights r(w, seed);
+    int64_t ch = p.use_normals ? 3 : 0;  // SA1's features: the normals
+    for (size_t i = 0; i < p.sa.size(); ++i) {
+        const std::string sa = "point.sa" + std::to_string(i + 1);
+        int64_t next = 0;
+        for (size_t s = 0; s < p.sa[i].mlps.size(); ++s) {
+            int64_t in = ch + 3;
+            for (size_t l = 0; l < p.sa[i].mlps[s].size(); ++l) {
+                std::string at = ".";  // built piecewise: GCC 12's -Wrestrict false positive on "." + string
+                at.append(std::to_string(s)).append(".").append(std::to_string(l));
+                const int64_t out = p.sa[i].mlps[s][l];
+                r.conv_bn(sa + ".conv_blocks" + at, sa + ".bn_blocks" + at, {out, in, 1, 1}, true);
+                in = out;
+            }
+            next += in;
+        }
+        ch = next;
+    }
+    int64_t in = ch + 3;
+    const std::string ga = "point.sa" + std::to_string(p.sa.size() + 1);
+    for (size_t l = 0; l < p.group_all.size(); ++l) {
+        const int64_t out = p.group_all[l];
+        r.conv_bn(ga + ".mlp_convs." + std::to_string(l), ga + ".mlp_bns." + std::to_string(l), {out, in, 1, 1}, true);
+        in = out;
+    }
+    std::vector<int64_t> sizes{in};
+    sizes.insert(sizes.end(), p.mlp.begin(), p.mlp.end());
+    sizes.push_back(cfg.C);
+    r.mlp("point.mlp", sizes);
+    return w;
 }
 
 }  // namespace vtloc::bench

@@ -30,4 +30,8 @@ private:
     std::mt19937 rng_;
 };
 
+// Random weights of the point encoder of `config` (a model config as JSON): each set
+// abstraction's conv + BatchNorm layers, the group-all layers and the head MLP.
+WeightStore random_point_weights(const nlohmann::json& config, uint32_t seed);
+
 }  // namespace vtloc::bench

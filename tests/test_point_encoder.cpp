@@ -9,6 +9,7 @@
 #include <cmath>
 
 #include "base/error.h"
+#include "bench/random_weights.h"
 #include "engine/model/point_encoder.h"
 #include "engine/model/prepared_weights.h"
 #include "tests/golden.h"
@@ -140,4 +141,30 @@ TEST_CASE("point encoder: point-major and channel-major rows give the same F^p b
         CHECK(out[0].at("f").data == out[1].at("f").data);
     }
     test::require_no_validation_messages();
+}
+
+// A set abstraction whose MLP is one layer, on input wide enough for the per-point
+// first layer (SA2 here: 128 + 3 channels, 32 points for 8 balls of 8): that layer is
+// also the max, so it gathers its rows (the per-point path has no max). Fused equals
+// unfused (point_group, linear, group_max) and the CPU reference.
+TEST_CASE("point encoder: one-layer set-abstraction MLPs on wide inputs", "[point]") {
+    nlohmann::json cfg = nlohmann::json::parse(bench::kR18Config);
+    cfg["point"] = nlohmann::json::parse(R"({"n_points": 64, "use_normals": true,
+        "sa": [{"npoint": 32, "radii": [0.5], "nsample": [8], "mlps": [[8, 128]]},
+               {"npoint": 8, "radii": [0.7, 0.9], "nsample": [8, 16], "mlps": [[16], [24]]}],
+        "group_all_mlp": [32], "mlp": [16]})");
+    const WeightStore file = bench::random_point_weights(cfg, 5);
+    const WeightStore w = prepare_weights(config_of(file), file);
+    const TensorMap in{{"point.cloud", test::random_tensor({64, 6}, 6)}};
+    HostTensor feature[2];
+    for (bool fuse : {true, false}) {
+        INFO((fuse ? "fused" : "unfused"));
+        Graph g;
+        PointEncoderOptions opt;
+        opt.fuse = fuse;
+        g.output(build_point_encoder(g, w, config_of(w), g.input("point.cloud", {64, 6}), opt).feature, "f");
+        feature[fuse] = test::run_gpu_and_compare(g, w, in).at("f");
+    }
+    REQUIRE(feature[1].shape == (Shape{1, 128}));
+    test::require_close(feature[1], feature[0], {}, "fused against unfused");
 }

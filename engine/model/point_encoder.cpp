@@ -64,7 +64,8 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
     // centre's share (as sa_gather.cpp, which is left for widths that are not a
     // multiple of 4).
     using Hidden = ops::GroupLinear::Hidden;
-    const bool per_point = si_in.channels + 3 > kFactorFromK && si_in.points < st.npoint * ns;
+    // Not for a one-layer MLP: that layer is also the max, which the per-point path lacks.
+    const bool per_point = widths.size() > 1 && si_in.channels + 3 > kFactorFromK && si_in.points < st.npoint * ns;
     Hidden hidden = Hidden::None;
     if (fuse && widths.size() > 1 && widths[0] % 4 == 0)
         hidden = si_in.channels <= 4 ? Hidden::Gathered : per_point ? Hidden::PerPoint : Hidden::None;
