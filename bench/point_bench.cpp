@@ -62,9 +62,13 @@ int main(int argc, char** argv) {
         if (const char* r = std::getenv("VTLOC_BENCH_ROUNDS")) rounds = std::max(1, std::atoi(r));
         if (const char* only = std::getenv("VTLOC_BENCH_POINTS")) sizes = {std::atoll(only)};
         for (int64_t n : sizes) {
-            Graph g;
-            PointEncoderOutputs p = build_point_encoder(g, w, cfg, g.input("point.cloud", {n, 6}));
-            g.output(p.feature, "point.feature");
+            // The encoder on an n-point cloud, F^p its only output.
+            auto encoder = [&](const PointEncoderOptions& opt) {
+                Graph e;
+                e.output(build_point_encoder(e, w, cfg, e.input("point.cloud", {n, 6}), opt).feature, "point.feature");
+                return e;
+            };
+            const Graph g = encoder({});
             // VTLOC_BENCH_OBJECT: a mesh or cloud file sampled to n points and normalised
             // as the model does it; its balls pad fewer rows than the sphere's.
             const char* object = std::getenv("VTLOC_BENCH_OBJECT");
@@ -95,20 +99,17 @@ int main(int argc, char** argv) {
             std::vector<double> round_gf, round_probe, round_frac;
             // The same encoder computing every row (no ball padding skipped), in the same
             // rounds right after: an A/B that a host's phases cannot tilt one way.
-            Graph g_all;
             PointEncoderOptions every_row;
             every_row.skip_padding = false;
-            g_all.output(build_point_encoder(g_all, w, cfg, g_all.input("point.cloud", {n, 6}), every_row).feature, "point.feature");
+            const Graph g_all = encoder(every_row);
             GpuExecutor prof_all(ctx, g_all, w, /*profile=*/true);
             prof_all.run(in);
             const std::map<std::string, double> flops_all = bench::node_flops(g_all);
             // And the encoder with the rows between layers channel-major, as before
             // PointEncoderOptions::point_major_rows: the layouts' A/B.
-            Graph g_cm;
             PointEncoderOptions channel_major;
             channel_major.point_major_rows = false;
-            g_cm.output(build_point_encoder(g_cm, w, cfg, g_cm.input("point.cloud", {n, 6}), channel_major).feature,
-                        "point.feature");
+            const Graph g_cm = encoder(channel_major);
             GpuExecutor prof_cm(ctx, g_cm, w, /*profile=*/true);
             prof_cm.run(in);
             std::map<std::string, double> node_ms_all, node_ms_cm;

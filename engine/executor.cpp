@@ -46,7 +46,8 @@ void check_inputs(const Graph& g, const TensorMap& inputs) {
 namespace {
 
 // Runs the CPU reference of the nodes marked in `run`, in schedule order, into
-// vals; an input or weight is looked up when a node first reads it.
+// vals; an input or weight is looked up when a node first reads it (the caller has
+// checked the inputs those nodes read).
 std::vector<HostTensor> run_nodes(const Graph& g, const WeightStore& weights, const TensorMap& inputs,
                                   const std::vector<char>& run, std::vector<NodeMs>* node_ms) {
     std::vector<HostTensor> vals(g.values().size());
@@ -59,12 +60,7 @@ std::vector<HostTensor> run_nodes(const Graph& g, const WeightStore& weights, co
         for (int id : n.inputs) {
             const Value& v = g.value(id);
             if (!ptr[size_t(id)] && v.kind == ValueKind::Weight) ptr[size_t(id)] = &weights.get(v.name, v.shape);
-            if (!ptr[size_t(id)] && v.kind == ValueKind::Input) {
-                auto it = inputs.find(v.name);
-                if (it == inputs.end()) throw Error("node '" + n.name + "' needs input '" + v.name + "', not given");
-                check_input(v, it->second);  // run_cpu_values checks only the inputs it reads
-                ptr[size_t(id)] = &it->second;
-            }
+            if (!ptr[size_t(id)] && v.kind == ValueKind::Input) ptr[size_t(id)] = &inputs.at(v.name);  // checked by the caller
             in.push_back(ptr[size_t(id)]);
         }
         for (int id : n.outputs) {
@@ -85,12 +81,7 @@ const HostTensor& value_of(const Graph& g, const WeightStore& weights, const Ten
                            const std::vector<HostTensor>& vals, int id) {
     const Value& v = g.value(id);
     if (v.kind == ValueKind::Weight) return weights.get(v.name, v.shape);
-    if (v.kind == ValueKind::Input) {
-        auto it = inputs.find(v.name);
-        if (it == inputs.end()) throw Error("input '" + v.name + "' is not given");
-        check_input(v, it->second);
-        return it->second;
-    }
+    if (v.kind == ValueKind::Input) return inputs.at(v.name);  // checked by the caller
     return vals[size_t(id)];
 }
 
@@ -124,6 +115,20 @@ std::map<int, HostTensor> run_cpu_values(const Graph& g, const WeightStore& weig
         for (int id : g.nodes()[size_t(n)].inputs)
             if (producer[size_t(id)] >= 0) todo.push_back(producer[size_t(id)]);
     }
+    // Only the inputs read (by a node that runs, or wanted as they are) must be given.
+    auto check = [&](int id, const Node* reader) {
+        const Value& v = g.value(id);
+        if (v.kind != ValueKind::Input) return;
+        auto it = inputs.find(v.name);
+        if (it == inputs.end())
+            throw Error(reader ? "node '" + reader->name + "' needs input '" + v.name + "', not given"
+                               : "input '" + v.name + "' is not given");
+        check_input(v, it->second);
+    };
+    for (size_t n = 0; n < run.size(); ++n)
+        if (run[n])
+            for (int id : g.nodes()[n].inputs) check(id, &g.nodes()[n]);
+    for (int id : wanted) check(id, nullptr);
     const std::vector<HostTensor> vals = run_nodes(g, weights, inputs, run, nullptr);
     std::map<int, HostTensor> out;
     for (int id : wanted) out[id] = value_of(g, weights, inputs, vals, id);

@@ -150,26 +150,16 @@ void block(uint m0, uint mend) {
     uint rows[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) rows[i] = min(m0 + i, mend - 1u);
     vec4 a[TM];
-    if (MODE == 0u && XPM) {
-        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
-            [[unroll]] for (uint i = 0; i < TM; ++i) {
-                if (AVEC4) {
-                    a[i] = LOAD_A4((rows[i] * p.K + k0) / 4u);
-                } else {
-                    [[unroll]] for (uint u = 0; u < 4; ++u)
-                        a[i][u] = k0 + u < p.K ? LOAD_A(rows[i] * p.K + min(k0 + u, p.K - 1u)) : 0.0;
-                }
-            }
-            fma_rows(a, k0);
-        }
-        return;
-    }
     if (MODE == 0u) {
         for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             [[unroll]] for (uint u = 0; u < 4; ++u) {
                 const uint k = min(k0 + u, p.K - 1u);
                 const bool live = k0 + u < p.K;
-                if (AVEC4) {
+                if (XPM && AVEC4) {  // a row's 4 channels at once
+                    if (u == 0u) [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_A4((rows[i] * p.K + k0) / 4u);
+                } else if (XPM) {
+                    [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_A(rows[i] * p.K + k) : 0.0;
+                } else if (AVEC4) {
                     [[unroll]] for (uint i = 0; i < TM / 4; ++i) {
                         vec4 v = live ? LOAD_A4((k * p.M + rows[4 * i]) / 4) : vec4(0.0);  // rows[4i] is a multiple of 4 here
                         [[unroll]] for (uint c = 0; c < 4; ++c) a[4 * i + c][u] = v[c];

@@ -35,6 +35,15 @@ void require_no_validation_messages() {
     CHECK(msgs.empty());
 }
 
+HostTensor transposed(const HostTensor& t) {
+    REQUIRE(t.shape.size() == 2);
+    const int64_t R = t.shape[0], C = t.shape[1];
+    HostTensor o({C, R}, t.type);
+    for (int64_t r = 0; r < R; ++r)
+        for (int64_t c = 0; c < C; ++c) o.data[size_t(c * R + r)] = t.data[size_t(r * C + c)];
+    return o;
+}
+
 HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo, float hi) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> dist(lo, hi);

@@ -24,6 +24,8 @@ void release_gpu();
 void require_no_validation_messages();
 
 HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo = -1.0f, float hi = 1.0f);
+// A 2-D tensor [R, C] as [C, R] (channel-major rows as point-major and back).
+HostTensor transposed(const HostTensor& t);
 
 // fp32 default: |got - want| <= abs + rel * |want| elementwise.
 struct Tolerance {

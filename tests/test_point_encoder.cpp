@@ -24,11 +24,16 @@ struct Result {
     double max_abs = 0, max_ref = 0;
 };
 
+// A golden config's weights, prepared as the model loads them.
+WeightStore golden_weights(const std::string& dir, const std::string& name) {
+    const WeightStore file = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
+    return prepare_weights(config_of(file), file);
+}
+
 // Builds the encoder on the golden cloud, runs it on the GPU (and the CPU
 // reference when `cpu`), checks indices exactly and returns F^p's error.
 Result run_golden(const std::string& dir, const std::string& name, bool fuse, bool cpu, test::Tolerance tol) {
-    const WeightStore file = WeightStore::load(test::require_golden_file(dir, name + ".safetensors"));
-    const WeightStore w = prepare_weights(config_of(file), file);
+    const WeightStore w = golden_weights(dir, name);
     test::Golden gold(test::require_golden_file(dir, name + ".golden.safetensors"));
     HostTensor cloud = gold.f32("point.cloud");
     Graph g;
@@ -123,8 +128,7 @@ TEST_CASE("point encoder: point-major and channel-major rows give the same F^p b
     for (auto [dir, name] : {std::pair{test::goldens_dir(), "vtloc-tiny"}, std::pair{test::goldens_dir(), "vtloc-mcr-tiny"},
                              std::pair{test::build_goldens_dir(), "vtloc-r18"}}) {
         INFO(name);
-        const WeightStore file = WeightStore::load(test::require_golden_file(dir, std::string(name) + ".safetensors"));
-        const WeightStore w = prepare_weights(config_of(file), file);
+        const WeightStore w = golden_weights(dir, name);
         test::Golden gold(test::require_golden_file(dir, std::string(name) + ".golden.safetensors"));
         const HostTensor cloud = gold.f32("point.cloud");
         TensorMap out[2];

@@ -222,6 +222,11 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
         int x = g.input("x", {c.K, c.M}), xt = g.input("xt", {c.M, c.K});  // xt: the same rows point-major
         int wv = g.weight("w", {c.K, c.N}), bv = g.weight("b", {c.N});
         using In = ops::GroupLinear::Input;
+        struct Same {
+            std::string got, want;
+            bool transposed;
+        };
+        std::vector<Same> same;  // outputs that must equal others bit for bit
         for (ops::BufferPath path : ops::kBufferPaths)
             for (Weights ubo : kWeightPaths)
                 // The device's tile for this size, and CPU devices' two big-layer tiles.
@@ -239,16 +244,21 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                              "max" + on);  // negative maxima
                     g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
                              "plain" + on);
-                    // The rows point-major (x [M, K]): the same sums in the same order.
+                    // The rows point-major (x [M, K]): the same sums in the same order, so the
+                    // same bits as the channel-major outputs above (out [M, N]: transposed).
                     ops::GroupLinear pm{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
                     pm.x_point_major = true;
                     g.output(ops::group_linear(g, {xt, wv, bv}, pm), "max_relu.pm" + on);
+                    same.push_back({"max_relu.pm" + on, "max_relu" + on, false});
                     pm.max = false, pm.group = 1, pm.act = ops::kActLeaky, pm.slope = 0.1;
                     g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm" + on);
-                    pm.point_major = true;  // and out as [M, N]
+                    same.push_back({"plain.pm" + on, "plain" + on, false});
+                    pm.point_major = true;
                     g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm_out" + on);
+                    same.push_back({"plain.pm_out" + on, "plain" + on, true});
                     pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
                     g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
+                    same.push_back({"plain.cm_in.pm_out" + on, "plain" + on, true});
                     if (tile != Tile::Auto) continue;
                     // The other workgroup grid: row blocks along x.
                     ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
@@ -259,31 +269,12 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                 }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         const HostTensor xv = test::random_tensor({c.K, c.M}, 33);
-        HostTensor xtv({c.M, c.K});
-        for (int64_t k = 0; k < c.K; ++k)
-            for (int64_t m = 0; m < c.M; ++m) xtv.data[size_t(m * c.K + k)] = xv.data[size_t(k * c.M + m)];
-        const TensorMap out = test::run_gpu_and_compare(g, w, {{"x", xv}, {"xt", xtv}});
-        int64_t pairs = 0;
-        for (const auto& [name, t] : out) {
-            size_t at = name.find(".pm");
-            if (at == std::string::npos) continue;
-            INFO(name);
-            const bool out_pm = name.compare(at, 7, ".pm_out") == 0;
-            size_t len = out_pm ? 7 : 3;
-            if (name.find(".cm_in.pm_out") != std::string::npos) at = name.find(".cm_in"), len = 13;
-            const HostTensor& cm = out.at(name.substr(0, at) + name.substr(at + len));
-            if (!out_pm) {
-                CHECK(t.data == cm.data);
-            } else {  // [M, N] against [N, M]
-                REQUIRE(t.shape == Shape{cm.shape.at(1), cm.shape.at(0)});
-                bool same = true;
-                for (int64_t n = 0; n < c.N; ++n)
-                    for (int64_t m = 0; m < c.M; ++m) same = same && t.data[size_t(m * c.N + n)] == cm.data[size_t(n * c.M + m)];
-                CHECK(same);
-            }
-            ++pairs;
+        const TensorMap out = test::run_gpu_and_compare(g, w, {{"x", xv}, {"xt", test::transposed(xv)}});
+        for (const Same& p : same) {
+            INFO(p.got);
+            CHECK(out.at(p.got).data == (p.transposed ? test::transposed(out.at(p.want)) : out.at(p.want)).data);
         }
-        CHECK(pairs == 4 * 9);  // 4 outputs on 9 path / weights / tile variants
+        CHECK(same.size() == 4 * 9);  // 4 outputs on 9 path / weights / tile variants
     }
 }
 

@@ -194,12 +194,7 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
                     // Large, not NaN: a max would drop a NaN row by itself.
                     poisoned.data[e] = (m + k) % 2 == 0 ? 1e6f : -1e6f;
                 }
-        HostTensor clean_pm({M, c.C2}), poisoned_pm({M, c.C2});  // the same rows point-major
-        for (int64_t k = 0; k < c.C2; ++k)
-            for (int64_t m = 0; m < M; ++m) {
-                clean_pm.data[size_t(m * c.C2 + k)] = clean.data[size_t(k * M + m)];
-                poisoned_pm.data[size_t(m * c.C2 + k)] = poisoned.data[size_t(k * M + m)];
-            }
+        const HostTensor clean_pm = test::transposed(clean), poisoned_pm = test::transposed(poisoned);  // point-major
         Graph pg;
         const int xc = pg.input("clean", {c.C2, M}), xp = pg.input("poisoned", {c.C2, M}),
                   bi = pg.input("ball", ball_t.shape, ElemType::I32);
