@@ -18,6 +18,7 @@
 #include "bench/versus.h"
 #include "base/error.h"
 #include "base/python.h"
+#include "base/shipped.h"
 #include "engine/io/image.h"
 #include "engine/io/object.h"
 #include "engine/model/model_config.h"
@@ -38,7 +39,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kUsage = R"(usage: vtloc-bench [options]
-  --weights FILE       weight file (default: the shipped models/vtloc-r18-half-random.safetensors)
+  --weights FILE       weight file (default: the shipped default model, models/vtloc-lite.safetensors)
   --config NAME        instead: random weights of a named config (vtloc-r18, vtloc-mcr, vtloc-tiny,
                        vtloc-mcr-tiny), exported once by weights_tools (python3 + torch; VTLOC_PYTHON picks the interpreter) into
                        <bench dir>/bench-weights/NAME.safetensors
@@ -271,7 +272,7 @@ int run(int argc, char** argv) {
     Args a = parse(argc, argv);
     std::string weights_path = !a.weights.empty() ? a.weights
                                : !a.config.empty() ? random_export(a.config)
-                                                   : (data_dir() / "models" / "vtloc-r18-half-random.safetensors").string();
+                                                   : (data_dir() / kDefaultModel).string();
     const std::string image_path = !a.image.empty() ? a.image : (data_dir() / "examples" / "touch_01.png").string();
     const std::string object_path = !a.object.empty() ? a.object : (data_dir() / "examples" / "mug.glb").string();
 

@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "base/shipped.h"
 #include "vtloc/vtloc.h"
 
 namespace vtloc::cli {
@@ -64,10 +65,7 @@ struct Session {
 // (build/vtloc -> the repository), or the source tree this binary was built
 // from. Throws api::Error when none holds the default model.
 std::filesystem::path shipped_dir();
-inline constexpr const char* kDefaultModel = "models/vtloc-lite.safetensors";
-// The untrained export kept as a fixture (tests, the mug examples): the CLI says
-// RANDOM WEIGHTS whenever it runs it.
-inline constexpr const char* kRandomModel = "models/vtloc-r18-half-random.safetensors";
+// kDefaultModel, kRandomModel: base/shipped.h
 // The demo's example for the default model (examples/<name>.json): a test touch
 // of the synthetic benchmark that vtloc-lite never trained on.
 inline constexpr const char* kDefaultExample = "cone_test0";
