@@ -32,7 +32,7 @@ struct PipelineDesc {
     uint32_t texel_bindings = 0;
     // Bit i set: binding i is a uniform buffer. On CPU devices a uniform-buffer load
     // at an address every lane shares is one load and a broadcast, where a
-    // storage-buffer load is still a loop over the lanes (README "On CPUs without AVX-512, measured").
+    // storage-buffer load is still a loop over the lanes (docs/performance.md "On CPUs without AVX-512, measured").
     uint32_t uniform_bindings = 0;
 
     bool operator<(const PipelineDesc& o) const;

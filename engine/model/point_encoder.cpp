@@ -120,7 +120,7 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         // Ball padding (a ball's free slots repeat its first point) is skipped:
         // the max leaves it out, and a gathering layer right before it leaves it
         // unwritten (not one with rows layers between: they would compute on
-        // whatever the skipped rows hold, for nothing). README "Ball padding".
+        // whatever the skipped rows hold, for nothing). docs/performance.md "Ball padding".
         gl.skip_padding = opt.skip_padding && (gl.max || (gather && l + 2 == widths.size()));
         if (gl.skip_padding && !gather && gl.max) ins.push_back(ball);
         x = ops::group_linear(g, ins, gl, node);

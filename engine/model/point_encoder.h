@@ -25,11 +25,11 @@ struct PointEncoderOptions {
     // as separate nodes; the same numbers, kept as a cross-check.
     bool fuse = true;
     // Fused only: ball padding (a ball's free slots, which repeat its first point)
-    // left out of the work, exactly (README "Ball padding"); false computes every
+    // left out of the work, exactly (docs/performance.md "Ball padding"); false computes every
     // row (vtloc-bench-point's A/B).
     bool skip_padding = true;
     // Fused only: a scale's layers pass their rows point-major ([M, C]) instead of
-    // channel-major ([C, M]); faster on lavapipe (README "Point-major rows").
+    // channel-major ([C, M]); faster on lavapipe (docs/performance.md "Point-major rows").
     bool point_major_rows = true;
 };
 

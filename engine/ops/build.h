@@ -136,7 +136,7 @@ struct GroupLinear {
     // Rows only: x is point-major [M, K] (a layer before with point_major) instead of
     // channel-major [K, M]. On a CPU driver a lane then reads its own rows' channels
     // as contiguous vec4s, where channel-major rows sit a whole row of M apart per
-    // channel (README "Point-major rows").
+    // channel (docs/performance.md "Point-major rows").
     bool x_point_major = false;
     // The workgroup grid: channel blocks along x where the device's limits allow
     // (group_linear.cpp says why); true keeps row blocks along x (tests run both).

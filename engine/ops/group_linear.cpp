@@ -12,7 +12,7 @@
 //   1: from a uniform buffer (point_mlp_ubo.comp), where the matrix fits the device's
 //      uniform range; else as 2;
 //   2: from a storage buffer (point_mlp.comp), a broadcast on GPUs but a loop over the
-//      lanes on a CPU driver (README "On CPUs without AVX-512, measured").
+//      lanes on a CPU driver (docs/performance.md "On CPUs without AVX-512, measured").
 // Param `in` picks the input (optional features always last):
 //   0: x^T [K, M] (channel-major, the previous layer's output), or x [M, K] with
 //      param x_point_major: [x^T, W^T, bias (, idx I32 [M / group, group] with pad and max)]
