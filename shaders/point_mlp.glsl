@@ -95,6 +95,7 @@ float acc[TM * TN];
 layout(constant_id = 10) const uint SG = 8;  // the device's subgroup size
 const uint WR = (TN + SG - 1u) / SG;         // weights each lane loads per input channel
 const uint WR4 = (TN / 4u + SG - 1u) / SG;   // the same in vec4s (WVEC4: binding 2 is RGBA32F)
+const uint HR = (7u + SG - 1u) / SG;         // HIDDEN 1: W0 rows each lane fetches per 4 channels
 #endif
 
 // acc += the products of the 4 input channels k0 .. k0 + 3 (a[i][u]: row i, channel
@@ -210,8 +211,23 @@ void block(uint m0, uint mend) {
                 f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
         for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             vec4 wf[4], wx[3];  // W0 rows of the features and of xyz, channels k0 .. k0 + 3
+#ifdef WEIGHTS_SHUFFLE
+            // Lane l fetches row l of the 7 (wf, then wx) and the lanes share them by
+            // shuffles: a fetch at a uniform index is still a gather on a CPU driver
+            // (1-1.5 % of the point MLPs' time, docs/performance.md "W0 rows by shuffles").
+            vec4 hl[HR];
+            [[unroll]] for (uint r = 0; r < HR; ++r) {
+                const uint item = min(r * SG + gl_SubgroupInvocationID, 6u);
+                const uint row = min(item < 4u ? item : p.CF + item - 4u, p.CF + 2u);
+                const vec4 h = LOAD_H4((row * p.K + k0) / 4u);
+                hl[r] = item < 4u && item >= p.CF ? vec4(0.0) : h;
+            }
+            [[unroll]] for (uint u = 0; u < 4; ++u) wf[u] = subgroupShuffle(hl[u / SG], u % SG);
+            [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = subgroupShuffle(hl[(4u + j) / SG], (4u + j) % SG);
+#else
             [[unroll]] for (uint u = 0; u < 4; ++u) wf[u] = u < p.CF ? LOAD_H4((u * p.K + k0) / 4u) : vec4(0.0);
             [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = LOAD_H4(((p.CF + j) * p.K + k0) / 4u);
+#endif
             const vec4 b0 = LOAD_HB4(k0 / 4u);
             [[unroll]] for (uint i = 0; i < TM; ++i) {
                 vec4 h = b0;
