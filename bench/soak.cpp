@@ -35,6 +35,7 @@
 #include <vtloc/vtloc.h>
 
 #include "base/atomic_write.h"
+#include "base/shipped.h"
 #include "bench/probe.h"
 #include "bench/soak_plot.h"
 
@@ -194,7 +195,7 @@ int main(int argc, char** argv) {
 #ifdef __GLIBC__
     mallopt(M_MMAP_THRESHOLD, 128 * 1024);  // see the header: measure leaks, not the allocator's policy
 #endif
-    std::string model_path = std::string(VTLOC_SOURCE_DIR) + "/models/vtloc-lite.safetensors";
+    std::string model_path = std::string(VTLOC_SOURCE_DIR) + "/" + vtloc::kDefaultModel;
     std::string json_path, png_path, plot_from;
     long runs = 10000, warmup_arg = -1;
     double max_drift = 1.0;

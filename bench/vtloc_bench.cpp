@@ -141,16 +141,9 @@ fs::path exe_dir() {
     return ec ? fs::path(".") : p.parent_path();
 }
 
-// The repository (or installed data) holding models/ and examples/.
-fs::path data_dir() {
-    std::vector<fs::path> dirs;
-    if (const char* e = std::getenv("VTLOC_DATA_DIR"); e && *e) dirs.push_back(e);
-    dirs.push_back(exe_dir().parent_path());
-    dirs.push_back(VTLOC_SOURCE_DIR);
-    for (const fs::path& d : dirs)
-        if (!d.empty() && fs::exists(d / "examples" / "mug.glb")) return d;
-    throw Error("cannot find the shipped examples/ and models/; set VTLOC_DATA_DIR or pass --weights, --image, --object");
-}
+// The repository holding models/ and examples/, found as the CLI finds it (the
+// bench is not installed: no install folder).
+fs::path data_dir() { return find_shipped_dir(shipped_dir_candidates(current_executable(), "", VTLOC_SOURCE_DIR)); }
 
 // Random weights of a named config, exported by weights_tools once and cached.
 std::string random_export(const std::string& name) {

@@ -60,10 +60,9 @@ struct Session {
     }
 };
 
-// Shipped files (models/, examples/): $VTLOC_DATA_DIR, an install's
-// share/vtloc beside the executable, the executable's parent folder
-// (build/vtloc -> the repository), or the source tree this binary was built
-// from. Throws api::Error when none holds the default model.
+// Shipped files (models/, examples/): the first folder of base/shipped.h's
+// search ($VTLOC_DATA_DIR, an install's share/vtloc, build/.., the source tree)
+// that holds the default model. Throws api::Error when none does.
 std::filesystem::path shipped_dir();
 // kDefaultModel, kRandomModel: base/shipped.h
 // The demo's example for the default model (examples/<name>.json): a test touch
