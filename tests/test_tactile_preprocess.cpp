@@ -24,10 +24,12 @@ namespace {
 
 const test::Tolerance kPrepTol{1e-5, 1e-5};
 
+// Both ways of reading the image (texel and storage buffers), outputs x.texel and x.storage.
 Graph prep_graph(int64_t h, int64_t w, int64_t crop, int64_t size) {
     Graph g;
     int img = g.input("image", {h, w, 3}, ElemType::I32);
-    g.output(ops::tactile_preprocess(g, img, crop, size), "x");
+    for (ops::BufferPath path : ops::kBufferPaths)
+        g.output(ops::tactile_preprocess(g, img, crop, size, "", path), std::string("x.") + ops::path_name(path));
     return g;
 }
 
@@ -54,12 +56,15 @@ void check_frames(const std::vector<std::vector<uint8_t>>& frames, int64_t h, in
         TensorMap want = run_cpu(g, WeightStore{}, in);
         TensorMap got = exec.run(in);
         test::require_no_validation_messages();
-        double worst = 0;
-        for (size_t k = 0; k < want.at("x").data.size(); ++k)
-            worst = std::max(worst, double(std::abs(got.at("x").data[k] - want.at("x").data[k])));
-        INFO("frame " << i << " " << h << "x" << w << " crop " << crop << " size " << size << ": max |gpu - cpu| "
-                      << worst);
-        test::require_close(got.at("x"), want.at("x"), kPrepTol, "preprocessed frame");
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            const std::string x = std::string("x.") + ops::path_name(path);
+            double worst = 0;
+            for (size_t k = 0; k < want.at(x).data.size(); ++k)
+                worst = std::max(worst, double(std::abs(got.at(x).data[k] - want.at(x).data[k])));
+            INFO("frame " << i << " " << h << "x" << w << " crop " << crop << " size " << size << ", " << x
+                          << ": max |gpu - cpu| " << worst);
+            test::require_close(got.at(x), want.at(x), kPrepTol, "preprocessed frame");
+        }
     }
 }
 
@@ -122,8 +127,9 @@ TEST_CASE("tactile_preprocess takes a batch of frames, each as if alone", "[op][
         std::copy(batch.data.begin() + std::ptrdiff_t(b * in_n), batch.data.begin() + std::ptrdiff_t((b + 1) * in_n), one.data.begin());
         TensorMap single = exec.run({{"image", one}});
         const auto& x = out.at("x").data;
-        CHECK(std::vector<float>(x.begin() + std::ptrdiff_t(b * out_n), x.begin() + std::ptrdiff_t((b + 1) * out_n)) ==
-              single.at("x").data);
+        for (ops::BufferPath path : ops::kBufferPaths)
+            CHECK(std::vector<float>(x.begin() + std::ptrdiff_t(b * out_n), x.begin() + std::ptrdiff_t((b + 1) * out_n)) ==
+                  single.at(std::string("x.") + ops::path_name(path)).data);
     }
     test::require_no_validation_messages();
     Graph bad;

@@ -65,8 +65,10 @@ int max_pool2d(Graph& g, int x, const Pool2d& p, const std::string& name) {
 
 int global_avg_pool(Graph& g, int x, const std::string& name) { return g.add1("global_avg_pool", {x}, {}, name); }
 
-int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name) {
-    return g.add1("tactile_preprocess", {image}, {{"crop", d(crop)}, {"size", d(size)}}, name);
+int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name, BufferPath path) {
+    Params p{{"crop", d(crop)}, {"size", d(size)}};
+    if (path == BufferPath::Storage) p.set("texel", 0);
+    return g.add1("tactile_preprocess", {image}, p, name);
 }
 
 int disentangle(Graph& g, const std::vector<int>& in, Act act, double slope, const std::string& name, bool subgroup) {

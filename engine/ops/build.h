@@ -52,7 +52,8 @@ struct Pool2d {
 };
 int max_pool2d(Graph& g, int x, const Pool2d& p, const std::string& name = "");
 int global_avg_pool(Graph& g, int x, const std::string& name = "");
-int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name = "");
+int tactile_preprocess(Graph& g, int image, int64_t crop, int64_t size, const std::string& name = "",
+                       BufferPath path = BufferPath::Texel);
 
 // GMA and heads.
 // subgroup = false: the shared-memory slabs even where the device has shuffles.

@@ -2,7 +2,8 @@
 // -> F32 [1, 3, size, size] network input (a batch [B, H, W, 3] -> [B, 3, size, size]), SPEC section 2: T / 255, centre crop
 // (params crop; zero padding), bilinear resize to `size` (align_corners false,
 // no antialias), ImageNet mean/std. Values outside 0..255 are clamped (both paths).
-// -> shaders/tactile_preprocess.comp
+// Param texel (default 1; 0 = a storage buffer): how the shader reads the image.
+// -> shaders/tactile_preprocess.comp (tactile_preprocess_ssbo.comp)
 #include "engine/ops/tactile_preprocess.h"
 
 #include <algorithm>
@@ -102,20 +103,32 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     Prep q = prep_params(a.in[0].shape, a.params);
-    const uint64_t rows = uint64_t(q.batch) * 3 * uint64_t(q.size);
-    uint32_t local = row_local_size(d, rows);
-    const rt::Pipeline& pipe = pipeline(a.ctx, "tactile_preprocess", 2, 28, {local});
-    struct { uint32_t h, w, crop, s; int32_t top, left; uint32_t rows; } push{
+    // One invocation per 4 columns of an output row (all 3 channels): a workgroup per
+    // row, its width the row's quads in whole subgroups.
+    const uint32_t quads = uint32_t((q.size + 3) / 4), sg = std::max(1u, d.subgroup_size);
+    const uint32_t local = std::min(elementwise_local_size(d), std::max(sg, (quads + sg - 1) / sg * sg));
+    const uint32_t gx = (quads + local - 1) / local;
+    if (q.size > int64_t(d.max_workgroup_count[1]) || q.batch > int64_t(d.max_workgroup_count[2]))
+        throw Error("a batch of " + std::to_string(q.batch) + " images of " + std::to_string(q.size) +
+                    " rows needs more workgroups than the device allows");
+    // The image as texels (a gather per fetch on CPU drivers, where a storage-buffer
+    // load is a loop over the lanes) within the device's texel-buffer limit; param
+    // texel = 0 forces the storage buffer (tests).
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements;
+    struct { uint32_t h, w, crop, s; int32_t top, left; } push{
         uint32_t(q.h), uint32_t(q.w), uint32_t(q.crop), uint32_t(q.size),
-        int32_t(center_crop_start(q.h, q.crop)), int32_t(center_crop_start(q.w, q.crop)), to_u32(rows, "output rows")};
+        int32_t(center_crop_start(q.h, q.crop)), int32_t(center_crop_start(q.w, q.crop))};
+    const rt::Pipeline& pipe = a.ctx.pipelines().get(rt::PipelineDesc{
+        texel ? "tactile_preprocess" : "tactile_preprocess_ssbo", 2, sizeof(push), {local, q.size % 4 == 0}, texel ? 0x1u : 0u});
     to_u32(numel(a.in[0].shape), "image size");
     to_u32(numel(a.out[0].shape), "output size");
-    a.seq.dispatch(pipe, {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, sizeof(push),
-                   grid_groups(rows, local, d));
+    a.seq.dispatch(pipe, {{a.in[0].view, rt::Access::Read, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
+                          {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), gx, uint32_t(q.size), uint32_t(q.batch));
 }
 
 }  // namespace
 
-const OpDef op_tactile_preprocess{"tactile_preprocess", infer, cpu, gpu, 0, {"crop", "size"}};
+const OpDef op_tactile_preprocess{"tactile_preprocess", infer, cpu, gpu, 0, {"crop", "size", "texel"}};
 
 }  // namespace vtloc::ops
