@@ -130,7 +130,9 @@ TEST_CASE("binary ops reject shapes that do not broadcast", "[op][binary]") {
 TEST_CASE("concat along the last axis matches the CPU reference", "[op][concat]") {
     struct Case { std::vector<Shape> in; };
     for (const Case& c : {Case{{{1, 37}, {1, 1}}}, Case{{{5, 7, 3}, {5, 7, 1}, {5, 7, 12}}},
-                          Case{{{127, 33}, {127, 64}, {127, 5}, {127, 2}}}}) {
+                          Case{{{127, 33}, {127, 64}, {127, 5}, {127, 2}}},
+                          Case{{{300, 64}, {300, 128}, {300, 8}}},  // every input as vec4s; rows past the 256 row groups
+                          Case{{{9, 4}, {9, 2}, {9, 2}, {9, 8}}}}) {  // vec4s for the first and last only
         Graph g;
         TensorMap inputs;
         std::vector<int> ids;

@@ -2,6 +2,8 @@
 // or for a single row (every input one slice of the output) one buffer copy per
 // input: on lavapipe a copy is a memcpy, a dispatch costs ~70 us, and GMA's
 // [F^t, F^p] of one touch is such a row.
+#include <algorithm>
+
 #include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
@@ -40,8 +42,6 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    uint32_t local = elementwise_local_size(d);
-    const rt::Pipeline& pipe = pipeline(a.ctx, "concat", 2, 16, {local});
     const Shape& os = a.out[0].shape;
     uint32_t out_width = to_u32(os.back(), "concat width");
     uint32_t rows = out_width ? to_u32(numel(os) / os.back(), "concat rows") : 0;
@@ -53,14 +53,26 @@ void gpu(const GpuOpArgs& a) {
         }
         return;
     }
+    const uint32_t sg = std::max(1u, d.subgroup_size);
     uint32_t col0 = 0;
     for (const GpuTensor& t : a.in) {
-        struct { uint32_t rows, width, out_width, col0; } push{rows, to_u32(t.shape.back(), "width"), out_width, col0};
+        const uint32_t width = to_u32(t.shape.back(), "width");
+        const bool vec4 = width % 4 == 0 && out_width % 4 == 0 && col0 % 4 == 0;
+        const uint32_t cols = vec4 ? width / 4 : width;  // invocations along x
+        // A row's columns in whole subgroups; rows along y, at most 256 workgroups
+        // of them (each loops over rows): a CPU driver pays per workgroup.
+        const uint32_t local = std::min(elementwise_local_size(d), std::max(sg, (cols + sg - 1) / sg * sg));
+        const uint32_t gx = (cols + local - 1) / local;
+        const uint32_t gy = std::min({rows, 256u, d.max_workgroup_count[1]});
+        if (gx > d.max_workgroup_count[0]) throw Error("a concat input of width " + std::to_string(width) + " needs more workgroups than the device allows");
+        struct { uint32_t rows, width, out_width, col0; } push{rows, width, out_width, col0};
         // Inputs write disjoint columns but overlapping byte ranges: the tracker
         // orders them with a barrier, which is cheap next to a missed hazard.
-        a.seq.dispatch(pipe, {{t.view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push,
-                       sizeof(push), grid_groups(uint64_t(rows) * push.width, local, d));
-        col0 += push.width;
+        const rt::Access R = rt::Access::Read, W = rt::Access::Write;
+        a.seq.dispatch(pipeline(a.ctx, "concat", 4, 16, {local, vec4}),
+                       {{t.view, R}, {t.view, R}, {a.out[0].view, W}, {a.out[0].view, W}}, &push, sizeof(push), std::max(1u, gx),
+                       std::max(1u, gy));
+        col0 += width;
     }
 }
 
