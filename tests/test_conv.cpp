@@ -138,7 +138,10 @@ TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
 TEST_CASE("max_pool2d matches the CPU reference at odd shapes", "[op][pool][max_pool2d]") {
     struct Case { Shape x; ops::Pool2d p; };
     for (const Case& c : {Case{{1, 5, 37, 53}, {3, 3, 2, 2, 1, 1}}, Case{{2, 3, 8, 9}, {2, 2, 2, 2, 0, 0}},
-                          Case{{1, 4, 11, 7}, {3, 2, 1, 2, 1, 0}}})
+                          Case{{1, 4, 11, 7}, {3, 2, 1, 2, 1, 0}},
+                          Case{{2, 3, 36, 40}, {3, 3, 2, 2, 1, 1}},   // OW = 20: 4 outputs a step (ResNet's pool)
+                          Case{{1, 2, 9, 12}, {3, 3, 1, 1, 1, 1}},    // the same at stride 1
+                          Case{{1, 2, 10, 17}, {2, 3, 2, 3, 0, 1}}})  // OW = 6: not a multiple of 4
         for (ops::BufferPath path : ops::kBufferPaths) {
             Graph g;
             ops::Pool2d p = c.p;

@@ -85,11 +85,11 @@ void max_gpu(const GpuOpArgs& a) {
     // PipelineDesc) unless it has more elements than the device allows in one.
     const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(x)) <= d.max_texel_elements;
     const rt::Pipeline& pipe = a.ctx.pipelines().get(rt::PipelineDesc{
-        texel ? "max_pool2d" : "max_pool2d_ssbo", 2, sizeof(push), {local, uint32_t(g.kh), uint32_t(g.kw)},
-        texel ? 0x1u : 0u});
+        texel ? "max_pool2d" : "max_pool2d_ssbo", 3, sizeof(push),
+        {local, uint32_t(g.kh), uint32_t(g.kw), uint32_t(g.sw), g.ow % 4 == 0}, texel ? 0x1u : 0u});
     a.seq.dispatch(pipe,
                    {{a.in[0].view, rt::Access::Read, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
-                    {a.out[0].view, rt::Access::Write}},
+                    {a.out[0].view, rt::Access::Write}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), grid_groups(uint64_t(push.planes) * push.oh, local, d));
 }
 
