@@ -14,9 +14,10 @@ using namespace vtloc;
 
 namespace {
 
-// max_pool2d.comp reads binding 0 as a texel buffer; a 1x1 kernel copies.
+// max_pool2d.comp reads binding 0 as a texel buffer; a 1x1 kernel copies (binding 2,
+// its output as vec4s, is not written at this width).
 const rt::Pipeline& copy_pipeline(rt::Context& ctx, uint32_t texel_mask) {
-    return ctx.pipelines().get(rt::PipelineDesc{"max_pool2d", 2, 36, {ctx.info().subgroup_size, 1, 1}, texel_mask});
+    return ctx.pipelines().get(rt::PipelineDesc{"max_pool2d", 3, 36, {ctx.info().subgroup_size, 1, 1}, texel_mask});
 }
 
 struct Push { uint32_t planes, h, w, oh, ow, sh, sw; int32_t ph, pw; };
@@ -43,6 +44,7 @@ TEST_CASE("a texel binding reads a sub-range of a buffer", "[runtime]") {
     seq.copy({staging.handle(), align, 28}, {dev.handle(), align, 28});
     Push push{1, 1, 7, 1, 7, 1, 1, 0, 0};
     seq.dispatch(copy_pipeline(ctx, 0x1), {{{dev.handle(), align, 28}, rt::Access::Read, VK_FORMAT_R32_SFLOAT},
+                                          {{dev.handle(), 4 * align, 28}, rt::Access::Write},
                                           {{dev.handle(), 4 * align, 28}, rt::Access::Write}},
                  &push, sizeof(push), 1);
     seq.copy({dev.handle(), 4 * align, 28}, {staging.handle(), 0, 28});
@@ -61,19 +63,22 @@ TEST_CASE("texel bindings the shader cannot use are refused by name", "[runtime]
     rt::Sequence seq(ctx);
     seq.begin();
     const rt::Pipeline& p = copy_pipeline(ctx, 0x1);
-    REQUIRE_THROWS_WITH(seq.dispatch(p, {{{buf.handle(), 0, 16}, rt::Access::Read}, {{buf.handle(), 128, 16}, rt::Access::Write}},
+    REQUIRE_THROWS_WITH(seq.dispatch(p, {{{buf.handle(), 0, 16}, rt::Access::Read}, {{buf.handle(), 128, 16}, rt::Access::Write},
+                                         {{buf.handle(), 128, 16}, rt::Access::Write}},
                                      &push, sizeof(push), 1),
                         Catch::Contains("max_pool2d") && Catch::Contains("texel binding 0") &&
                             Catch::Contains("texel_format"));
     REQUIRE_THROWS_WITH(seq.dispatch(p, {{{buf.handle(), 0, 16}, rt::Access::ReadWrite, VK_FORMAT_R32_SFLOAT},
+                                         {{buf.handle(), 128, 16}, rt::Access::Write},
                                          {{buf.handle(), 128, 16}, rt::Access::Write}},
                                      &push, sizeof(push), 1),
                         Catch::Contains("read-only"));
     REQUIRE_THROWS_WITH(seq.dispatch(p, {{{buf.handle(), 0, 8}, rt::Access::Read, VK_FORMAT_R32G32B32A32_SFLOAT},
+                                         {{buf.handle(), 128, 16}, rt::Access::Write},
                                          {{buf.handle(), 128, 16}, rt::Access::Write}},
                                      &push, sizeof(push), 1),
                         Catch::Contains("smaller than one texel"));
     seq.end();
-    REQUIRE_THROWS_WITH(copy_pipeline(ctx, 0x4), Catch::Contains("does not have"));
+    REQUIRE_THROWS_WITH(copy_pipeline(ctx, 0x8), Catch::Contains("does not have"));
     test::require_no_validation_messages();
 }
