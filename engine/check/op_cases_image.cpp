@@ -63,7 +63,8 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo&) {
 
     struct Pool { Shape x; ops::Pool2d p; const char* why; };
     for (const Pool& k : {Pool{{1, 5, 37, 53}, {3, 3, 2, 2, 1, 1}, "3x3 s2 p1"},
-                          Pool{{1, 4, 11, 7}, {3, 2, 1, 2, 1, 0}, "rectangular window"}})
+                          Pool{{1, 4, 11, 7}, {3, 2, 1, 2, 1, 0}, "rectangular window"},
+                          Pool{{2, 3, 36, 40}, {3, 3, 2, 2, 1, 1}, "3x3 s2 p1, 4 outputs a step"}})
         for (ops::BufferPath path : ops::kBufferPaths) {
             OpCase c("max_pool2d", std::string(k.why) + ", " + ops::path_name(path) + ": x" + shape_str(k.x));
             ops::Pool2d p = k.p;
@@ -84,12 +85,15 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo&) {
         std::vector<uint8_t> px(size_t(k.h * k.w * 3));
         uint32_t s = 12345;
         for (auto& b : px) b = uint8_t((s = s * 1664525u + 1013904223u) >> 24);
-        OpCase c("tactile_preprocess", std::string(k.why) + ": " + std::to_string(k.h) + "x" + std::to_string(k.w) +
-                                           " crop " + std::to_string(k.crop) + " size " + std::to_string(k.size));
-        int img = c.input("image", ops::tactile_image_tensor(px.data(), k.h, k.w));
-        c.output(ops::tactile_preprocess(c.g, img, k.crop, k.size), "x");
-        c.tol = {1e-5, 1e-5};
-        v.push_back(std::move(c));
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            OpCase c("tactile_preprocess", std::string(k.why) + ": " + std::to_string(k.h) + "x" + std::to_string(k.w) +
+                                               " crop " + std::to_string(k.crop) + " size " + std::to_string(k.size) + " " +
+                                               ops::path_name(path));
+            int img = c.input("image", ops::tactile_image_tensor(px.data(), k.h, k.w));
+            c.output(ops::tactile_preprocess(c.g, img, k.crop, k.size, "", path), "x");
+            c.tol = {1e-5, 1e-5};
+            v.push_back(std::move(c));
+        }
     }
     {
         OpCase c("tactile_preprocess", "a batch of 3 frames 37x53, crop 40 size 23");
