@@ -64,14 +64,15 @@ void gpu(const GpuOpArgs& a) {
         const uint32_t local = std::min(elementwise_local_size(d), std::max(sg, (cols + sg - 1) / sg * sg));
         const uint32_t gx = (cols + local - 1) / local;
         const uint32_t gy = std::min({rows, 256u, d.max_workgroup_count[1]});
-        if (gx > d.max_workgroup_count[0]) throw Error("a concat input of width " + std::to_string(width) + " needs more workgroups than the device allows");
+        if (gx > d.max_workgroup_count[0])
+            throw Error("a concat input of width " + std::to_string(width) + " needs more workgroups than the device allows");
         struct { uint32_t rows, width, out_width, col0; } push{rows, width, out_width, col0};
         // Inputs write disjoint columns but overlapping byte ranges: the tracker
         // orders them with a barrier, which is cheap next to a missed hazard.
         const rt::Access R = rt::Access::Read, W = rt::Access::Write;
         a.seq.dispatch(pipeline(a.ctx, "concat", 4, 16, {local, vec4}),
-                       {{t.view, R}, {t.view, R}, {a.out[0].view, W}, {a.out[0].view, W}}, &push, sizeof(push), std::max(1u, gx),
-                       std::max(1u, gy));
+                       {{t.view, R}, {t.view, R}, {a.out[0].view, W}, {a.out[0].view, W}}, &push, sizeof(push),
+                       std::max(1u, gx), std::max(1u, gy));
         col0 += width;
     }
 }

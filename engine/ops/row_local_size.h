@@ -1,6 +1,6 @@
 #pragma once
-// Workgroup size for shaders with one invocation per output row (max_pool2d,
-// tactile_preprocess): there are only hundreds to thousands of rows, so a full
+// Workgroup size for shaders with one invocation per output row (max_pool2d):
+// there are only hundreds to thousands of rows, so a full
 // 256-wide group would leave CPU devices' threads (one workgroup each) idle.
 #include <algorithm>
 #include <cstdint>
