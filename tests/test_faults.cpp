@@ -23,7 +23,7 @@ api::TactileImage frame(uint8_t v) { return api::TactileImage{120, 160, std::vec
 
 }  // namespace
 
-TEST_CASE("a memory budget fails one allocation clearly; the context stays usable and nothing leaks", "[faults]") {
+TEST_CASE("a memory budget fails one allocation clearly, and the context stays usable and nothing leaks", "[faults]") {
     const std::string mug = test::source_path("examples/mug.glb");
     // What encoding an object and one touch hold on an unlimited context.
     uint64_t after_encode = 0, after_touch = 0;
@@ -68,7 +68,7 @@ TEST_CASE("an allocation failing in the middle of a graph build frees what was a
     CHECK(ctx.take_validation_messages().empty());
 }
 
-TEST_CASE("VK_ERROR_DEVICE_LOST on submit is one clear error; the context then refuses work by name", "[faults]") {
+TEST_CASE("VK_ERROR_DEVICE_LOST on submit is one clear error, and the context then refuses work by name", "[faults]") {
     api::Context ctx(test::validated());
     api::Model model(ctx, test::tiny_model());
     api::Object o = model.encode_object(test::source_path("examples/mug.glb"));

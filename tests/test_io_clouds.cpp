@@ -22,7 +22,7 @@ const std::string kPcdHead3 =
 
 }  // namespace
 
-TEST_CASE("PCD ascii and binary give the same cloud; NaN points are dropped", "[io]") {
+TEST_CASE("PCD ascii and binary give the same cloud, and NaN points are dropped", "[io]") {
     const std::string ascii = kPcdHead3 + "DATA ascii\n1 2 3 4278190080\nnan nan nan 0\n-0.5 0.25 7 16\n";
     std::string bin = kPcdHead3 + "DATA binary\n";
     for (float v : {1.0f, 2.0f, 3.0f}) append_le(bin, v);
@@ -48,7 +48,7 @@ TEST_CASE("PCD with normals (PCL's PointNormal layout) keeps them, unit length",
     CHECK(c.data == std::vector<float>{1, 2, 3, 0, 0, 1});
 }
 
-TEST_CASE("PLY without normals and text rows are xyz clouds; text with six columns keeps normals", "[io]") {
+TEST_CASE("PLY without normals and text rows are xyz clouds, text with six columns keeps normals", "[io]") {
     const HostTensor p = load_object(write_temp("nonormals.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\n"
                                                                 "property float y\nproperty float z\nend_header\n1 2 3\n4 5 6\n"),
                                      100);

@@ -57,7 +57,7 @@ TEST_CASE("shipped files: the folders searched, in order", "[shipped]") {
           std::vector<fs::path>{"/data", "/opt/vt/share/vtloc", "/opt/vt", "/src"});
 }
 
-TEST_CASE("shipped files: the first folder holding the default model wins; none is an error naming each", "[shipped]") {
+TEST_CASE("shipped files: the first folder holding the default model wins, and none is an error naming each", "[shipped]") {
     const fs::path root = fs::temp_directory_path() / ("vtloc-shipped-" + std::to_string(::getpid()));
     fs::remove_all(root);
     const fs::path empty = root / "empty", a = data_folder(root / "a"), b = data_folder(root / "b");

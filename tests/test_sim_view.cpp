@@ -33,7 +33,7 @@ TEST_CASE("a partial view of a sphere is the hemisphere facing the camera", "[si
     CHECK(cam[0] * v.direction[0] + cam[1] * v.direction[1] + cam[2] * v.direction[2] < -500);
 }
 
-TEST_CASE("partial views are seeded: the same seed, the same view; another, another", "[sim]") {
+TEST_CASE("partial views are seeded: the same seed gives the same view, another seed another", "[sim]") {
     const io::TriangleMesh ball = sim::make_icosphere(30, 3);
     const sim::PartialView a = sim::render_partial_view(ball, 7, 100), b = sim::render_partial_view(ball, 7, 100),
                            c = sim::render_partial_view(ball, 8, 100);
