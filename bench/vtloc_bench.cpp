@@ -136,9 +136,8 @@ Args parse(int argc, char** argv) {
 }
 
 fs::path exe_dir() {
-    std::error_code ec;
-    fs::path p = fs::read_symlink("/proc/self/exe", ec);
-    return ec ? fs::path(".") : p.parent_path();
+    const fs::path exe = current_executable();
+    return exe.empty() ? fs::path(".") : exe.parent_path();
 }
 
 // The repository holding models/ and examples/, found as the CLI finds it (the

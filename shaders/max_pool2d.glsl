@@ -13,10 +13,11 @@ layout(constant_id = 2) const uint KW = 3;
 
 // OVEC4 (OW % 4 == 0): 4 outputs a step from one window of 3 SW + KW columns per
 // kernel row (27 fetches instead of 36 for ResNet's 3x3 / 2) and one vec4 store (a
-// CPU driver stores lane by lane, a branch each).
-layout(constant_id = 3) const uint SW = 1;
+// CPU driver stores lane by lane, a branch each); else one output a step.
+layout(constant_id = 3) const uint SW = 1;  // the column stride
 layout(constant_id = 4) const bool OVEC4 = false;
-const uint IC = 3u * SW + KW;
+const uint U = OVEC4 ? 4u : 1u;
+const uint IC = (U - 1u) * SW + KW;
 
 layout(std430, binding = 1) writeonly buffer Y_ { float Y[]; };
 layout(std430, binding = 2) writeonly buffer Y4_ { vec4 Y4[]; };  // binding 1 as vec4s
@@ -31,37 +32,24 @@ void main() {
         bool rowok[KH];
         [[unroll]] for (uint ky = 0; ky < KH; ++ky) rowok[ky] = y0 + int(ky) >= 0 && y0 + int(ky) < int(p.H);
         int base = int(plane * p.H * p.W) + y0 * int(p.W);
-        if (OVEC4) {
-            for (uint ox = 0; ox < p.OW; ox += 4u) {
-                const int x0 = int(ox * SW) - p.pw;
-                vec4 m = vec4(uintBitsToFloat(0xff800000u));
-                [[unroll]] for (uint ky = 0; ky < KH; ++ky) {
-                    float v[IC];
-                    bool ok[IC];
-                    [[unroll]] for (uint i = 0; i < IC; ++i) {
-                        const int x = x0 + int(i);
-                        ok[i] = rowok[ky] && x >= 0 && x < int(p.W);
-                        v[i] = LOAD_X(ok[i] ? base + int(ky * p.W) + x : 0);
-                    }
-                    [[unroll]] for (uint u = 0; u < 4u; ++u)
-                        [[unroll]] for (uint kx = 0; kx < KW; ++kx)
-                            m[u] = ok[u * SW + kx] ? max(m[u], v[u * SW + kx]) : m[u];
+        // U outputs a step from one window of IC columns per kernel row.
+        for (uint ox = 0; ox < p.OW; ox += U) {
+            const int x0 = int(ox * SW) - p.pw;
+            vec4 m = vec4(uintBitsToFloat(0xff800000u));  // -inf
+            [[unroll]] for (uint ky = 0; ky < KH; ++ky) {
+                float v[IC];
+                bool ok[IC];
+                [[unroll]] for (uint i = 0; i < IC; ++i) {
+                    const int x = x0 + int(i);
+                    ok[i] = rowok[ky] && x >= 0 && x < int(p.W);
+                    v[i] = LOAD_X(ok[i] ? base + int(ky * p.W) + x : 0);
                 }
-                Y4[(row * p.OW + ox) / 4u] = m;
+                [[unroll]] for (uint u = 0; u < U; ++u)
+                    [[unroll]] for (uint kx = 0; kx < KW; ++kx)
+                        m[u] = ok[u * SW + kx] ? max(m[u], v[u * SW + kx]) : m[u];
             }
-            continue;
-        }
-        for (uint ox = 0; ox < p.OW; ++ox) {
-            int x0 = int(ox * p.sw) - p.pw;
-            float m = uintBitsToFloat(0xff800000u);  // -inf
-            [[unroll]] for (uint ky = 0; ky < KH; ++ky)
-                [[unroll]] for (uint kx = 0; kx < KW; ++kx) {
-                    int x = x0 + int(kx);
-                    bool ok = rowok[ky] && x >= 0 && x < int(p.W);
-                    float v = LOAD_X(ok ? base + int(ky * p.W) + x : 0);
-                    m = ok ? max(m, v) : m;
-                }
-            Y[row * p.OW + ox] = m;
+            if (OVEC4) Y4[(row * p.OW + ox) / 4u] = m;
+            else Y[row * p.OW + ox] = m.x;
         }
     }
 }

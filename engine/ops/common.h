@@ -26,6 +26,9 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d);
 // The op may take its *_subgroup shader: the device has shuffles and the op's
 // param "subgroup" (default 1) does not force the plain one.
 bool shuffles_allowed(const GpuOpArgs& a);
+// Workgroup size for n invocations along x (one row of the output, its rows along y):
+// n in whole subgroups, at most the elementwise size (tactile_preprocess, concat).
+uint32_t row_span_local_size(const rt::DeviceInfo& d, uint64_t n);
 // Workgroup size of the *_subgroup shaders that spread rows over workgroups: 64
 // invocations in whole subgroups (at least one), so a few hundred rows still
 // reach every core of a CPU driver.

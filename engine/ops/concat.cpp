@@ -53,7 +53,6 @@ void gpu(const GpuOpArgs& a) {
         }
         return;
     }
-    const uint32_t sg = std::max(1u, d.subgroup_size);
     uint32_t col0 = 0;
     for (const GpuTensor& t : a.in) {
         const uint32_t width = to_u32(t.shape.back(), "width");
@@ -61,7 +60,7 @@ void gpu(const GpuOpArgs& a) {
         const uint32_t cols = vec4 ? width / 4 : width;  // invocations along x
         // A row's columns in whole subgroups; rows along y, at most 256 workgroups
         // of them (each loops over rows): a CPU driver pays per workgroup.
-        const uint32_t local = std::min(elementwise_local_size(d), std::max(sg, (cols + sg - 1) / sg * sg));
+        const uint32_t local = row_span_local_size(d, cols);
         const uint32_t gx = (cols + local - 1) / local;
         const uint32_t gy = std::min({rows, 256u, d.max_workgroup_count[1]});
         if (gx > d.max_workgroup_count[0])

@@ -104,8 +104,7 @@ void gpu(const GpuOpArgs& a) {
     Prep q = prep_params(a.in[0].shape, a.params);
     // One invocation per 4 columns of an output row (all 3 channels): a workgroup per
     // row, its width the row's quads in whole subgroups.
-    const uint32_t quads = uint32_t((q.size + 3) / 4), sg = std::max(1u, d.subgroup_size);
-    const uint32_t local = std::min(elementwise_local_size(d), std::max(sg, (quads + sg - 1) / sg * sg));
+    const uint32_t quads = uint32_t((q.size + 3) / 4), local = row_span_local_size(d, quads);
     const uint32_t gx = (quads + local - 1) / local;
     if (q.size > int64_t(d.max_workgroup_count[1]) || q.batch > int64_t(d.max_workgroup_count[2]))
         throw Error("a batch of " + std::to_string(q.batch) + " images of " + std::to_string(q.size) +
