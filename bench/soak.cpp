@@ -22,6 +22,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <stdexcept>
 #include <string>
@@ -195,7 +196,7 @@ int main(int argc, char** argv) {
 #ifdef __GLIBC__
     mallopt(M_MMAP_THRESHOLD, 128 * 1024);  // see the header: measure leaks, not the allocator's policy
 #endif
-    std::string model_path = std::string(VTLOC_SOURCE_DIR) + "/" + vtloc::kDefaultModel;
+    std::string model_path;  // default: the shipped model, found as the CLI finds it
     std::string json_path, png_path, plot_from;
     long runs = 10000, warmup_arg = -1;
     double max_drift = 1.0;
@@ -222,9 +223,12 @@ int main(int argc, char** argv) {
                                     j.at("rss_slope_mib_per_run").get<double>());
             return 0;
         }
+        const std::filesystem::path data =
+            vtloc::find_shipped_dir(vtloc::shipped_dir_candidates(vtloc::current_executable(), "", VTLOC_SOURCE_DIR));
+        if (model_path.empty()) model_path = (data / vtloc::kDefaultModel).string();
         api::Context ctx;
         api::Model model(ctx, model_path);
-        const std::string ex = std::string(VTLOC_SOURCE_DIR) + "/examples";
+        const std::string ex = (data / "examples").string();
         std::vector<api::Object> objects;
         objects.push_back(model.encode_object(ex + "/cone_test0.ply", ex + "/cone_test0_candidates.csv"));
         objects.push_back(model.encode_object(ex + "/mug.glb", ex + "/mug_candidates.csv"));
