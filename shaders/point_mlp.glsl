@@ -30,9 +30,12 @@
 // PAD: ball padding (SPEC 2 fills a ball's free slots with its first index, so such
 //   a row repeats row 0's input and output) is work skipped: a row past a group's
 //   first whose index (binding 7, [M / NS][NS]) equals the first's is left out of the
-//   max, and a plain output leaves a block unwritten where the subgroup's blocks
-//   (row_block) are all padding (point_mlp_shfl.comp only: it needs a subgroup vote;
-//   the others compute those rows). The max after such an output takes PAD as well.
+//   max, and a plain output may leave it unwritten. point_mlp_shfl.comp (it has
+//   subgroup votes and shuffles; the others compute every row) skips the chunks
+//   past a ball's last real row: the subgroup's balls pool their chunks (Pool; a
+//   plain output with POOL, a max where that takes fewer steps), or, for a plain
+//   output on a GPU, a subgroup skips the row blocks (row_block) that are all
+//   padding. The max after such an output takes PAD as well.
 // Register blocking and no shared memory: an invocation owns TM rows x TN channels
 // (MAXPOOL: all rows of one group, TM at a time) and per 4 input channels does
 // 4 x TM x TN fmas (fma_rows). The channel block is uniform in a workgroup (CBLOCK), so
@@ -59,6 +62,9 @@ layout(constant_id = 13) const bool PMOUT = false;
 layout(constant_id = 14) const bool CB_FIRST = false;
 layout(constant_id = 15) const bool PAD = false;
 layout(constant_id = 16) const bool XPM = false;
+// PAD, plain output, vote shader: one invocation per ball, the subgroup's chunks
+// pooled (main), instead of one per row block (row_block).
+layout(constant_id = 17) const bool POOL = false;
 #ifdef SUBGROUP_VOTE
 #define ANY_LANE(x) subgroupAny(x)
 const bool SKIP_BLOCKS = PAD;
@@ -273,11 +279,12 @@ bool padding_row(uint r) {
     return r != r0 && LOAD_I(r) == LOAD_I(r0);
 }
 
-// The row block invocation t computes. PAD, plain output (the vote shader): lane i of
-// a subgroup takes block b of group chunk * SG + i, so a subgroup skips block b where
-// none of its SG balls has a real row there (a block of 8 rows where rows in order
-// would need a subgroup's 8 blocks, 64 rows, all padding). Groups that do not fill a
-// subgroup keep the rows in order. A permutation: any subgroup layout stays exact.
+// The row block invocation t computes. PAD, plain output (the vote shader on a
+// GPU): lane i of a subgroup takes block b of group chunk * SG + i, so a subgroup
+// skips block b where none of its SG balls has a real row there (a block of 8 rows
+// where rows in order would need a subgroup's 8 blocks, 64 rows, all padding).
+// Groups that do not fill a subgroup keep the rows in order. A permutation: any
+// subgroup layout stays exact.
 uint row_block(uint t) {
 #ifdef SUBGROUP_VOTE
     const uint B = p.NS / TM, full = p.M / p.NS / SG * SG * B;  // blocks per group; blocks of whole-subgroup chunks
@@ -289,6 +296,86 @@ uint row_block(uint t) {
     return t;
 }
 
+float b[TN];  // the block's biases
+
+// Stores the plain output of rows m0 .. m0 + TM - 1 below mend (acc + b, act).
+void store_rows(uint m0, uint mend, bool live, uint n0) {
+    if (PMOUT) {
+        [[unroll]] for (uint i = 0; i < TM; ++i)
+            [[unroll]] for (uint j = 0; j < TN; j += 4u) {
+                vec4 v;
+                [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[i * TN + j + c] + b[j + c], ACT, p.slope);
+                const uint e = (m0 + i) * p.N + n0 + j;
+                if (!live || m0 + i >= mend) continue;
+                if (WVEC4) {
+                    if (n0 + j < p.N) outv[e / 4u] = v;
+                } else {
+                    [[unroll]] for (uint c = 0; c < 4; ++c)
+                        if (n0 + j + c < p.N) outv[(e + c) / 4u][(e + c) % 4u] = v[c];
+                }
+            }
+        return;
+    }
+    [[unroll]] for (uint j = 0; j < TN; ++j) {
+        if (OVEC4) {  // m0 and mend are multiples of 4 here
+            [[unroll]] for (uint i = 0; i < TM; i += 4u) {
+                vec4 v;
+                [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[(i + c) * TN + j] + b[j], ACT, p.slope);
+                if (live && n0 + j < p.N && m0 + i < mend) outv[((n0 + j) * p.M + m0 + i) / 4u] = v;
+            }
+        } else {
+            [[unroll]] for (uint i = 0; i < TM; ++i) {
+                const uint e = (n0 + j) * p.M + m0 + i;
+                if (live && n0 + j < p.N && m0 + i < mend) outv[e / 4u][e % 4u] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
+            }
+        }
+    }
+}
+
+#ifdef SUBGROUP_VOTE
+// PAD: a ball needs its chunks of TM rows up to its last real row (padding is the
+// tail SPEC 2's ball query leaves; rows are checked one by one all the same). One
+// lane per ball makes a subgroup take as many steps as its longest ball; pooled,
+// each step gives the next SG chunks of its balls' chunks to its SG lanes.
+struct Pool {
+    uint mine;    // this lane's ball's chunks (0 for a spare invocation)
+    uint before;  // the chunks of the lanes below this one
+    uint total;   // the subgroup's chunks
+    uint most;    // the most chunks of one ball
+};
+
+Pool pool_of(uint g0, bool live) {
+    const int first = LOAD_I(g0);
+    uint used = 1u;
+    for (uint j = 1u; j < p.NS; ++j)
+        if (LOAD_I(g0 + j) != first) used = j + 1u;
+    Pool pl;
+    pl.mine = live ? (used + TM - 1u) / TM : 0u;
+    pl.before = pl.total = pl.most = 0u;
+    for (uint l = 0u; l < SG; ++l) {
+        const uint c = subgroupShuffle(pl.mine, l);
+        pl.before += l < gl_SubgroupInvocationID ? c : 0u;
+        pl.total += c;
+        pl.most = max(pl.most, c);
+    }
+    return pl;
+}
+
+// This lane's chunk in step s of the pool: (the lane that owns its ball, the ball's
+// first row, the chunk's first row), lane t's ball being t. Past the pool: owner SG
+// and lane SG - 1's last chunk, to compute and not use.
+uvec3 pool_chunk(Pool pl, uint s, uint t) {
+    const uint item = s + gl_SubgroupInvocationID;
+    uint owner = SG, chunk = 0u;
+    for (uint l = 0u; l < SG; ++l) {
+        const uint bl = subgroupShuffle(pl.before, l), ml = subgroupShuffle(pl.mine, l);
+        if (item >= bl && item < bl + ml) owner = l, chunk = item - bl;
+    }
+    const uint h0 = subgroupShuffle(t, min(owner, SG - 1u)) * p.NS;
+    return uvec3(owner, h0, h0 + chunk * TM);
+}
+#endif
+
 void main() {
     // Spare invocations redo the last block and store nothing: no early return
     // (but PAD's, taken by whole subgroups), so every loop below has a uniform trip
@@ -297,8 +384,18 @@ void main() {
     const bool live = t_all < p.blocks;
     const uint t = min(t_all, p.blocks - 1u);
     const uint n0 = CBLOCK * TN;
-    float b[TN];
     [[unroll]] for (uint j = 0; j < TN; ++j) b[j] = bias[min(n0 + j, p.N - 1u)];
+#ifdef SUBGROUP_VOTE
+    if (POOL) {  // PAD, a plain output, one invocation per ball (group_linear.cpp: CPU devices)
+        const Pool pl = pool_of(t * p.NS, live);
+        for (uint s = 0u; s < pl.total; s += SG) {  // uniform: the subgroup's total
+            const uvec3 c = pool_chunk(pl, s, t);
+            block(c.z, c.y + p.NS);
+            store_rows(c.z, c.y + p.NS, c.x < SG, n0);
+        }
+        return;
+    }
+#endif
     if (!MAXPOOL) {
         const uint m0 = row_block(t) * TM;
         if (SKIP_BLOCKS) {  // a subgroup-uniform return: the shuffles below see every lane
@@ -307,41 +404,39 @@ void main() {
             if (!ANY_LANE(live && need)) return;
         }
         block(m0, p.M);
-        if (PMOUT) {
-            [[unroll]] for (uint i = 0; i < TM; ++i)
-                [[unroll]] for (uint j = 0; j < TN; j += 4u) {
-                    vec4 v;
-                    [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[i * TN + j + c] + b[j + c], ACT, p.slope);
-                    const uint e = (m0 + i) * p.N + n0 + j;
-                    if (!live || m0 + i >= p.M) continue;
-                    if (WVEC4) {
-                        if (n0 + j < p.N) outv[e / 4u] = v;
-                    } else {
-                        [[unroll]] for (uint c = 0; c < 4; ++c)
-                            if (n0 + j + c < p.N) outv[(e + c) / 4u][(e + c) % 4u] = v[c];
-                    }
-                }
-            return;
-        }
-        [[unroll]] for (uint j = 0; j < TN; ++j) {
-            if (OVEC4) {
-                [[unroll]] for (uint i = 0; i < TM; i += 4u) {
-                    vec4 v;
-                    [[unroll]] for (uint c = 0; c < 4; ++c) v[c] = apply_act(acc[(i + c) * TN + j] + b[j], ACT, p.slope);
-                    if (live && n0 + j < p.N && m0 + i < p.M) outv[((n0 + j) * p.M + m0 + i) / 4u] = v;
-                }
-            } else {
-                [[unroll]] for (uint i = 0; i < TM; ++i) {
-                    const uint e = (n0 + j) * p.M + m0 + i;
-                    if (live && n0 + j < p.N && m0 + i < p.M) outv[e / 4u][e % 4u] = apply_act(acc[i * TN + j] + b[j], ACT, p.slope);
-                }
-            }
-        }
+        store_rows(m0, p.M, live, n0);
         return;
     }
     float mx[TN];
     [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = uintBitsToFloat(0xFF800000u);  // -inf
     const uint g0 = t * p.NS, gend = g0 + p.NS;
+#ifdef SUBGROUP_VOTE
+    // Pooled where that takes fewer steps than one lane per ball; a chunk's max
+    // reaches the lane that owns its ball by shuffles (max is order-free: the same
+    // values either way).
+    const Pool pl = PAD ? pool_of(g0, live) : Pool(0u, 0u, 0u, 0u);
+    if ((pl.total + SG - 1u) / SG < pl.most) {  // subgroup-uniform
+        for (uint s = 0u; s < pl.total; s += SG) {
+            const uvec3 c = pool_chunk(pl, s, t);
+            bool pad[TM];
+            [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = c.x == SG || padding_row(min(c.z + i, c.y + p.NS - 1u));
+            block(c.z, c.y + p.NS);
+            float cm[TN];
+            [[unroll]] for (uint j = 0; j < TN; ++j) {
+                cm[j] = uintBitsToFloat(0xFF800000u);
+                [[unroll]] for (uint i = 0; i < TM; ++i)
+                    if (!pad[i]) cm[j] = max(cm[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
+            }
+            for (uint l = 0u; l < SG; ++l) {
+                const bool to_me = subgroupShuffle(c.x, l) == gl_SubgroupInvocationID;
+                [[unroll]] for (uint j = 0; j < TN; ++j) {
+                    const float v = subgroupShuffle(cm[j], l);
+                    if (to_me) mx[j] = max(mx[j], v);
+                }
+            }
+        }
+    } else
+#endif
     for (uint c = 0; c < p.chunks; ++c) {
         bool pad[TM];
         [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = false;

@@ -365,3 +365,78 @@ TEST_CASE("the vote shader leaves padding blocks unwritten", "[op][group_linear]
     CHECK(unwritten * 4 > padded);  // most of them: 64 balls of 8 rows a block, 8 balls to a subgroup
     }
 }
+
+TEST_CASE("balls of very different lengths in one subgroup pool their chunks exactly", "[op][group_linear]") {
+    // Crafted balls (SPEC 2's layout: real slots, then the first index again): in
+    // each run of 8 balls one is full, one 40 rows long and the rest 1-7 rows, so a
+    // subgroup of 4 or 8 balls has far fewer chunks than lanes x its longest ball
+    // (the vote shader pools them); the last 8 balls are equally long (it keeps one
+    // lane per ball). Ball 11 repeats its first index mid-ball, real rows after it.
+    // The maxes must match the CPU reference, and bit for bit the same layers
+    // without pad; a plain output's real rows must match the reference, pooled
+    // (CPU devices) or in row blocks (GPUs: param row_blocks). Each variant runs in
+    // a graph of its own: in one graph the arena could give a layer the memory of
+    // a twin with the same values, and rows it failed to write would look right.
+    const int64_t P = 300, S = 40, NS = 64;
+    std::vector<int32_t> idx(size_t(S * NS));
+    for (int64_t s = 0; s < S; ++s) {
+        const int64_t used = s >= 32 ? 20 : s % 8 == 3 ? NS : s % 8 == 5 ? 40 : 1 + (s * 5) % 7;
+        for (int64_t j = 0; j < NS; ++j)
+            idx[size_t(s * NS + j)] = int32_t(j < used ? (s * 37 + j * 7) % P : (s * 37) % P);  // 7 and 300: coprime
+    }
+    idx[size_t(11 * NS + 5)] = idx[size_t(11 * NS)];
+    const HostTensor ball = HostTensor::from_ints({S, NS}, idx);
+    const std::vector<bool> pad = padding_rows(ball);
+    WeightStore w = two_layers(101);
+    w.add("w2", test::random_tensor({24, 40}, 105, -0.3f, 0.3f));
+    w.add("b2", test::random_tensor({40}, 106, -0.2f, 0.2f));
+    const TensorMap inputs{{"cloud", test::random_tensor({P, 6}, 107)}, {"centres", test::random_tensor({S, 3}, 108)}, {"ball", ball}};
+    // The layers of one variant: the gathering layer (layer one in registers) and the max.
+    auto run = [&](Tile tile, bool pm, bool skip, bool rb) {
+        Graph g;
+        const int x = g.input("cloud", {P, 6}), c = g.input("centres", {S, 3}), bi = g.input("ball", {S, NS}, ElemType::I32);
+        ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu, 0.01, ops::BufferPath::Texel, Weights::Shuffle, tile};
+        first.hidden = Hidden::Gathered, first.skip_padding = skip, first.point_major = pm, first.row_blocks = rb;
+        const int h = ops::group_linear(g, {x, c, bi, g.weight("w0", {6, 16}), g.weight("b0", {16}), g.weight("w1", {16, 24}),
+                                            g.weight("b1", {24}), x},
+                                        first);
+        g.output(h, "plain");
+        ops::GroupLinear last{In::Rows, 0, true, NS, ops::kActRelu, 0.01, ops::BufferPath::Texel, Weights::Shuffle, tile};
+        last.skip_padding = skip, last.x_point_major = pm;
+        std::vector<int> in{h, g.weight("w2", {24, 40}), g.weight("b2", {40})};
+        if (skip) in.push_back(bi);
+        g.output(ops::group_linear(g, in, last), "max");
+        return test::run_both(g, w, inputs);
+    };
+    for (Tile tile : {Tile::Auto, Tile::Big16x32})
+        for (bool pm : {false, true}) {
+            const test::BothRuns full = run(tile, pm, false, false);
+            for (bool rb : {false, true}) {
+                INFO((tile == Tile::Auto ? "auto tile" : "16 x 32") << (pm ? ", point-major" : ", channel-major")
+                                                                   << (rb ? ", row blocks" : ", pooled"));
+                const test::BothRuns r = run(tile, pm, true, rb);
+                test::require_close(r.gpu.at("max"), r.cpu.at("max"), {}, "max against the CPU reference");
+                CHECK(r.gpu.at("max").data == full.gpu.at("max").data);  // the rows left out repeat row 0
+                const HostTensor &got = r.gpu.at("plain"), &want = r.cpu.at("plain");
+                const int64_t M = S * NS, C = 24;
+                HostTensor a(got.shape), b(got.shape);
+                for (int64_t m = 0; m < M; ++m)
+                    for (int64_t k = 0; k < C && !pad[size_t(m)]; ++k) {
+                        const size_t e = size_t(pm ? m * C + k : k * M + m);
+                        a.data[e] = got.data[e], b.data[e] = want.data[e];
+                    }
+                test::require_close(a, b, {}, "the plain output's real rows against the CPU reference");
+            }
+        }
+    // One gathering layer that is also the max.
+    Graph g;
+    const int x = g.input("cloud", {P, 6}), c = g.input("centres", {S, 3}), bi = g.input("ball", {S, NS}, ElemType::I32);
+    for (bool skip : {false, true}) {
+        ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu, 0.01, ops::BufferPath::Texel, Weights::Shuffle};
+        one.skip_padding = skip;
+        g.output(ops::group_linear(g, {x, c, bi, g.weight("w0", {6, 16}), g.weight("b0", {16}), x}, one), skip ? "pad" : "full");
+    }
+    const test::BothRuns r = test::run_both(g, w, inputs);
+    test::require_close(r.gpu.at("pad"), r.cpu.at("pad"), {}, "one layer with pad against the CPU reference");
+    CHECK(r.gpu.at("pad").data == r.gpu.at("full").data);
+}

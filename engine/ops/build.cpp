@@ -171,6 +171,7 @@ int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, con
     if (l.point_major) p.set("point_major", 1);
     if (l.x_point_major) p.set("x_point_major", 1);
     if (l.rows_in_x) p.set("rows_in_x", 1);
+    if (l.row_blocks) p.set("row_blocks", 1);
     if (l.skip_padding) p.set("pad", 1);
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls
     return g.add1("group_linear", in, p, name);

@@ -148,6 +148,9 @@ struct GroupLinear {
     // take it too. The point encoder sets it on the max and the gathering layer
     // right before it.
     bool skip_padding = false;
+    // skip_padding on a plain output: one invocation per row block, as on a GPU, also
+    // on a CPU device, where a ball's chunks are otherwise pooled (tests run both).
+    bool row_blocks = false;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

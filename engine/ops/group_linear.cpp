@@ -39,7 +39,8 @@
 // skipping safe); a plain output (in = 1 only) holds anything in them. in = 1 takes the
 // ball from its idx; a max over in = 0 rows takes it as a last input, idx I32 [M / group,
 // group]. A max after a plain output with pad must take it too. The point encoder sets it
-// on the max and on the gathering layer right before it.
+// on the max and on the gathering layer right before it. Param row_blocks = 1 (tests):
+// a plain output with pad runs one invocation per row block on any device (see gpu()).
 // Param max = 1: the output is the max over each group of NS consecutive rows,
 // point-major [M / NS, N] (NS = the ball size for in = 1, param `group` otherwise);
 // else channel-major [N, M] (point_major: [M, N]). Params act, slope as linear's. Param tile
@@ -235,6 +236,26 @@ void gpu(const GpuOpArgs& a) {
     std::vector<TensorDesc> ds;
     for (size_t i = 0; i < a.in.size(); ++i) ds.push_back({a.in[i].shape, index_input(a.params, i) ? ElemType::I32 : ElemType::F32});
     const Layout l = layout_of(ds, a.params);
+    // The activations / cloud (bindings 0, 1), centres and indices (6, 7) and
+    // features (8, 9) are read as texel buffers where the device's texel-buffer
+    // limit allows (param texel = 0 forces storage buffers); bindings 1 and 9 are
+    // the same tensors as vec4s.
+    const GpuTensor& src = a.in[0];
+    const GpuTensor& fsrc = l.feat ? a.in.back() : src;  // without features: any texel-able buffer
+    const GpuTensor& bias = a.in[l.w + 1];  // also the filler of bindings the mode does not read
+    const GpuTensor& centres = l.mode == 1 ? a.in[1] : bias;
+    const GpuTensor& index = l.mode == 1 ? a.in[2] : l.pad ? a.in[3] : bias;
+    bool texel = a.params.get("texel", 1) != 0;
+    // hidden: W0^T and b0 (bindings 10, 11, as vec4s); else the bias fills them.
+    const GpuTensor& w0 = l.hidden != 0 ? a.in[3] : bias;
+    const GpuTensor& b0 = l.hidden == 1 ? a.in[4] : bias;
+    for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias, &w0})
+        texel = texel && uint64_t(numel(t->shape)) <= d.max_texel_elements;
+    auto fmt = [&](const GpuTensor& t, bool vec4) {
+        if (!texel) return VK_FORMAT_UNDEFINED;
+        return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
+    };
+    const Weights wp = group_linear_weight_path(d, l.K, l.N, texel, Weights(a.params.get("weights", 0)), a.in[l.w].view.offset);
     // TM x TN accumulators per invocation, both multiples of 4 (the shader's vec4
     // granularity), fewer channels for narrow layers. GPUs: 8 x 16 (registers).
     // CPU devices run a subgroup as one SIMD stream and pay for every texel fetch
@@ -255,7 +276,13 @@ void gpu(const GpuOpArgs& a) {
                      (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
     const uint32_t TM = big && tile == 1 ? 16 : 8;
     const uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
-    const uint64_t blocks = l.max ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
+    // A plain output with pad on a CPU device: one invocation per ball, pooling the
+    // chunks of a subgroup's balls (point_mlp.glsl POOL). A GPU keeps one invocation
+    // per row block: 16x fewer invocations would leave it idle. Param row_blocks
+    // (tests) keeps the GPU's way on any device.
+    const bool pool = l.pad && !l.max && wp == Weights::Shuffle && d.type == VK_PHYSICAL_DEVICE_TYPE_CPU &&
+                      a.params.get("row_blocks", 0) == 0;
+    const uint64_t blocks = l.max || pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
     // spare invocations redo the last block.
     uint32_t L = std::min(64u, elementwise_local_size(d));
@@ -279,32 +306,12 @@ void gpu(const GpuOpArgs& a) {
         uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
         uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
         uint32_t((l.NS + TM - 1) / TM)};
-    // The activations / cloud (bindings 0, 1), centres and indices (6, 7) and
-    // features (8, 9) are read as texel buffers where the device's texel-buffer
-    // limit allows (param texel = 0 forces storage buffers); bindings 1 and 9 are
-    // the same tensors as vec4s.
-    const GpuTensor& src = a.in[0];
-    const GpuTensor& fsrc = l.feat ? a.in.back() : src;  // without features: any texel-able buffer
-    const GpuTensor& bias = a.in[l.w + 1];  // also the filler of bindings the mode does not read
-    const GpuTensor& centres = l.mode == 1 ? a.in[1] : bias;
-    const GpuTensor& index = l.mode == 1 ? a.in[2] : l.pad ? a.in[3] : bias;
-    bool texel = a.params.get("texel", 1) != 0;
-    // hidden: W0^T and b0 (bindings 10, 11, as vec4s); else the bias fills them.
-    const GpuTensor& w0 = l.hidden != 0 ? a.in[3] : bias;
-    const GpuTensor& b0 = l.hidden == 1 ? a.in[4] : bias;
-    for (const GpuTensor* t : {&src, &fsrc, &centres, &index, &bias, &w0})
-        texel = texel && uint64_t(numel(t->shape)) <= d.max_texel_elements;
-    auto fmt = [&](const GpuTensor& t, bool vec4) {
-        if (!texel) return VK_FORMAT_UNDEFINED;
-        return vec4 && numel(t.shape) % 4 == 0 ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_R32_SFLOAT;
-    };
-    const Weights wp = group_linear_weight_path(d, l.K, l.N, texel, Weights(a.params.get("weights", 0)), a.in[l.w].view.offset);
     // WVECS (9) only where the shader declares it: elsewhere a weight-shape-dependent
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
-                               !l.max && !l.point_major && l.M % 4 == 0, uint32_t(l.hidden), l.point_major, cb_first, l.pad,
-                               l.x_point_major};
+                               !l.max && !l.point_major && l.M % 4 == 0 && (!pool || l.NS % 4 == 0), uint32_t(l.hidden),
+                               l.point_major, cb_first, l.pad, l.x_point_major, pool};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -345,7 +352,7 @@ void take_unspecified(const std::vector<const HostTensor*>& in, const Params& p,
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
                             {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
-                             "x_point_major", "rows_in_x", "pad"},
+                             "x_point_major", "rows_in_x", "pad", "row_blocks"},
                             take_unspecified};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
