@@ -361,9 +361,9 @@ Pool pool_of(uint g0, bool live) {
     return pl;
 }
 
-// This lane's chunk in step s of the pool: (the lane that owns its ball, the ball's
-// first row, the chunk's first row), lane t's ball being t. Past the pool: owner SG
-// and lane SG - 1's last chunk, to compute and not use.
+// This lane's chunk in step s of the pool (t: the lane's own ball): (the lane that
+// owns the chunk's ball, that ball's first row, the chunk's first row). Past the
+// pool: owner SG and lane SG - 1's first chunk, to compute and not use.
 uvec3 pool_chunk(Pool pl, uint s, uint t) {
     const uint item = s + gl_SubgroupInvocationID;
     uint owner = SG, chunk = 0u;
