@@ -411,11 +411,13 @@ void main() {
     [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = uintBitsToFloat(0xFF800000u);  // -inf
     const uint g0 = t * p.NS, gend = g0 + p.NS;
 #ifdef SUBGROUP_VOTE
-    // Pooled where that takes fewer steps than one lane per ball; a chunk's max
-    // reaches the lane that owns its ball by shuffles (max is order-free: the same
-    // values either way).
+    // Pooled where that takes less time than one lane per ball; a chunk's max
+    // reaches the lane that owns its ball by SG rounds of TN shuffles (max is
+    // order-free: the same values either way). A step costs TM K multiply-adds a
+    // channel, the rounds about 3 SG operations more: much for narrow layers on
+    // wide subgroups (K = 32, SG = 32: a third more).
     const Pool pl = PAD ? pool_of(g0, live) : Pool(0u, 0u, 0u, 0u);
-    if ((pl.total + SG - 1u) / SG < pl.most) {  // subgroup-uniform
+    if ((pl.total + SG - 1u) / SG * (TM * p.K + 3u * SG) < pl.most * TM * p.K) {  // subgroup-uniform
         for (uint s = 0u; s < pl.total; s += SG) {
             const uvec3 c = pool_chunk(pl, s, t);
             bool pad[TM];
