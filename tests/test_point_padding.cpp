@@ -11,6 +11,7 @@
 #include "base/error.h"
 #include "engine/check/fault_injection.h"
 #include "engine/check/graph_check.h"
+#include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "tests/harness.h"
@@ -367,25 +368,17 @@ TEST_CASE("the vote shader leaves padding blocks unwritten", "[op][group_linear]
 }
 
 TEST_CASE("balls of very different lengths in one subgroup pool their chunks exactly", "[op][group_linear]") {
-    // Crafted balls (SPEC 2's layout: real slots, then the first index again): in
-    // each run of 8 balls one is full, one 40 rows long and the rest 1-7 rows, so a
-    // subgroup of 4 or 8 balls has far fewer chunks than lanes x its longest ball
-    // (the vote shader pools them); the last 8 balls are equally long (it keeps one
-    // lane per ball). Ball 11 repeats its first index mid-ball, real rows after it.
+    // check::uneven_balls: a subgroup of 4 or 8 of its balls has far fewer chunks
+    // than lanes x its longest ball (the vote shader pools them); its last 8 balls
+    // are equally long (one lane per ball stays); ball 11 repeats its first index
+    // mid-ball, real rows after it.
     // The maxes must match the CPU reference, and bit for bit the same layers
     // without pad; a plain output's real rows must match the reference, pooled
     // (CPU devices) or in row blocks (GPUs: param row_blocks). Each variant runs in
     // a graph of its own: in one graph the arena could give a layer the memory of
     // a twin with the same values, and rows it failed to write would look right.
     const int64_t P = 300, S = 40, NS = 64;
-    std::vector<int32_t> idx(size_t(S * NS));
-    for (int64_t s = 0; s < S; ++s) {
-        const int64_t used = s >= 32 ? 20 : s % 8 == 3 ? NS : s % 8 == 5 ? 40 : 1 + (s * 5) % 7;
-        for (int64_t j = 0; j < NS; ++j)
-            idx[size_t(s * NS + j)] = int32_t(j < used ? (s * 37 + j * 7) % P : (s * 37) % P);  // 7 and 300: coprime
-    }
-    idx[size_t(11 * NS + 5)] = idx[size_t(11 * NS)];
-    const HostTensor ball = HostTensor::from_ints({S, NS}, idx);
+    const HostTensor ball = check::uneven_balls(S, NS, P);
     const std::vector<bool> pad = padding_rows(ball);
     WeightStore w = two_layers(101);
     w.add("w2", test::random_tensor({24, 40}, 105, -0.3f, 0.3f));

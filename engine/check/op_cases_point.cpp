@@ -2,6 +2,7 @@
 // (gather, plain, group-all and per-point inputs; a hidden first layer from the
 // gathered rows or per point; fused max; ball padding skipped; texel and storage-buffer paths), sa_gather, cloud_normalize (the shapes of tests/test_point_ops.cpp) and
 // normal_estimate (a sphere sample, as tests/test_normals.cpp).
+#include <algorithm>
 #include <cmath>
 
 #include "engine/check/op_selftest.h"
@@ -129,6 +130,38 @@ void add_sa_gather_cases(std::vector<OpCase>& v) {
     }
 }
 
+// group_linear with ball padding skipped on uneven_balls (the shuffle shader pools a
+// subgroup's chunks): a gathering layer (layer one in registers) and the max after
+// it, both row layouts, and a gathered max. row_blocks: the gathering layer in row
+// blocks, as GPUs run it (each way a case of its own: in one graph, one layer could
+// be handed the other's memory, values and all).
+OpCase uneven_balls_case(bool row_blocks) {
+    const int64_t P = 300, S = 40, NS = 64;
+    OpCase c("group_linear", std::string("ball padding skipped, 40 balls of 1 to 64 rows; ") +
+                                 (row_blocks ? "gathering layer in row blocks" : "chunks pooled"));
+    const int x = c.input("cloud", random_tensor({P, 6}, 61)), centres = c.input("centres", random_tensor({S, 3}, 62));
+    const int ball = c.input("ball", uneven_balls(S, NS, P));
+    const int w0 = c.weight("w0", random_tensor({6, 16}, 63, -0.5f, 0.5f)), b0 = c.weight("b0", random_tensor({16}, 64, -0.2f, 0.2f));
+    const int w1 = c.weight("w1", random_tensor({16, 24}, 65, -0.3f, 0.3f)), b1 = c.weight("b1", random_tensor({24}, 66, -0.2f, 0.2f));
+    const int w2 = c.weight("w2", random_tensor({24, 40}, 67, -0.3f, 0.3f)), b2 = c.weight("b2", random_tensor({40}, 68, -0.2f, 0.2f));
+    using In = ops::GroupLinear::Input;
+    for (bool pm : {false, true}) {
+        ops::GroupLinear first{In::Gather, 3, false, 1, ops::kActRelu};
+        first.hidden = ops::GroupLinear::Hidden::Gathered;
+        first.skip_padding = true, first.point_major = pm, first.row_blocks = row_blocks;
+        const int h = ops::group_linear(c.g, {x, centres, ball, w0, b0, w1, b1, x}, first);
+        ops::GroupLinear last{In::Rows, 0, true, NS, ops::kActRelu};
+        last.skip_padding = true, last.x_point_major = pm;
+        c.output(ops::group_linear(c.g, {h, w2, b2, ball}, last), pm ? "max_point_major" : "max");
+    }
+    if (!row_blocks) {
+        ops::GroupLinear one{In::Gather, 3, true, 1, ops::kActRelu};
+        one.skip_padding = true;
+        c.output(ops::group_linear(c.g, {x, centres, ball, w0, b0, x}, one), "gathered_max");
+    }
+    return c;
+}
+
 // group_linear on a plain input: the max over groups and a plain leaky layer.
 void wide_cases(std::vector<OpCase>& v, bool cpu_device) {
     struct Wide { int64_t M, K, Nout, group; };
@@ -190,6 +223,20 @@ void normal_estimate_cases(std::vector<OpCase>& v) {
 
 }  // namespace
 
+HostTensor uneven_balls(int64_t S, int64_t NS, int64_t P) {
+    std::vector<int32_t> idx(size_t(S * NS));
+    for (int64_t s = 0; s < S; ++s) {
+        const int64_t used = s >= 32 ? std::min<int64_t>(20, NS)
+                             : s % 8 == 3 ? NS
+                             : s % 8 == 5 ? std::min<int64_t>(40, NS)
+                                          : std::min<int64_t>(1 + (s * 5) % 7, NS);
+        for (int64_t j = 0; j < NS; ++j)  // j * 7 % P: distinct while P has no factor 7 (P = 300)
+            idx[size_t(s * NS + j)] = int32_t(j < used ? (s * 37 + j * 7) % P : (s * 37) % P);
+    }
+    if (S > 11 && NS > 6) idx[size_t(11 * NS + 5)] = idx[size_t(11 * NS)];  // real rows after it
+    return HostTensor::from_ints({S, NS}, idx);
+}
+
 std::vector<OpCase> point_cases(const rt::DeviceInfo& d) {
     std::vector<OpCase> v;
     v.push_back(fps_case(1000, 3, 1000, 0, 0, false, "npoint = N, not a power of two"));
@@ -210,6 +257,8 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo& d) {
     for (ops::BufferPath path : ops::kBufferPaths)
         v.push_back(stage_case("group_linear",
                                std::string("gather, hidden first layer, fused max, group-all; ") + ops::path_name(path) + " path", path));
+    v.push_back(uneven_balls_case(false));
+    v.push_back(uneven_balls_case(true));
     wide_cases(v, d.type == VK_PHYSICAL_DEVICE_TYPE_CPU);
     add_sa_gather_cases(v);
     cloud_normalize_cases(v);

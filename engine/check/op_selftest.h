@@ -36,6 +36,12 @@ struct OpCase {
 // Seeded uniform values in [lo, hi) (std::mt19937; fixed for a seed).
 HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo = -1.0f, float hi = 1.0f);
 
+// Balls in SPEC 2's layout (real slots, then the first index again) of very
+// different lengths in one subgroup, [S, NS] indices into P points: in each run of 8
+// balls one is full, one 40 rows long, the rest 1-7 rows; balls 32 on are 20 rows
+// each; ball 11 repeats its first index in slot 5, real rows after it.
+HostTensor uneven_balls(int64_t S, int64_t NS, int64_t P);
+
 // The case lists, by op family.
 std::vector<OpCase> dense_cases(const rt::DeviceInfo& d);  // linear, binary, activations, concat, flatten
 std::vector<OpCase> image_cases(const rt::DeviceInfo& d);  // conv2d, pools, tactile_preprocess
