@@ -35,6 +35,24 @@ std::vector<bool> padding_rows(const HostTensor& ball) {
     return pad;
 }
 
+// A plain output's real rows (padding rows unspecified) against the reference's:
+// [C, M], or [M, C] with point_major.
+void require_real_rows_close(const HostTensor& got, const HostTensor& want, const std::vector<bool>& pad, bool point_major,
+                             const std::string& what) {
+    REQUIRE(got.shape == want.shape);
+    REQUIRE(got.shape.size() == 2);
+    const int64_t M = got.shape[point_major ? 0 : 1], C = got.shape[point_major ? 1 : 0];
+    REQUIRE(M == int64_t(pad.size()));
+    HostTensor a(got.shape), b(got.shape);
+    for (int64_t k = 0; k < C; ++k)
+        for (int64_t m = 0; m < M; ++m)
+            if (!pad[size_t(m)]) {
+                const size_t e = size_t(point_major ? m * C + k : k * M + m);
+                a.data[e] = got.data[e], b.data[e] = want.data[e];
+            }
+    test::require_close(a, b, {}, what + " (real rows) against the CPU reference");
+}
+
 // The layer variants the tests sweep: every weight path on texel buffers, storage
 // buffers, and the big-layer tile on the shuffle path of each.
 struct Variant {
@@ -164,21 +182,8 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
             ++maxes;
         }
         CHECK(maxes == 6 * (3 * 2 + 1));  // texel: 3 weight paths + the big tile; storage: both tiles; 3 hidden x 2 row layouts + one
-        for (const std::string& name : plain_names) {  // [C2, M], or [M, C2] (.pm): real rows only
-            const HostTensor &got = r.gpu.at(name), &want = r.cpu.at(name);
-            REQUIRE(got.shape == want.shape);
-            const bool pm = name.find(".pm") != std::string::npos;
-            const int64_t M = got.shape.at(pm ? 0 : 1), C = got.shape.at(pm ? 1 : 0);
-            REQUIRE(M == int64_t(pad.size()));
-            HostTensor a(got.shape), b(got.shape);
-            for (int64_t k = 0; k < C; ++k)
-                for (int64_t m = 0; m < M; ++m)
-                    if (!pad[size_t(m)]) {
-                        const size_t e = size_t(pm ? m * C + k : k * M + m);
-                        a.data[e] = got.data[e], b.data[e] = want.data[e];
-                    }
-            test::require_close(a, b, {}, name + " (real rows) against the CPU reference");
-        }
+        for (const std::string& name : plain_names)  // [C2, M], or [M, C2] (.pm)
+            require_real_rows_close(r.gpu.at(name), r.cpu.at(name), pad, name.find(".pm") != std::string::npos, name);
         CHECK(plain_names.size() == 6 * 2 * 2);
 
         // A max over rows whose padding holds poison (what a skipped block may hold):
@@ -410,15 +415,7 @@ TEST_CASE("balls of very different lengths in one subgroup pool their chunks exa
                 const test::BothRuns r = run(tile, pm, true, rb);
                 test::require_close(r.gpu.at("max"), r.cpu.at("max"), {}, "max against the CPU reference");
                 CHECK(r.gpu.at("max").data == full.gpu.at("max").data);  // the rows left out repeat row 0
-                const HostTensor &got = r.gpu.at("plain"), &want = r.cpu.at("plain");
-                const int64_t M = S * NS, C = 24;
-                HostTensor a(got.shape), b(got.shape);
-                for (int64_t m = 0; m < M; ++m)
-                    for (int64_t k = 0; k < C && !pad[size_t(m)]; ++k) {
-                        const size_t e = size_t(pm ? m * C + k : k * M + m);
-                        a.data[e] = got.data[e], b.data[e] = want.data[e];
-                    }
-                test::require_close(a, b, {}, "the plain output's real rows against the CPU reference");
+                require_real_rows_close(r.gpu.at("plain"), r.cpu.at("plain"), pad, pm, "the plain output");
             }
         }
     // One gathering layer that is also the max.

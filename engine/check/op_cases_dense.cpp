@@ -47,20 +47,17 @@ std::vector<OpCase> dense_cases(const rt::DeviceInfo&) {
             v.push_back(std::move(c));
         }
 
-    OpCase cat("concat", "[127, 33] [127, 64] [127, 5] [127, 2] along the last axis");
-    std::vector<int> parts;
-    int64_t widths[] = {33, 64, 5, 2};
-    for (int i = 0; i < 4; ++i)
-        parts.push_back(cat.input(std::string("x").append(std::to_string(i)), random_tensor({127, widths[i]}, 40 + uint32_t(i))));
-    cat.output(cat.g.add1("concat", parts), "y");
-    v.push_back(std::move(cat));
-    OpCase cat4("concat", "[300, 64] [300, 128] [300, 8]: vec4 columns, more rows than row groups");
-    std::vector<int> parts4;
-    int64_t widths4[] = {64, 128, 8};
-    for (int i = 0; i < 3; ++i)
-        parts4.push_back(cat4.input(std::string("x").append(std::to_string(i)), random_tensor({300, widths4[i]}, 46 + uint32_t(i))));
-    cat4.output(cat4.g.add1("concat", parts4), "y");
-    v.push_back(std::move(cat4));
+    // 2-d concats along the last axis: inputs of `rows` x widths[i], seeds from `seed`.
+    auto concat_case = [](const std::string& why, int64_t rows, std::vector<int64_t> widths, uint32_t seed) {
+        OpCase c("concat", why);
+        std::vector<int> parts;
+        for (size_t i = 0; i < widths.size(); ++i)
+            parts.push_back(c.input(std::string("x").append(std::to_string(i)), random_tensor({rows, widths[i]}, seed + uint32_t(i))));
+        c.output(c.g.add1("concat", parts), "y");
+        return c;
+    };
+    v.push_back(concat_case("[127, 33] [127, 64] [127, 5] [127, 2] along the last axis", 127, {33, 64, 5, 2}, 40));
+    v.push_back(concat_case("[300, 64] [300, 128] [300, 8]: vec4 columns, more rows than row groups", 300, {64, 128, 8}, 46));
     OpCase cat3("concat", "[5, 7, 3] [5, 7, 1] (3-d, one column)");
     cat3.output(cat3.g.add1("concat", {cat3.input("a", random_tensor({5, 7, 3}, 44)),
                                        cat3.input("b", random_tensor({5, 7, 1}, 45))}),

@@ -33,6 +33,13 @@ bool shuffles_allowed(const GpuOpArgs& a) {
     return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(a.ctx.info());
 }
 
+uint32_t row_local_size(const rt::DeviceInfo& d, uint64_t rows) {
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    uint32_t local = elementwise_local_size(d);
+    while (local > sg && rows < 16ull * local) local = std::max(sg, local / 2 / sg * sg);
+    return local;
+}
+
 uint32_t row_span_local_size(const rt::DeviceInfo& d, uint64_t n) {
     const uint64_t sg = std::max(1u, d.subgroup_size);
     return uint32_t(std::min<uint64_t>(elementwise_local_size(d), std::max(sg, (n + sg - 1) / sg * sg)));

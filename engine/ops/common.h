@@ -26,6 +26,11 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d);
 // The op may take its *_subgroup shader: the device has shuffles and the op's
 // param "subgroup" (default 1) does not force the plain one.
 bool shuffles_allowed(const GpuOpArgs& a);
+// Workgroup size for shaders with one invocation per output row (max_pool2d): the
+// elementwise size, halved (in whole subgroups) until there are >= 16 groups. There
+// are only hundreds to thousands of rows, and a full 256-wide group would leave CPU
+// devices' threads (one workgroup each) idle.
+uint32_t row_local_size(const rt::DeviceInfo& d, uint64_t rows);
 // Workgroup size for n invocations along x (one row of the output, its rows along y):
 // n in whole subgroups, at most the elementwise size (tactile_preprocess, concat).
 uint32_t row_span_local_size(const rt::DeviceInfo& d, uint64_t n);

@@ -12,7 +12,6 @@
 #include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
-#include "engine/ops/row_local_size.h"
 
 namespace vtloc::ops {
 namespace {
