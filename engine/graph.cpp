@@ -20,7 +20,7 @@ int Graph::input(const std::string& name, Shape shape, ElemType type) {
     return new_value(name, std::move(shape), ValueKind::Input, type);
 }
 
-int Graph::weight(const std::string& name, Shape shape) {
+int Graph::weight(const std::string& name, Shape shape, ElemType type) {
     for (size_t i = 0; i < values_.size(); ++i)
         if (values_[i].kind == ValueKind::Weight && values_[i].name == name) {
             if (values_[i].shape != shape)
@@ -28,7 +28,7 @@ int Graph::weight(const std::string& name, Shape shape) {
                             " and " + shape_str(shape));
             return int(i);
         }
-    return new_value(name, std::move(shape), ValueKind::Weight);
+    return new_value(name, std::move(shape), ValueKind::Weight, type);
 }
 
 std::vector<int> Graph::add(const std::string& op, const std::vector<int>& inputs, Params params,

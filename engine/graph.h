@@ -51,7 +51,8 @@ class Graph {
 public:
     int input(const std::string& name, Shape shape, ElemType type = ElemType::F32);
     // A weight looked up by name (and checked for this shape) when the graph is run.
-    int weight(const std::string& name, Shape shape);
+    // I32 weights (e.g. a surface's lookup grid) keep their integers bit for bit.
+    int weight(const std::string& name, Shape shape, ElemType type = ElemType::F32);
     std::vector<int> add(const std::string& op, const std::vector<int>& inputs, Params params = {},
                          const std::string& name = {});
     int add1(const std::string& op, const std::vector<int>& inputs, Params params = {},

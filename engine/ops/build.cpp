@@ -139,6 +139,24 @@ std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, con
                  {{"sigma", b.sigma}, {"sigma_m", b.sigma_m}, {"window", double(b.window)}}, name);
 }
 
+int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,
+                  const PoseEvidence& p, const std::string& name) {
+    Params q{{"press", p.press}, {"log_floor", p.log_floor}, {"field_floor", p.field_floor}, {"ox", p.origin[0]},
+             {"oy", p.origin[1]}, {"oz", p.origin[2]}, {"voxel", p.voxel}, {"nx", d(p.dims[0])},
+             {"ny", d(p.dims[1])}, {"nz", d(p.dims[2])}, {"own_field", d(p.own_field)}, {"own_weight", p.own_weight}};
+    return g.add1("pose_evidence", {samples, dense, cells, spins, terms, fields}, q, name);
+}
+
+std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }
+
+int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {
+    return g.add1("spin_marginal", {prob}, {{"n_spin", d(n_spin)}}, name);
+}
+
+int expected_distance(Graph& g, int points, int weights, const std::string& name) {
+    return g.add1("expected_distance", {points, weights}, {}, name);
+}
+
 std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace, bool force_tree) {
     Params p{{"npoint", d(npoint)}};
     if (force_workspace) p.set("no_registers", 1);

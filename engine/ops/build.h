@@ -96,6 +96,24 @@ struct Belief {
 // candidates [M, 3], the touches' contacts [T, 3], the motions between them [T - 1, 3].
 std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name = "");
 
+// Multi-touch filter (SPEC 6; engine/track/ builds the grid these read).
+struct PoseEvidence {
+    double press = 0.8, log_floor = -12, field_floor = -30;
+    double origin[3] = {0, 0, 0}, voxel = 1;
+    int64_t dims[3] = {1, 1, 1};
+    int64_t own_field = -1;  // a field added at the hypothesis itself, -1 none
+    double own_weight = 1;
+};
+// samples [S, 9], dense [D, 6], cells [V, 2] I32, spins [NS, 2], terms [K, 16], fields [F, S*NS] -> score [S*NS].
+int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,
+                  const PoseEvidence& p, const std::string& name = "");
+// score [M] -> {log probabilities, probabilities}.
+std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
+// prob [S * n_spin] -> [S].
+int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
+// points [S, 3], weights [S] -> sum_s w_s ||p_s - p_j|| [S].
+int expected_distance(Graph& g, int points, int weights, const std::string& name = "");
+
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers
 // path would fit; force_tree: the shared-memory tree reduction even where the

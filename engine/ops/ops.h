@@ -41,6 +41,10 @@ extern const OpDef op_heatmap;      // heatmap.cpp
 extern const OpDef op_retrieve;     // retrieve.cpp (topk + heatmap)
 extern const OpDef op_ilu_retrieve; // ilu_retrieve.cpp (ilu + retrieve)
 extern const OpDef op_belief;       // belief.cpp
+extern const OpDef op_pose_evidence;     // pose_evidence.cpp (multi-touch filter)
+extern const OpDef op_log_softmax;       // log_softmax.cpp
+extern const OpDef op_spin_marginal;     // pose_reduce.cpp
+extern const OpDef op_expected_distance; // pose_reduce.cpp
 extern const OpDef op_fps;              // fps.cpp (point cloud)
 extern const OpDef op_ball_query;       // ball_query.cpp
 extern const OpDef op_point_group;      // point_group.cpp

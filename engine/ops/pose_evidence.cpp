@@ -1,0 +1,134 @@
+// pose_evidence: the multi-touch filter's log score of every sensor-pose
+// hypothesis (SPEC 6; docs/multitouch.md). Hypothesis h = sample * NS + spin;
+// each term k carries it to another touch's pose (R rel_k, t + R trel_k) and adds
+// that pose's geometry evidence (on the surface, axis along the inward normal)
+// and/or a log field (a touch term, or the online filter's previous belief)
+// read at the nearest hypothesis. own_field adds a field at h itself.
+// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 6], cells
+// [V, 2] I32 (nearest dense point, nearest sample), spins [NS, 2] (cos, sin),
+// terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
+// [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
+#include <cmath>
+
+#include "base/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+#include "engine/ops/pose_evidence.h"
+
+namespace vtloc::ops {
+namespace {
+
+struct Setup {
+    float press, log_floor, field_floor, voxel, own_weight;
+    pose::V3 origin;
+    int32_t nx, ny, nz, own_field;
+};
+
+int32_t int_param(const Params& p, const char* k, double fallback) {
+    double v = p.get(k, fallback);
+    if (!(v == std::floor(v)) || v < -1 || v > 2147483647.0) throw Error(std::string(k) + " must be an integer");
+    return int32_t(v);
+}
+
+Setup setup(const Params& p) {
+    Setup s{float(p.get("press", 0.8)), float(p.get("log_floor", -12)), float(p.get("field_floor", -30)),
+            float(p.get("voxel", 1)), float(p.get("own_weight", 1)),
+            {float(p.get("ox", 0)), float(p.get("oy", 0)), float(p.get("oz", 0))},
+            int_param(p, "nx", 1), int_param(p, "ny", 1), int_param(p, "nz", 1), int_param(p, "own_field", -1)};
+    if (!(s.voxel > 0) || !std::isfinite(s.voxel)) throw Error("voxel must be positive");
+    if (s.nx < 1 || s.ny < 1 || s.nz < 1) throw Error("grid dims nx, ny, nz must be >= 1");
+    if (!std::isfinite(s.press) || !std::isfinite(s.log_floor) || !std::isfinite(s.field_floor))
+        throw Error("press, log_floor and field_floor must be finite");
+    return s;
+}
+
+std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 6, 6);
+    for (int i : {0, 1, 3, 4, 5})
+        if (in[size_t(i)].type != ElemType::F32) throw Error("input " + std::to_string(i) + " must be F32");
+    if (in[2].type != ElemType::I32) throw Error("cells must be I32");
+    const Setup st = setup(p);
+    const Shape &s = in[0].shape, &d = in[1].shape, &c = in[2].shape, &sp = in[3].shape, &k = in[4].shape,
+                &f = in[5].shape;
+    if (s.size() != 2 || s[1] != 9 || s[0] == 0) throw Error("samples must be [S > 0, 9], got " + shape_str(s));
+    if (d.size() != 2 || d[1] != 6 || d[0] == 0) throw Error("dense surface must be [D > 0, 6], got " + shape_str(d));
+    const int64_t V = int64_t(st.nx) * st.ny * st.nz;
+    if (c != Shape{V, 2}) throw Error("cells must be [nx*ny*nz, 2] = " + shape_str({V, 2}) + ", got " + shape_str(c));
+    if (sp.size() != 2 || sp[1] != 2 || sp[0] == 0) throw Error("spins must be [NS > 0, 2], got " + shape_str(sp));
+    if (k.size() != 2 || k[1] != 16) throw Error("terms must be [K, 16], got " + shape_str(k));
+    const int64_t H = s[0] * sp[0];
+    if (f.size() != 2 || f[1] != H)
+        throw Error("fields must be [F, S * NS] = [F, " + std::to_string(H) + "], got " + shape_str(f));
+    if (st.own_field >= f[0]) throw Error("own_field " + std::to_string(st.own_field) + " names no field");
+    to_u32(H * f[0], "field array size");
+    to_u32(2 * V, "grid size");
+    return {TensorDesc{{H}}};
+}
+
+pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, std::vector<int32_t>& cells) {
+    cells = in[2]->ints();
+    return {in[1]->data.data(), cells.data(), in[0]->data.data(), in[3]->data.data(), int32_t(in[3]->shape[0]),
+            st.origin, st.voxel, st.nx, st.ny, st.nz};
+}
+
+void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    const Setup st = setup(p);
+    std::vector<int32_t> cells;
+    const pose::Grid g = grid_of(in, st, cells);
+    const int64_t H = out[0]->shape[0], K = in[4]->shape[0], F = in[5]->shape[0];
+    std::vector<pose::Term> terms;
+    for (int64_t k = 0; k < K; ++k) {
+        terms.push_back(pose::term_from_row(&in[4]->data[size_t(k * 16)]));
+        if (terms.back().field >= F) throw Error("term " + std::to_string(k) + " names field " +
+                                                 std::to_string(terms.back().field) + " of " + std::to_string(F));
+    }
+    const float* fields = in[5]->data.data();
+    for (int64_t h = 0; h < H; ++h) {
+        const pose::Frame f = pose::hypothesis_frame(g, h, st.press);
+        float acc = st.own_field >= 0 ? st.own_weight * fields[int64_t(st.own_field) * H + h] : 0.0f;
+        for (const pose::Term& t : terms) {
+            const pose::Frame m = pose::moved(f, t);
+            const int64_t cell = pose::cell_of(g, m.t);
+            if (t.sigma_d > 0) acc += pose::geometry_log(g, cell, m, st.press, t.sigma_d, t.sigma_a, st.log_floor);
+            if (t.field >= 0) {
+                const int64_t hk = pose::nearest_hypothesis(g, cell, m.x);
+                acc += t.weight * (hk < 0 ? st.field_floor : fields[int64_t(t.field) * H + hk]);
+            }
+        }
+        out[0]->data[size_t(h)] = acc;
+    }
+}
+
+void gpu(const GpuOpArgs& a) {
+    const Setup st = setup(a.params);
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t H = uint32_t(a.out[0].shape[0]);
+    const uint32_t K = uint32_t(a.in[4].shape[0]), F = uint32_t(a.in[5].shape[0]), NS = uint32_t(a.in[3].shape[0]);
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups(H, local, d);
+    const uint64_t strides = (uint64_t(H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
+    check_loop_budget(d, strides * (uint64_t(K) * (NS + 2) + 4), "pose_evidence (hypotheses x terms x spins)");
+    struct {
+        float ox, oy, oz, inv_voxel;
+        int32_t nx, ny, nz, n_spin;
+        uint32_t H, K, F;
+        int32_t own_field;
+        float press, log_floor, field_floor, own_weight;
+    } push{st.origin.x, st.origin.y, st.origin.z, 1.0f / st.voxel, st.nx, st.ny, st.nz, int32_t(NS), H, K, F,
+           st.own_field, st.press, st.log_floor, st.field_floor, st.own_weight};
+    // Empty terms or fields: any read-only buffer fills the unused binding.
+    const rt::BufferView& terms = K ? a.in[4].view : a.in[0].view;
+    const rt::BufferView& fields = F ? a.in[5].view : a.in[0].view;
+    a.seq.dispatch(pipeline(a.ctx, "pose_evidence", 7, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
+                    {a.in[3].view, rt::Access::Read}, {terms, rt::Access::Read}, {fields, rt::Access::Read},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), groups);
+}
+
+}  // namespace
+
+const OpDef op_pose_evidence{"pose_evidence", infer, cpu, gpu, 0,
+                             {"press", "log_floor", "field_floor", "ox", "oy", "oz", "voxel", "nx", "ny", "nz",
+                              "own_field", "own_weight"}};
+
+}  // namespace vtloc::ops

@@ -1,0 +1,94 @@
+// The multi-touch filter's reductions of its belief (SPEC 6):
+// spin_marginal: prob [S * NS] -> [S], the belief at each surface sample (param n_spin);
+// expected_distance: points [S, 3], weights [S] -> cost [S], cost_j = sum_s w_s ||p_s - p_j||,
+// whose argmin is the Bayes estimate of the contact for the distance error.
+// -> shaders/spin_marginal.comp, shaders/expected_distance.comp
+#include <cmath>
+
+#include "base/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+namespace {
+
+int64_t n_spin(const Params& p) {
+    double v = p.get("n_spin", 0);
+    if (!(v >= 1) || v != std::floor(v) || v > 65536) throw Error("n_spin must be an integer in [1, 65536]");
+    return int64_t(v);
+}
+
+std::vector<TensorDesc> marginal_infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 1, 1);
+    expect_f32(in);
+    const int64_t NS = n_spin(p);
+    if (in[0].shape.size() != 1 || in[0].shape[0] == 0 || in[0].shape[0] % NS)
+        throw Error("spin_marginal needs a flat [S * " + std::to_string(NS) + "] belief, got " + shape_str(in[0].shape));
+    to_u32(in[0].shape[0], "belief size");
+    return {TensorDesc{{in[0].shape[0] / NS}}};
+}
+
+void marginal_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    const int64_t NS = n_spin(p), S = out[0]->shape[0];
+    for (int64_t s = 0; s < S; ++s) {
+        float acc = 0;
+        for (int64_t j = 0; j < NS; ++j) acc += in[0]->data[size_t(s * NS + j)];
+        out[0]->data[size_t(s)] = acc;
+    }
+}
+
+void marginal_gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    struct { uint32_t S, NS; } push{uint32_t(a.out[0].shape[0]), uint32_t(n_spin(a.params))};
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups(push.S, local, d);
+    const uint64_t strides = (uint64_t(push.S) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
+    check_loop_budget(d, strides * (push.NS + 1), "spin_marginal");
+    a.seq.dispatch(pipeline(a.ctx, "spin_marginal", 2, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, sizeof(push), groups);
+}
+
+std::vector<TensorDesc> expect_infer(const std::vector<TensorDesc>& in, const Params&) {
+    expect_input_count(in, 2, 2);
+    expect_f32(in);
+    const Shape &pt = in[0].shape, &w = in[1].shape;
+    if (pt.size() != 2 || pt[1] != 3 || pt[0] == 0) throw Error("points must be [S > 0, 3], got " + shape_str(pt));
+    if (w != Shape{pt[0]}) throw Error("weights must be [S] = " + shape_str({pt[0]}) + ", got " + shape_str(w));
+    to_u32(3 * pt[0], "point array size");
+    return {TensorDesc{{pt[0]}}};
+}
+
+void expect_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
+    const std::vector<float>&pt = in[0]->data, &w = in[1]->data;
+    const size_t S = w.size();
+    for (size_t j = 0; j < S; ++j) {
+        double acc = 0;
+        for (size_t s = 0; s < S; ++s) {
+            double e[3] = {double(pt[3 * s]) - pt[3 * j], double(pt[3 * s + 1]) - pt[3 * j + 1],
+                           double(pt[3 * s + 2]) - pt[3 * j + 2]};
+            acc += double(w[s]) * std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
+        }
+        out[0]->data[j] = float(acc);
+    }
+}
+
+void expect_gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t S = uint32_t(a.in[0].shape[0]);
+    uint32_t local = elementwise_local_size(d);
+    while (local > 1 && local * 16 > d.max_shared_memory) local /= 2;
+    const uint64_t groups = (uint64_t(S) + local - 1) / local;
+    if (groups > d.max_workgroup_count[0])
+        throw Error("expected_distance: " + std::to_string(S) + " points need more workgroups than the device's " +
+                    std::to_string(d.max_workgroup_count[0]));
+    check_loop_budget(d, uint64_t(S) + 2 * groups + 8, "expected_distance over " + std::to_string(S) + " points");
+    a.seq.dispatch(pipeline(a.ctx, "expected_distance", 3, 4, {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+                   &S, 4, uint32_t(groups));
+}
+
+}  // namespace
+
+const OpDef op_spin_marginal{"spin_marginal", marginal_infer, marginal_cpu, marginal_gpu, 0, {"n_spin"}};
+const OpDef op_expected_distance{"expected_distance", expect_infer, expect_cpu, expect_gpu, 0, {}};
+
+}  // namespace vtloc::ops

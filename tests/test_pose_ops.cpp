@@ -1,0 +1,198 @@
+// The multi-touch filter's ops (SPEC 6): pose_evidence, log_softmax,
+// spin_marginal and expected_distance, GPU against the CPU reference on random
+// inputs of odd sizes with fixed seeds.
+// Tolerances: pose_evidence's lookups (grid cell, nearest spin) are computed
+// `precise` in the same fp32 order on both sides, so they agree exactly and only
+// exp/log/acos differ: 1e-4 + 1e-4*|ref| on scores that sum up to 8 terms, with
+// acos near 1 (|error| <= ~5e-4 rad on the GPU's acos) entering squared, i.e. at
+// most ~1e-5 per term for the widths used here. The rest: the default.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "engine/ops/build.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+namespace {
+
+struct Scene {
+    int64_t S, D, NS, K, F;
+    int64_t dims[3];
+    TensorMap in;
+    ops::PoseEvidence p;
+};
+
+// Unit vector, and a unit vector orthogonal to it.
+void frame_pair(std::mt19937& rng, float* n, float* t) {
+    std::normal_distribution<float> g;
+    float a[3] = {g(rng), g(rng), g(rng)}, b[3] = {g(rng), g(rng), g(rng)};
+    float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (float& v : a) v /= la;
+    float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
+    float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    for (int i = 0; i < 3; ++i) n[i] = a[i], t[i] = b[i] / lb;
+}
+
+// A random proper rotation (row-major), from a unit quaternion.
+void rotation(std::mt19937& rng, float* r) {
+    std::normal_distribution<double> g;
+    double q[4] = {g(rng), g(rng), g(rng), g(rng)}, l = 0;
+    for (double v : q) l += v * v;
+    for (double& v : q) v /= std::sqrt(l);
+    double w = q[0], x = q[1], y = q[2], z = q[3];
+    double m[9] = {1 - 2 * (y * y + z * z), 2 * (x * y - w * z), 2 * (x * z + w * y),
+                   2 * (x * y + w * z), 1 - 2 * (x * x + z * z), 2 * (y * z - w * x),
+                   2 * (x * z - w * y), 2 * (y * z + w * x), 1 - 2 * (x * x + y * y)};
+    for (int i = 0; i < 9; ++i) r[i] = float(m[i]);
+}
+
+// Samples and dense points inside a box the grid covers (and some terms that
+// carry poses out of it); cells hold random indices with some -1.
+Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t seed) {
+    std::mt19937 rng(seed);
+    Scene sc{S, D, NS, K, F, {7, 5, 6}, {}, {}};
+    sc.p.voxel = 1.5;
+    sc.p.origin[0] = -5.25, sc.p.origin[1] = -3.75, sc.p.origin[2] = -4.5;
+    sc.p.dims[0] = 7, sc.p.dims[1] = 5, sc.p.dims[2] = 6;
+    sc.p.press = 0.7;
+    const int64_t V = 7 * 5 * 6;
+    std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+    HostTensor samples({S, 9}), dense({D, 6}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
+    for (int64_t s = 0; s < S; ++s) {
+        float* r = &samples.data[size_t(s * 9)];
+        for (int i = 0; i < 3; ++i) r[i] = u(rng);
+        frame_pair(rng, r + 3, r + 6);
+    }
+    for (int64_t i = 0; i < D; ++i) {
+        float* r = &dense.data[size_t(i * 6)];
+        float t[3];
+        for (int k = 0; k < 3; ++k) r[k] = u(rng);
+        frame_pair(rng, r + 3, t);
+    }
+    std::vector<int32_t> cells(size_t(V * 2));
+    std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1), si(-1, int32_t(S) - 1);
+    for (int64_t c = 0; c < V; ++c) cells[size_t(2 * c)] = di(rng), cells[size_t(2 * c + 1)] = si(rng);
+    for (int64_t j = 0; j < NS; ++j) {
+        double a = 2 * M_PI * double(j) / double(NS);
+        spins.data[size_t(2 * j)] = float(std::cos(a)), spins.data[size_t(2 * j + 1)] = float(std::sin(a));
+    }
+    std::uniform_real_distribution<float> sd(0.3f, 2.0f), sa(0.1f, 0.5f), w(0.2f, 1.5f);
+    for (int64_t k = 0; k < K; ++k) {
+        float* r = &terms.data[size_t(k * 16)];
+        rotation(rng, r);
+        for (int i = 0; i < 3; ++i) r[9 + i] = u(rng);
+        r[12] = k % 3 == 2 ? 0.0f : sd(rng);  // some terms are fields only
+        r[13] = sa(rng);
+        r[14] = F ? float(int64_t(k) % (F + 1) - 1) : -1.0f;  // -1: geometry only
+        r[15] = w(rng);
+    }
+    std::uniform_real_distribution<float> lf(-20.0f, 0.0f);
+    for (float& v : fields.data) v = lf(rng);
+    sc.p.own_field = F ? F - 1 : -1;
+    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 2}, cells)},
+             {"spins", spins}, {"terms", terms}, {"fields", fields}};
+    return sc;
+}
+
+Graph evidence_graph(const Scene& sc) {
+    Graph g;
+    const int64_t V = sc.dims[0] * sc.dims[1] * sc.dims[2];
+    int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 6}),
+                                 g.input("cells", {V, 2}, ElemType::I32), g.input("spins", {sc.NS, 2}),
+                                 g.input("terms", {sc.K, 16}), g.input("fields", {sc.F, sc.S * sc.NS}), sc.p);
+    g.output(out, "score");
+    return g;
+}
+
+}  // namespace
+
+TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose]") {
+    struct Case { int64_t S, D, NS, K, F; };
+    for (Case c : {Case{1, 1, 1, 1, 0}, Case{13, 29, 7, 3, 2}, Case{61, 17, 36, 8, 3}, Case{257, 101, 12, 0, 1},
+                   Case{40, 9, 5, 5, 0}}) {
+        INFO("S " << c.S << " D " << c.D << " NS " << c.NS << " K " << c.K << " F " << c.F);
+        Scene sc = scene(c.S, c.D, c.NS, c.K, c.F, uint32_t(c.S * 31 + c.K));
+        test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in);
+    }
+}
+
+TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][pose]") {
+    // A plane z = 0 (outward normal +z) sampled densely; hypothesis: the sample at
+    // the origin, spin 0. A term moving the sensor 3 mm along its x axis stays on
+    // the plane; one moving it 3 mm along its axis (into the object) does not.
+    Scene sc = scene(1, 1, 4, 2, 0, 3);
+    std::vector<float> dense;
+    for (int y = -3; y <= 3; ++y)
+        for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), 0, 0, 0, 1});
+    sc.D = int64_t(dense.size() / 6);
+    sc.in["dense"] = HostTensor({sc.D, 6}, dense);
+    sc.in["samples"] = HostTensor({1, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0});
+    const int64_t V = 7 * 5 * 6;
+    std::vector<int32_t> cells(size_t(2 * V));
+    for (int64_t c = 0; c < V; ++c) {
+        int64_t ix = c % 7, iy = (c / 7) % 5;
+        float cx = float(sc.p.origin[0] + (double(ix) + 0.5) * sc.p.voxel), cy = float(sc.p.origin[1] + (double(iy) + 0.5) * sc.p.voxel);
+        int32_t gx = int32_t(std::lround(std::clamp(cx, -3.0f, 3.0f))) + 3, gy = int32_t(std::lround(std::clamp(cy, -3.0f, 3.0f))) + 3;
+        cells[size_t(2 * c)] = gy * 7 + gx;
+        cells[size_t(2 * c + 1)] = 0;
+    }
+    sc.in["cells"] = HostTensor::from_ints({V, 2}, cells);
+    HostTensor terms({2, 16});
+    for (int k = 0; k < 2; ++k) {
+        float* r = &terms.data[size_t(16 * k)];
+        r[0] = r[4] = r[8] = 1;
+        r[12] = 0.5f, r[13] = 0.2f, r[14] = -1, r[15] = 1;
+    }
+    terms.data[9] = 3.0f;        // term 0: along x
+    terms.data[16 + 11] = 3.0f;  // term 1: along z, into the object
+    sc.p.own_field = -1;
+    for (int k = 0; k < 2; ++k) {
+        sc.K = 1;
+        HostTensor one({1, 16}, std::vector<float>(terms.data.begin() + 16 * k, terms.data.begin() + 16 * (k + 1)));
+        sc.in["terms"] = one;
+        TensorMap got = test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in);
+        // Spin 0 (x along +x) of the hypothesis at the origin; on the plane: ~0; off it: the floor.
+        const float v = got.at("score").data[0];
+        if (k == 0) CHECK(v > -0.01f);
+        else CHECK(v < -11.0f);
+    }
+}
+
+TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU reference", "[op][pose]") {
+    for (int64_t S : {1, 7, 300, 1031}) {
+        for (int64_t NS : {1, 5, 36}) {
+            INFO("S " << S << " NS " << NS);
+            Graph g;
+            int score = g.input("score", {S * NS});
+            std::vector<int> lp = ops::log_softmax(g, score);
+            int m = ops::spin_marginal(g, lp[1], NS);
+            int e = ops::expected_distance(g, g.input("pts", {S, 3}), m);
+            g.output(lp[0], "log");
+            g.output(lp[1], "prob");
+            g.output(m, "marginal");
+            g.output(e, "cost");
+            TensorMap in{{"score", test::random_tensor({S * NS}, uint32_t(S + NS), -30.0f, 5.0f)},
+                         {"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)}};
+            TensorMap got = test::run_gpu_and_compare(g, WeightStore{}, in);
+            double sum = 0;
+            for (float v : got.at("marginal").data) sum += v;
+            CHECK(std::abs(sum - 1.0) < 1e-4);
+        }
+    }
+}
+
+TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
+    Graph g;
+    int score = g.input("score", {12});
+    CHECK_THROWS_WITH(ops::spin_marginal(g, score, 5), Catch::Contains("[S * 5]"));
+    CHECK_THROWS_WITH(ops::expected_distance(g, g.input("p", {4, 3}), g.input("w", {5})), Catch::Contains("weights must be [S]"));
+    Scene sc = scene(5, 5, 3, 1, 1, 1);
+    Graph h;
+    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 6}), h.input("c", {7, 2}, ElemType::I32),
+                                         h.input("sp", {3, 2}), h.input("t", {1, 16}), h.input("f", {1, 15}), sc.p),
+                      Catch::Contains("cells must be [nx*ny*nz, 2]"));
+}
