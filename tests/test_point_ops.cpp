@@ -206,15 +206,18 @@ TEST_CASE("point grouping, the fused MLP layers and the neighbour max match the 
     }
 }
 
-TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
-    struct Case {
-        int64_t M, K, N, group;
-    };
+namespace {
+
+struct FusedCase {
+    int64_t M, K, N, group;
+};
+
+// the fused MLP layer handles wide layers, large groups and ragged shapes: the cases given.
+void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
     // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
     // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
     // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: the uniform path falls back.
-    for (Case c : {Case{20 * 128, 131, 96, 128}, Case{2560, 64, 200, 5}, Case{1001, 37, 37, 13}, Case{36, 8, 8, 12},
-                   Case{640, 128, 160, 16}}) {
+    for (FusedCase c : cases) {
         WeightStore w;
         w.add("w", test::random_tensor({c.K, c.N}, 31, -0.15f, 0.15f));
         w.add("b", test::random_tensor({c.N}, 32, -0.1f, 0.1f));
@@ -278,6 +281,20 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     }
 }
 
+}  // namespace
+
+TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
+    // Every path on three shapes (lavapipe's time goes to compiling each path's
+    // pipelines): groups of 128, odd sizes with a group not a multiple of 4, and
+    // 80 KiB weights (128 x 160). The full-size rows run in the long suite.
+    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}, FusedCase{48, 128, 160, 16}});
+}
+
+TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
+    fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
+                   FusedCase{640, 128, 160, 16}});
+}
+
 TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_linear]") {
     // A layer with rows for 128 invocations and 1.3e8 multiply-adds (a big layer
     // on CPU devices) and a small one; the tile is spec constants 1 (rows) and 2
@@ -310,7 +327,14 @@ TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_li
     CHECK(tile.at("small") == std::make_pair(8u, 16u));
 }
 
-TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
+namespace {
+
+struct HiddenCase {
+    int64_t cf, S, ns, C1, C2;
+};
+
+// a first layer computed in registers (hidden) equals the two layers: the cases given.
+void hidden_layer_cases(std::initializer_list<HiddenCase> cases) {
     // The first layer of a set-abstraction scale inside the second (group_linear
     // hidden: from the gathered row, or from that layer per source point, stored
     // point-major) against the same two layers as separate nodes: 0, 3 and 4 feature
@@ -318,10 +342,7 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
     // odd and vec4 output widths, plain and max outputs, both buffer paths (and
     // from the gathered row every weight path and the big-layer tiles). All are
     // checked against the CPU reference.
-    struct Case {
-        int64_t cf, S, ns, C1, C2;
-    };
-    for (Case c : {Case{3, 37, 12, 20, 33}, Case{0, 19, 5, 4, 8}, Case{4, 16, 128, 64, 96}, Case{3, 9, 32, 64, 37}}) {
+    for (HiddenCase c : cases) {
         const int64_t N = 300, K0 = c.cf + 3;
         WeightStore w;
         w.add("w0", test::random_tensor({K0, c.C1}, 61, -0.5f, 0.5f));
@@ -406,6 +427,18 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
                 CHECK(differ == 0);
             }
     }
+}
+
+}  // namespace
+
+TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
+    // Every path on three shapes: no feature columns, 4 from a wider tensor with
+    // balls of 128 (around 3 centres; 16 in the long suite), an odd output width.
+    hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
+}
+
+TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
+    hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
 }
 
 TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {

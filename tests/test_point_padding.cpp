@@ -85,19 +85,22 @@ std::string infer_error(std::vector<TensorDesc> in, Params p) {
 
 }  // namespace
 
-TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear]") {
+namespace {
+
+struct PadCase {
+    int64_t S, ns;
+    double radius;
+    int64_t C1, C2, C3;
+};
+
+// ball padding skipped (pad) leaves every max exact: the cases given.
+void padding_cases(std::initializer_list<PadCase> cases) {
     // Balls of 16 .. 128 around 8 .. 64 centres of 300 points: a small radius pads
     // most slots (whole subgroups of rows are padding), a large one few. Three
     // layers (the paper's shape), as the point encoder builds them: a gathered
     // layer (plain, or with layer one in registers from the row or per source point),
     // a plain rows layer between, a max. Every weight path, both buffer paths.
-    struct Case {
-        int64_t S, ns;
-        double radius;
-        int64_t C1, C2, C3;
-    };
-    for (Case c : {Case{37, 32, 0.25, 16, 20, 33}, Case{64, 128, 0.4, 64, 96, 128}, Case{8, 16, 1.5, 8, 12, 8},
-                   Case{19, 40, 0.3, 12, 37, 16}, Case{23, 20, 0.3, 12, 20, 16}}) {  // 20: not a multiple of the row tiles
+    for (PadCase c : cases) {  // 20: not a multiple of the row tiles
         const int64_t N = 300, K0 = 6;
         WeightStore w;
         w.add("w0", test::random_tensor({K0, c.C1}, 71, -0.5f, 0.5f));
@@ -232,6 +235,20 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
         }
         CHECK(poisoned_maxes == 6 * 2);
     }
+}
+
+}  // namespace
+
+TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear]") {
+    // Every path and layout on two shapes: mostly padding with odd widths and a
+    // ball length that is not a multiple of the row tiles, and balls of 128 around
+    // 6 centres (64 in the long suite, with the others).
+    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}, PadCase{6, 128, 0.4, 64, 96, 128}});
+}
+
+TEST_CASE("ball padding skipped (pad) leaves every max exact, at full size", "[long][group_linear]") {
+    padding_cases({PadCase{37, 32, 0.25, 16, 20, 33}, PadCase{64, 128, 0.4, 64, 96, 128}, PadCase{8, 16, 1.5, 8, 12, 8},
+                   PadCase{19, 40, 0.3, 12, 37, 16}, PadCase{23, 20, 0.3, 12, 20, 16}});
 }
 
 TEST_CASE("pad = 1 and x_point_major = 1 name what they need", "[op][group_linear]") {
