@@ -152,18 +152,28 @@ std::vector<Case> make_cases(int n_objects, int n_images) {
     return cases;
 }
 
-uint64_t run_case(api::Model& model, const std::vector<api::Object>& objects,
+uint64_t run_case(api::Model& model, const std::vector<api::Object>& objects, std::vector<api::Tracker>& trackers,
                   const std::vector<api::TactileImage>& images, const Case& c, size_t& touches) {
     std::vector<api::TactileImage> batch;
     for (int i : c.images) batch.push_back(images[size_t(i)]);
     Hash h;
     if (c.sequence) {
-        std::vector<std::array<double, 3>> motions(batch.size() - 1, {1.5, -0.5, 0.25});
-        api::SequenceResult s = model.localize_sequence(objects[size_t(c.object)], batch, motions, c.opt);
-        for (const auto& t : s.touches) h.touch(t);
-        h.vec(s.belief);
-        h.vec(s.heatmap);
-        h.bytes(&s.best, sizeof s.best);
+        // A tracker window: the touches' heat-maps as its network terms, a fixed
+        // motion (10 degrees about the axis and a shift) between them.
+        const api::Object& obj = objects[size_t(c.object)];
+        const std::vector<api::TouchResult> rs = model.localize(obj, batch, c.opt);
+        std::vector<const api::TouchResult*> terms;
+        for (const auto& t : rs) h.touch(t), terms.push_back(&t);
+        api::Motion m;
+        const double a = 10 * M_PI / 180;
+        m.R = {std::cos(a), -std::sin(a), 0, std::sin(a), std::cos(a), 0, 0, 0, 1};
+        m.t = {1.5, -0.5, 0.25};
+        const api::TrackerEstimate e =
+            trackers[size_t(c.object)].evaluate_window(std::vector<api::Motion>(batch.size() - 1, m), terms, &obj);
+        h.vec(e.heatmap);
+        h.vec(e.sample_belief);
+        h.bytes(e.contact.data(), sizeof e.contact);
+        h.bytes(e.pose.R.data(), sizeof e.pose.R);
     } else {
         for (const auto& t : model.localize(objects[size_t(c.object)], batch, c.opt)) h.touch(t);
     }
@@ -234,6 +244,10 @@ int main(int argc, char** argv) {
         objects.push_back(model.encode_object(ex + "/mug.glb", ex + "/mug_candidates.csv"));
         objects.push_back(model.encode_object(sphere_cloud(1500, 30)));
         objects.push_back(model.encode_object(box_cloud(400, 80, 40, 20)));
+        std::vector<api::Tracker> trackers;  // one per object, from its cloud (stateless windows)
+        api::TrackerOptions to;
+        to.hypotheses = 20000;
+        for (const api::Object& o : objects) trackers.emplace_back(ctx, o.cloud(), to);
         const std::vector<api::TactileImage> images = image_set(ex);
         const std::vector<Case> cases = make_cases(int(objects.size()), int(images.size()));
 
@@ -252,7 +266,7 @@ int main(int argc, char** argv) {
                 order ^= order << 13, order ^= order >> 7, order ^= order << 17;
                 ci = size_t(order % cases.size());
             }
-            const uint64_t h = run_case(model, objects, images, cases[ci], touches);
+            const uint64_t h = run_case(model, objects, trackers, images, cases[ci], touches);
             if (size_t(r) < cases.size()) first[ci] = h;
             else if (h != first[ci]) {
                 if (++mismatches <= 5) std::fprintf(stderr, "run %ld: %s differs from its first run\n", r, cases[ci].name.c_str());

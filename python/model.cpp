@@ -216,28 +216,7 @@ void bind_model_class(py::module_& m) {
              },
              py::arg("object"), py::arg("image"), py::arg("iters") = -1, py::arg("top_k") = 0, py::arg("gma") = true,
              py::arg("symmetry") = py::none(), py::arg("backend") = "gpu", py::arg("keep_tensors") = false,
-             py::arg("profile") = false, py::arg("mm_per_px") = py::none(), kLocalizeDoc)
-        .def("localize_sequence",
-             [](api::Model& mo, const api::Object& obj, const py::object& images, const py::object& motions, int iters,
-                int top_k, bool gma, const py::object& symmetry, const std::string& backend, bool keep_tensors,
-                const py::object& mm_per_px, double sigma, double sigma_m, int window) {
-                 const auto opt = localize_options(iters, top_k, gma, symmetry, backend, keep_tensors, false, mm_per_px);
-                 auto frames = to_images(images, "images");
-                 std::vector<std::array<double, 3>> moves;
-                 if (!(frames.size() == 1 && motions.is_none())) moves = to_rows3(motions, "motions");
-                 api::BeliefOptions b;
-                 b.sigma = sigma;
-                 b.sigma_m = sigma_m;
-                 b.window = window;
-                 py::gil_scoped_release release;
-                 return mo.localize_sequence(obj, frames, moves, opt, b);
-             },
-             py::arg("object"), py::arg("images"), py::arg("motions"), py::arg("iters") = -1, py::arg("top_k") = 0,
-             py::arg("gma") = true, py::arg("symmetry") = py::none(), py::arg("backend") = "gpu",
-             py::arg("keep_tensors") = false, py::arg("mm_per_px") = py::none(), py::arg("sigma") = 0.2,
-             py::arg("sigma_m") = 0.05, py::arg("window") = 4,
-             "Multi-touch belief (SPEC section 6): images, a list of T frames; motions, a (T-1) x 3\n"
-             "array of the sensor's displacement between touches (object units).");
+             py::arg("profile") = false, py::arg("mm_per_px") = py::none(), kLocalizeDoc);
 }
 
 void bind_outputs(py::module_& m) {

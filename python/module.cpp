@@ -12,6 +12,7 @@ using namespace vtloc;
 
 namespace vtloc::python {
 void bind_model(py::module_& m);
+void bind_tracker(py::module_& m);
 }
 
 namespace {
@@ -85,4 +86,5 @@ PYBIND11_MODULE(vtloc, m) {
 
     python::bind_results(m);
     python::bind_model(m);
+    python::bind_tracker(m);
 }

@@ -96,14 +96,6 @@ void bind_results(py::module_& m) {
             return "<vtloc.TouchResult contact=(" + std::to_string(r.contact[0]) + ", " + std::to_string(r.contact[1]) +
                    ", " + std::to_string(r.contact[2]) + ")>";
         });
-
-    py::class_<api::SequenceResult>(m, "SequenceResult", "Multi-touch belief over the candidates (SPEC section 6).")
-        .def_property_readonly("touches", [](const api::SequenceResult& s) { return s.touches; })
-        .def_property_readonly("belief", [](const api::SequenceResult& s) { return floats(s.belief); })
-        .def_property_readonly("best", [](const api::SequenceResult& s) { return s.best; })
-        .def_property_readonly("best_point", [](const api::SequenceResult& s) { return vec3(s.best_point); })
-        .def_property_readonly("heatmap", [](const api::SequenceResult& s) { return floats(s.heatmap); })
-        .def_property_readonly("timings", [](const api::SequenceResult& s) { return timings_dict(s.timings); });
 }
 
 }  // namespace vtloc::python

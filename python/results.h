@@ -8,7 +8,7 @@ namespace vtloc::python {
 
 namespace py = pybind11;
 
-// Registers TouchResult and SequenceResult (read-only attributes, numpy arrays).
+// Registers TouchResult (read-only attributes, numpy arrays).
 void bind_results(py::module_& m);
 
 py::dict timings_dict(const api::Timings& t);

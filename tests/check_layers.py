@@ -20,13 +20,14 @@ ALLOWED = {
     "engine": ["base", "runtime"],                # tensors, graph, executor, weight files
     "engine/ops": ["base", "runtime", "engine"],  # one file per op + its CPU reference
     "engine/model": ["base", "runtime", "engine", "engine/ops"],  # VTLoc graph builders, runner
+    "engine/track": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # multi-touch filter
     "engine/check": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # device self-test
     "engine/io": ["base", "engine"],              # files in and out (no Vulkan, no graph)
     "engine/sim": ["base", "engine", "engine/io", "engine/model"],  # synthetic touches, datasets
     # The public API reaches the engine through the model layer (never a single op);
     # runtime only for device selection, engine/ only for tensors and dump files.
-    "engine/api": ["base", "runtime", "engine", "engine/io", "engine/model", "engine/check"],
-    "apps": ["base", "engine", "engine/io", "engine/sim", "engine/api"],
+    "engine/api": ["base", "runtime", "engine", "engine/io", "engine/model", "engine/check", "engine/track"],
+    "apps": ["base", "engine", "engine/io", "engine/sim", "engine/api", "engine/track"],
     "python": ["engine/api"],
 }
 # bench/ and tests/ may include anything: they measure and check single layers.

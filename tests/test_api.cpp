@@ -201,19 +201,6 @@ TEST_CASE("api: batches of mixed sizes, sequences and the CPU backend", "[api]")
     cpu.backend = api::Backend::Cpu;
     check_same(model.localize(obj, images[0], cpu), batch[0], 2e-3);
 
-    std::vector<api::TactileImage> same{images[0], images[2], images[0]};
-    api::SequenceResult s = model.localize_sequence(obj, same, {{90, 0, 0}, {-90, 0, 0}});
-    REQUIRE(s.belief.size() == obj.candidate_count());
-    double sum = 0;
-    for (float b : s.belief) sum += b;
-    CHECK(std::abs(sum - 1.0) < 1e-4);
-    REQUIRE(s.best >= 0);
-    CHECK(s.best_point[0] == obj.candidates()[size_t(s.best) * 3]);
-    CHECK(s.heatmap.size() == obj.cloud().size());
-    CHECK(s.touches.size() == 3);
-    CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, same, {}); }), Catch::Contains("needs 2 motions"));
-    CHECK_THAT(test::api_error([&] { model.localize_sequence(obj, images, {{0, 0, 0}, {0, 0, 0}}); }),
-               Catch::Contains("one size"));
     test::require_no_validation(ctx);
 }
 

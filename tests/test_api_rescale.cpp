@@ -144,15 +144,11 @@ TEST_CASE("api: the same touch at twice the pixel count and half the pixel size 
         CHECK(d <= 1.01 / 255 / 0.224);
         CHECK(d > 0);  // really two different frames
     }
-    SECTION("batches and sequences rescale every frame") {
+    SECTION("batches rescale every frame") {
         const api::TactileImage im = example_image();
         api::TouchResult want = model.localize(obj, im, plain);
         std::vector<api::TactileImage> frames{replicate2(im), replicate2(im)};
         for (const api::TouchResult& r : model.localize(obj, frames, half))
-            CHECK(tensor(r, "tactile.input").f32 == tensor(want, "tactile.input").f32);
-        api::SequenceResult s = model.localize_sequence(obj, frames, {{0, 0, 0}}, half);
-        REQUIRE(s.touches.size() == 2);
-        for (const api::TouchResult& r : s.touches)
             CHECK(tensor(r, "tactile.input").f32 == tensor(want, "tactile.input").f32);
     }
     test::require_no_validation(ctx);
@@ -204,8 +200,7 @@ TEST_CASE("api: mm_per_px errors", "[api][rescale]") {
     opt.mm_per_px = 0.1;
     const api::TactileImage im = example_image();
     for (auto call : std::initializer_list<std::function<void()>>{
-             [&] { tiny.localize(obj, im, opt); }, [&] { tiny.localize(obj, std::vector<api::TactileImage>{im, im}, opt); },
-             [&] { tiny.localize_sequence(obj, {im}, {}, opt); }}) {
+             [&] { tiny.localize(obj, im, opt); }, [&] { tiny.localize(obj, std::vector<api::TactileImage>{im, im}, opt); }}) {
         std::string m = test::api_error(call);
         CHECK(m == test::tiny_model() + " has no sensor pixel size in its config; cannot rescale");
     }

@@ -110,7 +110,7 @@ Graph evidence_graph(const Scene& sc) {
 
 }  // namespace
 
-TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose]") {
+TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose][pose_evidence]") {
     struct Case { int64_t S, D, NS, K, F; };
     for (Case c : {Case{1, 1, 1, 1, 0}, Case{13, 29, 7, 3, 2}, Case{61, 17, 36, 8, 3}, Case{257, 101, 12, 0, 1},
                    Case{40, 9, 5, 5, 0}}) {
@@ -162,7 +162,7 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
     }
 }
 
-TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU reference", "[op][pose]") {
+TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU reference", "[op][pose][log_softmax][spin_marginal][expected_distance]") {
     for (int64_t S : {1, 7, 300, 1031}) {
         for (int64_t NS : {1, 5, 36}) {
             INFO("S " << S << " NS " << NS);

@@ -11,6 +11,7 @@
 #include "engine/io/mesh.h"
 #include "engine/sim/mesh_builder.h"
 #include "engine/sim/shapes.h"
+#include "engine/sim/symmetry.h"
 #include "engine/sim/uniformity.h"
 #include "tests/io_test_util.h"
 
@@ -114,4 +115,46 @@ TEST_CASE("mesh builder: polygon triangulation covers a non-convex outline", "[s
     CHECK(area == Approx(7.0));
     io::TriangleMesh prism = sim::mesh::extrude(u, 0, 2);
     CHECK(sim::mesh::signed_volume(prism) == Approx(14.0));
+}
+
+TEST_CASE("declared symmetry groups hold: each shape maps onto itself within 0.2 mm", "[sim][symmetry]") {
+    int declared = 0;
+    for (const std::string& name : sim::shape_names()) {
+        const sim::Symmetry s = sim::shape_symmetry(name);
+        if (s.none()) continue;
+        ++declared;
+        INFO(name);
+        const io::TriangleMesh mesh = sim::make_shape(name);
+        CHECK(sim::symmetry_residual_mm(s, mesh, 400) <= 0.2);
+        // ... and the check can fail: a quarter turn is no symmetry of the box, a tilted axis none of the cone.
+    }
+    CHECK(declared >= 8);
+    sim::Symmetry quarter;
+    quarter.order = 4;
+    CHECK(sim::symmetry_residual_mm(quarter, sim::make_shape("box"), 400) > 5);
+    sim::Symmetry tilted;
+    tilted.order = 0;
+    tilted.axis = {0, 0.2, 1};
+    CHECK(sim::symmetry_residual_mm(tilted, sim::make_shape("cone"), 400) > 1);
+}
+
+TEST_CASE("distance up to symmetry, and the symmetry's JSON", "[sim][symmetry]") {
+    sim::Symmetry ring;  // every angle about z, with the flip about x
+    ring.order = 0;
+    ring.flip = sim::Vec3d{1, 0, 0};
+    CHECK(sim::distance_up_to_symmetry(ring, {10, 0, 3}, {0, -10, 3}) == Approx(0).margin(1e-9));
+    CHECK(sim::distance_up_to_symmetry(ring, {10, 0, 3}, {0, 10, -3}) == Approx(0).margin(1e-9));  // flipped
+    CHECK(sim::distance_up_to_symmetry(ring, {10, 0, 3}, {0, 12, 3}) == Approx(2));
+    sim::Symmetry two;  // a half turn about z
+    two.order = 2;
+    CHECK(sim::distance_up_to_symmetry(two, {5, 1, 0}, {-5, -1, 0}) == Approx(0).margin(1e-9));
+    CHECK(sim::distance_up_to_symmetry(two, {5, 1, 0}, {-5, 1, 0}) == Approx(2));
+    CHECK(sim::distance_up_to_symmetry(sim::Symmetry{}, {1, 2, 3}, {1, 2, 5}) == Approx(2));
+    const sim::Symmetry back = sim::symmetry_from_json(sim::symmetry_json(ring), "x");
+    CHECK(back.order == 0);
+    CHECK(back.flip.has_value());
+    CHECK(sim::symmetry_json(sim::Symmetry{}).is_null());
+    CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 1}}, {"order", 2}, {"flip", {0, 0.5, 1}}}, "o.json"),
+                      Catch::Contains("o.json: symmetry flip axis must be perpendicular"));
+    CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"axis", {0, 0, 1}}}, "o.json"), Catch::Contains("o.json: symmetry must be"));
 }

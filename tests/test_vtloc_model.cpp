@@ -170,27 +170,6 @@ TEST_CASE("the GPU and the CPU reference backends agree on the whole model", "[m
     test::require_no_validation_messages();
 }
 
-TEST_CASE("a touch sequence updates the belief from each touch and the motions", "[model]") {
-    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
-    VtlocRunner runner(c.weights, &test::gpu()), cpu(c.weights, nullptr);
-    EncodedObject obj = runner.encode_object(c.cloud, &c.candidates);
-    std::vector<HostTensor> images{c.image, c.image};
-    std::vector<std::array<double, 3>> motions{{5.0, 0.0, 0.0}};
-    SequenceResult s = runner.localize_sequence(obj, images, motions);
-    SequenceResult t = cpu.localize_sequence(cpu.encode_object(c.cloud, &c.candidates), images, motions);
-    REQUIRE(s.belief.size() == size_t(c.candidates.shape[0]));
-    double sum = 0;
-    for (float b : s.belief) sum += b;
-    CHECK(std::abs(sum - 1.0) < 1e-4);
-    test::require_close(HostTensor({int64_t(s.belief.size())}, s.belief), HostTensor({int64_t(t.belief.size())}, t.belief),
-                        {1e-5, 1e-3}, "belief GPU vs CPU");
-    CHECK(s.best == t.best);
-    CHECK(s.heatmap.size() == size_t(c.cloud.shape[0]));
-    CHECK(*std::max_element(s.heatmap.begin(), s.heatmap.end()) == 1.0f);
-    REQUIRE_THROWS_WITH(runner.localize_sequence(obj, images, {}), Catch::Contains("needs 1 motions"));
-    test::require_no_validation_messages();
-}
-
 TEST_CASE("bad inputs to the model are named", "[model]") {
     GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
     VtlocRunner runner(c.weights, &test::gpu());

@@ -2,7 +2,7 @@
 reference of ``vtloc eval``.
 
   python3 -m weights_tools.eval --model M.safetensors --data DIR [--split test|train|all]
-      [--objects all|known|unknown] [--iters N] [--topk K] [--sequence S] [--json FILE]
+      [--objects all|known|unknown] [--iters N] [--topk K] [--json FILE]
       [--mm-per-px MM]
 
 Frames are rescaled to the model's sensor pixel size (``tactile.rescale``) when the
@@ -10,14 +10,9 @@ model's config and the dataset's index.json both record one and they differ, or 
 ``--mm-per-px`` (the frames' pixel size) when given.
 
 Each object's cloud is encoded once (normalised frame of SPEC 1); its touches run in
-batches.  ``--sequence S`` (S > 1) scores the SPEC 6 belief instead of the single
-touch: each selected touch together with the S - 1 touches before it in the object's
-collection order (``order`` column; those may be train touches, and fewer exist at the
-start of the path), motions = their ``dx,dy,dz`` columns divided by the object's
-scale.  The prediction is then the belief's argmax candidate (lowest index on a tie):
-error, ND and rank are measured from that candidate's point, and MPE scores the
-belief heat-map (each cloud point takes the belief of its nearest candidate,
-min-max normalised: ``post.belief_heatmap``) instead of the top-K heat-map.
+batches.  Several touches (SPEC 6) are evaluated by ``vtloc eval --sequence``: the
+multi-touch filter lives in the engine only (engine/track), its ops checked against
+their C++ references.
 """
 
 import argparse
@@ -85,8 +80,8 @@ def frame_mm_per_px(model_cfg, ds_sensor, override=None):
     return check_mm_per_px(float(data_mm), "the dataset's sensor.mm_per_px")
 
 
-def evaluate(model, ds, split="test", objects="all", iters=None, topk=5, sequence=1,
-             batch=32, sigma=0.2, sigma_m=0.05, progress=None, mm_per_px=None):
+def evaluate(model, ds, split="test", objects="all", iters=None, topk=5,
+             batch=32, progress=None, mm_per_px=None):
     """Returns (rows, per_touch, seconds of network time, touches run)."""
     per_touch, net_s, net_n = [], 0.0, 0
     subsets = {}
@@ -100,33 +95,15 @@ def evaluate(model, ds, split="test", objects="all", iters=None, topk=5, sequenc
             raise DatasetError(f"{obj.folder}/touches.csv: no test touches, so no candidates")
         subsets[obj.name] = obj.subset
         frame = metrics.ObjectFrame(obj.points, obj.candidates)
-        path = collection_path(obj)
-        pos = {t.id: i for i, t in enumerate(path)}
-        windows = {}
-        run = {t.id: t for t in chosen}
-        if sequence > 1:
-            for t in chosen:
-                if t.id in pos:
-                    windows[t.id] = path[max(0, pos[t.id] - sequence + 1):pos[t.id] + 1]
-                    run.update((w.id, w) for w in windows[t.id])
-        run = sorted(run.values(), key=lambda t: t.id)
+        run = sorted(chosen, key=lambda t: t.id)
         t0 = time.perf_counter()
         preds = predict(model, obj, run, iters, batch, mm_per_px=mm_per_px)
         net_s += time.perf_counter() - t0
         net_n += len(run)
         pred = {t.id: p for t, p in zip(run, preds)}
         for t in chosen:
-            if t.id in windows:
-                w = windows[t.id]
-                best, _, heat = metrics.belief_prediction(
-                    frame, np.stack([pred[u.id] for u in w]),
-                    np.stack([u.motion for u in w[1:]]) if len(w) > 1 else np.zeros((0, 3)),
-                    sigma, sigma_m, window=sequence)
-                c = frame.cand[best].numpy()
-                m = metrics.touch_metrics(frame, c, t.contact, topk, heat=heat)
-            else:
-                c = pred[t.id]
-                m = metrics.touch_metrics(frame, c, t.contact, topk)
+            c = pred[t.id]
+            m = metrics.touch_metrics(frame, c, t.contact, topk)
             per_touch.append({"object": obj.name, "touch": t.id, "subset": obj.subset, **m,
                               "contact": [float(v) for v in c]})
         if progress is not None:
@@ -156,17 +133,14 @@ def main(argv=None):
     ap.add_argument("--objects", choices=tuple(OBJECT_FILTER), default="all")
     ap.add_argument("--iters", type=int, help="ILU iterations (default: the config's)")
     ap.add_argument("--topk", type=int, default=5)
-    ap.add_argument("--sequence", type=int, default=1, help="touches per belief (SPEC 6)")
-    ap.add_argument("--sigma", type=float, default=0.2)
-    ap.add_argument("--sigma-m", type=float, default=0.05)
     ap.add_argument("--batch", type=int, default=32)
     ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
     ap.add_argument("--json", help="write the vtloc-eval/1 report here")
     ap.add_argument("--mm-per-px", type=float, metavar="MM",
                     help="the frames' pixel size (default: the dataset's, when the model's differs)")
     args = ap.parse_args(argv)
-    if args.topk < 1 or args.sequence < 1 or args.batch < 1:
-        ap.error("--topk, --sequence and --batch must be >= 1")
+    if args.topk < 1 or args.batch < 1:
+        ap.error("--topk and --batch must be >= 1")
     torch.set_num_threads(args.threads or os.cpu_count() or 1)
     try:
         model = model_mod.load(args.model).eval()
@@ -178,8 +152,8 @@ def main(argv=None):
             print(f"rescaling frames from {mm_per_px:g} to {model.cfg['sensor']['mm_per_px']:g} mm per pixel",
                   file=sys.stderr)
         rows, per_touch, net_s, net_n = evaluate(
-            model, ds, args.split, args.objects, args.iters, args.topk, args.sequence,
-            args.batch, args.sigma, args.sigma_m, mm_per_px=mm_per_px)
+            model, ds, args.split, args.objects, args.iters, args.topk,
+            args.batch, mm_per_px=mm_per_px)
     except (DatasetError, ValueError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
@@ -189,7 +163,7 @@ def main(argv=None):
     report = {
         "format": "vtloc-eval/1", "model": args.model, "config": model.cfg["name"],
         "data": args.data, "split": args.split, "objects": args.objects, "iters": iters,
-        "topk": args.topk, "sequence": args.sequence, "mm_per_px": mm_per_px,
+        "topk": args.topk, "sequence": 1, "mm_per_px": mm_per_px,
         "rows": rows, "per_touch": per_touch,
         "time_per_touch_ms": 1000.0 * net_s / net_n if net_n else None,
     }

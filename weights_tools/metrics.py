@@ -2,8 +2,6 @@
 
 Per touch: ``touch_metrics`` (error_mm, nd, rank, mpe).  Per report row:
 ``aggregate`` (mean over an object's touches, then over the row's objects).
-The multi-contact belief (SPEC 6) is ``post.multi_contact_belief``;
-``sequence_metrics`` scores its argmax candidate.
 """
 
 import math
@@ -95,16 +93,6 @@ def touch_metrics(frame, pred_obj, gt_obj, topk=5, heat=None):
     return {"error_mm": err, "nd": 100.0 * err / frame.D, "rank": rank,
             "mpe": mpe(heat, gt_heatmap(frame.xyz_n, gt_n))}
 
-
-def belief_prediction(frame, contacts_obj, motions_obj, sigma=0.2, sigma_m=0.05, window=4):
-    """SPEC 6 over the object's candidates.  contacts_obj: T x 3 predictions (mm),
-    motions_obj: (T-1) x 3 sensor-centre translations (mm) between them.
-    Returns (argmax candidate index, belief M, belief heat-map over the cloud)."""
-    cp_n = frame.normalise(np.asarray(contacts_obj).reshape(-1, 3))
-    d_n = torch.as_tensor(np.asarray(motions_obj), dtype=torch.float64).reshape(-1, 3) / frame.scale
-    b = post.multi_contact_belief(frame.cand_n, cp_n, d_n, sigma, sigma_m, window)
-    best = int(torch.nonzero(b == b.max())[0, 0])  # lowest index on a tie
-    return best, b, post.belief_heatmap(frame.xyz_n, frame.cand_n, b)
 
 
 def aggregate(per_touch, subsets, method):

@@ -1,5 +1,5 @@
 """After the network (SPEC 1, 3, 6): normalised frame, candidate top-K,
-heat-map, symmetry prior, Chamfer distance and the multi-contact belief.
+heat-map, symmetry prior and Chamfer distance.
 
 Everything here takes tensors for one object (no batch dimension) and works in
 the normalised frame unless said otherwise.
@@ -112,49 +112,3 @@ def chamfer(a, b):
     diff = a[:, None, :] - b[None, :, :]
     d = (diff * diff).sum(dim=-1)
     return d.min(dim=1).values.mean() + d.min(dim=0).values.mean()
-
-
-def _log_normalise(logb):
-    return logb - torch.logsumexp(logb, dim=0)
-
-
-def multi_contact_belief(candidates, contacts, motions, sigma=0.2, sigma_m=0.05, window=4):
-    """Belief over candidates after a sequence of touches (SPEC 6), in float64.
-
-    candidates: M x 3, contacts: T x 3 (c^p_t), both normalised frame.
-    motions: (T-1) x 3, motions[t-1] = sensor displacement from touch t-1 to
-    touch t, already divided by ``scale``.  Only the last ``window`` touches
-    are used (None: all); the belief starts uniform before the first of them,
-    which has no motion step.  Computed in log space so that no weight
-    underflows.  Returns the belief (M, sums to 1)."""
-    c = torch.as_tensor(candidates).double()
-    cp = torch.as_tensor(contacts).double().reshape(-1, 3)
-    d = torch.as_tensor(motions).double().reshape(-1, 3)
-    T = cp.shape[0]
-    if T == 0 or d.shape[0] != T - 1:
-        raise ValueError("need T >= 1 contacts and T - 1 motions")
-    first = 0 if window is None else max(0, T - window)
-    logb = torch.full((c.shape[0],), -math.log(c.shape[0]), dtype=torch.float64)
-    for t in range(first, T):
-        if t > first:
-            moved = c + d[t - 1]  # where each candidate j would be after the motion
-            k = -sqdist(c[:, None, :], moved[None, :, :]) / (2 * sigma_m ** 2)  # [i, j]
-            logb = torch.logsumexp(k + logb[None, :], dim=1)
-        loglik = -sqdist(c, cp[t].reshape(1, 3)) / (2 * sigma ** 2)
-        logb = _log_normalise(logb + loglik)
-    return torch.exp(logb)
-
-
-def belief_heatmap(cloud_xyz, candidates, belief):
-    """Belief spread over the cloud: each point takes the belief of its nearest
-    candidate (lowest index on a tie), min-max normalised (zeros if flat)."""
-    p = torch.as_tensor(cloud_xyz).double()[:, :3]
-    c = torch.as_tensor(candidates).double()
-    d = sqdist(p[:, None, :], c[None, :, :])
-    dmin = d.min(dim=1, keepdim=True).values
-    j = torch.where(d == dmin, torch.arange(c.shape[0]), c.shape[0]).min(dim=1).values
-    s = torch.as_tensor(belief).double()[j]
-    lo, hi = s.min(), s.max()
-    if hi == lo:
-        return torch.zeros(p.shape[0], dtype=torch.float32)
-    return ((s - lo) / (hi - lo)).float()

@@ -32,9 +32,16 @@ const char* kHelp =
     "  --iters N                 ILU iterations, 0..64 (default: the model's)\n"
     "  --topk K                  K of the heat-map that MPE scores, capped at the candidate count\n"
     "                            (default 5)\n"
-    "  --sequence S              multi-contact: each touch with the S-1 touches before it in\n"
-    "                            collection order and their motions, through the belief filter\n"
-    "                            (SPEC section 6); default 1 = single touches\n"
+    "  --sequence T[,T..]        several touches (SPEC section 6): windows of T touches along each\n"
+    "                            object's collection tour ending at the test touches with order >= 7,\n"
+    "                            through the multi-touch filter with the dataset's relative motions;\n"
+    "                            both protocols (surface, candidates), rows for geometry alone and\n"
+    "                            geometry + the model's heat-map (e.g. 1,2,3,4,6,8; needs mesh.ply)\n"
+    "  --geometry-only           with --sequence: no network rows (no model needed)\n"
+    "  --odometry-noise MM,DEG   with --sequence: also rows with seeded Gaussian noise on every motion\n"
+    "  --filter K=V,...          with --sequence: the filter's knobs (press, sigma_d, sigma_a, allowance,\n"
+    "                            network_weight, hypotheses, n_spin); fit them with --end-split train\n"
+    "  --end-split test|train    with --sequence: windows end at test touches (default) or train ones\n"
     "  --cloud full|xyz|view     the object cloud: points.csv with its normals (default), its points\n"
     "                            with estimated normals (xyz), or the single view a depth camera sees\n"
     "                            (view.xyz of vtloc synth --view; estimated normals facing the camera)\n"
@@ -82,7 +89,6 @@ eval::Options parse(const Args& a) {
     o.objects = one_of(a, "--objects", "all", {"all", "known", "unknown"});
     o.iters = a.integer("--iters", -1, 0, api::kMaxIterations);
     o.topk = a.integer("--topk", 5, 1, api::kMaxTopK);
-    o.sequence = a.integer("--sequence", 1, 1, 64);
     o.cloud = one_of(a, "--cloud", "full", {"full", "xyz", "view"});
     o.json = a.get("--json");
     o.markdown = a.get("--markdown");
@@ -179,7 +185,7 @@ void render_extremes(const eval::Options& opt, const eval::MethodResult& model, 
         ro.tactile = &image;
         char caption[256];
         std::snprintf(caption, sizeof caption, "%s: %s touch %d, error %.2f mm, rank %d%s", config.c_str(),
-                      o.name.c_str(), r.touch->id, r.m.error_mm, r.m.rank, opt.sequence > 1 ? " (belief)" : "");
+                      o.name.c_str(), r.touch->id, r.m.error_mm, r.m.rank, "");
         ro.caption = caption;
         char name[64];
         std::snprintf(name, sizeof name, "%s_%02zu_", kind.c_str(), k + 1);
@@ -239,8 +245,6 @@ void print_run_lines(const Session& s, const eval::Options& opt, const eval::Rep
         std::printf("rescale   frames of %g mm per pixel (%s) to the model's %g before the crop\n",
                     *opt.frames_mm_per_px, opt.mm_per_px ? "--mm-per-px" : "the dataset's sensor",
                     info.sensor->mm_per_px);
-    if (opt.sequence > 1)
-        std::printf("sequence  %d touches per belief window (SPEC section 6, sigma 0.2, sigma_m 0.05)\n", opt.sequence);
 }
 
 }  // namespace
@@ -256,12 +260,13 @@ int cmd_eval(Session& s, int argc, char** argv) {
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
                                   {"--markdown"},  {"--per-touch"}, {"--render"},    {"--render-count"},
                                   {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
-                                  {"--mm-per-px"}, {"--cloud"}};
+                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
     }
+    if (a.get("--sequence")) return eval::run_sequence(s, a);
     eval::Options opt = parse(a);
     if (opt.model.empty()) opt.model = default_model_path();
 

@@ -1,8 +1,7 @@
-// vtloc sequence: several touches with known motions -> a belief over the candidates.
-#include <algorithm>
+// vtloc sequence: several touches and the robot's motions between them -> the
+// sensor's pose on the object after each touch (SPEC section 6, api::Tracker).
 #include <cstdio>
 #include <fstream>
-#include <numeric>
 
 #include "apps/vtloc/report.h"
 
@@ -11,48 +10,83 @@ namespace vtloc::cli {
 namespace {
 
 const char* kHelp =
-    "usage: vtloc sequence [--model M] (--object FILE | --depth D.png --intrinsics K)\n"
-    "                      (--touch IMG[,dx,dy,dz] ... | --touches FILE.json) [options]\n"
+    "usage: vtloc sequence --object FILE --touches SEQ.json [options]\n"
     "\n"
-    "Multi-contact localisation (SPEC section 6): touches on one object, in order, with the\n"
-    "sensor's motion between them, give a belief over the candidate contact points.\n"
+    "Localisation from several touches (SPEC section 6): the online multi-touch filter follows\n"
+    "a belief over the sensor's pose on the object's surface from the geometry of the touches\n"
+    "and the motions between them, and (unless --geometry-only) each touch's network heat-map.\n"
+    "It prints, after each touch, the contact (the Bayes estimate), the most likely pose and the\n"
+    "modes of the belief.\n"
     "\n"
-    "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
-    "%s"
-    "  --touch IMG[,dx,dy,dz]    one touch (repeat, in order); dx,dy,dz = the sensor's\n"
-    "                            displacement since the previous touch, object units\n"
-    "                            (default 0,0,0; none for the first touch)\n"
-    "  --touches FILE.json       the touches as {\"touches\": [{\"tactile\": \"a.png\"},\n"
-    "                            {\"tactile\": \"b.png\", \"motion\": [dx, dy, dz]}, ...]}\n"
-    "                            (paths relative to the JSON file)\n"
-    "  --candidates F            candidate contact points (default: the object's points)\n"
-    "  --sigma S                 likelihood width, normalised frame (default 0.2)\n"
-    "  --sigma-m S               motion noise, normalised frame (default 0.05)\n"
-    "  --window W                touches used: the current one and W-1 before it (default 4, 0 = all)\n"
-    "%s"
+    "  --object FILE             a mesh (.glb .gltf .obj .off .stl .ply; sampled densely: the\n"
+    "                            surface is exact) or a cloud with normals (.ply .xyz/.csv/.txt)\n"
+    "  --touches SEQ.json        {\"format\": \"vtloc-touches/2\", \"motion\": \"relative\" | \"flange\",\n"
+    "                            \"touches\": [{\"tactile\": \"a.png\"}, {\"tactile\": \"b.png\",\n"
+    "                            \"motion\": M}, ...]}; relative: M = this touch's sensor pose in the\n"
+    "                            previous one's frame, a 4x4 matrix or {\"Q\": 3x3, \"q\": [x, y, z]};\n"
+    "                            flange: every touch has \"flange\": the flange pose in the robot's\n"
+    "                            frame (4x4), and the file or --tool gives \"tool\" (flange to sensor).\n"
+    "                            Paths relative to the file; units those of the robot (mm)\n"
+    "  --tool M16                the flange-to-sensor transform, 16 numbers row-major\n"
+    "  --object-units S          multiply the object file's coordinates by S to get the robot's\n"
+    "                            units (a glTF in metres with a robot in mm: 1000; default 1)\n"
+    "  --geometry-only           no network term (no model is loaded)\n"
+    "  --window W                touches scored exactly, older ones through a prior (default 8)\n"
+    "  --model M                 weight file for the network term (default: the shipped model)\n"
     "  --json                    print the result as JSON\n"
-    "  --heatmap OUT.ply         write the belief's heat-map as a PLY (contact_prob + colour)\n"
-    "  --render OUT.png          write a picture of the belief's heat-map\n"
+    "  --render OUT.png          the belief after each touch, side by side on the object\n"
     "\n"
-    "All tactile images must have one size. Exit status: 0 ok, 1 bad input or runtime\n"
-    "error, 2 usage error.\n";
+    "Exit status: 0 ok, 1 bad input or runtime error, 2 usage error.\n";
 
 struct Touch {
     std::string image;
-    std::optional<std::array<double, 3>> motion;
+    std::optional<api::Motion> motion;  // relative, from the previous touch
+    std::optional<api::Motion> flange;  // absolute, robot frame
 };
 
-Touch parse_touch(const std::string& arg) {
-    // IMG,dx,dy,dz: the last three comma-separated fields, when there are
-    // three more after the path (paths with commas still work without a motion).
-    size_t c3 = arg.rfind(','), c2 = c3 == std::string::npos || c3 == 0 ? std::string::npos : arg.rfind(',', c3 - 1);
-    size_t c1 = c2 == std::string::npos || c2 == 0 ? std::string::npos : arg.rfind(',', c2 - 1);
-    if (c1 == std::string::npos) return {arg, std::nullopt};
-    std::vector<double> v = parse_numbers(arg.substr(c1 + 1), 3, "--touch " + arg);
-    return {arg.substr(0, c1), std::array<double, 3>{v[0], v[1], v[2]}};
+// A 4x4 matrix (rows) or {"Q": 3x3, "q": [3]} as a rigid motion.
+api::Motion parse_motion(const nlohmann::json& m, const std::string& where) {
+    api::Motion out;
+    auto num = [&](const nlohmann::json& v) {
+        if (!v.is_number()) throw api::Error(where + ": expected a number, got " + v.dump());
+        return v.get<double>();
+    };
+    if (m.is_array() && m.size() == 3 && m[0].is_number())
+        throw api::Error(where + ": a translation [dx, dy, dz] is the old translation-only format; motions are full "
+                                 "rigid motions now (a 4x4 matrix or {\"Q\": 3x3, \"q\": [x, y, z]})");
+    if (m.is_array() && m.size() == 4) {
+        for (int r = 0; r < 4; ++r) {
+            if (!m[size_t(r)].is_array() || m[size_t(r)].size() != 4) throw api::Error(where + ": a 4x4 matrix needs 4 rows of 4");
+            for (int c = 0; c < 4; ++c) {
+                const double v = num(m[size_t(r)][size_t(c)]);
+                if (r == 3 && v != (c == 3 ? 1.0 : 0.0)) throw api::Error(where + ": the last row must be 0 0 0 1");
+                if (r < 3 && c < 3) out.R[size_t(r * 3 + c)] = v;
+                if (r < 3 && c == 3) out.t[size_t(r)] = v;
+            }
+        }
+        return out;
+    }
+    if (m.is_object() && m.contains("Q") && m.contains("q")) {
+        const nlohmann::json &Q = m["Q"], &q = m["q"];
+        if (!Q.is_array() || Q.size() != 3 || !q.is_array() || q.size() != 3)
+            throw api::Error(where + ": \"Q\" must be 3 rows of 3 and \"q\" 3 numbers");
+        for (int r = 0; r < 3; ++r) {
+            if (!Q[size_t(r)].is_array() || Q[size_t(r)].size() != 3) throw api::Error(where + ": \"Q\" must be 3 rows of 3");
+            for (int c = 0; c < 3; ++c) out.R[size_t(r * 3 + c)] = num(Q[size_t(r)][size_t(c)]);
+            out.t[size_t(r)] = num(q[size_t(r)]);
+        }
+        return out;
+    }
+    throw api::Error(where + ": a motion is a 4x4 matrix or {\"Q\": 3x3, \"q\": [x, y, z]}");
 }
 
-std::vector<Touch> read_touch_file(const std::string& path) {
+struct TouchFile {
+    std::vector<Touch> touches;
+    bool flange = false;
+    std::optional<api::Motion> tool;
+};
+
+TouchFile read_touch_file(const std::string& path) {
     std::ifstream in(path);
     if (!in) throw api::Error(path + ": cannot open");
     nlohmann::json j;
@@ -62,162 +96,136 @@ std::vector<Touch> read_touch_file(const std::string& path) {
         throw api::Error(path + ": not valid JSON");
     }
     if (!j.is_object() || !j.contains("touches") || !j["touches"].is_array())
-        throw api::Error(path + ": expected {\"touches\": [...]}");
+        throw api::Error(path + ": expected {\"format\": \"vtloc-touches/2\", \"touches\": [...]}");
+    if (!j.contains("format"))
+        throw api::Error(path + ": no \"format\": this is the old translation-only touches file; give "
+                                "\"format\": \"vtloc-touches/2\" with full rigid motions (vtloc sequence --help)");
+    if (j["format"] != "vtloc-touches/2")
+        throw api::Error(path + ": format " + j["format"].dump() + " is not \"vtloc-touches/2\"");
+    TouchFile f;
+    const std::string kind = j.value("motion", std::string("relative"));
+    if (kind != "relative" && kind != "flange") throw api::Error(path + ": \"motion\" must be \"relative\" or \"flange\"");
+    f.flange = kind == "flange";
+    if (j.contains("tool")) f.tool = parse_motion(j["tool"], path + ": tool");
     const std::filesystem::path base = std::filesystem::path(path).parent_path();
-    std::vector<Touch> out;
     for (size_t i = 0; i < j["touches"].size(); ++i) {
         const nlohmann::json& t = j["touches"][i];
         const std::string where = path + ": touch " + std::to_string(i + 1);
         if (!t.is_object() || !t.contains("tactile") || !t["tactile"].is_string())
             throw api::Error(where + " needs a \"tactile\" image path");
-        Touch touch{(base / t["tactile"].get<std::string>()).lexically_normal().string(), std::nullopt};
-        if (t.contains("motion")) {
-            const nlohmann::json& m = t["motion"];
-            if (!m.is_array() || m.size() != 3 || !m[0].is_number() || !m[1].is_number() || !m[2].is_number())
-                throw api::Error(where + ": \"motion\" must be [dx, dy, dz]");
-            touch.motion = std::array<double, 3>{m[0].get<double>(), m[1].get<double>(), m[2].get<double>()};
+        Touch touch{(base / t["tactile"].get<std::string>()).lexically_normal().string(), std::nullopt, std::nullopt};
+        if (f.flange) {
+            if (!t.contains("flange")) throw api::Error(where + " needs \"flange\" (the file's motions are flange poses)");
+            touch.flange = parse_motion(t["flange"], where + ": flange");
+        } else if (t.contains("motion")) {
+            if (i == 0) throw api::Error(where + ": the first touch has no previous one to move from; drop its motion");
+            touch.motion = parse_motion(t["motion"], where + ": motion");
+        } else if (i > 0) {
+            throw api::Error(where + " needs a \"motion\" from the previous touch");
         }
-        out.push_back(touch);
+        f.touches.push_back(touch);
     }
-    return out;
+    if (f.touches.empty()) throw api::Error(path + ": no touches");
+    return f;
 }
 
-// --touches FILE.json or the --touch options, in order.
-std::vector<Touch> gather_touches(const Args& a) {
-    std::vector<Touch> touches;
-    if (a.get("--touches") && a.flag("--touch")) throw UsageError("give --touch or --touches, not both");
-    if (auto file = a.get("--touches")) touches = read_touch_file(*file);
-    for (const std::string& t : a.all("--touch")) touches.push_back(parse_touch(t));
-    if (touches.empty()) throw UsageError("no touches: give --touch IMG[,dx,dy,dz] or --touches FILE.json");
-    if (touches[0].motion) throw api::Error("the first touch has no previous one to move from; drop its motion");
-    return touches;
-}
-
-// What the outputs and the report need of one sequence run.
-struct Run {
-    const std::vector<Touch>& touches;
-    const std::vector<std::array<double, 3>>& motions;
-    const api::ModelInfo& info;
-    const api::Object& object;
-    const api::SequenceResult& r;
-    const std::string &object_path, &candidates;
-    bool random;
-    std::vector<size_t> order;  // the most believed candidates, best first (argmax included)
-    size_t shown;               // how many of them the report shows
-
-    std::array<double, 3> candidate(size_t i) const {
-        const std::vector<float>& c = object.candidates();
-        return std::array<double, 3>{c[i * 3], c[i * 3 + 1], c[i * 3 + 2]};
-    }
-};
-
-void rank_candidates(Run& run) {
-    const std::vector<float>& belief = run.r.belief;
-    run.order.resize(belief.size());
-    std::iota(run.order.begin(), run.order.end(), size_t(0));
-    run.shown = std::min<size_t>(5, run.order.size());
-    std::partial_sort(run.order.begin(), run.order.begin() + long(run.shown), run.order.end(),
-                      [&](size_t x, size_t y) { return belief[x] > belief[y] || (belief[x] == belief[y] && x < y); });
-}
-
-nlohmann::json write_outputs(const Args& a, const Run& run) {
-    nlohmann::json outputs = nlohmann::json::object();
-    write_heatmap_option(a, run.object, run.r.heatmap, outputs);
-    if (auto p = a.get("--render")) {
-        api::RenderOptions ro;
-        ro.contact = run.r.best_point;
-        ro.caption = run.info.name + (run.random ? " (RANDOM weights)" : "") + ": belief after " +
-                     std::to_string(run.touches.size()) + " touches on " + run.object_path;
-        api::render_heatmap_png(*p, run.object, run.r.heatmap, ro);
-        outputs["render"] = *p;
-    }
-    return outputs;
-}
-
-void print_json(const Session& s, const Run& run, const nlohmann::json& outputs) {
-    const api::SequenceResult& r = run.r;
-    nlohmann::json jt = nlohmann::json::array();
-    for (size_t i = 0; i < run.touches.size(); ++i) {
-        nlohmann::json t = touch_json(r.touches[i]);
-        t["tactile"] = run.touches[i].image;
-        t["motion"] = i == 0 ? nlohmann::json(nullptr) : point_json(run.motions[i - 1]);
-        jt.push_back(t);
-    }
-    nlohmann::json top = nlohmann::json::array();
-    for (size_t k = 0; k < run.shown; ++k)
-        top.push_back({{"index", run.order[k]}, {"belief", r.belief[run.order[k]]},
-                       {"point", point_json(run.candidate(run.order[k]))}});
-    nlohmann::json j{{"model", model_json(run.info, run.random)},
-                     {"object", object_json(run.object, run.candidates)},
-                     {"touches", jt},
-                     {"belief", {{"best", r.best}, {"best_point", point_json(r.best_point)}, {"top", top},
-                                 {"values", r.belief}}},
-                     {"timings_ms", timings_json(r.timings)},
-                     {"outputs", outputs}};
-    if (s.context) j["device"] = s.context->device().name;
-    std::printf("%s\n", j.dump(2).c_str());
-}
-
-void print_text(const Run& run, const nlohmann::json& outputs) {
-    const api::SequenceResult& r = run.r;
-    print_model(run.info, run.random);
-    std::printf("object    %s: %zu points, %zu candidates%s\n", run.object_path.c_str(), run.object.cloud().size(),
-                run.object.candidate_count(),
-                run.candidates.empty() ? " (its points)" : (" from " + run.candidates).c_str());
-    for (size_t i = 0; i < run.touches.size(); ++i) {
-        std::printf("touch %zu   %s", i + 1, run.touches[i].image.c_str());
-        if (i > 0) std::printf(", moved %s", point_str(run.motions[i - 1]).c_str());
-        std::printf("\n          contact %s\n", point_str(r.touches[i].contact).c_str());
-    }
-    std::printf("belief    argmax: candidate %d at %s (belief %.3g)\n", r.best, point_str(r.best_point).c_str(),
-                double(r.belief[size_t(r.best)]));
-    for (size_t k = 1; k < run.shown; ++k)
-        std::printf("          then candidate %zu at %s (%.3g)\n", run.order[k],
-                    point_str(run.candidate(run.order[k])).c_str(), double(r.belief[run.order[k]]));
-    std::printf("time      %.1f ms for the %zu touches and the belief\n", r.timings.wall_ms, run.touches.size());
-    for (auto& [what, path] : outputs.items()) std::printf("wrote     %s\n", path.get<std::string>().c_str());
+nlohmann::json matrix_json(const api::Motion& m) {
+    return nlohmann::json::array({{m.R[0], m.R[1], m.R[2], m.t[0]},
+                                  {m.R[3], m.R[4], m.R[5], m.t[1]},
+                                  {m.R[6], m.R[7], m.R[8], m.t[2]},
+                                  {0, 0, 0, 1}});
 }
 
 }  // namespace
 
 int cmd_sequence(Session& s, int argc, char** argv) {
-    std::vector<OptionSpec> specs{{"--model"},   {"--touch", true, true}, {"--touches"},
-                                  {"--candidates"}, {"--sigma"}, {"--sigma-m"},         {"--window"},
-                                  {"--json", false}, {"--heatmap"}, {"--render"}};
-    for (OptionSpec& o : touch_option_specs()) specs.push_back(o);
-    for (OptionSpec& o : object_option_specs()) specs.push_back(o);
+    std::vector<OptionSpec> specs{{"--object"}, {"--touches"}, {"--tool"}, {"--object-units"}, {"--geometry-only", false},
+                                  {"--window"}, {"--model"}, {"--json", false}, {"--render"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
-        std::printf(kHelp, kObjectOptionsHelp, kTouchOptionsHelp);
+        std::fputs(kHelp, stdout);
         return 0;
     }
-    const std::string object_path = object_label(a);
-    if (object_path.empty()) throw UsageError("give --object FILE or --depth D.png --intrinsics fx,fy,cx,cy");
-    const std::string candidates = a.get("--candidates").value_or("");
-    const std::vector<Touch> touches = gather_touches(a);
-    api::LocalizeOptions opt = touch_options(a);
-    api::BeliefOptions belief;
-    belief.sigma = a.number("--sigma", belief.sigma);
-    belief.sigma_m = a.number("--sigma-m", belief.sigma_m);
-    belief.window = a.integer("--window", belief.window, 0, 1 << 20);
-
-    std::vector<api::TactileImage> images;
-    std::vector<std::array<double, 3>> motions;
-    for (size_t i = 0; i < touches.size(); ++i) {
-        images.push_back(api::load_tactile_image(touches[i].image));
-        if (i > 0) motions.push_back(touches[i].motion.value_or(std::array<double, 3>{0, 0, 0}));
+    const std::string object_path = a.required("--object");
+    const std::string touches_path = a.required("--touches");
+    TouchFile file = read_touch_file(touches_path);
+    if (auto t = a.get("--tool")) {
+        const std::vector<double> v = parse_numbers(*t, 16, "--tool");
+        nlohmann::json m = nlohmann::json::array();
+        for (int r = 0; r < 4; ++r) m.push_back({v[size_t(4 * r)], v[size_t(4 * r + 1)], v[size_t(4 * r + 2)], v[size_t(4 * r + 3)]});
+        file.tool = parse_motion(m, "--tool");
     }
-    const auto model_arg = a.get("--model");
-    const std::string model_file = model_arg ? *model_arg : default_model_path();
-    api::Model model = load_model(s, model_file, opt.backend);
-    api::Object object = encode_cli_object(model, a, candidates, opt.backend);
-    api::SequenceResult r = model.localize_sequence(object, images, motions, opt, belief);
+    if (file.flange && !file.tool) throw api::Error(touches_path + ": flange poses need the tool transform (\"tool\" or --tool)");
+    std::vector<std::optional<api::Motion>> motions(file.touches.size());
+    if (file.flange) {
+        std::vector<api::Motion> flange;
+        for (const Touch& t : file.touches) flange.push_back(*t.flange);
+        const std::vector<api::Motion> rel = api::motions_from_flange_poses(flange, *file.tool);
+        for (size_t i = 1; i < file.touches.size(); ++i) motions[i] = rel[i - 1];
+    } else {
+        for (size_t i = 0; i < file.touches.size(); ++i) motions[i] = file.touches[i].motion;
+    }
+    api::TrackerOptions to;
+    to.window = a.integer("--window", to.window, 1, 64);
+    to.object_units = a.number("--object-units", 1.0);
+    const bool geometry_only = a.flag("--geometry-only");
 
-    Run run{touches, motions, model.info(), object, r, object_path, candidates, is_shipped_random_model(model_file), {}, 0};
-    rank_candidates(run);
-    const nlohmann::json outputs = write_outputs(a, run);
-    if (a.flag("--json")) print_json(s, run, outputs);
-    else print_text(run, outputs);
+    std::optional<api::Model> model;
+    std::optional<api::Object> object;
+    std::string model_file;
+    if (!geometry_only) {
+        model_file = a.get("--model").value_or(default_model_path());
+        model.emplace(load_model(s, model_file, api::Backend::Gpu));
+        object = model->encode_object(object_path);
+    }
+    api::Tracker tracker(s.gpu(), object_path, to);
+    std::vector<api::TrackerEstimate> steps;
+    nlohmann::json jt = nlohmann::json::array();
+    const bool json = a.flag("--json");
+    if (!json) {
+        if (model) print_model(model->info(), is_shipped_random_model(model_file));
+        std::printf("object    %s: hypotheses %zu surface samples x %d spins (%.2f mm apart), %.1f MiB on the GPU%s\n",
+                    object_path.c_str(), tracker.sample_points().size() / 3, tracker.n_spin(), tracker.spacing_mm(),
+                    double(tracker.device_bytes()) / 1048576.0, geometry_only ? ", geometry only" : "");
+    }
+    for (size_t i = 0; i < file.touches.size(); ++i) {
+        std::optional<api::TouchResult> r;
+        if (model) {
+            const api::TactileImage im = api::load_tactile_image(file.touches[i].image);
+            r = model->localize(*object, im);
+        } else if (!std::filesystem::exists(file.touches[i].image)) {
+            throw api::Error(file.touches[i].image + ": no such file (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
+        }
+        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr);
+        const api::TrackerEstimate e = tracker.estimate();
+        steps.push_back(e);
+        nlohmann::json modes = nlohmann::json::array();
+        for (const api::TrackerMode& m : e.modes) modes.push_back({{"contact", point_json(m.contact)}, {"probability", m.probability}});
+        nlohmann::json t{{"tactile", file.touches[i].image}, {"contact", point_json(e.contact)}, {"pose", matrix_json(e.pose)},
+                         {"pose_contact", point_json(e.pose_contact)}, {"modes", modes}, {"mass_within_5mm", e.mass_within_5mm}};
+        if (file.flange)  // the object in the robot's frame: flange * tool * inverse(sensor pose in the object)
+            t["object_in_robot"] = matrix_json(api::compose(api::compose(*file.touches[i].flange, *file.tool), api::inverse(e.pose)));
+        jt.push_back(t);
+        if (!json)
+            std::printf("touch %-3zu %s\n          contact %s, belief within 5 mm %.2f; best mode %s (p %.2f)\n", i + 1,
+                        file.touches[i].image.c_str(), point_str(e.contact).c_str(), e.mass_within_5mm,
+                        point_str(e.modes.empty() ? e.contact : e.modes[0].contact).c_str(),
+                        e.modes.empty() ? 0.0 : e.modes[0].probability);
+    }
+    nlohmann::json outputs = nlohmann::json::object();
+    if (auto p = a.get("--render")) {
+        std::vector<std::string> captions;
+        for (size_t i = 0; i < steps.size(); ++i) captions.push_back("belief after touch " + std::to_string(i + 1));
+        api::render_tracker_png(*p, tracker, steps, captions);
+        outputs["render"] = *p;
+        if (!json) std::printf("wrote     %s\n", p->c_str());
+    }
+    if (json) {
+        nlohmann::json j{{"object", object_path}, {"geometry_only", geometry_only}, {"touches", jt}, {"outputs", outputs}};
+        if (model) j["model"] = model_json(model->info(), is_shipped_random_model(model_file));
+        if (s.context) j["device"] = s.context->device().name;
+        std::printf("%s\n", j.dump(2).c_str());
+    }
     return 0;
 }
 

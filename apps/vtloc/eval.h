@@ -12,13 +12,15 @@
 
 namespace vtloc::cli::eval {
 
+// vtloc eval --sequence (eval_sequence.cpp): SPEC 6's protocols; prints and writes its own report.
+int run_sequence(Session& s, const Args& a);
+
 struct Options {
     std::string model, data;
     std::string split = "test";    // test | train | all
     std::string objects = "all";   // all | known | unknown
     int iters = -1;                // -1 = the model's default
     int topk = 5;
-    int sequence = 1;              // touches per belief window (1 = single touches)
     std::string cloud = "full";    // full (points.csv) | xyz (its points, normals estimated) | view (view.xyz)
     std::optional<std::string> json, markdown, per_touch, render_dir;
     int render_count = 3;
@@ -85,10 +87,9 @@ struct Report {
 std::string image_path(const sim::ObjectRecord& o, const sim::TouchRecord& t);
 
 // ---- eval_run.cpp -----------------------------------------------------------
-// Runs the model on every job's touches (batches per object, or belief windows
-// with opt.sequence > 1). Touches whose image cannot be read are skipped into
-// `skips` and dropped from their job with --skip-bad, else throw. engine_ms =
-// wall time of the engine calls (localize / localize_sequence).
+// Runs the model on every job's touches (batches per object). Touches whose
+// image cannot be read are skipped into `skips` and dropped from their job with
+// --skip-bad, else throw. engine_ms = wall time of the engine calls (localize).
 MethodResult run_model(api::Model& model, std::vector<Job>& jobs, const Options& opt, std::vector<Skip>& skips,
                        double& engine_ms);
 

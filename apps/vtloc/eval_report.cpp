@@ -86,7 +86,7 @@ void write_markdown(const std::string& path, const Report& rep) {
     }
     md << "\n" << rep.opt.split << " touches, " << rep.opt.objects << " objects, " << rep.iters
        << " ILU iterations, " << cloud_label(rep.opt.cloud)
-       << ", top-" << rep.opt.topk << (rep.opt.sequence > 1 ? ", sequences of " + std::to_string(rep.opt.sequence) : "")
+       << ", top-" << rep.opt.topk
        << "; " << fmt("%.2f", rep.time_per_touch_ms) << " ms engine time per touch.\n";
     for (const std::string& n : rep.notes) md << "\n" << n << "\n";
     for (const std::string& w : rep.warnings) md << "\n**" << w << "**\n";
@@ -119,7 +119,7 @@ void write_json(const std::string& path, const Report& rep, const MethodResult& 
                      {"objects", rep.opt.objects},
                      {"iters", rep.head == "mcr" ? nlohmann::json(nullptr) : nlohmann::json(rep.iters)},
                      {"topk", rep.opt.topk},
-                     {"sequence", rep.opt.sequence},
+                     {"sequence", 1},  // single touches; several: vtloc eval --sequence (its own report)
                      {"cloud", rep.opt.cloud},
                      {"mm_per_px", rep.opt.frames_mm_per_px ? nlohmann::json(*rep.opt.frames_mm_per_px)
                                                             : nlohmann::json(nullptr)},

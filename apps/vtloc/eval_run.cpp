@@ -1,4 +1,4 @@
-// vtloc eval: the model's touches, in batches per object or as belief windows.
+// vtloc eval: the model's touches, in batches per object.
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -134,8 +134,7 @@ public:
         api::Object object = encode(model_, job, opt_);
         res.encoded.push_back(object);
         kept_.clear();
-        if (opt_.sequence <= 1) batches(ji, job, object, lo, cache);
-        else windows(ji, job, object, lo, cache);
+        batches(ji, job, object, lo, cache);
         job.touches = kept_;
     }
 
@@ -187,41 +186,6 @@ private:
                     record(ji, job, batch[i], r[i].contact, {}, std::move(r[i].heatmap));
             }
             progress_.advance(std::min(job.touches.size(), b + kBatch) - b);
-        }
-    }
-
-    void windows(size_t ji, const Job& job, const api::Object& object, const api::LocalizeOptions& lo,
-                 ImageCache& cache) {
-        // The collection path: train and test touches by `order`. The belief
-        // window is a touch and the (sequence - 1) touches before it there.
-        std::vector<const sim::TouchRecord*> path;
-        for (const sim::TouchRecord& t : job.rec->touches)
-            if (t.order >= 0 && t.split != "extra") path.push_back(&t);
-        std::stable_sort(path.begin(), path.end(), [](auto* x, auto* y) { return x->order < y->order; });
-        for (const sim::TouchRecord* t : job.touches) {
-            progress_.advance();
-            if (!cache.get(*t, true)) continue;
-            std::vector<const sim::TouchRecord*> window{t};
-            const auto at = std::find(path.begin(), path.end(), t);
-            for (auto it = at; it != path.end() && it != path.begin() && int(window.size()) < opt_.sequence;) {
-                --it;
-                if (!cache.get(**it, false)) break;  // an unreadable predecessor ends the window
-                window.insert(window.begin(), *it);
-            }
-            std::vector<api::TactileImage> images;
-            std::vector<std::array<double, 3>> motions;
-            for (size_t i = 0; i < window.size(); ++i) {
-                images.push_back(*cache.get(*window[i], false));
-                if (i > 0) motions.push_back(window[i]->motion);
-            }
-            api::BeliefOptions belief;
-            belief.window = opt_.sequence;
-            const std::string shape = shape_key('s', images, job.geom.candidates.size());
-            api::SequenceResult r =
-                timed(shape, [&] { return model_.localize_sequence(object, images, motions, lo, belief); });
-            // The prediction is the argmax candidate itself (exact, not the float round trip);
-            // rank as for single touches: candidates by distance to it.
-            record(ji, job, t, job.geom.candidates[size_t(r.best)], {}, std::move(r.heatmap));
         }
     }
 

@@ -198,41 +198,5 @@ TouchResult Model::localize(const Object& object, const TactileImage& image, con
     return std::move(localize(object, std::vector<TactileImage>{image}, options).at(0));
 }
 
-SequenceResult Model::localize_sequence(const Object& object, const std::vector<TactileImage>& images,
-                                        const std::vector<std::array<double, 3>>& motions,
-                                        const LocalizeOptions& options, const BeliefOptions& belief) {
-    return guarded([&] {
-        const Object::Impl& o = object_for(object.impl_, *impl_);
-        if (images.empty()) throw Error("a touch sequence needs at least one touch");
-        if (!(belief.sigma > 0) || !(belief.sigma_m > 0))
-            throw Error("the belief's sigma and sigma_m must be positive");
-        if (belief.window < 0) throw Error("the belief window must be >= 0 (0 = every touch)");
-        TouchOptions topt = touch_options(impl_->info, o, options);
-        const std::vector<TactileImage> scaled = model_frames(impl_->info, images, options);
-        std::vector<HostTensor> batch;
-        for (const TactileImage& im : scaled.empty() ? images : scaled) batch.push_back(image_tensor(im));
-        std::lock_guard<std::mutex> lock(impl_->mu);
-        VtlocRunner& runner = impl_->runner(options.backend);
-        runner.set_profiling(options.profile);
-        auto t0 = std::chrono::steady_clock::now();
-        vtloc::SequenceResult s =
-            runner.localize_sequence(o.encoded, batch, motions, topt, {belief.sigma, belief.sigma_m, belief.window});
-        SequenceResult out;
-        out.timings.wall_ms = ms_since(t0);
-        for (size_t i = 0; i < s.touches.size(); ++i) {
-            out.touches.push_back(convert(s.touches[i], o));
-            out.touches.back().timings.wall_ms = out.timings.wall_ms;
-            if (options.keep_tensors)
-                out.touches.back().tensors =
-                    all_tensors(o, images[i], s.touches[i], scaled.empty() ? nullptr : &scaled[i]);
-        }
-        out.belief = s.belief;
-        out.best = s.best;
-        out.best_point = {o.candidates[size_t(s.best) * 3], o.candidates[size_t(s.best) * 3 + 1],
-                          o.candidates[size_t(s.best) * 3 + 2]};
-        out.heatmap = s.heatmap;
-        return out;
-    });
-}
 
 }  // namespace vtloc::api

@@ -1,7 +1,7 @@
 // Self-test cases: disentangle (whole and split into row chunks), gma_decode,
 // chamfer (one set and a batch), ilu (1/4/8/16 lanes per row, register-resident), ilu_step, topk (ties;
-// a batch with its heat-maps), heatmap (with and without symmetry), retrieve and ilu_retrieve (both paths) and belief (the shapes of tests/test_gma_ops.cpp,
-// test_ilu_op.cpp, test_topk_heatmap.cpp and test_belief.cpp).
+// a batch with its heat-maps), heatmap (with and without symmetry), retrieve and ilu_retrieve (both paths); the shapes of tests/test_gma_ops.cpp,
+// test_ilu_op.cpp and test_topk_heatmap.cpp.
 #include <cmath>
 
 #include "engine/check/op_selftest.h"
@@ -162,18 +162,6 @@ std::vector<OpCase> head_cases(const rt::DeviceInfo&) {
         v.push_back(std::move(c));
     }
 
-    struct Belief { int64_t M, T; double window; };
-    for (Belief k : {Belief{37, 1, 4}, Belief{37, 6, 4}, Belief{1000, 3, 0}}) {
-        OpCase c("belief", std::to_string(k.M) + " candidates, " + std::to_string(k.T) + " touches, window " +
-                               std::to_string(int(k.window)));
-        std::vector<int> o2 = ops::belief(c.g, c.input("cand", random_tensor({k.M, 3}, uint32_t(k.M))),
-                                          c.input("cp", random_tensor({k.T, 3}, uint32_t(k.T) + 5, -0.8f, 0.8f)),
-                                          c.input("d", random_tensor({k.T - 1, 3}, 9, -0.1f, 0.1f)),
-                                          ops::Belief{0.2, 0.05, int(k.window)});
-        c.output(o2[0], "belief");
-        c.output(o2[1], "log");
-        v.push_back(std::move(c));
-    }
     return v;
 }
 

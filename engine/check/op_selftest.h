@@ -46,7 +46,8 @@ HostTensor uneven_balls(int64_t S, int64_t NS, int64_t P);
 std::vector<OpCase> dense_cases(const rt::DeviceInfo& d);  // linear, binary, activations, concat, flatten
 std::vector<OpCase> image_cases(const rt::DeviceInfo& d);  // conv2d, pools, tactile_preprocess
 std::vector<OpCase> point_cases(const rt::DeviceInfo& d);  // fps, ball_query, grouping, cloud_normalize
-std::vector<OpCase> head_cases(const rt::DeviceInfo& d);   // GMA, chamfer, ILU, top-K, heat-map, belief
+std::vector<OpCase> head_cases(const rt::DeviceInfo& d);   // GMA, chamfer, ILU, top-K, heat-map
+std::vector<OpCase> track_cases(const rt::DeviceInfo& d);  // the multi-touch filter's ops
 
 struct OpCaseResult {
     std::string op, variant;

@@ -45,30 +45,4 @@ void require_finite(const HostTensor& t, const std::string& what) {
             throw Error(what + " holds " + (std::isnan(t.data[i]) ? "NaN" : "inf") + " at element " + std::to_string(i));
 }
 
-std::vector<float> belief_heatmap(const HostTensor& cloud, const HostTensor& candidates,
-                                  const std::vector<float>& belief) {
-    const int64_t P = cloud.shape.at(0), D = cloud.shape.at(1), M = candidates.shape.at(0);
-    if (int64_t(belief.size()) != M) throw Error("belief has " + std::to_string(belief.size()) + " entries for " +
-                                                 std::to_string(M) + " candidates");
-    std::vector<double> s(static_cast<size_t>(P));
-    for (int64_t p = 0; p < P; ++p) {
-        double best = std::numeric_limits<double>::infinity();
-        int64_t j_best = 0;
-        for (int64_t j = 0; j < M; ++j) {
-            double d = 0.0;
-            for (int c = 0; c < 3; ++c) {
-                double e = double(cloud.data[size_t(p * D + c)]) - candidates.data[size_t(j * 3 + c)];
-                d += e * e;
-            }
-            if (d < best) best = d, j_best = j;
-        }
-        s[size_t(p)] = belief[size_t(j_best)];
-    }
-    auto [lo, hi] = std::minmax_element(s.begin(), s.end());
-    std::vector<float> out(size_t(P), 0.0f);
-    if (P == 0 || *hi == *lo) return out;
-    for (int64_t p = 0; p < P; ++p) out[size_t(p)] = float((s[size_t(p)] - *lo) / (*hi - *lo));
-    return out;
-}
-
 }  // namespace vtloc

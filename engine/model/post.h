@@ -16,13 +16,6 @@ namespace vtloc {
 HostTensor symmetry_transforms(const std::array<double, 3>& axis_point, const std::array<double, 3>& axis_dir,
                                int order);
 
-// The multi-contact belief spread over the cloud (weights_tools/post.py
-// belief_heatmap): each point of cloud [P, D >= 3] takes the belief of its
-// nearest candidate [M, 3] (lowest index on a tie), then min-max normalised
-// (zeros when flat). On the host: it runs once per sequence, after the GPU work.
-std::vector<float> belief_heatmap(const HostTensor& cloud, const HostTensor& candidates,
-                                  const std::vector<float>& belief);
-
 // Throws naming `what` when t holds NaN or inf (the GPU ops would only propagate them).
 void require_finite(const HostTensor& t, const std::string& what);
 

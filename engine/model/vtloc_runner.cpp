@@ -263,42 +263,4 @@ VtlocRunner::Prepared VtlocRunner::prepare_once(const HostTensor& image, const H
     return {build_vtloc_graph(config_, weights_, r.spec), std::move(r.inputs)};
 }
 
-SequenceResult VtlocRunner::localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,
-                                              const std::vector<std::array<double, 3>>& motions,
-                                              const TouchOptions& options, const BeliefOptions& belief) {
-    const int64_t T = int64_t(images.size());
-    if (T == 0) throw Error("a touch sequence needs at least one touch");
-    if (int64_t(motions.size()) != T - 1)
-        throw Error("a sequence of " + std::to_string(T) + " touches needs " + std::to_string(T - 1) +
-                    " motions between them, got " + std::to_string(motions.size()));
-    SequenceResult r;
-    r.touches = localize(object, images, options);
-
-    HostTensor contacts({T, 3}), moves({T - 1, 3});
-    for (int64_t t = 0; t < T; ++t)
-        for (int i = 0; i < 3; ++i) contacts.data[size_t(t * 3 + i)] = float(r.touches[size_t(t)].contact_normalised[size_t(i)]);
-    for (int64_t t = 0; t + 1 < T; ++t)
-        for (int i = 0; i < 3; ++i) {
-            double d = motions[size_t(t)][size_t(i)];
-            if (!std::isfinite(d)) throw Error("motion " + std::to_string(t) + " holds NaN or inf");
-            moves.data[size_t(t * 3 + i)] = float(d / object.frame.scale);
-        }
-    const int64_t M = object.candidates.shape[0];
-    std::string key = "belief/m" + std::to_string(M) + "/t" + std::to_string(T) + "/" + std::to_string(belief.sigma) +
-                      "/" + std::to_string(belief.sigma_m) + "/" + std::to_string(belief.window);
-    TensorMap out = run_graph(key, [&] {
-        Graph g;
-        int c = g.input("candidates", {M, 3});
-        auto b = ops::belief(g, c, g.input("contacts", {T, 3}), g.input("motions", {T - 1, 3}),
-                             ops::Belief{belief.sigma, belief.sigma_m, belief.window}, "belief");
-        g.output(b.at(0), "belief");
-        return g;
-    }, {{"candidates", object.candidates}, {"contacts", contacts}, {"motions", moves}});
-    r.belief = out.at("belief").data;
-    r.best = int32_t(std::max_element(r.belief.begin(), r.belief.end()) - r.belief.begin());
-    r.best_point = from_frame(&object.candidates.data[size_t(r.best) * 3], object.frame);
-    r.heatmap = belief_heatmap(object.target, object.candidates, r.belief);
-    return r;
-}
-
 }  // namespace vtloc

@@ -57,21 +57,6 @@ struct TouchResult {
     std::optional<float> alignment;        // chamfer(P^d, P) when GMA ran
 };
 
-struct BeliefOptions {
-    double sigma = 0.2;     // likelihood width (normalised frame)
-    double sigma_m = 0.05;  // motion noise (normalised frame)
-    int window = 4;         // touches used: the current one and window-1 before it (0 = all)
-};
-
-// Multi-contact localisation (SPEC section 6) over a sequence of touches.
-struct SequenceResult {
-    std::vector<TouchResult> touches;   // each touch on its own
-    std::vector<float> belief;          // over the candidates, sums to 1
-    int32_t best = -1;                  // argmax of the belief (lowest index on a tie)
-    std::array<double, 3> best_point{}; // that candidate, object units
-    std::vector<float> heatmap;         // belief spread over the cloud, min-max normalised
-};
-
 class VtlocRunner {
 public:
     // gpu == nullptr runs the CPU reference implementations. config: the
@@ -108,13 +93,6 @@ public:
     };
     Prepared prepare_once(const HostTensor& image, const HostTensor& cloud, const HostTensor* candidates,
                           const TouchOptions& options = {});
-
-    // Touches with known sensor motions between them: motions[t-1] is the
-    // displacement (object units) from touch t-1 to touch t. All touches run in
-    // one submit, then the belief update in another.
-    SequenceResult localize_sequence(const EncodedObject& object, const std::vector<HostTensor>& images,
-                                     const std::vector<std::array<double, 3>>& motions,
-                                     const TouchOptions& options = {}, const BeliefOptions& belief = {});
 
     // Time per node of the last run, in schedule order: GPU timestamps, or the
     // wall time of each CPU reference node on the CPU backend. Empty without

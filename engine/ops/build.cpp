@@ -134,11 +134,6 @@ std::vector<int> retrieve(Graph& g, int contact, int candidates, int cloud, int 
     return g.add("retrieve", in, p, name);
 }
 
-std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name) {
-    return g.add("belief", {candidates, contacts, motions},
-                 {{"sigma", b.sigma}, {"sigma_m", b.sigma_m}, {"window", double(b.window)}}, name);
-}
-
 int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,
                   const PoseEvidence& p, const std::string& name) {
     Params q{{"press", p.press}, {"log_floor", p.log_floor}, {"field_floor", p.field_floor}, {"ox", p.origin[0]},

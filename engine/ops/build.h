@@ -89,12 +89,6 @@ int heatmap(Graph& g, int cloud, int candidates, int index, int symmetry, const 
 // subgroup = false: the two ops' other shaders.
 std::vector<int> retrieve(Graph& g, int contact, int candidates, int cloud, int symmetry, int64_t k,
                           const std::string& name = "", bool subgroup = true);
-struct Belief {
-    double sigma = 0.2, sigma_m = 0.05;
-    int window = 4;
-};
-// candidates [M, 3], the touches' contacts [T, 3], the motions between them [T - 1, 3].
-std::vector<int> belief(Graph& g, int candidates, int contacts, int motions, const Belief& b, const std::string& name = "");
 
 // Multi-touch filter (SPEC 6; engine/track/ builds the grid these read).
 struct PoseEvidence {

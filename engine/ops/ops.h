@@ -40,7 +40,6 @@ extern const OpDef op_topk;         // topk.cpp
 extern const OpDef op_heatmap;      // heatmap.cpp
 extern const OpDef op_retrieve;     // retrieve.cpp (topk + heatmap)
 extern const OpDef op_ilu_retrieve; // ilu_retrieve.cpp (ilu + retrieve)
-extern const OpDef op_belief;       // belief.cpp
 extern const OpDef op_pose_evidence;     // pose_evidence.cpp (multi-touch filter)
 extern const OpDef op_log_softmax;       // log_softmax.cpp
 extern const OpDef op_spin_marginal;     // pose_reduce.cpp

@@ -30,7 +30,6 @@ const OpDef* const kOps[] = {
     &ops::op_heatmap,
     &ops::op_retrieve,
     &ops::op_ilu_retrieve,
-    &ops::op_belief,
     &ops::op_pose_evidence,
     &ops::op_log_softmax,
     &ops::op_spin_marginal,

@@ -229,6 +229,7 @@ ObjectRecord read_object(const fs::path& root, const json& entry, const fs::path
     o.scale_mm = optional_field<double>(j, "scale_mm", 0.0, oj);
     o.diameter_mm = optional_field<double>(j, "diameter_mm", 0.0, oj);
     o.sample_seed = optional_field<uint64_t>(j, "sample_seed", uint64_t(0), oj);
+    if (j.contains("symmetry")) o.symmetry = symmetry_from_json(j["symmetry"], oj.string());
 
     read_points(o, dir, n_points);
     read_touches(o, dir);
@@ -285,6 +286,7 @@ void write_object_json(const std::string& path, const ObjectRecord& o) {
     json j = {{"name", o.name},         {"source", o.source},         {"scale_mm", o.scale_mm},
               {"diameter_mm", o.diameter_mm}, {"subset", o.subset},   {"dn_share", o.dn_share},
               {"n_points", o.n_points}, {"sample_seed", o.sample_seed}};
+    j["symmetry"] = symmetry_json(o.symmetry);
     write_file_atomic(path, j.dump(1) + "\n");
 }
 

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "base/atomic_write.h"
+#include "engine/sim/symmetry.h"
 #include "engine/tensor.h"
 
 namespace vtloc::sim {
@@ -45,6 +46,7 @@ struct ObjectRecord {
     std::string folder;            // absolute or relative to the dataset root, as read
     HostTensor points;             // N x 6, mm
     std::vector<TouchRecord> touches;  // in id order
+    Symmetry symmetry;             // its rigid symmetries (none unless declared: object.json "symmetry")
     bool has_mesh = false;         // mesh.ply present
     bool has_background = false;   // background.png present
 

@@ -1,6 +1,7 @@
 // One object of a `vtloc synth` dataset (docs/dataset.md): mesh, cloud,
 // contacts, touches, collection order and files.
 #include "engine/sim/object_builder.h"
+#include "engine/sim/symmetry.h"
 
 #include <algorithm>
 #include <cmath>
@@ -25,7 +26,7 @@ namespace vtloc::sim {
 namespace {
 
 // Mesh scaled so its largest bounding-box side is scale_mm, centred on its box.
-io::TriangleMesh scaled(io::TriangleMesh m, double scale_mm) {
+io::TriangleMesh scaled(io::TriangleMesh m, double scale_mm, double* f_out = nullptr, Vec3d* centre_out = nullptr) {
     double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
     for (size_t i = 0; i < m.vertex_count(); ++i)
         for (int k = 0; k < 3; ++k) {
@@ -34,6 +35,8 @@ io::TriangleMesh scaled(io::TriangleMesh m, double scale_mm) {
         }
     double side = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
     double f = scale_mm / side;
+    if (f_out) *f_out = f;
+    if (centre_out) *centre_out = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
     for (size_t i = 0; i < m.vertex_count(); ++i)
         for (int k = 0; k < 3; ++k) {
             float& v = m.positions[i * 3 + size_t(k)];
@@ -126,9 +129,11 @@ void write_touch(const fs::path& dir, const TouchRecord& r, const Touch& t, int 
 namespace {
 
 // The object's mesh, scaled so its largest side is the given or drawn size (mm).
-io::TriangleMesh object_mesh(const Job& job, io::SplitMix64& rng, double& scale) {
+// A procedural shape's symmetry group moves with it (`symmetry`, else none).
+io::TriangleMesh object_mesh(const Job& job, io::SplitMix64& rng, double& scale, Symmetry* symmetry = nullptr) {
     io::TriangleMesh mesh;
-    if (job.src.source.rfind("shape:", 0) == 0) {
+    const bool shape = job.src.source.rfind("shape:", 0) == 0;
+    if (shape) {
         mesh = make_shape(job.name);
         scale = job.src.scale_mm ? *job.src.scale_mm : shape_scale_mm(job.name);
     } else {
@@ -137,7 +142,11 @@ io::TriangleMesh object_mesh(const Job& job, io::SplitMix64& rng, double& scale)
     }
     if (!(scale >= 1 && scale <= 10000))
         throw Error(job.src.source + ": scale " + std::to_string(scale) + " mm is outside 1..10000");
-    return scaled(std::move(mesh), scale);
+    double f = 1;
+    Vec3d centre{};
+    io::TriangleMesh out = scaled(std::move(mesh), scale, &f, &centre);
+    if (symmetry && shape) *symmetry = scaled_symmetry(shape_symmetry(job.name), f, centre);
+    return out;
 }
 
 // Contact draws: area-weighted surface samples in batches of 256, each rendered
@@ -277,9 +286,11 @@ ObjectRecord build_object(const Job& job, Shared& sh) {
     const BuildOptions& opt = sh.opt;
     io::SplitMix64 rng(opt.seed * 0x9E3779B97F4A7C15ull + uint64_t(job.index) * 0xD1B54A32D192ED03ull + 1);
     double scale = 0;
-    const io::TriangleMesh mesh = object_mesh(job, rng, scale);
+    Symmetry symmetry;
+    const io::TriangleMesh mesh = object_mesh(job, rng, scale, &symmetry);
 
     ObjectRecord o;
+    o.symmetry = symmetry;
     o.name = job.name;
     o.source = job.src.source.rfind("shape:", 0) == 0 ? job.src.source : fs::path(job.src.source).filename().string();
     o.scale_mm = scale;

@@ -64,8 +64,7 @@ def test_bad_options(tiny, mug, touch):
     expect("mm_per_px: expected a number", tiny.localize, mug, touch, mm_per_px="0.1")
     expect("no sensor pixel size", tiny.localize, mug, touch, mm_per_px=0.1)
     expect("axis_dir: expected 3 numbers", vtloc.Symmetry, (0, 0, 0), (0, 1), 2)
-    expect("motions: expected a float32 or float64 array of shape (N, 3)", tiny.localize_sequence, mug,
-           [touch, touch], np.zeros((1, 2)))
+
     expect("heat: expected a 1-D float32 or float64 array", vtloc.write_heatmap_ply, "/tmp/x.ply", mug,
            np.zeros((2, 2), np.float32))
 
@@ -76,3 +75,17 @@ def test_bad_files(ctx, tmp_path):
     expect("bad.safetensors", vtloc.Model, ctx, str(bad))
     expect("nosuch", vtloc.inspect_model, str(tmp_path / "nosuch.safetensors"))
     expect("nosuch", vtloc.Context, "nosuch-device-name")
+
+
+def test_bad_tracker_inputs(ctx, root):
+    tr = vtloc.Tracker(ctx, os.path.join(root, "examples", "mug.glb"), hypotheses=20000)
+    expect("motion: expected a float32 or float64 4 x 4 array", tr.add_touch, np.zeros((3, 3)))
+    expect("touch 1: the first touch has no previous one", tr.add_touch, np.eye(4))
+    tr.add_touch()
+    bad = np.eye(4)
+    bad[0, 0] = 2
+    expect("touch 2's motion: the 3x3 part is not a rotation", tr.add_touch, bad)
+    nan = np.eye(4)
+    nan[1, 3] = np.nan
+    expect("NaN or inf", tr.add_touch, nan)
+    expect("needs a normal per point", vtloc.Tracker, ctx, np.zeros((10, 3), np.float32))

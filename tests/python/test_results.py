@@ -37,21 +37,25 @@ def test_localize_equals_the_cli(cli, tiny, tiny_path, mug, touch, root, tmp_pat
     assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
 
 
-def test_sequence_equals_the_cli(cli, tiny, tiny_path, mug, root, tmp_path):
-    frames = [os.path.join(root, "examples", f"touch_0{i}.png") for i in (1, 2, 3)]
-    motions = np.array([[1.0, 0.0, 0.0], [0.0, 2.0, 0.0]])
-    touch_args = ["--touch", frames[0]]
-    for f, m in zip(frames[1:], motions.tolist()):
-        touch_args += ["--touch", f"{f},{m[0]},{m[1]},{m[2]}"]
-    out = json.loads(run_cli(cli, "sequence", "--model", tiny_path, "--object",
-                             os.path.join(root, "examples", "mug.glb"), *touch_args, "--json"))
-    s = tiny.localize_sequence(mug, frames, motions)
-    assert s.best == out["belief"]["best"]
-    assert s.best_point.tolist() == out["belief"]["best_point"]
-    assert np.array_equal(s.belief, np.array(out["belief"]["values"], dtype=np.float32))
-    assert abs(float(s.belief.sum()) - 1.0) < 1e-5
-    for t, single in zip(s.touches, tiny.localize(mug, frames)):
-        assert np.array_equal(t.contact, single.contact)
+def test_tracker_equals_the_cli(cli, ctx, root):
+    seq = os.path.join(root, "tests", "cli", "data", "sequence.json")
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    out = json.loads(run_cli(cli, "sequence", "--object", mug_path, "--touches", seq, "--geometry-only", "--json"))
+    with open(seq) as f:
+        spec = json.load(f)
+    t = vtloc.Tracker(ctx, mug_path)
+    for touch, cli_touch in zip(spec["touches"], out["touches"]):
+        m = touch.get("motion")
+        if isinstance(m, dict):  # {"Q": 3x3, "q": 3}
+            m = np.vstack([np.hstack([np.array(m["Q"]), np.array(m["q"])[:, None]]), [0, 0, 0, 1]])
+        t.add_touch(None if m is None else np.array(m, dtype=np.float64))
+        e = t.estimate()
+        assert e["contact"].tolist() == cli_touch["contact"]
+        assert e["pose"].tolist() == cli_touch["pose"]
+        assert abs(float(e["sample_belief"].sum()) - 1.0) < 1e-4
+    assert t.touches == 3 and t.belief.shape == (t.sample_points.shape[0] * t.n_spin,)
+    win = t.evaluate_window([np.eye(4)])
+    assert len(win["window_poses"]) == 2 and win["pose"].shape == (4, 4)
 
 
 def test_batch_equals_single_touches(tiny, mug, root):

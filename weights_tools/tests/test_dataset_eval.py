@@ -174,16 +174,6 @@ def test_aggregation_per_object_first():
     assert rows["uniform"]["mm"] == 1.0 and rows["non-uniform"]["top5"] == 0.0
 
 
-def test_belief_prediction_follows_motion():
-    f = _frame()
-    c = f.cand.numpy()
-    # three noisy predictions near candidates 0 -> 2 -> 5, with the true motions between them
-    preds = np.stack([c[0] + 0.4, c[2] - 0.3, c[5] + 0.2])
-    motions = np.stack([c[2] - c[0], c[5] - c[2]])
-    best, b, heat = metrics.belief_prediction(f, preds, motions)
-    assert best == 5 and b.sum() == pytest.approx(1.0) and float(heat.max()) == 1.0
-
-
 # ---------------------------------------------------------------- eval.py
 
 def test_eval_end_to_end(data_dir, tiny_weights, tmp_path):
@@ -217,26 +207,12 @@ def test_eval_end_to_end(data_dir, tiny_weights, tmp_path):
     assert np.allclose(direct, pt[0]["contact"], atol=1e-5)
 
 
-def test_eval_filters_and_sequence(data_dir, tiny_weights):
+def test_eval_filters(data_dir, tiny_weights):
     from weights_tools import model as model_mod
     m = model_mod.load(tiny_weights)
     ds = read_dataset(data_dir)
     rows, per_touch, _, _ = eval_mod.evaluate(m, ds, split="train", objects="unknown")
     assert {p["object"] for p in per_touch} == {"shape02"} and len(per_touch) == 6
-    rows, per_touch, _, n_run = eval_mod.evaluate(m, ds, split="test", objects="known", sequence=4)
-    assert len(per_touch) == 8 and n_run > 8  # predecessors (train touches) were run too
-    for p in per_touch:  # the sequence prediction is a candidate
-        o = ds.object(p["object"])
-        assert np.min(np.linalg.norm(o.candidates - p["contact"], axis=1)) < 1e-9
-    # the first touch of a path has no predecessor: belief of its own prediction only
-    o = ds.objects[0]
-    first = eval_mod.collection_path(o)[0]
-    _, pt1, _, _ = eval_mod.evaluate(m, ds, split="all", objects="known", sequence=4)
-    rec = [p for p in pt1 if p["object"] == o.name and p["touch"] == first.id][0]
-    f = metrics.ObjectFrame(o.points, o.candidates)
-    pred = eval_mod.predict(m, o, [first])
-    best, _, _ = metrics.belief_prediction(f, pred, np.zeros((0, 3)))
-    assert np.allclose(rec["contact"], o.candidates[best])
 
 
 def test_eval_cli_errors(tiny_weights, tmp_path, capsys):

@@ -84,38 +84,3 @@ def test_chamfer_hand_and_brute_force():
     want = (sum(min(d2(p, q) for q in bl) for p in al) / len(al)
             + sum(min(d2(p, q) for p in al) for q in bl) / len(bl))
     assert abs(float(post.chamfer(a, b)) - want) < 1e-9
-
-
-def _ambiguous_sequence():
-    cands = torch.tensor([
-        [-0.1, 0.7, 0],   # 0: distractor nearest the second prediction
-        [0.5, 0.0, 0],    # 1: mirror of 3 for the first touch
-        [-0.5, 0.4, 0],   # 2: true second contact = 3 + motion
-        [-0.5, 0.0, 0],   # 3: true first contact
-        [0.9, 0.9, 0],    # 4: unrelated
-    ], dtype=torch.float64)
-    contacts = torch.tensor([[0.0, 0.0, 0],     # equidistant from 1 and 3
-                             [-0.29, 0.56, 0]], dtype=torch.float64)  # nearer 0 than 2
-    motions = torch.tensor([[0.0, 0.4, 0]], dtype=torch.float64)
-    return cands, contacts, motions
-
-
-def test_belief_resolves_ambiguous_sequence():
-    cands, contacts, motions = _ambiguous_sequence()
-    # each touch alone is ambiguous or wrong
-    first = post.multi_contact_belief(cands, contacts[:1], motions[:0])
-    assert abs(float(first[1] - first[3])) < 1e-12
-    assert post.top_k(contacts[1].float(), cands.float(), 1)[0].item() == 0
-    b = post.multi_contact_belief(cands, contacts, motions)
-    assert abs(float(b.sum()) - 1) < 1e-12
-    assert int(b.argmax()) == 2 and float(b[2]) > 0.99
-    # a window of one touch forgets the first: back to the distractor
-    assert int(post.multi_contact_belief(cands, contacts, motions, window=1).argmax()) == 0
-    heat = post.belief_heatmap(cands + 0.01, cands, b)
-    assert int(heat.argmax()) == 2 and float(heat.max()) == 1
-
-
-def test_belief_argument_checks():
-    cands, contacts, motions = _ambiguous_sequence()
-    with pytest.raises(ValueError):
-        post.multi_contact_belief(cands, contacts, motions[:0])

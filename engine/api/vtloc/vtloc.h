@@ -21,7 +21,7 @@
 // - No global state: every resource hangs off a Context (its own Vulkan
 //   instance, device and queue) or a Model.
 // - A Model (and its Context) may be shared between threads: the calls on one
-//   Model run one at a time (encode_object, localize, localize_sequence), and
+//   Model run one at a time (encode_object, localize; a Tracker likewise), and
 //   the Context serialises its queue. For parallel work make one Context (and
 //   Model) per thread; contexts share nothing, and concurrent contexts on one
 //   device give bit-identical results to a single one (both tested, 4 threads).
@@ -294,21 +294,6 @@ struct TouchResult {
     std::vector<Tensor> tensors;                 // with keep_tensors
 };
 
-struct BeliefOptions {
-    double sigma = 0.2;     // likelihood width, normalised frame
-    double sigma_m = 0.05;  // motion noise, normalised frame
-    int window = 4;         // touches used: the current one and window-1 before (0 = all)
-};
-
-struct SequenceResult {
-    std::vector<TouchResult> touches;    // each touch on its own
-    std::vector<float> belief;           // over the candidates, sums to 1
-    int32_t best = -1;                   // argmax of the belief
-    std::array<double, 3> best_point{};  // that candidate, object units
-    std::vector<float> heatmap;          // belief over Object::cloud(), in [0, 1]
-    Timings timings;
-};
-
 class Model {
 public:
     // Loads and checks the weight file (inspect_model's checks). The Context
@@ -336,17 +321,103 @@ public:
     // size is one run).
     std::vector<TouchResult> localize(const Object& object, const std::vector<TactileImage>& images,
                                       const LocalizeOptions& options = {});
-    // Multi-contact belief (SPEC section 6): motions[t-1] is the sensor's
-    // displacement from touch t-1 to touch t (object units); images of one size.
-    SequenceResult localize_sequence(const Object& object, const std::vector<TactileImage>& images,
-                                     const std::vector<std::array<double, 3>>& motions,
-                                     const LocalizeOptions& options = {}, const BeliefOptions& belief = {});
 
     struct Impl;
 
 private:
     std::unique_ptr<Impl> impl_;
 };
+
+// ---- Several touches (SPEC section 6) ---------------------------------------
+
+// A rigid motion (R row-major, then t, object units). As the motion between two
+// touches: pose b in pose a's frame (R = R_a^T R_b, t = R_a^T (t_b - t_a)), what
+// a robot's kinematics measure. As a sensor pose: the columns of R are the
+// sensor's x (image columns), y (rows) and z (its axis, into the object) in
+// object coordinates, t the window centre on the undeformed gel.
+struct Motion {
+    std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::array<double, 3> t{};
+};
+// a then b in a's frame; the inverse. motion_between(a, b) = inverse(a) * b.
+Motion compose(const Motion& a, const Motion& b);
+Motion inverse(const Motion& a);
+// Relative motions from absolute flange poses (robot base frame, metres or mm
+// as given): sensor_k = flange_k * tool; motion k = inverse(sensor_k) * sensor_{k+1}.
+std::vector<Motion> motions_from_flange_poses(const std::vector<Motion>& flange, const Motion& tool);
+
+struct TrackerOptions {
+    double press_mm = 0.8;       // the press assumed for every touch (our data: 0.3-1.5 mm)
+    double sigma_d_mm = 0.7;     // a pose's distance to the surface
+    double sigma_a_deg = 9;      // its axis against the inward normal (covers a tilt up to 10 degrees)
+    double odometry_mm = 0;      // motion noise per step (std), widening with the lever arm
+    double odometry_deg = 0;
+    int window = 8;              // touches scored exactly; older ones enter as a prior
+    int n_spin = 36;             // spin hypotheses (10 degrees apart)
+    int64_t hypotheses = 120000; // surface samples x spins, about
+    double network_weight = 0.5; // temperature of the network's heat-map term (add_touch with a TouchResult)
+    double mode_radius_mm = 5;   // the modes' non-maximum suppression
+    double grid_allowance = 0.5; // the grid's widths grow by this share of its spacing and spin step
+    double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
+};
+
+struct TrackerMode {
+    std::array<double, 3> contact{};
+    double probability = 0;
+};
+
+struct TrackerEstimate {
+    int touches = 0;
+    std::array<double, 3> contact{};         // Bayes contact of the current touch (min expected distance, on the surface)
+    Motion pose;                             // the most likely pose of the current touch (refined over 6 DoF)
+    std::array<double, 3> pose_contact{};    // where that pose's axis meets the surface
+    std::vector<Motion> window_poses;        // every touch of the window, oldest first (the current one last)
+    std::vector<TrackerMode> modes;          // best first, probabilities under the belief
+    double mass_within_5mm = 0;              // the belief's own mass within 5 mm of `contact`
+    std::vector<float> heatmap;              // belief over the tracker's display_cloud(), in [0, 1]
+    std::vector<float> sample_belief;        // the belief at each of sample_points(), sums to 1
+};
+
+// The online multi-touch filter: a belief over sensor poses on the object's
+// surface. A mesh is sampled densely (the surface is exact to ~0.5 mm); a point
+// cloud is used as it is (normals required; coarser: a pose is checked against
+// the nearest cloud point's tangent plane). add_touch costs the same however
+// many touches came before.
+class Tracker {
+public:
+    Tracker(Context& context, const std::string& object_path, const TrackerOptions& options = {});
+    Tracker(Context& context, const PointCloud& cloud, const TrackerOptions& options = {});
+    ~Tracker();
+    Tracker(Tracker&&) noexcept;
+    Tracker& operator=(Tracker&&) noexcept;
+
+    // The first touch takes no motion, every later one the motion from the
+    // previous touch. network: that touch's TouchResult (its heat-map over
+    // `object`'s cloud becomes a touch term); null = geometry only.
+    void add_touch(const std::optional<Motion>& motion, const TouchResult* network = nullptr,
+                   const Object* object = nullptr);
+    int touches() const;
+    TrackerEstimate estimate() const;
+    // The windowed form: motions between W touches (W - 1), optional results per touch.
+    TrackerEstimate evaluate_window(const std::vector<Motion>& motions,
+                                    const std::vector<const TouchResult*>& network = {}, const Object* object = nullptr);
+    std::vector<float> belief() const;        // over hypotheses, sums to 1
+    std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
+    int n_spin() const;
+    const PointCloud& display_cloud() const;  // the points heatmap values refer to
+    uint64_t device_bytes() const;            // the surface tables resident on the GPU
+    double spacing_mm() const;                // the hypothesis samples' spacing
+
+    struct Impl;
+
+private:
+    std::unique_ptr<Impl> impl_;
+};
+
+// The belief after each touch, side by side on the tracker's display cloud
+// (one panel per estimate, captioned), so a person sees it converge.
+void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
+                        const std::vector<std::string>& captions = {});
 
 // ---- Outputs ----------------------------------------------------------------
 

@@ -1,0 +1,297 @@
+// vtloc eval --sequence: SPEC 6's multi-touch protocols on a dataset (docs/eval.md,
+// "Several touches"). Windows of T touches along each object's collection tour
+// end at the test touches whose order is at least 7 (the same touches for every
+// T); the filter (api::Tracker, windowed form) sees the window's relative
+// motions (touches.csv q..), optionally with seeded odometry noise, and, in the
+// "+ network" rows, each touch's heat-map from the model.
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <random>
+#include <sstream>
+
+#include "apps/vtloc/eval.h"
+#include "apps/vtloc/report.h"
+#include "base/atomic_write.h"
+#include "base/error.h"
+
+namespace vtloc::cli::eval {
+
+namespace {
+
+namespace fs = std::filesystem;
+using P3 = std::array<double, 3>;
+
+double dist(const P3& a, const P3& b) {
+    return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+}
+
+// The angle of Ra^T Rb in degrees.
+double rotation_error_deg(const std::array<double, 9>& a, const std::array<double, 9>& b) {
+    double tr = 0;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) tr += a[size_t(r * 3 + c)] * b[size_t(r * 3 + c)];
+    return std::acos(std::clamp((tr - 1) / 2, -1.0, 1.0)) * 180 / M_PI;
+}
+
+// A motion with Gaussian noise: a rotation of N(0, deg) about each axis and N(0, mm) per axis.
+api::Motion noisy(const api::Motion& m, double mm, double deg, std::mt19937_64& rng) {
+    if (mm == 0 && deg == 0) return m;
+    std::normal_distribution<double> g;
+    const double w[3] = {g(rng) * deg * M_PI / 180, g(rng) * deg * M_PI / 180, g(rng) * deg * M_PI / 180};
+    const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    api::Motion d;
+    if (th > 0) {
+        const double k[3] = {w[0] / th, w[1] / th, w[2] / th}, c = std::cos(th), s = std::sin(th), v = 1 - c;
+        d.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
+               k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
+               k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+    }
+    d.t = {g(rng) * mm, g(rng) * mm, g(rng) * mm};
+    return api::compose(m, d);
+}
+
+struct Score {
+    double nd = 0, mm = 0, nd_sym = 0, nd_map = 0, nd_sym_map = 0, rot = 0, within5 = 0, mass5 = 0, cand_nd = 0;
+    int n = 0;
+    void add(const Score& s) {
+        nd += s.nd, mm += s.mm, nd_sym += s.nd_sym, nd_map += s.nd_map, nd_sym_map += s.nd_sym_map, rot += s.rot, within5 += s.within5, mass5 += s.mass5, cand_nd += s.cand_nd;
+        n += s.n;
+    }
+    Score mean() const {
+        Score m = *this;
+        const double k = n ? 1.0 / n : 0;
+        m.nd *= k, m.mm *= k, m.nd_sym *= k, m.nd_map *= k, m.nd_sym_map *= k, m.rot *= k, m.within5 *= k, m.mass5 *= k, m.cand_nd *= k;
+        return m;
+    }
+};
+
+struct RowKey {
+    std::string method;  // "Geometry", "Geometry + network"
+    bool noise;
+    int T;
+    bool operator<(const RowKey& o) const { return std::tie(method, noise, T) < std::tie(o.method, o.noise, o.T); }
+};
+
+std::vector<int> parse_ts(const std::string& v) {
+    std::vector<int> out;
+    std::stringstream ss(v);
+    std::string item;
+    while (std::getline(ss, item, ',')) {
+        char* end = nullptr;
+        long t = std::strtol(item.c_str(), &end, 10);
+        if (item.empty() || *end || t < 1 || t > 8) throw UsageError("--sequence takes window lengths 1..8, e.g. 1,2,3,4,6,8; got '" + v + "'");
+        out.push_back(int(t));
+    }
+    std::sort(out.begin(), out.end());
+    out.erase(std::unique(out.begin(), out.end()), out.end());
+    return out;
+}
+
+}  // namespace
+
+int run_sequence(Session& s, const Args& a) {
+    const std::string data = a.required("--data");
+    const std::vector<int> Ts = parse_ts(a.get("--sequence").value_or("1,2,3,4,6,8"));
+    const bool geometry_only = a.flag("--geometry-only");
+    std::optional<std::pair<double, double>> noise;
+    if (auto v = a.get("--odometry-noise")) {
+        std::vector<double> n = parse_numbers(*v, 2, "--odometry-noise");
+        if (!(n[0] >= 0 && n[1] >= 0)) throw UsageError("--odometry-noise MM,DEG must be >= 0");
+        noise = std::make_pair(n[0], n[1]);
+    }
+    const std::string objects = a.get("--objects").value_or("all");
+    if (objects != "all" && objects != "known" && objects != "unknown") throw UsageError("--objects must be all, known or unknown");
+    const sim::Dataset d = [&] {
+        try {
+            return sim::read_dataset(data);
+        } catch (const vtloc::Error& e) {
+            throw api::Error(e.what());
+        }
+    }();
+    api::TrackerOptions to;
+    // --filter k=v,...: the filter's knobs, for fitting them on windows that end at train touches.
+    if (auto f = a.get("--filter")) {
+        std::stringstream ss(*f);
+        std::string kv;
+        while (std::getline(ss, kv, ',')) {
+            const size_t eq = kv.find('=');
+            if (eq == std::string::npos) throw UsageError("--filter takes key=value pairs, got '" + kv + "'");
+            const std::string k = kv.substr(0, eq);
+            const double v = parse_numbers(kv.substr(eq + 1), 1, "--filter " + k)[0];
+            if (k == "press") to.press_mm = v;
+            else if (k == "sigma_d") to.sigma_d_mm = v;
+            else if (k == "sigma_a") to.sigma_a_deg = v;
+            else if (k == "allowance") to.grid_allowance = v;
+            else if (k == "network_weight") to.network_weight = v;
+            else if (k == "hypotheses") to.hypotheses = int64_t(v);
+            else if (k == "n_spin") to.n_spin = int(v);
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, hypotheses, n_spin)");
+        }
+    }
+    const std::string end_split = a.get("--end-split").value_or("test");
+    if (end_split != "test" && end_split != "train") throw UsageError("--end-split must be test or train");
+    std::optional<api::Model> model;
+    std::string model_path;
+    if (!geometry_only) {
+        model_path = a.get("--model").value_or(default_model_path());
+        model.emplace(load_model(s, model_path, api::Backend::Gpu));
+    }
+    std::map<RowKey, std::map<std::string, Score>> per_object;  // row -> object -> sum
+    std::map<std::string, std::string> subset_of;
+    int windows = 0;
+    for (const sim::ObjectRecord& o : d.objects) {
+        if (objects == "known" && o.object_split != "seen") continue;
+        if (objects == "unknown" && o.object_split != "unseen") continue;
+        const std::string mesh = (fs::path(o.folder) / "mesh.ply").string();
+        if (!fs::exists(mesh)) throw api::Error(mesh + ": missing (the surface protocol needs each object's mesh)");
+        subset_of[o.name] = o.subset;
+        api::Tracker tracker(s.gpu(), mesh, to);
+        std::vector<const sim::TouchRecord*> tour;
+        for (const sim::TouchRecord& t : o.touches)
+            if (t.order >= 0) tour.push_back(&t);
+        std::sort(tour.begin(), tour.end(), [](auto* x, auto* y) { return x->order < y->order; });
+        for (size_t i = 0; i < tour.size(); ++i)
+            if (tour[i]->order != int(i))
+                throw api::Error(o.folder + "/touches.csv: the collection order skips " + std::to_string(i));
+        std::optional<api::Object> encoded;
+        std::map<size_t, api::TouchResult> results;
+        if (model) {
+            api::PointCloud cloud;
+            for (int64_t i = 0; i < o.points.shape[0]; ++i)
+                for (int k = 0; k < 3; ++k)
+                    cloud.xyz.push_back(o.points.data[size_t(6 * i + k)]), cloud.normals.push_back(o.points.data[size_t(6 * i + 3 + k)]);
+            std::vector<float> cand = o.candidates().data;
+            encoded = model->encode_object(cloud, cand);
+        }
+        const HostTensor cands = o.candidates();
+        for (size_t end = 7; end < tour.size(); ++end) {
+            if (tour[end]->split != end_split) continue;
+            const sim::TouchRecord& truth = *tour[end];
+            for (bool with_noise : {false, true}) {
+                if (with_noise && !noise) continue;
+                // One noise draw per motion, the same for every T (seeded by object and touch).
+                std::vector<api::Motion> all;
+                for (size_t i = 1; i <= end; ++i) {
+                    std::mt19937_64 rng(std::hash<std::string>{}(o.name) ^ (uint64_t(tour[i]->id) * 0x9E3779B97F4A7C15ULL));
+                    api::Motion m{tour[i]->rel_R, tour[i]->rel_t};
+                    all.push_back(with_noise ? noisy(m, noise->first, noise->second, rng) : m);
+                }
+                for (int T : Ts) {
+                    std::vector<api::Motion> motions(all.end() - (T - 1), all.end());
+                    for (const char* method : {"Geometry", "Geometry + network"}) {
+                        const bool net = std::string(method) != "Geometry";
+                        if (net && !model) continue;
+                        std::vector<const api::TouchResult*> res;
+                        if (net)
+                            for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
+                                if (!results.count(i))
+                                    results[i] = model->localize(*encoded, api::load_tactile_image(image_path(o, *tour[i])));
+                                res.push_back(&results[i]);
+                            }
+                        const api::TrackerEstimate e = tracker.evaluate_window(motions, res, net ? &*encoded : nullptr);
+                        Score sc;
+                        sc.n = 1;
+                        sc.mm = dist(e.contact, truth.contact);
+                        sc.nd = 100 * sc.mm / o.diameter_mm;
+                        // Up to symmetry, the Bayes estimate of that metric: the belief's expected
+                        // distance to each candidate answer counted to the nearest image.
+                        P3 sym_pick = e.contact;
+                        if (!o.symmetry.none()) {
+                            const std::vector<float> sp = tracker.sample_points();
+                            std::vector<size_t> live;
+                            for (size_t k = 0; k < e.sample_belief.size(); ++k)
+                                if (e.sample_belief[k] > 1e-5f) live.push_back(k);
+                            std::vector<P3> answers{e.contact, e.pose_contact};
+                            for (const auto& md : e.modes) answers.push_back(md.contact);
+                            for (size_t k : live) answers.push_back(P3{sp[3 * k], sp[3 * k + 1], sp[3 * k + 2]});
+                            if (answers.size() > 400) answers.resize(400);
+                            double best_r = INFINITY;
+                            for (const P3& c : answers) {
+                                double r = 0;
+                                for (size_t k : live)
+                                    r += e.sample_belief[k] * sim::distance_up_to_symmetry(o.symmetry, c, P3{sp[3 * k], sp[3 * k + 1], sp[3 * k + 2]});
+                                if (r < best_r) best_r = r, sym_pick = c;
+                            }
+                        }
+                        sc.nd_sym = 100 * sim::distance_up_to_symmetry(o.symmetry, sym_pick, truth.contact) / o.diameter_mm;
+                        sc.nd_map = 100 * dist(e.pose_contact, truth.contact) / o.diameter_mm;
+                        sc.nd_sym_map = 100 * sim::distance_up_to_symmetry(o.symmetry, e.pose_contact, truth.contact) / o.diameter_mm;
+                        sc.rot = rotation_error_deg(e.pose.R, truth.R);
+                        sc.within5 = sc.mm <= 5 ? 1 : 0;
+                        sc.mass5 = e.mass_within_5mm;
+                        // Candidates protocol: the candidate with the least expected distance under the belief.
+                        const std::vector<float> pts = tracker.sample_points();
+                        double best = INFINITY;
+                        P3 pick{};
+                        for (int64_t c = 0; c < cands.shape[0]; ++c) {
+                            const P3 q{cands.data[size_t(3 * c)], cands.data[size_t(3 * c + 1)], cands.data[size_t(3 * c + 2)]};
+                            double r = 0;
+                            for (size_t k = 0; k < e.sample_belief.size(); ++k)
+                                if (e.sample_belief[k] > 1e-7f) r += e.sample_belief[k] * dist(q, P3{pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]});
+                            if (r < best) best = r, pick = q;
+                        }
+                        sc.cand_nd = 100 * dist(pick, truth.contact) / o.diameter_mm;
+                        per_object[{method, with_noise, T}][o.name].add(sc);
+                        ++windows;
+                    }
+                }
+            }
+        }
+        std::printf("object    %-14s %s, spacing %.2f mm, %zu tour touches, surface tables %.1f MiB\n", o.name.c_str(),
+                    o.subset.c_str(), tracker.spacing_mm(), tour.size(), double(tracker.device_bytes()) / 1048576.0);
+        std::fflush(stdout);
+    }
+    if (per_object.empty()) throw api::Error(data + ": no test touch with order >= 7 to end a window at");
+
+    // Per object, then over objects, per subset.
+    std::string md = "| method | odometry noise | T | subset | objects | ND % (surface) | mm | ND % up to symmetry | ND % (candidates) | rotation deg | within 5 mm | belief mass within 5 mm |\n"
+                     "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |\n";
+    nlohmann::json rows = nlohmann::json::array();
+    std::printf("\n%-20s %-6s %2s %-12s %7s %7s %7s %7s %7s %7s %7s\n", "method", "noise", "T", "subset", "ND%", "mm", "symND%",
+                "candND%", "rot", "in5mm", "mass5");
+    for (const auto& [key, objs] : per_object)
+        for (const char* subset : {"non-uniform", "uniform", "all"}) {
+            Score acc;
+            int n_obj = 0;
+            for (const auto& [name, sc] : objs) {
+                if (std::string(subset) != "all" && subset_of[name] != subset) continue;
+                Score m = sc.mean();
+                m.n = 1;
+                acc.add(m);
+                ++n_obj;
+            }
+            if (!n_obj) continue;
+            const Score m = acc.mean();
+            const std::string nz = key.noise ? "yes" : "no";
+            std::printf("%-20s %-6s %2d %-12s %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f %7.2f\n", key.method.c_str(), nz.c_str(), key.T,
+                        subset, m.nd, m.mm, m.nd_sym, m.cand_nd, m.rot, m.within5, m.mass5);
+            char line[512];
+            std::snprintf(line, sizeof line, "| %s | %s | %d | %s | %d | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f | %.2f |\n",
+                          key.method.c_str(), nz.c_str(), key.T, subset, n_obj, m.nd, m.mm, m.nd_sym, m.cand_nd, m.rot, m.within5, m.mass5);
+            md += line;
+            rows.push_back({{"method", key.method}, {"odometry_noise", key.noise}, {"T", key.T}, {"subset", subset},
+                            {"objects", n_obj}, {"nd", m.nd}, {"mm", m.mm}, {"nd_symmetry", m.nd_sym}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"nd_candidates", m.cand_nd},
+                            {"rotation_deg", m.rot}, {"within_5mm", m.within5}, {"mass_within_5mm", m.mass5}});
+        }
+    nlohmann::json per_obj = nlohmann::json::object();
+    for (const auto& [key, objs] : per_object)
+        for (const auto& [name, sc] : objs) {
+            const Score m = sc.mean();
+            per_obj[key.method + (key.noise ? " (noise)" : "") + " T" + std::to_string(key.T)][name] = {{"nd", m.nd}, {"nd_symmetry", m.nd_sym}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"mm", m.mm}, {"touches", sc.n}};
+        }
+    std::printf("\nwindows   %d (ending at the %s touches with order >= 7)\n", windows, end_split.c_str());
+    if (auto p = a.get("--markdown")) write_file_atomic(*p, md), std::printf("wrote     %s\n", p->c_str());
+    if (auto p = a.get("--json")) {
+        nlohmann::json j{{"format", "vtloc-eval-sequence/1"}, {"data", data}, {"model", geometry_only ? "" : model_path},
+                         {"rows", rows}, {"per_object", per_obj}};
+        write_file_atomic(*p, j.dump(1) + "\n");
+        std::printf("wrote     %s\n", p->c_str());
+    }
+    return 0;
+}
+
+}  // namespace vtloc::cli::eval

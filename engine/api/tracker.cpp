@@ -1,0 +1,251 @@
+// api::Tracker: the public face of engine/track (the multi-touch filter).
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "base/error.h"
+#include "engine/api/api_internal.h"
+#include "engine/io/mesh.h"
+#include "engine/io/mesh_formats.h"
+#include "engine/io/render.h"
+#include "engine/track/tracker.h"
+
+namespace vtloc::api {
+
+namespace {
+
+track::Rigid to_rigid(const Motion& m) { return {m.R, m.t}; }
+Motion to_motion(const track::Rigid& r) { return {r.R, r.t}; }
+
+double mesh_area(const io::TriangleMesh& m) {
+    double a = 0;
+    for (size_t t = 0; t < m.triangle_count(); ++t) {
+        const float* p[3];
+        for (int k = 0; k < 3; ++k) p[k] = &m.positions[3 * size_t(m.triangles[3 * t + size_t(k)])];
+        double u[3], v[3];
+        for (int k = 0; k < 3; ++k) u[k] = double(p[1][k]) - p[0][k], v[k] = double(p[2][k]) - p[0][k];
+        const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
+        a += 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
+    }
+    return a;
+}
+
+track::SurfaceOptions surface_options(const TrackerOptions& o) {
+    if (o.n_spin < 1 || o.n_spin > 720) throw Error("tracker: n_spin must be 1..720, got " + std::to_string(o.n_spin));
+    if (o.hypotheses < o.n_spin || o.hypotheses > 4000000)
+        throw Error("tracker: hypotheses must be n_spin..4,000,000, got " + std::to_string(o.hypotheses));
+    track::SurfaceOptions s;
+    s.n_spin = o.n_spin;
+    s.target_hypotheses = o.hypotheses;
+    return s;
+}
+
+track::FilterOptions filter_options(const TrackerOptions& o) {
+    if (o.window < 1 || o.window > 64) throw Error("tracker: window must be 1..64, got " + std::to_string(o.window));
+    if (!(o.network_weight >= 0) || !std::isfinite(o.network_weight)) throw Error("tracker: network_weight must be >= 0");
+    track::FilterOptions f;
+    f.press_mm = o.press_mm;
+    f.sigma_d_mm = o.sigma_d_mm;
+    f.sigma_a_deg = o.sigma_a_deg;
+    f.odometry_mm = o.odometry_mm;
+    f.odometry_deg = o.odometry_deg;
+    f.online_window = o.window;
+    f.mode_radius_mm = o.mode_radius_mm;
+    f.grid_allowance = o.grid_allowance;
+    if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))
+        throw Error("tracker: widths must be > 0, grid_allowance >= 0 and press_mm finite");
+    f.term_weight = 1;  // the network's temperature is applied when its field is made
+    return f;
+}
+
+}  // namespace
+
+struct Tracker::Impl {
+    track::Tracker tracker;
+    PointCloud display;
+    HostTensor display_tensor;
+    double network_weight, object_units;
+    Impl(rt::Context& ctx, track::Surface s, const TrackerOptions& o, PointCloud disp)
+        : tracker(ctx, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
+          object_units(o.object_units) {
+        display_tensor = HostTensor({int64_t(display.size()), 3}, display.xyz);
+    }
+
+    // The network's heat-map over `object`'s cloud as a log field over the
+    // hypotheses: each sample takes its nearest cloud point's heat h, log(h + 0.05)
+    // (a floor: one wrong heat-map cannot veto what the geometry says).
+    std::vector<float> network_field(const TouchResult* r, const Object* object, size_t touch) const {
+        if (!r) return {};
+        if (!object) throw Error("touch " + std::to_string(touch) + ": a network result needs the Object it was computed on");
+        // The Object holds the file's units; the tracker's surface is scaled by object_units.
+        std::vector<float> xyz = object->cloud().xyz;
+        for (float& v : xyz) v = float(v * object_units);
+        const size_t N = xyz.size() / 3;
+        if (r->heatmap.size() != N)
+            throw Error("touch " + std::to_string(touch) + ": the result's heat-map has " + std::to_string(r->heatmap.size()) +
+                        " values for the object's " + std::to_string(N) + " points");
+        const track::Surface& s = tracker.surface();
+        const int64_t S = s.n_samples(), NS = s.n_spin();
+        std::vector<float> f(size_t(S * NS));
+        for (int64_t i = 0; i < S; ++i) {
+            const float* p = &s.samples[size_t(9 * i)];
+            size_t best = 0;
+            float bd = INFINITY;
+            for (size_t j = 0; j < N; ++j) {
+                const float d = (xyz[3 * j] - p[0]) * (xyz[3 * j] - p[0]) + (xyz[3 * j + 1] - p[1]) * (xyz[3 * j + 1] - p[1]) +
+                                (xyz[3 * j + 2] - p[2]) * (xyz[3 * j + 2] - p[2]);
+                if (d < bd) bd = d, best = j;
+            }
+            const float v = float(network_weight * std::log(double(r->heatmap[best]) + 0.05));
+            std::fill(f.begin() + i * NS, f.begin() + (i + 1) * NS, v);
+        }
+        return f;
+    }
+
+    TrackerEstimate convert(const track::Estimate& e, int touches) const {
+        TrackerEstimate o;
+        o.touches = touches;
+        o.contact = e.contact;
+        o.pose = to_motion(e.pose);
+        o.pose_contact = e.pose_contact;
+        for (const auto& w : e.window_poses) o.window_poses.push_back(to_motion(w));
+        for (const auto& m : e.modes) o.modes.push_back({m.contact, m.probability});
+        o.mass_within_5mm = e.mass_within_5mm;
+        o.heatmap = tracker.heatmap(e, display_tensor);
+        o.sample_belief = e.sample_belief;
+        return o;
+    }
+};
+
+Motion compose(const Motion& a, const Motion& b) { return to_motion(track::compose(to_rigid(a), to_rigid(b))); }
+Motion inverse(const Motion& a) { return to_motion(track::inverse(to_rigid(a))); }
+
+std::vector<Motion> motions_from_flange_poses(const std::vector<Motion>& flange, const Motion& tool) {
+    return guarded([&] {
+        track::check_rigid(to_rigid(tool), "the tool (flange-to-sensor) transform");
+        std::vector<Motion> out;
+        for (size_t k = 0; k < flange.size(); ++k) {
+            track::check_rigid(to_rigid(flange[k]), "flange pose " + std::to_string(k + 1));
+            if (k) out.push_back(compose(inverse(compose(flange[k - 1], tool)), compose(flange[k], tool)));
+        }
+        return out;
+    });
+}
+
+Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions& o) {
+    guarded([&] {
+        if (!(o.object_units > 0) || !std::isfinite(o.object_units))
+            throw Error("tracker: object_units must be a finite number > 0");
+        PointCloud cloud;
+        try {
+            io::TriangleMesh mesh = io::load_mesh(path);
+            for (float& v : mesh.positions) v = float(v * o.object_units);
+            const double area = mesh_area(mesh);
+            // ~4 points per mm^2 (0.5 mm apart), within a memory bound.
+            const int64_t n = std::clamp<int64_t>(int64_t(area * 4), 20000, 300000);
+            HostTensor dense = io::sample_surface(mesh, n, io::kDefaultSampleSeed + 7, path);
+            HostTensor disp = io::sample_surface(mesh, 4096, io::kDefaultSampleSeed, path);
+            PointCloud d;
+            for (int64_t i = 0; i < disp.shape[0]; ++i)
+                for (int k = 0; k < 3; ++k) d.xyz.push_back(disp.data[size_t(6 * i + k)]), d.normals.push_back(disp.data[size_t(6 * i + 3 + k)]);
+            impl_ = std::make_unique<Impl>(ContextAccess::rt(context), track::build_surface(dense, true, surface_options(o), path), o, d);
+            return;
+        } catch (const ::vtloc::Error& e) {
+            // Not a mesh with faces: read it as a point cloud (below), unless the file is unreadable.
+            const std::string why = e.what();
+            if (why.find("no faces") == std::string::npos && why.find("unknown mesh extension") == std::string::npos) throw;
+        }
+        cloud = load_point_cloud(path, 1);
+        for (float& v : cloud.xyz) v = float(v * o.object_units);
+        *this = Tracker(context, cloud, o);
+        impl_->object_units = o.object_units;
+    });
+}
+
+Tracker::Tracker(Context& context, const PointCloud& cloud, const TrackerOptions& o) {
+    guarded([&] {
+        if (cloud.normals.size() != cloud.xyz.size())
+            throw Error("tracker: the cloud needs a normal per point (the filter checks each pose against the surface's normal)");
+        HostTensor t = cloud_tensor(cloud);
+        impl_ = std::make_unique<Impl>(ContextAccess::rt(context), track::build_surface(t, false, surface_options(o), "cloud"), o, cloud);
+        impl_->object_units = 1;  // a PointCloud is given in the tracker's units
+    });
+}
+
+Tracker::~Tracker() = default;
+Tracker::Tracker(Tracker&&) noexcept = default;
+Tracker& Tracker::operator=(Tracker&&) noexcept = default;
+
+void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* network, const Object* object) {
+    guarded([&] {
+        std::vector<float> f = impl_->network_field(network, object, size_t(impl_->tracker.touches() + 1));
+        impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, f);
+    });
+}
+
+int Tracker::touches() const { return impl_->tracker.touches(); }
+
+TrackerEstimate Tracker::estimate() const {
+    return guarded([&] { return impl_->convert(impl_->tracker.estimate(), impl_->tracker.touches()); });
+}
+
+TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, const std::vector<const TouchResult*>& network,
+                                         const Object* object) {
+    return guarded([&] {
+        std::vector<track::Rigid> m;
+        for (const Motion& x : motions) m.push_back(to_rigid(x));
+        std::vector<std::vector<float>> terms;
+        bool any = false;
+        for (size_t i = 0; i < network.size(); ++i) {
+            terms.push_back(impl_->network_field(network[i], object, i + 1));
+            any = any || network[i];
+        }
+        if (!any) terms.clear();
+        else if (terms.size() != motions.size() + 1)
+            throw Error("window: " + std::to_string(terms.size()) + " network results for " + std::to_string(motions.size() + 1) + " touches");
+        return impl_->convert(impl_->tracker.evaluate_window(m, terms), int(motions.size() + 1));
+    });
+}
+
+std::vector<float> Tracker::belief() const { return impl_->tracker.belief(); }
+
+std::vector<float> Tracker::sample_points() const {
+    const track::Surface& s = impl_->tracker.surface();
+    std::vector<float> p;
+    for (int64_t i = 0; i < s.n_samples(); ++i) p.insert(p.end(), &s.samples[size_t(9 * i)], &s.samples[size_t(9 * i + 3)]);
+    return p;
+}
+
+int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
+const PointCloud& Tracker::display_cloud() const { return impl_->display; }
+uint64_t Tracker::device_bytes() const { return impl_->tracker.surface().device_bytes(); }
+double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
+
+void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
+                        const std::vector<std::string>& captions) {
+    guarded([&] {
+        if (steps.empty()) throw Error(path + ": no estimate to draw");
+        const PointCloud& c = tracker.display_cloud();
+        if (c.normals.size() != c.xyz.size()) throw Error(path + ": the display cloud has no normals");
+        HostTensor cloud({int64_t(c.size()), 6});
+        for (size_t i = 0; i < c.size(); ++i)
+            for (int k = 0; k < 3; ++k) cloud.data[6 * i + size_t(k)] = c.xyz[3 * i + size_t(k)], cloud.data[6 * i + 3 + size_t(k)] = c.normals[3 * i + size_t(k)];
+        const int cols = std::min<int>(4, int(steps.size())), rows = (int(steps.size()) + cols - 1) / cols;
+        const int W = 640, H = 400;
+        io::RgbImage sheet(rows * H, cols * W);
+        for (size_t k = 0; k < steps.size(); ++k) {
+            io::RenderOptions ro;
+            ro.width = W, ro.height = H;
+            ro.contact = std::array<float, 3>{float(steps[k].contact[0]), float(steps[k].contact[1]), float(steps[k].contact[2])};
+            ro.caption = k < captions.size() ? captions[k] : "after touch " + std::to_string(steps[k].touches);
+            if (steps[k].heatmap.size() != c.size()) throw Error(path + ": estimate " + std::to_string(k + 1) + " has no heat-map for the display cloud");
+            const io::RgbImage panel = io::render_heatmap(cloud, steps[k].heatmap, ro);
+            const int r0 = int(k) / cols * H, c0 = int(k) % cols * W;
+            for (int y = 0; y < H; ++y)
+                std::memcpy(&sheet.pixels[(size_t(r0 + y) * size_t(cols * W) + size_t(c0)) * 3], &panel.pixels[size_t(y) * W * 3], size_t(W) * 3);
+        }
+        io::save_png(path, sheet);
+    });
+}
+
+}  // namespace vtloc::api

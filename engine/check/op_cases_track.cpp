@@ -1,0 +1,97 @@
+// Self-test cases of the multi-touch filter's ops (tests/test_pose_ops.cpp):
+// pose_evidence on a random scene (terms with geometry, with fields, both; some
+// poses leave the grid, some cells are empty), then log_softmax, spin_marginal
+// and expected_distance on its score.
+#include <cmath>
+#include <random>
+
+#include "engine/check/op_selftest.h"
+#include "engine/ops/build.h"
+
+namespace vtloc::check {
+
+namespace {
+
+// Unit rows: a random direction in r[0..2] and, orthogonal to it, r[3..5].
+void unit_pair(std::mt19937& rng, float* r) {
+    std::normal_distribution<float> g;
+    float a[3] = {g(rng), g(rng), g(rng)}, b[3] = {g(rng), g(rng), g(rng)};
+    float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (float& x : a) x /= la;
+    float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
+    float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    for (int i = 0; i < 3; ++i) r[i] = a[i], r[3 + i] = b[i] / lb;
+}
+
+OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
+    OpCase c("pose_evidence", std::to_string(S) + " samples x " + std::to_string(NS) + " spins, " + std::to_string(K) + " terms");
+    std::mt19937 rng(seed);
+    std::uniform_real_distribution<float> u(-4.0f, 4.0f);
+    const int64_t D = 2 * S + 3, V = 6 * 5 * 7, F = 2;
+    HostTensor samples({S, 9}), dense({D, 6}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
+    for (int64_t s = 0; s < S; ++s) {
+        float* r = &samples.data[size_t(s * 9)];
+        for (int i = 0; i < 3; ++i) r[i] = u(rng);
+        unit_pair(rng, r + 3);
+    }
+    for (int64_t i = 0; i < D; ++i) {
+        float* r = &dense.data[size_t(i * 6)], t[6];
+        unit_pair(rng, t);
+        for (int k = 0; k < 3; ++k) r[k] = u(rng), r[3 + k] = t[k];
+    }
+    std::vector<int32_t> cells(size_t(2 * V));
+    for (int64_t i = 0; i < V; ++i)
+        cells[size_t(2 * i)] = int32_t(rng() % uint32_t(D + 1)) - 1, cells[size_t(2 * i + 1)] = int32_t(rng() % uint32_t(S + 1)) - 1;
+    for (int64_t j = 0; j < NS; ++j)
+        spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * double(j) / double(NS))),
+        spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
+    for (int64_t k = 0; k < K; ++k) {
+        float* r = &terms.data[size_t(k * 16)], a[6];
+        unit_pair(rng, a);  // a rotation from two orthonormal columns and their cross product
+        const float z[3] = {a[1] * a[5] - a[2] * a[4], a[2] * a[3] - a[0] * a[5], a[0] * a[4] - a[1] * a[3]};
+        for (int i = 0; i < 3; ++i) r[3 * i] = a[i], r[3 * i + 1] = a[3 + i], r[3 * i + 2] = z[i];
+        for (int i = 0; i < 3; ++i) r[9 + i] = u(rng);
+        r[12] = k % 3 == 1 ? 0.0f : 0.8f;
+        r[13] = 0.25f;
+        r[14] = float(int64_t(k % 3) - 1);
+        r[15] = 0.7f;
+    }
+    std::uniform_real_distribution<float> lf(-20.0f, 0.0f);
+    for (float& x : fields.data) x = lf(rng);
+    ops::PoseEvidence p;
+    p.voxel = 1.5;
+    p.origin[0] = -4.5, p.origin[1] = -3.75, p.origin[2] = -5.25;
+    p.dims[0] = 6, p.dims[1] = 5, p.dims[2] = 7;
+    p.own_field = 1;
+    int score = ops::pose_evidence(c.g, c.input("samples", samples), c.input("dense", dense),
+                                   c.input("cells", HostTensor::from_ints({V, 2}, cells)), c.input("spins", spins),
+                                   c.input("terms", terms), c.input("fields", fields), p);
+    c.output(score, "score");
+    return c;
+}
+
+// The three reductions in a chain, filed under `op` (the cases are small).
+OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
+    OpCase c(op, std::to_string(S) + " x " + std::to_string(NS) + " spins: log_softmax, spin_marginal, expected_distance");
+    std::vector<int> lp = ops::log_softmax(c.g, c.input("score", random_tensor({S * NS}, seed, -30.0f, 5.0f)));
+    int m = ops::spin_marginal(c.g, lp[1], NS);
+    c.output(lp[0], "log");
+    c.output(m, "marginal");
+    c.output(ops::expected_distance(c.g, c.input("pts", random_tensor({S, 3}, seed + 1, -50.0f, 50.0f)), m), "cost");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
+    std::vector<OpCase> v;
+    v.push_back(pose_case(61, 36, 6, 3));
+    v.push_back(pose_case(7, 5, 0, 4));
+    v.push_back(reduce_case("log_softmax", 1031, 12, 5));
+    v.push_back(reduce_case("spin_marginal", 300, 36, 6));
+    v.push_back(reduce_case("expected_distance", 77, 1, 7));
+    return v;
+}
+
+}  // namespace vtloc::check

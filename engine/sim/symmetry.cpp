@@ -1,0 +1,213 @@
+#include "engine/sim/symmetry.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "base/error.h"
+
+namespace vtloc::sim {
+
+namespace {
+
+Vec3d unit(const Vec3d& a) {
+    const double n = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    return {a[0] / n, a[1] / n, a[2] / n};
+}
+
+// Rotation by angle th about unit axis k (Rodrigues), row-major.
+Mat3d rotation(const Vec3d& k, double th) {
+    const double c = std::cos(th), s = std::sin(th), v = 1 - c;
+    return {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
+            k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
+            k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+}
+
+Mat3d mul(const Mat3d& a, const Mat3d& b) {
+    Mat3d o{};
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) o[size_t(r * 3 + c)] += a[size_t(r * 3 + k)] * b[size_t(k * 3 + c)];
+    return o;
+}
+
+double sq(const Vec3d& a, const Vec3d& b) {
+    return (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]);
+}
+
+// Squared distance from p to triangle abc (Ericson's region tests).
+double point_triangle_sq(const Vec3d& p, const Vec3d& a, const Vec3d& b, const Vec3d& c) {
+    auto sub = [](const Vec3d& x, const Vec3d& y) { return Vec3d{x[0] - y[0], x[1] - y[1], x[2] - y[2]}; };
+    auto dot = [](const Vec3d& x, const Vec3d& y) { return x[0] * y[0] + x[1] * y[1] + x[2] * y[2]; };
+    auto at = [&](double v, double w) {
+        return Vec3d{a[0] + v * (b[0] - a[0]) + w * (c[0] - a[0]), a[1] + v * (b[1] - a[1]) + w * (c[1] - a[1]),
+                     a[2] + v * (b[2] - a[2]) + w * (c[2] - a[2])};
+    };
+    const Vec3d ab = sub(b, a), ac = sub(c, a), ap = sub(p, a);
+    const double d1 = dot(ab, ap), d2 = dot(ac, ap);
+    if (d1 <= 0 && d2 <= 0) return sq(p, a);
+    const Vec3d bp = sub(p, b);
+    const double d3 = dot(ab, bp), d4 = dot(ac, bp);
+    if (d3 >= 0 && d4 <= d3) return sq(p, b);
+    const double vc = d1 * d4 - d3 * d2;
+    if (vc <= 0 && d1 >= 0 && d3 <= 0) return sq(p, at(d1 / (d1 - d3), 0));
+    const Vec3d cp = sub(p, c);
+    const double d5 = dot(ab, cp), d6 = dot(ac, cp);
+    if (d6 >= 0 && d5 <= d6) return sq(p, c);
+    const double vb = d5 * d2 - d1 * d6;
+    if (vb <= 0 && d2 >= 0 && d6 <= 0) return sq(p, at(0, d2 / (d2 - d6)));
+    const double va = d3 * d6 - d5 * d4;
+    if (va <= 0 && (d4 - d3) >= 0 && (d5 - d6) >= 0) {
+        const double w = (d4 - d3) / ((d4 - d3) + (d5 - d6));
+        return sq(p, at(1 - w, w));
+    }
+    const double den = 1 / (va + vb + vc);
+    return sq(p, at(vb * den, vc * den));
+}
+
+}  // namespace
+
+std::vector<Mat3d> Symmetry::rotations() const {
+    const Vec3d k = unit(axis);
+    const int n = order == 0 ? 360 : order;
+    std::vector<Mat3d> out;
+    for (int i = 0; i < n; ++i) out.push_back(rotation(k, 2 * M_PI * i / n));
+    if (flip) {
+        const Mat3d f = rotation(unit(*flip), M_PI);
+        for (int i = 0; i < n; ++i) out.push_back(mul(out[size_t(i)], f));
+    }
+    return out;
+}
+
+Vec3d Symmetry::apply(const Mat3d& R, const Vec3d& p) const {
+    const Vec3d d{p[0] - point[0], p[1] - point[1], p[2] - point[2]};
+    Vec3d o;
+    for (int r = 0; r < 3; ++r)
+        o[size_t(r)] = point[size_t(r)] + R[size_t(r * 3)] * d[0] + R[size_t(r * 3 + 1)] * d[1] + R[size_t(r * 3 + 2)] * d[2];
+    return o;
+}
+
+nlohmann::json symmetry_json(const Symmetry& s) {
+    if (s.none()) return nullptr;
+    nlohmann::json j{{"point", s.point}, {"axis", s.axis}, {"order", s.order}};
+    j["flip"] = s.flip ? nlohmann::json(*s.flip) : nlohmann::json(nullptr);
+    return j;
+}
+
+Symmetry symmetry_from_json(const nlohmann::json& j, const std::string& where) {
+    Symmetry s;
+    if (j.is_null()) return s;
+    auto vec = [&](const nlohmann::json& v, const char* what) {
+        if (!v.is_array() || v.size() != 3 || !v[0].is_number() || !v[1].is_number() || !v[2].is_number())
+            throw Error(where + ": symmetry \"" + what + "\" must be [x, y, z]");
+        Vec3d o{v[0].get<double>(), v[1].get<double>(), v[2].get<double>()};
+        for (double x : o)
+            if (!std::isfinite(x)) throw Error(where + ": symmetry \"" + what + "\" is not finite");
+        return o;
+    };
+    if (!j.is_object() || !j.contains("point") || !j.contains("axis") || !j.contains("order"))
+        throw Error(where + ": symmetry must be null or {\"point\", \"axis\", \"order\", \"flip\"}");
+    s.point = vec(j["point"], "point");
+    s.axis = vec(j["axis"], "axis");
+    if (sq(s.axis, {0, 0, 0}) < 1e-12) throw Error(where + ": symmetry axis is zero");
+    s.axis = unit(s.axis);
+    if (!j["order"].is_number_integer() || j["order"].get<int>() < 0 || j["order"].get<int>() > 3600)
+        throw Error(where + ": symmetry order must be an integer 0..3600 (0: every angle)");
+    s.order = j["order"].get<int>();
+    if (j.contains("flip") && !j["flip"].is_null()) {
+        Vec3d f = vec(j["flip"], "flip");
+        if (sq(f, {0, 0, 0}) < 1e-12) throw Error(where + ": symmetry flip axis is zero");
+        f = unit(f);
+        if (std::abs(f[0] * s.axis[0] + f[1] * s.axis[1] + f[2] * s.axis[2]) > 1e-3)
+            throw Error(where + ": symmetry flip axis must be perpendicular to the axis");
+        s.flip = f;
+    }
+    return s;
+}
+
+Symmetry shape_symmetry(const std::string& name) {
+    Symmetry s;  // every revolved shape turns about z through the origin
+    const Vec3d x{1, 0, 0};
+    if (name == "box") s.order = 2, s.flip = x;
+    else if (name == "cylinder" || name == "sphere" || name == "torus" || name == "capsule") s.order = 0, s.flip = x;
+    else if (name == "cone" || name == "bolt") s.order = 0;
+    else if (name == "ridged_cylinder") s.order = 80, s.flip = x;
+    else if (name == "knurled_cylinder") s.order = 63, s.flip = x;
+    return s;
+}
+
+Symmetry scaled_symmetry(const Symmetry& s, double f, const Vec3d& centre) {
+    Symmetry o = s;
+    for (int k = 0; k < 3; ++k) o.point[size_t(k)] = f * (s.point[size_t(k)] - centre[size_t(k)]);
+    return o;
+}
+
+double distance_up_to_symmetry(const Symmetry& s, const Vec3d& pred, const Vec3d& truth) {
+    if (s.order == 0) {  // every angle: compare the circles the two points sweep (height h, radius r)
+        const Vec3d k = unit(s.axis);
+        auto hr = [&](const Vec3d& p) {
+            const Vec3d d{p[0] - s.point[0], p[1] - s.point[1], p[2] - s.point[2]};
+            const double h = d[0] * k[0] + d[1] * k[1] + d[2] * k[2];
+            const Vec3d q{d[0] - h * k[0], d[1] - h * k[1], d[2] - h * k[2]};
+            return std::array<double, 2>{h, std::sqrt(q[0] * q[0] + q[1] * q[1] + q[2] * q[2])};
+        };
+        const auto a = hr(pred), b = hr(truth);
+        double d2 = (a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]);
+        if (s.flip) d2 = std::min(d2, (a[0] + b[0]) * (a[0] + b[0]) + (a[1] - b[1]) * (a[1] - b[1]));
+        return std::sqrt(d2);
+    }
+    double best = std::numeric_limits<double>::infinity();
+    for (const Mat3d& R : s.rotations()) best = std::min(best, sq(pred, s.apply(R, truth)));
+    return std::sqrt(best);
+}
+
+double symmetry_residual_mm(const Symmetry& s, const io::TriangleMesh& mesh, int samples) {
+    if (s.none()) return 0;
+    // A hash grid of triangles by their bounding boxes, cells of about the mean edge.
+    const size_t T = mesh.triangle_count();
+    auto vert = [&](size_t t, int c) {
+        const float* p = &mesh.positions[3 * size_t(mesh.triangles[3 * t + size_t(c)])];
+        return Vec3d{p[0], p[1], p[2]};
+    };
+    double edge = 0;
+    for (size_t t = 0; t < T; ++t) edge += std::sqrt(sq(vert(t, 0), vert(t, 1)));
+    const double cell = std::max(0.5, 2 * edge / double(std::max<size_t>(T, 1)));
+    auto key = [&](int64_t x, int64_t y, int64_t z) { return (x * 73856093) ^ (y * 19349663) ^ (z * 83492791); };
+    std::unordered_multimap<int64_t, size_t> grid;
+    for (size_t t = 0; t < T; ++t) {
+        Vec3d lo = vert(t, 0), hi = lo;
+        for (int c = 1; c < 3; ++c)
+            for (int k = 0; k < 3; ++k) lo[size_t(k)] = std::min(lo[size_t(k)], vert(t, c)[size_t(k)]), hi[size_t(k)] = std::max(hi[size_t(k)], vert(t, c)[size_t(k)]);
+        for (int64_t x = int64_t(std::floor(lo[0] / cell)); x <= int64_t(std::floor(hi[0] / cell)); ++x)
+            for (int64_t y = int64_t(std::floor(lo[1] / cell)); y <= int64_t(std::floor(hi[1] / cell)); ++y)
+                for (int64_t z = int64_t(std::floor(lo[2] / cell)); z <= int64_t(std::floor(hi[2] / cell)); ++z) grid.emplace(key(x, y, z), t);
+    }
+    auto nearest = [&](const Vec3d& p) {  // within one cell around p, else "far" (one cell)
+        double best = cell * cell;
+        const int64_t c[3] = {int64_t(std::floor(p[0] / cell)), int64_t(std::floor(p[1] / cell)), int64_t(std::floor(p[2] / cell))};
+        for (int64_t x = c[0] - 1; x <= c[0] + 1; ++x)
+            for (int64_t y = c[1] - 1; y <= c[1] + 1; ++y)
+                for (int64_t z = c[2] - 1; z <= c[2] + 1; ++z) {
+                    auto [b, e] = grid.equal_range(key(x, y, z));
+                    for (auto it = b; it != e; ++it) best = std::min(best, point_triangle_sq(p, vert(it->second, 0), vert(it->second, 1), vert(it->second, 2)));
+                }
+        return std::sqrt(best);
+    };
+    const HostTensor pts = io::sample_surface(mesh, samples, 12345, "symmetry check");
+    std::vector<Mat3d> Rs = s.rotations();
+    if (s.order == 0) {  // 24 angles (and their flips) stand for the continuous group
+        Symmetry d = s;
+        d.order = 24;
+        Rs = d.rotations();
+    }
+    double worst = 0;
+    for (const Mat3d& R : Rs)
+        for (int64_t i = 0; i < pts.shape[0]; ++i) {
+            const Vec3d p{pts.data[size_t(6 * i)], pts.data[size_t(6 * i + 1)], pts.data[size_t(6 * i + 2)]};
+            worst = std::max(worst, nearest(s.apply(R, p)));
+        }
+    return worst;
+}
+
+}  // namespace vtloc::sim

@@ -1,0 +1,164 @@
+#include "engine/track/surface.h"
+
+#include <algorithm>
+#include <cmath>
+#include <limits>
+#include <unordered_map>
+
+#include "base/error.h"
+
+namespace vtloc::track {
+
+namespace {
+
+using D3 = std::array<double, 3>;
+
+int64_t key_of(const float* p, const D3& lo, double h) {
+    int64_t k[3];
+    for (int i = 0; i < 3; ++i) k[i] = int64_t(std::floor((double(p[i]) - lo[i]) / h));
+    return (k[2] * 1048576 + k[1]) * 1048576 + k[0];
+}
+
+// One sample per occupied cube of side h: the dense point nearest the cube's
+// centre (lowest index on a tie), in the order the cubes are first met.
+std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo, double h) {
+    const int64_t D = int64_t(dense.size() / 6);
+    std::unordered_map<int64_t, size_t> slot;
+    std::vector<int64_t> best;
+    std::vector<double> best_d;
+    for (int64_t i = 0; i < D; ++i) {
+        const float* p = &dense[size_t(i * 6)];
+        const int64_t key = key_of(p, lo, h);
+        double d = 0;
+        for (int k = 0; k < 3; ++k) {
+            double c = lo[k] + (std::floor((double(p[k]) - lo[k]) / h) + 0.5) * h, e = double(p[k]) - c;
+            d += e * e;
+        }
+        auto [it, fresh] = slot.emplace(key, best.size());
+        if (fresh) {
+            best.push_back(i);
+            best_d.push_back(d);
+        } else if (d < best_d[it->second]) {
+            best[it->second] = i;
+            best_d[it->second] = d;
+        }
+    }
+    return best;
+}
+
+// For every cell within `band` of a point, the nearest point (lowest index on a tie).
+void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, int64_t stride, const Surface& s,
+           double band) {
+    std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
+    const int r = int(std::ceil(band / s.voxel));
+    for (int64_t i = 0; i < n; ++i) {
+        const float* p = pts + i * stride;
+        int c[3];
+        for (int k = 0; k < 3; ++k) c[k] = int(std::floor((p[k] - s.origin[size_t(k)]) / s.voxel));
+        for (int z = std::max(0, c[2] - r); z <= std::min(s.dims[2] - 1, c[2] + r); ++z)
+            for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y)
+                for (int x = std::max(0, c[0] - r); x <= std::min(s.dims[0] - 1, c[0] + r); ++x) {
+                    const float q[3] = {s.origin[0] + (float(x) + 0.5f) * s.voxel,
+                                        s.origin[1] + (float(y) + 0.5f) * s.voxel,
+                                        s.origin[2] + (float(z) + 0.5f) * s.voxel};
+                    const float d = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
+                                    (q[2] - p[2]) * (q[2] - p[2]);
+                    if (d > float(band * band)) continue;
+                    const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
+                    if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
+                }
+    }
+}
+
+}  // namespace
+
+D3 tangent_of(const D3& a) {
+    D3 e = std::abs(a[0]) <= std::abs(a[1]) && std::abs(a[0]) <= std::abs(a[2]) ? D3{1, 0, 0}
+           : std::abs(a[1]) <= std::abs(a[2])                                   ? D3{0, 1, 0}
+                                                                                : D3{0, 0, 1};
+    const double d = e[0] * a[0] + e[1] * a[1] + e[2] * a[2];
+    D3 t{e[0] - d * a[0], e[1] - d * a[1], e[2] - d * a[2]};
+    const double n = std::sqrt(t[0] * t[0] + t[1] * t[1] + t[2] * t[2]);
+    return {t[0] / n, t[1] / n, t[2] / n};
+}
+
+int64_t Surface::cell_of(const float* q) const {
+    int64_t c[3];
+    for (int k = 0; k < 3; ++k) {
+        const float f = std::floor((q[k] - origin[size_t(k)]) * (1.0f / voxel));
+        if (!(f >= 0 && f < float(dims[size_t(k)]))) return -1;
+        c[k] = int64_t(f);
+    }
+    return (c[2] * dims[1] + c[1]) * dims[0] + c[0];
+}
+
+Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOptions& o, const std::string& source) {
+    if (dense.shape.size() != 2 || dense.shape[1] != 6 || dense.shape[0] == 0)
+        throw Error(source + ": the filter needs surface points with normals [N > 0, 6], got " + shape_str(dense.shape));
+    if (o.n_spin < 1 || o.target_hypotheses < o.n_spin || o.max_cells < 8 || !(o.band_mm > 0) || !(o.min_voxel_mm > 0))
+        throw Error("surface options: n_spin >= 1, target_hypotheses >= n_spin, max_cells >= 8 and positive widths");
+    const int64_t D = dense.shape[0];
+    Surface s;
+    s.from_mesh = from_mesh;
+    s.dense = dense.data;
+    D3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
+    for (int64_t i = 0; i < D; ++i) {
+        float* p = &s.dense[size_t(i * 6)];
+        double nn = 0;
+        for (int k = 0; k < 6; ++k)
+            if (!std::isfinite(p[k])) throw Error(source + ": point " + std::to_string(i) + " is not finite");
+        for (int k = 0; k < 3; ++k) nn += double(p[3 + k]) * p[3 + k], lo[size_t(k)] = std::min(lo[size_t(k)], double(p[k])),
+                                     hi[size_t(k)] = std::max(hi[size_t(k)], double(p[k]));
+        if (!(nn > 1e-12)) throw Error(source + ": point " + std::to_string(i) + " has a zero normal");
+        for (int k = 0; k < 3; ++k) p[3 + k] = float(p[3 + k] / std::sqrt(nn));
+    }
+    const D3 ext{hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]};
+    s.diameter = std::sqrt(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]);
+
+    // Spacing: bisect h (on a log scale) until the samples are about target / NS.
+    const double want = double(o.target_hypotheses) / o.n_spin;
+    double h_lo = std::max(1e-3, s.diameter * 1e-4), h_hi = std::max(2 * s.diameter, 1e-2);
+    std::vector<int64_t> picked;
+    for (int it = 0; it < 24; ++it) {
+        const double h = std::sqrt(h_lo * h_hi);
+        picked = pick_samples(s.dense, lo, h);
+        if (double(picked.size()) > want) h_lo = h;
+        else h_hi = h;
+    }
+    s.spacing_mm = h_hi;
+    picked = pick_samples(s.dense, lo, s.spacing_mm);
+    for (int64_t i : picked) {
+        const float* p = &s.dense[size_t(i * 6)];
+        const D3 t1 = tangent_of(D3{-double(p[3]), -double(p[4]), -double(p[5])});
+        s.samples.insert(s.samples.end(), p, p + 6);
+        for (double v : t1) s.samples.push_back(float(v));
+    }
+    for (int j = 0; j < o.n_spin; ++j) {
+        const double a = 2 * M_PI * j / o.n_spin;
+        s.spins.push_back(float(std::cos(a)));
+        s.spins.push_back(float(std::sin(a)));
+    }
+
+    // Grid: the box grown by the band, in cells no smaller than min_voxel, at most max_cells.
+    const double margin = o.band_mm + 1.0;
+    const double vol = (ext[0] + 2 * margin) * (ext[1] + 2 * margin) * (ext[2] + 2 * margin);
+    s.voxel = float(std::max(o.min_voxel_mm, std::cbrt(vol / double(o.max_cells)) * 1.0001));
+    int64_t cells = 0;
+    for (int grow = 0; grow < 64; ++grow, s.voxel *= 1.02f) {  // the ceilings may push past max_cells
+        cells = 1;
+        for (int k = 0; k < 3; ++k) {
+            s.origin[size_t(k)] = float(lo[size_t(k)] - margin);
+            s.dims[size_t(k)] = int32_t(std::ceil((ext[size_t(k)] + 2 * margin) / s.voxel));
+            cells *= s.dims[size_t(k)];
+        }
+        if (cells <= o.max_cells) break;
+    }
+    if (cells > o.max_cells) throw Error(source + ": the lookup grid would need " + std::to_string(cells) + " cells");
+    s.cells.assign(size_t(2 * cells), -1);
+    const double band = std::max(o.band_mm, double(s.voxel));
+    splat(s.cells, 0, s.dense.data(), D, 6, s, band);
+    splat(s.cells, 1, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm));
+    return s;
+}
+
+}  // namespace vtloc::track

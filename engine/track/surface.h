@@ -1,0 +1,57 @@
+#pragma once
+// The object as the multi-touch filter sees it (SPEC 6, docs/multitouch.md):
+// a dense set of surface points with outward normals (a mesh sampled densely, or
+// the user's cloud as it is), the hypothesis samples (a subset about `spacing`
+// apart; each with the renderer's tangent t1 of its axis z = -n), the spins, and
+// a lookup grid whose cells name the nearest dense point and the nearest sample
+// within a band around the surface.
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "engine/tensor.h"
+
+namespace vtloc::track {
+
+struct SurfaceOptions {
+    int64_t target_hypotheses = 120000;  // samples x spins, about
+    int n_spin = 36;                     // 10 degrees apart
+    int64_t max_cells = 2000000;         // lookup grid cells at most (8 bytes each)
+    double band_mm = 4.0;                // cells farther from the surface hold no point
+    double min_voxel_mm = 0.5;
+};
+
+struct Surface {
+    std::vector<float> dense;     // [D, 6] point, outward unit normal (object units)
+    std::vector<float> samples;   // [S, 9] point, normal, t1
+    std::vector<float> spins;     // [NS, 2] cos, sin of 2 pi j / NS
+    std::vector<int32_t> cells;   // [nx*ny*nz, 2] nearest dense point, nearest sample (-1 none)
+    std::array<float, 3> origin{};
+    float voxel = 1;
+    std::array<int32_t, 3> dims{};
+    double spacing_mm = 0;        // hypothesis sample spacing
+    double diameter = 0;          // largest distance between two dense points (bounding-box bound)
+    bool from_mesh = false;
+
+    int64_t n_dense() const { return int64_t(dense.size() / 6); }
+    int64_t n_samples() const { return int64_t(samples.size() / 9); }
+    int n_spin() const { return int(spins.size() / 2); }
+    int64_t n_hypotheses() const { return n_samples() * n_spin(); }
+    int64_t n_cells() const { return int64_t(dims[0]) * dims[1] * dims[2]; }
+    uint64_t device_bytes() const { return 4 * (dense.size() + samples.size() + spins.size() + cells.size()); }
+    // The grid cell holding q (-1 outside), the dense point and sample it names.
+    int64_t cell_of(const float* q) const;
+};
+
+// dense [D, 6]: points and outward normals; from_mesh says whether they were
+// sampled from a mesh (dense, exact normals) or are a user's cloud. Throws
+// vtloc::Error naming `source` for an empty set, non-finite values, zero normals.
+Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOptions& o = {},
+                      const std::string& source = "object");
+
+// The renderer's tangent t1 of unit axis a (engine/sim/touch_renderer.cpp: from
+// the world axis least aligned with a), so spin 0 means the dataset's spin_deg 0.
+std::array<double, 3> tangent_of(const std::array<double, 3>& a);
+
+}  // namespace vtloc::track

@@ -1,0 +1,467 @@
+#include "engine/track/tracker.h"
+
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <numeric>
+
+#include "base/error.h"
+#include "engine/executor.h"
+#include "engine/ops/build.h"
+#include "engine/ops/pose_evidence.h"
+#include "engine/resident_weights.h"
+#include "engine/weights.h"
+
+namespace vtloc::track {
+
+namespace {
+
+
+using P = ops::pose::V3;
+
+}  // namespace
+
+Rigid compose(const Rigid& a, const Rigid& b) {
+    Rigid o;
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c)
+            o.R[size_t(r * 3 + c)] = a.R[size_t(r * 3)] * b.R[size_t(c)] + a.R[size_t(r * 3 + 1)] * b.R[size_t(3 + c)] +
+                                     a.R[size_t(r * 3 + 2)] * b.R[size_t(6 + c)];
+        o.t[size_t(r)] = a.t[size_t(r)] + a.R[size_t(r * 3)] * b.t[0] + a.R[size_t(r * 3 + 1)] * b.t[1] +
+                         a.R[size_t(r * 3 + 2)] * b.t[2];
+    }
+    return o;
+}
+
+Rigid inverse(const Rigid& a) {
+    Rigid o;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) o.R[size_t(r * 3 + c)] = a.R[size_t(c * 3 + r)];
+    for (int r = 0; r < 3; ++r)
+        o.t[size_t(r)] = -(o.R[size_t(r * 3)] * a.t[0] + o.R[size_t(r * 3 + 1)] * a.t[1] + o.R[size_t(r * 3 + 2)] * a.t[2]);
+    return o;
+}
+
+void check_rigid(const Rigid& m, const std::string& what) {
+    for (double v : m.R)
+        if (!std::isfinite(v)) throw Error(what + ": the rotation holds NaN or inf");
+    for (double v : m.t)
+        if (!std::isfinite(v)) throw Error(what + ": the translation holds NaN or inf");
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            double d = 0;
+            for (int k = 0; k < 3; ++k) d += m.R[size_t(k * 3 + a)] * m.R[size_t(k * 3 + b)];
+            if (std::abs(d - (a == b ? 1.0 : 0.0)) > 1e-4)
+                throw Error(what + ": the 3x3 part is not a rotation (its columns are not orthonormal)");
+        }
+    const auto& R = m.R;
+    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
+    if (det < 0) throw Error(what + ": the 3x3 part is a reflection (determinant -1), not a rotation");
+}
+
+struct Tracker::Impl {
+    rt::Context& ctx;
+    WeightStore weights;
+    std::shared_ptr<ResidentWeights> resident;
+    std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
+    explicit Impl(rt::Context& c) : ctx(c), resident(std::make_shared<ResidentWeights>(c)) {}
+};
+
+Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options)
+    : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
+    if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
+        !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
+        throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
+    const Surface& s = surface_;
+    WeightStore& w = impl_->weights;
+    w.add("surface.samples", HostTensor({s.n_samples(), 9}, s.samples));
+    w.add("surface.dense", HostTensor({s.n_dense(), 6}, s.dense));
+    w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 2}, s.cells));
+    w.add("surface.spins", HostTensor({int64_t(s.n_spin()), 2}, s.spins));
+    std::vector<float> pts;
+    for (int64_t i = 0; i < s.n_samples(); ++i) pts.insert(pts.end(), &s.samples[size_t(i * 9)], &s.samples[size_t(i * 9 + 3)]);
+    w.add("surface.points", HostTensor({s.n_samples(), 3}, pts));
+}
+
+Tracker::~Tracker() = default;
+
+namespace {
+
+// One filter step's graph: evidence over K terms and F fields, then the belief,
+// its spin marginal and the Bayes risk of each sample.
+Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F, int64_t own) {
+    Graph g;
+    const int64_t S = s.n_samples(), NS = s.n_spin(), H = S * NS;
+    ops::PoseEvidence p;
+    p.press = o.press_mm;
+    p.log_floor = o.log_floor;
+    p.field_floor = -30;
+    for (int k = 0; k < 3; ++k) p.origin[k] = s.origin[size_t(k)], p.dims[k] = s.dims[size_t(k)];
+    p.voxel = s.voxel;
+    p.own_field = own;
+    p.own_weight = 1;
+    int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 9}), g.weight("surface.dense", {s.n_dense(), 6}),
+                                   g.weight("surface.cells", {s.n_cells(), 2}, ElemType::I32),
+                                   g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}),
+                                   g.input("fields", {F, H}), p, "track.evidence");
+    std::vector<int> lp = ops::log_softmax(g, score, "track.belief");
+    int m = ops::spin_marginal(g, lp[1], NS, "track.marginal");
+    int c = ops::expected_distance(g, g.weight("surface.points", {S, 3}), m, "track.risk");
+    g.output(lp[0], "log");
+    g.output(lp[1], "prob");
+    g.output(m, "marginal");
+    g.output(c, "cost");
+    return g;
+}
+
+// The term row of a touch whose pose is `rel` in the hypothesis' frame, `steps` motions away.
+// q_mm, q_rad: how far a grid hypothesis may sit from the true pose (half the
+// sample spacing, half the spin step); the lever arm turns the latter into distance.
+void term_row(float* r, const Rigid& rel, int steps, const FilterOptions& o, int field, double weight, double q_mm = 0,
+              double q_rad = 0) {
+    for (int i = 0; i < 9; ++i) r[i] = float(rel.R[size_t(i)]);
+    for (int i = 0; i < 3; ++i) r[9 + i] = float(rel.t[size_t(i)]);
+    const double lever = std::sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
+    const double od = o.odometry_deg * M_PI / 180;
+    r[12] = float(std::sqrt(o.sigma_d_mm * o.sigma_d_mm + steps * (o.odometry_mm * o.odometry_mm + od * od * lever * lever) +
+                            q_mm * q_mm + (lever * q_rad) * (lever * q_rad)));
+    const double sa = o.sigma_a_deg * M_PI / 180;
+    r[13] = float(std::sqrt(sa * sa + steps * od * od + q_rad * q_rad));
+    r[14] = float(field);
+    r[15] = float(weight);
+}
+
+ops::pose::Grid grid_of(const Surface& s) {
+    return {s.dense.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
+            P{s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
+}
+
+ops::pose::Frame frame_of(const Rigid& x) {
+    const auto& R = x.R;
+    return {P{float(R[0]), float(R[3]), float(R[6])}, P{float(R[1]), float(R[4]), float(R[7])},
+            P{float(R[2]), float(R[5]), float(R[8])}, P{float(x.t[0]), float(x.t[1]), float(x.t[2])}};
+}
+
+Rigid rigid_of(const ops::pose::Frame& f) {
+    Rigid r;
+    r.R = {f.x.x, f.y.x, f.z.x, f.x.y, f.y.y, f.z.y, f.x.z, f.y.z, f.z.z};
+    r.t = {f.t.x, f.t.y, f.t.z};
+    return r;
+}
+
+// A small rotation about the pose's own axes (Rodrigues) and a shift in its frame.
+Rigid perturb(const Rigid& x, const double d[6]) {
+    const double th = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
+    Rigid m;
+    if (th > 0) {
+        const double k[3] = {d[0] / th, d[1] / th, d[2] / th}, c = std::cos(th), s = std::sin(th), v = 1 - c;
+        m.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
+               k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
+               k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+    }
+    m.t = {d[3], d[4], d[5]};
+    return compose(x, m);
+}
+
+// Where a pose's axis meets the surface: the nearest dense point's tangent plane
+// (the pose's own press back along its axis where no point is near).
+std::array<double, 3> axis_contact(const Surface& s, const ops::pose::Grid& grid, const Rigid& x, double press) {
+    const ops::pose::Frame f = frame_of(x);
+    std::array<double, 3> c{f.t.x - press * f.z.x, f.t.y - press * f.z.y, f.t.z - press * f.z.z};
+    const int64_t cell = ops::pose::cell_of(grid, f.t);
+    if (cell >= 0 && s.cells[size_t(2 * cell)] >= 0) {
+        const float* q = &s.dense[size_t(6 * s.cells[size_t(2 * cell)])];
+        const P n{q[3], q[4], q[5]};
+        const float dz = ops::pose::dot(f.z, n);
+        if (std::abs(dz) > 1e-3f) {
+            const float lam = ops::pose::dot(ops::pose::sub(P{q[0], q[1], q[2]}, f.t), n) / dz;
+            c = {f.t.x + lam * f.z.x, f.t.y + lam * f.z.y, f.t.z + lam * f.z.z};
+        }
+    }
+    return c;
+}
+
+}  // namespace
+
+void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
+    const int64_t H = surface_.n_hypotheses();
+    if (!term.empty() && int64_t(term.size()) != H)
+        throw Error("touch " + std::to_string(touch) + ": its term has " + std::to_string(term.size()) + " values for " +
+                    std::to_string(H) + " hypotheses");
+    for (float v : term)
+        if (std::isnan(v) || v == INFINITY) throw Error("touch " + std::to_string(touch) + ": its term holds NaN or +inf");
+}
+
+Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
+                                const Rigid* prior_motion, const std::vector<float>* prior) {
+    const int64_t m = int64_t(motions.size()) + 1, H = surface_.n_hypotheses();
+    bool any_term = false;
+    for (const auto* t : terms) any_term = any_term || (t && !t->empty());
+    const int64_t n_term_fields = any_term ? m : 0, F = n_term_fields + (prior ? 1 : 0), K = m - 1 + (prior ? 1 : 0);
+    auto& ex = impl_->exec[{K, F}];
+    if (!ex)
+        ex = std::make_unique<GpuExecutor>(impl_->ctx, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1),
+                                           impl_->weights, impl_->resident);
+    Step st;
+    st.to_window.resize(size_t(m - 1));
+    Rigid chain;  // touch k's pose in the current one's frame, from the newest back
+    for (int64_t k = m - 2; k >= 0; --k) {
+        chain = compose(motions[size_t(k)], chain);
+        st.to_window[size_t(k)] = inverse(chain);
+    }
+    HostTensor tr({K, 16}), fields({F, H});
+    for (int64_t k = 0; k < m - 1; ++k) {
+        const bool has = any_term && terms[size_t(k)] && !terms[size_t(k)]->empty();
+        term_row(&tr.data[size_t(16 * k)], st.to_window[size_t(k)], int(m - 1 - k), opt_, has ? int(k) : -1, opt_.term_weight,
+                 opt_.grid_allowance * surface_.spacing_mm, opt_.grid_allowance * 2 * M_PI / surface_.n_spin());
+    }
+    if (prior) {
+        // The touch before the window: its belief read at the pose the motions lead back to (no geometry: its
+        // belief holds it). The read is at the nearest hypothesis; the window's own geometry is exact.
+        term_row(&tr.data[size_t(16 * (K - 1))], compose(m > 1 ? st.to_window[0] : Rigid{}, inverse(*prior_motion)), int(m), opt_,
+                 int(F - 1), 1.0);
+        tr.data[size_t(16 * (K - 1) + 12)] = 0;
+        std::copy(prior->begin(), prior->end(), fields.data.begin() + (F - 1) * H);
+    }
+    for (int64_t f = 0; f < n_term_fields; ++f)
+        if (terms[size_t(f)] && !terms[size_t(f)]->empty())
+            for (int64_t h = 0; h < H; ++h)
+                fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
+    TensorMap out = ex->run({{"terms", tr}, {"fields", fields}});
+    st.log = std::move(out.at("log").data);
+    st.prob = std::move(out.at("prob").data);
+    st.marginal = std::move(out.at("marginal").data);
+    st.cost = std::move(out.at("cost").data);
+    return st;
+}
+
+void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term) {
+    const size_t n = size_t(touches_) + 1;
+    if (touches_ == 0 && motion) throw Error("touch 1: the first touch has no previous one to move from");
+    if (touches_ > 0 && !motion) throw Error("touch " + std::to_string(n) + ": needs the motion from the previous touch");
+    if (motion) check_rigid(*motion, "touch " + std::to_string(n) + "'s motion");
+    check_term(term, n);
+    // The window: the last online_window touches, this one included; the belief of
+    // the touch before it (when there is one) enters as a prior.
+    if (motion) motions_.push_back(*motion);
+    terms_.push_back(term);
+    const size_t W = size_t(std::max(1, opt_.online_window));
+    std::optional<Rigid> prior_motion;
+    if (terms_.size() > W) {
+        prior_motion = motions_.front();
+        motions_.erase(motions_.begin());
+        terms_.erase(terms_.begin());
+    }
+    std::vector<const std::vector<float>*> tp;
+    for (const auto& t : terms_) tp.push_back(&t);
+    Step st = run_step(motions_, tp, prior_motion ? &*prior_motion : nullptr, prior_motion ? &prior_log_ : nullptr);
+    // The belief a later touch reads as its prior is the one of the touch that leaves its window next.
+    beliefs_.push_back(st.log);
+    if (beliefs_.size() > W) beliefs_.erase(beliefs_.begin());
+    prior_log_ = beliefs_.front();
+    last_ = std::move(st);
+    ++touches_;
+}
+
+Estimate Tracker::estimate() const {
+    if (touches_ == 0) throw Error("the tracker has no touch yet");
+    return finish(last_.log, last_.prob, last_.marginal, last_.cost, last_.to_window);
+}
+
+Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms) {
+    const size_t W = motions.size() + 1;
+    if (!terms.empty() && terms.size() != W)
+        throw Error("window: " + std::to_string(terms.size()) + " touch terms for " + std::to_string(W) + " touches");
+    for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
+    std::vector<const std::vector<float>*> tp(W, nullptr);
+    for (size_t i = 0; i < terms.size(); ++i) check_term(terms[i], i + 1), tp[i] = &terms[i];
+    Step st = run_step(motions, tp, nullptr, nullptr);
+    return finish(st.log, st.prob, st.marginal, st.cost, st.to_window);
+}
+
+Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& prob, const std::vector<float>& marginal,
+                         const std::vector<float>& cost, const std::vector<Rigid>& to_window) const {
+    const Surface& s = surface_;
+    const int64_t S = s.n_samples(), NS = s.n_spin();
+    const ops::pose::Grid grid = grid_of(s);
+    auto point = [&](int64_t i) { return std::array<double, 3>{s.samples[size_t(9 * i)], s.samples[size_t(9 * i + 1)], s.samples[size_t(9 * i + 2)]}; };
+    auto dist = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
+        return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
+    };
+    Estimate e;
+    e.sample_belief = marginal;
+    const int64_t best = int64_t(std::min_element(cost.begin(), cost.end()) - cost.begin());
+    e.contact = point(best);
+    for (int64_t i = 0; i < S; ++i)
+        if (dist(point(i), e.contact) <= 5.0) e.mass_within_5mm += marginal[size_t(i)];
+
+    // Modes: greedy non-maximum suppression over the samples' belief.
+    std::vector<int64_t> order(static_cast<size_t>(S));
+    std::iota(order.begin(), order.end(), 0);
+    std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return marginal[size_t(a)] > marginal[size_t(b)]; });
+    std::vector<char> taken(static_cast<size_t>(S), 0);
+    std::vector<int64_t> mode_sample;
+    for (int64_t i : order) {
+        if (taken[size_t(i)] || int(e.modes.size()) >= opt_.n_modes) continue;
+        Mode m{point(i), 0};
+        for (int64_t j = 0; j < S; ++j)
+            if (!taken[size_t(j)] && dist(point(j), m.contact) <= opt_.mode_radius_mm) taken[size_t(j)] = 1, m.probability += marginal[size_t(j)];
+        e.modes.push_back(m);
+        mode_sample.push_back(i);
+    }
+
+    // Refinement: the best spin at each of the best modes, then a pattern search
+    // over six degrees of freedom on the window's geometry (the current touch's too).
+    std::vector<ops::pose::Term> terms;
+    for (size_t k = 0; k < to_window.size(); ++k) {
+        float r[16];
+        term_row(r, to_window[k], int(to_window.size() - k), opt_, -1, 0);
+        terms.push_back(ops::pose::term_from_row(r));
+    }
+    ops::pose::Term self{};
+    self.rel[0] = self.rel[4] = self.rel[8] = 1;
+    self.sigma_d = float(opt_.sigma_d_mm);
+    self.sigma_a = float(opt_.sigma_a_deg * M_PI / 180);
+    // The window's geometry and the touch's own (its pose on the surface), apart.
+    auto window_part = [&](const Rigid& x) {
+        const ops::pose::Frame f = frame_of(x);
+        double v = 0;
+        for (const ops::pose::Term& t : terms) {
+            ops::pose::Frame m = ops::pose::moved(f, t);
+            v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, float(opt_.press_mm), t.sigma_d, t.sigma_a, float(opt_.log_floor));
+        }
+        return v;
+    };
+    auto self_part = [&](const Rigid& x) {
+        const ops::pose::Frame f = frame_of(x);
+        return double(ops::pose::geometry_log(grid, ops::pose::cell_of(grid, f.t), f, float(opt_.press_mm), self.sigma_d, self.sigma_a, float(opt_.log_floor)));
+    };
+    auto objective = [&](const Rigid& x) { return window_part(x) + self_part(x); };
+    // The refined modes share the grid mass they hold by their refined fit (the
+    // window's geometry at the tight widths): the grid, whose widths must cover
+    // its own spacing, cannot tell a true pose between its hypotheses from a
+    // near miss. Samples outside the refined modes keep their grid mass.
+    const int n_refine = std::max(1, std::min<int>(opt_.refine, int(mode_sample.size())));
+    std::vector<double> fit(static_cast<size_t>(n_refine), 0.0);
+    std::vector<Rigid> refined(static_cast<size_t>(n_refine));
+    std::vector<std::array<double, 3>> refined_contact(static_cast<size_t>(n_refine));
+    for (int m = 0; m < n_refine; ++m) {
+        const int64_t smp = mode_sample[size_t(m)];
+        int64_t hb = smp * NS;
+        for (int64_t j = 1; j < NS; ++j)
+            if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
+        Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
+        double fx = objective(x);
+        if (opt_.refine > 0) {
+            double step_r = 4.0 * M_PI / 180, step_t = 0.8;
+            for (int round = 0; round < 6; ++round, step_r /= 2, step_t /= 2)
+                for (bool moved = true; moved;) {
+                    moved = false;
+                    for (int k = 0; k < 6; ++k)
+                        for (double sign : {1.0, -1.0}) {
+                            double d[6] = {0, 0, 0, 0, 0, 0};
+                            d[k] = sign * (k < 3 ? step_r : step_t);
+                            Rigid y = perturb(x, d);
+                            double fy = objective(y);
+                            if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
+                        }
+                }
+        }
+        fit[size_t(m)] = fx;
+        refined[size_t(m)] = x;
+        refined_contact[size_t(m)] = axis_contact(s, grid, x, opt_.press_mm);
+    }
+    // Relative to the least-improved refined mode, which the unrefined samples are taken to be like.
+    std::vector<int> mode_of(static_cast<size_t>(S), -1);
+    std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
+    for (int64_t i = 0; i < S; ++i)
+        for (int m = 0; m < n_refine; ++m)
+            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) {
+                mode_of[size_t(i)] = m, grid_mass[size_t(m)] += marginal[size_t(i)];
+                break;
+            }
+    const double fmax = *std::max_element(fit.begin(), fit.end());
+    double held = 0, z = 0;
+    for (int m = 0; m < n_refine; ++m) held += grid_mass[size_t(m)], z += std::exp(fit[size_t(m)] - fmax);
+    std::vector<double> w(static_cast<size_t>(S));
+    double total = 0;
+    for (int64_t i = 0; i < S; ++i) {
+        const int m = mode_of[size_t(i)];
+        w[size_t(i)] = m < 0 || grid_mass[size_t(m)] <= 0
+                           ? double(marginal[size_t(i)])
+                           : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(fit[size_t(m)] - fmax) / z;
+        total += w[size_t(i)];
+    }
+    for (double& v : w) v /= total;
+    int best_mode = 0;
+    std::vector<double> mode_mass(static_cast<size_t>(n_refine), 0.0);
+    for (int m = 0; m < n_refine; ++m) {
+        for (int64_t i = 0; i < S; ++i)
+            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) mode_mass[size_t(m)] += w[size_t(i)];
+        if (mode_mass[size_t(m)] > mode_mass[size_t(best_mode)]) best_mode = m;
+    }
+    e.pose = refined[size_t(best_mode)];
+    // The Bayes contact under the re-weighted belief, each refined mode's mass at
+    // its refined contact (its peak; the grid spreads it over the spacing), among
+    // those contacts and the samples the GPU's risk ranked best.
+    std::vector<std::array<double, 3>> at(static_cast<size_t>(S));
+    for (int64_t i = 0; i < S; ++i) {
+        at[size_t(i)] = point(i);
+        for (int m = 0; m < n_refine; ++m)
+            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) {
+                at[size_t(i)] = refined_contact[size_t(m)];
+                break;
+            }
+    }
+    std::vector<std::array<double, 3>> cand(refined_contact.begin(), refined_contact.end());
+    std::vector<int64_t> by_cost(static_cast<size_t>(S));
+    std::iota(by_cost.begin(), by_cost.end(), 0);
+    const size_t n_cost = std::min<size_t>(64, by_cost.size());
+    std::partial_sort(by_cost.begin(), by_cost.begin() + long(n_cost), by_cost.end(),
+                      [&](int64_t a, int64_t b) { return cost[size_t(a)] < cost[size_t(b)] || (cost[size_t(a)] == cost[size_t(b)] && a < b); });
+    for (size_t i = 0; i < n_cost; ++i) cand.push_back(point(by_cost[i]));
+    double best_risk = INFINITY;
+    for (const auto& c : cand) {
+        double r = 0;
+        for (int64_t i = 0; i < S; ++i) r += w[size_t(i)] * dist(at[size_t(i)], c);
+        if (r < best_risk) best_risk = r, e.contact = c;
+    }
+    e.mass_within_5mm = 0;
+    for (int64_t i = 0; i < S; ++i)
+        if (dist(at[size_t(i)], e.contact) <= 5.0) e.mass_within_5mm += w[size_t(i)];
+    for (size_t m = 0; m < e.modes.size(); ++m) {
+        e.modes[m].probability = 0;
+        if (int(m) < n_refine) e.modes[m].contact = refined_contact[m];
+    }
+    for (int64_t i = 0; i < S; ++i)  // mode masses under the re-weighted belief
+        for (size_t m = 0; m < e.modes.size(); ++m)
+            if (dist(point(i), point(mode_sample[m])) <= opt_.mode_radius_mm) {
+                e.modes[m].probability += w[size_t(i)];
+                break;
+            }
+    std::stable_sort(e.modes.begin(), e.modes.end(), [](const Mode& a, const Mode& b) { return a.probability > b.probability; });
+    e.sample_belief.assign(w.begin(), w.end());
+    e.pose_contact = axis_contact(s, grid, e.pose, opt_.press_mm);
+    for (const Rigid& r : to_window) e.window_poses.push_back(compose(e.pose, r));
+    e.window_poses.push_back(e.pose);
+    (void)prob;
+    return e;
+}
+
+std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) const {
+    if (cloud.shape.size() != 2 || cloud.shape[1] < 3) throw Error("heat-map: the cloud must be [N, >= 3]");
+    const int64_t N = cloud.shape[0], C = cloud.shape[1];
+    std::vector<float> h(static_cast<size_t>(N), 0.0f);
+    for (int64_t i = 0; i < N; ++i) {
+        const int64_t cell = surface_.cell_of(&cloud.data[size_t(i * C)]);
+        const int32_t smp = cell < 0 ? -1 : surface_.cells[size_t(2 * cell + 1)];
+        if (smp >= 0) h[size_t(i)] = e.sample_belief[size_t(smp)];
+    }
+    if (h.empty()) return h;
+    const auto [lo, hi] = std::minmax_element(h.begin(), h.end());
+    const float a = *lo, b = *hi;
+    for (float& v : h) v = b > a ? (v - a) / (b - a) : 0.0f;
+    return h;
+}
+
+}  // namespace vtloc::track

@@ -1,0 +1,114 @@
+#pragma once
+// The multi-touch filter (SPEC 6; docs/multitouch.md): a belief over sensor
+// poses on the object's surface (hypotheses = surface samples x spins), moved on
+// by the robot's relative motions and scored by the geometry of the touches
+// (each pose must sit on the surface, its axis along the inward normal) and by
+// optional touch terms (log fields over the hypotheses, e.g. the network's
+// heat-map). Two forms: online (add_touch: the previous belief read at the
+// pose the motion leads back to; a touch costs the same however many came
+// before) and windowed (evaluate_window: the current touch and the W - 1 before
+// it, each scored directly). Everything runs on the GPU; the ops' CPU
+// references are the oracle (tests/test_tracker.cpp).
+#include <array>
+#include <memory>
+#include <optional>
+#include <vector>
+
+#include "engine/track/surface.h"
+
+namespace vtloc {
+namespace rt {
+class Context;
+}
+namespace track {
+
+// A rigid motion or pose: R row-major, then t. As a motion from touch a to b:
+// pose b in pose a's frame (Q = R_a^T R_b, q = R_a^T (t_b - t_a)).
+struct Rigid {
+    std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::array<double, 3> t{};
+};
+Rigid compose(const Rigid& a, const Rigid& b);  // a then b in a's frame: (Ra Rb, ta + Ra tb)
+Rigid inverse(const Rigid& a);
+// Throws naming `what` unless R is a rotation (orthonormal within 1e-4, det +1) and all finite.
+void check_rigid(const Rigid& m, const std::string& what);
+
+struct FilterOptions {
+    double press_mm = 0.8;       // the press assumed for every touch (data: 0.3-1.5)
+    double sigma_d_mm = 0.7;     // distance to the surface, at zero lever arm
+    double sigma_a_deg = 9;      // axis against the inward normal (data: tilt up to 10)
+    double odometry_mm = 0;      // motion noise per step, std, translation
+    double odometry_deg = 0;     // and rotation (grows with the lever arm)
+    double log_floor = -9;       // robust floor of one touch's geometry term (log)
+    double grid_allowance = 0.5; // the grid's widths grow by this share of the spacing and spin step
+    double term_weight = 1;      // temperature of the touch terms
+    double mode_radius_mm = 5;   // non-maximum suppression of the modes
+    int n_modes = 8;
+    int refine = 8;              // the best modes refined over six degrees of freedom
+    int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
+};
+
+struct Mode {
+    std::array<double, 3> contact{};
+    double probability = 0;
+};
+
+struct Estimate {
+    std::array<double, 3> contact{};         // the Bayes contact: min expected distance, on the surface
+    Rigid pose;                              // the most likely pose of the current touch (refined)
+    std::array<double, 3> pose_contact{};    // where that pose's axis meets the surface
+    std::vector<Rigid> window_poses;         // that pose carried to each touch of the window, oldest first
+    std::vector<Mode> modes;                 // best first
+    double mass_within_5mm = 0;              // the belief's mass within 5 mm of `contact`
+    std::vector<float> sample_belief;        // [S] summed over spins
+};
+
+class Tracker {
+public:
+    Tracker(rt::Context& ctx, Surface surface, FilterOptions options = {});
+    ~Tracker();
+    Tracker(const Tracker&) = delete;
+    Tracker& operator=(const Tracker&) = delete;
+
+    // Online: the first touch takes no motion; each later one the motion from
+    // the previous touch. term: a log field over the hypotheses [S * NS], or empty.
+    void add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term = {});
+    int touches() const { return touches_; }
+    const std::vector<float>& belief() const { return last_.prob; }  // [S * NS], sums to 1
+    Estimate estimate() const;
+
+    // Windowed (stateless): motions[i] from touch i to i + 1 (W - 1 of them),
+    // terms[i] for touch i (empty vectors: none; or no terms at all).
+    Estimate evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms = {});
+
+    const Surface& surface() const { return surface_; }
+    const FilterOptions& options() const { return opt_; }
+    // A heat-map over `cloud` [N, >= 3]: each point's cell's sample belief, min-max normalised.
+    std::vector<float> heatmap(const Estimate& e, const HostTensor& cloud) const;
+
+private:
+    struct Impl;
+    struct Step {
+        std::vector<float> log, prob, marginal, cost;
+        std::vector<Rigid> to_window;  // each earlier touch of the window in the current one's frame
+    };
+    // One GPU step over a window (motions between its touches, a term per touch or
+    // null) and, optionally, the belief of the touch before it as a prior.
+    Step run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
+                  const Rigid* prior_motion, const std::vector<float>* prior);
+    void check_term(const std::vector<float>& term, size_t touch) const;
+    Estimate finish(const std::vector<float>& log, const std::vector<float>& prob, const std::vector<float>& marginal,
+                    const std::vector<float>& cost, const std::vector<Rigid>& to_window) const;
+    Surface surface_;
+    FilterOptions opt_;
+    std::unique_ptr<Impl> impl_;
+    int touches_ = 0;
+    Step last_;
+    std::vector<Rigid> motions_;              // between the window's touches
+    std::vector<std::vector<float>> terms_;   // the window's touch terms
+    std::vector<std::vector<float>> beliefs_; // log beliefs of the last W touches
+    std::vector<float> prior_log_;
+};
+
+}  // namespace track
+}  // namespace vtloc

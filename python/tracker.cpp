@@ -1,0 +1,121 @@
+// vtloc.Tracker: the multi-touch filter (SPEC section 6), numpy in and out.
+// Motions and poses are 4 x 4 homogeneous float arrays (the rotation in the
+// upper left, the translation in the last column, object units).
+#include <pybind11/stl.h>
+
+#include "arrays.h"
+
+namespace vtloc::python {
+
+namespace {
+
+api::Motion to_motion(const py::handle& obj, const std::string& what) {
+    py::array a = py::array::ensure(obj);
+    if (!a || a.ndim() != 2 || a.shape(0) != 4 || a.shape(1) != 4 ||
+        !(a.dtype().is(py::dtype::of<float>()) || a.dtype().is(py::dtype::of<double>())))
+        throw api::Error(what + ": expected a float32 or float64 4 x 4 array, got " + (a ? describe(a) : "something else"));
+    py::array_t<double, py::array::c_style | py::array::forcecast> d(a);
+    auto r = d.unchecked<2>();
+    for (int i = 0; i < 3; ++i)
+        if (r(3, i) != 0) throw api::Error(what + ": the last row must be 0 0 0 1");
+    if (r(3, 3) != 1) throw api::Error(what + ": the last row must be 0 0 0 1");
+    api::Motion m;
+    for (int i = 0; i < 3; ++i) {
+        for (int j = 0; j < 3; ++j) m.R[size_t(i * 3 + j)] = r(i, j);
+        m.t[size_t(i)] = r(i, 3);
+    }
+    return m;
+}
+
+py::array_t<double> matrix(const api::Motion& m) {
+    py::array_t<double> a({4, 4});
+    auto r = a.mutable_unchecked<2>();
+    for (int i = 0; i < 4; ++i)
+        for (int j = 0; j < 4; ++j) r(i, j) = i == 3 ? (j == 3 ? 1.0 : 0.0) : j == 3 ? m.t[size_t(i)] : m.R[size_t(i * 3 + j)];
+    return a;
+}
+
+api::TrackerOptions options(double press_mm, double sigma_d_mm, double sigma_a_deg, double odometry_mm, double odometry_deg,
+                            int window, int n_spin, int64_t hypotheses, double network_weight, double object_units) {
+    api::TrackerOptions o;
+    o.press_mm = press_mm, o.sigma_d_mm = sigma_d_mm, o.sigma_a_deg = sigma_a_deg;
+    o.odometry_mm = odometry_mm, o.odometry_deg = odometry_deg, o.window = window, o.n_spin = n_spin;
+    o.hypotheses = hypotheses, o.network_weight = network_weight, o.object_units = object_units;
+    return o;
+}
+
+py::dict estimate_dict(const api::TrackerEstimate& e) {
+    py::dict d;
+    d["touches"] = e.touches;
+    d["contact"] = vec3(e.contact);
+    d["pose"] = matrix(e.pose);
+    d["pose_contact"] = vec3(e.pose_contact);
+    py::list w;
+    for (const api::Motion& m : e.window_poses) w.append(matrix(m));
+    d["window_poses"] = w;
+    py::list modes;
+    for (const api::TrackerMode& m : e.modes) modes.append(py::make_tuple(vec3(m.contact), m.probability));
+    d["modes"] = modes;
+    d["mass_within_5mm"] = e.mass_within_5mm;
+    d["heatmap"] = floats(e.heatmap);
+    d["sample_belief"] = floats(e.sample_belief);
+    return d;
+}
+
+const char* kTrackerDoc =
+    "The multi-touch filter (SPEC section 6): a belief over sensor poses on the object's surface.\n"
+    "Tracker(context, object) with object a mesh or cloud path, or an N x 6 array (points and\n"
+    "normals, object units). add_touch(motion=None, result=None, object=None): the first touch\n"
+    "takes no motion, each later one the 4 x 4 motion from the previous touch (pose b in pose a's\n"
+    "frame); result: that touch's TouchResult on `object` (a network term). estimate() -> dict.";
+
+}  // namespace
+
+void bind_tracker(py::module_& m) {
+    py::class_<api::Tracker>(m, "Tracker", kTrackerDoc)
+        .def(py::init([](api::Context& ctx, const py::object& object, double press_mm, double sigma_d_mm, double sigma_a_deg,
+                         double odometry_mm, double odometry_deg, int window, int n_spin, int64_t hypotheses,
+                         double network_weight, double object_units) {
+                 const api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
+                                                       n_spin, hypotheses, network_weight, object_units);
+                 if (py::isinstance<py::str>(object)) return api::Tracker(ctx, object.cast<std::string>(), o);
+                 api::PointCloud c = to_cloud(object, "object");
+                 for (float& v : c.xyz) v = float(v * object_units);
+                 return api::Tracker(ctx, c, o);
+             }),
+             py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 0.7,
+             py::arg("sigma_a_deg") = 9.0, py::arg("odometry_mm") = 0.0, py::arg("odometry_deg") = 0.0, py::arg("window") = 8,
+             py::arg("n_spin") = 36, py::arg("hypotheses") = 120000, py::arg("network_weight") = 0.5,
+             py::arg("object_units") = 1.0, py::keep_alive<1, 2>())
+        .def(
+            "add_touch",
+            [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object) {
+                std::optional<api::Motion> mo;
+                if (!motion.is_none()) mo = to_motion(motion, "motion");
+                py::gil_scoped_release release;
+                t.add_touch(mo, result, object);
+            },
+            py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr)
+        .def("estimate", [](const api::Tracker& t) { return estimate_dict(t.estimate()); })
+        .def(
+            "evaluate_window",
+            [](api::Tracker& t, const py::list& motions) {
+                std::vector<api::Motion> ms;
+                for (size_t i = 0; i < motions.size(); ++i) ms.push_back(to_motion(motions[i], "motions[" + std::to_string(i) + "]"));
+                return estimate_dict(t.evaluate_window(ms));
+            },
+            py::arg("motions"), "The windowed form (geometry only): a list of the W - 1 motions between W touches.")
+        .def_property_readonly("touches", &api::Tracker::touches)
+        .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })
+        .def_property_readonly("sample_points", [](const api::Tracker& t) {
+            std::vector<float> p = t.sample_points();
+            py::array_t<float> a({py::ssize_t(p.size() / 3), py::ssize_t(3)});
+            std::copy(p.begin(), p.end(), a.mutable_data());
+            return a;
+        })
+        .def_property_readonly("n_spin", &api::Tracker::n_spin)
+        .def_property_readonly("spacing_mm", &api::Tracker::spacing_mm)
+        .def_property_readonly("device_bytes", &api::Tracker::device_bytes);
+}
+
+}  // namespace vtloc::python

@@ -1,0 +1,57 @@
+"""Fits the multi-touch filter's knobs (SPEC 6) on windows that end at train touches.
+
+Runs `vtloc eval --sequence 4,8 --geometry-only --end-split train` over a small grid of
+knobs on a dataset and prints, per setting, ND (raw and up to symmetry) at T = 4 and 8
+and the belief's calibration; the best by mean ND up to symmetry is the default in
+engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
+
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--out fit.json]
+"""
+import argparse
+import itertools
+import json
+import os
+import subprocess
+import tempfile
+
+GRID = {
+    "allowance": [0.25, 0.5, 0.75],
+    "sigma_d": [0.5, 0.7, 1.0],
+    "sigma_a": [6, 9, 12],
+}
+
+
+def run(vtloc, data, knobs):
+    with tempfile.TemporaryDirectory() as tmp:
+        out = os.path.join(tmp, "fit.json")
+        arg = ",".join(f"{k}={v}" for k, v in knobs.items())
+        subprocess.run([vtloc, "eval", "--data", data, "--sequence", "4,8", "--geometry-only", "--end-split", "train",
+                        "--filter", arg, "--json", out], check=True, stdout=subprocess.DEVNULL)
+        with open(out) as f:
+            rows = [r for r in json.load(f)["rows"] if r["subset"] == "all" and not r["odometry_noise"]]
+    return {f"T{r['T']}": {k: r[k] for k in ("nd", "nd_symmetry", "within_5mm", "mass_within_5mm")} for r in rows}
+
+
+def main():
+    ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
+    ap.add_argument("--vtloc", default="build/vtloc")
+    ap.add_argument("--data", required=True)
+    ap.add_argument("--out")
+    a = ap.parse_args()
+    results = []
+    for values in itertools.product(*GRID.values()):
+        knobs = dict(zip(GRID, values))
+        r = run(a.vtloc, a.data, knobs)
+        score = sum(v["nd_symmetry"] for v in r.values()) / len(r)
+        results.append({"knobs": knobs, "score": score, "rows": r})
+        print(json.dumps(knobs), f"mean ND up to symmetry {score:.2f}",
+              " ".join(f"{t}: {v['nd']:.1f}/{v['nd_symmetry']:.1f}" for t, v in r.items()), flush=True)
+    best = min(results, key=lambda x: x["score"])
+    print("best", json.dumps(best["knobs"]), f"{best['score']:.2f}")
+    if a.out:
+        with open(a.out, "w") as f:
+            json.dump({"grid": GRID, "results": results, "best": best}, f, indent=1)
+
+
+if __name__ == "__main__":
+    main()
