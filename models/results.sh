@@ -2,7 +2,8 @@
 # Every number of docs/results.md: `vtloc eval` (this engine) on the exported weights,
 # known and unknown objects of the synthetic benchmark, each beside the PyTorch
 # reference's metrics on the same touches (tests/eval/compare_eval.py prints the
-# largest difference), and the ILU N ablation (N varied at run time on one model).
+# largest difference), the ILU N ablation (N varied at run time on one model) and the
+# several-touch tables (SPEC 6).
 #   bash models/results.sh OUT_DIR MODEL.safetensors [MODEL ...]
 set -euo pipefail
 root="$(cd "$(dirname "$0")/.." && pwd)"
@@ -20,6 +21,15 @@ for model in "$@"; do
     /usr/bin/python3 tests/eval/compare_eval.py "$out/$name.$objects.json" "$out/$name.$objects.py.json" "$data" \
       | tee "$out/$name.$objects.compare.txt"
   done
+done
+# Several touches (SPEC 6, docs/multitouch.md): both protocols, geometry alone and with the first
+# model's heat-maps, without and with odometry noise, on the default benchmark (its meshes:
+# data/synth/make_dataset.sh), known and unknown objects.
+seqdata="${VTLOC_SEQUENCE_DATA:-$root/build/synth-default}"
+[ -d "$seqdata" ] || bash "$root/data/synth/make_dataset.sh" "$seqdata" 0
+for objects in known unknown; do
+  build/vtloc eval --model "$1" --data "$seqdata" --objects "$objects" --sequence 1,2,3,4,6,8 \
+    --odometry-noise 0.5,0.5 --json "$out/sequence.$objects.json" --markdown "$out/sequence.$objects.md"
 done
 # ILU N ablation on the first model: accuracy per N and this engine's time per touch.
 model="$1"; name="$(basename "$model" .safetensors)"

@@ -83,8 +83,8 @@ void bind_tracker(py::module_& m) {
                  for (float& v : c.xyz) v = float(v * object_units);
                  return api::Tracker(ctx, c, o);
              }),
-             py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 0.7,
-             py::arg("sigma_a_deg") = 9.0, py::arg("odometry_mm") = 0.0, py::arg("odometry_deg") = 0.0, py::arg("window") = 8,
+             py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 1.0,
+             py::arg("sigma_a_deg") = 6.0, py::arg("odometry_mm") = 0.0, py::arg("odometry_deg") = 0.0, py::arg("window") = 8,
              py::arg("n_spin") = 36, py::arg("hypotheses") = 120000, py::arg("network_weight") = 0.5,
              py::arg("object_units") = 1.0, py::keep_alive<1, 2>())
         .def(

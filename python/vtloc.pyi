@@ -78,7 +78,7 @@ class TouchResult:
 class Tracker:
     """The multi-touch filter (SPEC section 6). Motions and poses: 4 x 4 arrays, object units."""
     def __init__(self, context: Context, object: Union[str, npt.NDArray[np.floating]], press_mm: float = 0.8,
-                 sigma_d_mm: float = 0.7, sigma_a_deg: float = 9.0, odometry_mm: float = 0.0,
+                 sigma_d_mm: float = 1.0, sigma_a_deg: float = 6.0, odometry_mm: float = 0.0,
                  odometry_deg: float = 0.0, window: int = 8, n_spin: int = 36, hypotheses: int = 120000,
                  network_weight: float = 0.5, object_units: float = 1.0) -> None: ...
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,

@@ -2,6 +2,7 @@
 // shapes with fixed seeds. Tolerance: the fp32 default 1e-4 + 1e-4*|ref|; the
 // CPU GEMM accumulates in double, so this bounds the shader's fp32 rounding.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <set>
 
 #include "base/error.h"
@@ -239,4 +240,14 @@ TEST_CASE("linear reports mismatched shapes with the node's name", "[op][linear]
     int w = g.weight("fc.weight", {8, 11});
     REQUIRE_THROWS_WITH(ops::linear(g, x, w, -1, ops::kActNone, 0.01, "fc1"),
                         Catch::Contains("fc1") && Catch::Contains("expects 11"));
+}
+
+TEST_CASE("the subgroup-4 run sees subgroup size 4", "[op][registry]") {
+    // CTest's sg4/ tests set LP_NATIVE_VECTOR_WIDTH=128 (lavapipe: 4 lanes); a
+    // lost variable made them repeat the subgroup-8 run unnoticed once.
+    const char* w = std::getenv("LP_NATIVE_VECTOR_WIDTH");
+    const rt::DeviceInfo& d = test::gpu().info();
+    if (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU) return;  // another driver: nothing to check
+    if (w && std::string(w) == "128") CHECK(d.subgroup_size == 4u);
+    else CHECK(d.subgroup_size >= 4u);
 }

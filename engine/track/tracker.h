@@ -35,12 +35,12 @@ void check_rigid(const Rigid& m, const std::string& what);
 
 struct FilterOptions {
     double press_mm = 0.8;       // the press assumed for every touch (data: 0.3-1.5)
-    double sigma_d_mm = 0.7;     // distance to the surface, at zero lever arm
-    double sigma_a_deg = 9;      // axis against the inward normal (data: tilt up to 10)
+    double sigma_d_mm = 1.0;     // distance to the surface, at zero lever arm (fitted: weights_tools/fit_filter.py)
+    double sigma_a_deg = 6;      // axis against the inward normal (fitted likewise)
     double odometry_mm = 0;      // motion noise per step, std, translation
     double odometry_deg = 0;     // and rotation (grows with the lever arm)
     double log_floor = -9;       // robust floor of one touch's geometry term (log)
-    double grid_allowance = 0.5; // the grid's widths grow by this share of the spacing and spin step
+    double grid_allowance = 0.25; // the grid's widths grow by this share of the spacing and spin step (fitted)
     double term_weight = 1;      // temperature of the touch terms
     double mode_radius_mm = 5;   // non-maximum suppression of the modes
     int n_modes = 8;

@@ -348,8 +348,8 @@ std::vector<Motion> motions_from_flange_poses(const std::vector<Motion>& flange,
 
 struct TrackerOptions {
     double press_mm = 0.8;       // the press assumed for every touch (our data: 0.3-1.5 mm)
-    double sigma_d_mm = 0.7;     // a pose's distance to the surface
-    double sigma_a_deg = 9;      // its axis against the inward normal (covers a tilt up to 10 degrees)
+    double sigma_d_mm = 1.0;     // a pose's distance to the surface (fitted on train windows: docs/multitouch.md)
+    double sigma_a_deg = 6;      // its axis against the inward normal (fitted likewise)
     double odometry_mm = 0;      // motion noise per step (std), widening with the lever arm
     double odometry_deg = 0;
     int window = 8;              // touches scored exactly; older ones enter as a prior
@@ -357,7 +357,7 @@ struct TrackerOptions {
     int64_t hypotheses = 120000; // surface samples x spins, about
     double network_weight = 0.5; // temperature of the network's heat-map term (add_touch with a TouchResult)
     double mode_radius_mm = 5;   // the modes' non-maximum suppression
-    double grid_allowance = 0.5; // the grid's widths grow by this share of its spacing and spin step
+    double grid_allowance = 0.25; // the grid's widths grow by this share of its spacing and spin step (fitted)
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
 };
 
