@@ -35,6 +35,9 @@ MethodResult run_chance(const std::vector<Job>& jobs) {
 MethodResult run_point_filtering(const sim::Dataset& d, const std::vector<Job>& jobs) {
     MethodResult res;
     res.method = "Point Filtering";
+    // ObjectFolder's Point Filtering combines touches; this row is its single-touch form
+    // (several touches: vtloc eval --sequence).
+    res.label = "Point Filtering (single touch)";
     int without_mesh = 0;
     for (const Job& job : jobs) without_mesh += job.rec->has_mesh ? 0 : 1;
     if (without_mesh > 0) {
