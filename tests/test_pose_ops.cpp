@@ -170,13 +170,17 @@ TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU refere
             int score = g.input("score", {S * NS});
             std::vector<int> lp = ops::log_softmax(g, score);
             int m = ops::spin_marginal(g, lp[1], NS);
-            int e = ops::expected_distance(g, g.input("pts", {S, 3}), m);
+            const int pts = g.input("pts", {S, 3});
+            int e = ops::expected_distance(g, pts, m, pts);  // every sample an answer
+            int e2 = ops::expected_distance(g, pts, m, g.input("ans", {(S + 6) / 7, 3}));
             g.output(lp[0], "log");
             g.output(lp[1], "prob");
             g.output(m, "marginal");
             g.output(e, "cost");
+            g.output(e2, "cost_answers");
             TensorMap in{{"score", test::random_tensor({S * NS}, uint32_t(S + NS), -30.0f, 5.0f)},
-                         {"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)}};
+                         {"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)},
+                         {"ans", test::random_tensor({(S + 6) / 7, 3}, uint32_t(S) + 3, -60.0f, 60.0f)}};
             TensorMap got = test::run_gpu_and_compare(g, WeightStore{}, in);
             double sum = 0;
             for (float v : got.at("marginal").data) sum += v;
@@ -189,7 +193,9 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     Graph g;
     int score = g.input("score", {12});
     CHECK_THROWS_WITH(ops::spin_marginal(g, score, 5), Catch::Contains("[S * 5]"));
-    CHECK_THROWS_WITH(ops::expected_distance(g, g.input("p", {4, 3}), g.input("w", {5})), Catch::Contains("weights must be [S]"));
+    const int p4 = g.input("p", {4, 3});
+    CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w", {5}), p4), Catch::Contains("weights must be [S]"));
+    CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w4", {4}), g.input("a", {2, 2})), Catch::Contains("answers must be [A > 0, 3]"));
     Scene sc = scene(5, 5, 3, 1, 1, 1);
     Graph h;
     CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 6}), h.input("c", {7, 2}, ElemType::I32),

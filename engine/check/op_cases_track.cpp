@@ -78,7 +78,9 @@ OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
     int m = ops::spin_marginal(c.g, lp[1], NS);
     c.output(lp[0], "log");
     c.output(m, "marginal");
-    c.output(ops::expected_distance(c.g, c.input("pts", random_tensor({S, 3}, seed + 1, -50.0f, 50.0f)), m), "cost");
+    const int pts = c.input("pts", random_tensor({S, 3}, seed + 1, -50.0f, 50.0f));
+    c.output(ops::expected_distance(c.g, pts, m, c.input("answers", random_tensor({(S + 2) / 3, 3}, seed + 2, -60.0f, 60.0f))),
+             "cost");
     return c;
 }
 

@@ -105,8 +105,8 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
 // prob [S * n_spin] -> [S].
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
-// points [S, 3], weights [S] -> sum_s w_s ||p_s - p_j|| [S].
-int expected_distance(Graph& g, int points, int weights, const std::string& name = "");
+// points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
+int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "");
 
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers

@@ -1,7 +1,8 @@
 // The multi-touch filter's reductions of its belief (SPEC 6):
 // spin_marginal: prob [S * NS] -> [S], the belief at each surface sample (param n_spin);
-// expected_distance: points [S, 3], weights [S] -> cost [S], cost_j = sum_s w_s ||p_s - p_j||,
-// whose argmin is the Bayes estimate of the contact for the distance error.
+// expected_distance: points [S, 3], weights [S], answers [A, 3] -> cost [A],
+// cost_j = sum_s w_s ||p_s - a_j||, whose argmin is the Bayes estimate of the contact
+// for the distance error (the tracker asks it of a strided subset of its samples).
 // -> shaders/spin_marginal.comp, shaders/expected_distance.comp
 #include <cmath>
 
@@ -48,23 +49,25 @@ void marginal_gpu(const GpuOpArgs& a) {
 }
 
 std::vector<TensorDesc> expect_infer(const std::vector<TensorDesc>& in, const Params&) {
-    expect_input_count(in, 2, 2);
+    expect_input_count(in, 3, 3);
     expect_f32(in);
-    const Shape &pt = in[0].shape, &w = in[1].shape;
+    const Shape &pt = in[0].shape, &w = in[1].shape, &an = in[2].shape;
     if (pt.size() != 2 || pt[1] != 3 || pt[0] == 0) throw Error("points must be [S > 0, 3], got " + shape_str(pt));
     if (w != Shape{pt[0]}) throw Error("weights must be [S] = " + shape_str({pt[0]}) + ", got " + shape_str(w));
+    if (an.size() != 2 || an[1] != 3 || an[0] == 0) throw Error("answers must be [A > 0, 3], got " + shape_str(an));
     to_u32(3 * pt[0], "point array size");
-    return {TensorDesc{{pt[0]}}};
+    to_u32(3 * an[0], "answer array size");
+    return {TensorDesc{{an[0]}}};
 }
 
 void expect_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params&) {
-    const std::vector<float>&pt = in[0]->data, &w = in[1]->data;
-    const size_t S = w.size();
-    for (size_t j = 0; j < S; ++j) {
+    const std::vector<float>&pt = in[0]->data, &w = in[1]->data, &an = in[2]->data;
+    const size_t S = w.size(), A = an.size() / 3;
+    for (size_t j = 0; j < A; ++j) {
         double acc = 0;
         for (size_t s = 0; s < S; ++s) {
-            double e[3] = {double(pt[3 * s]) - pt[3 * j], double(pt[3 * s + 1]) - pt[3 * j + 1],
-                           double(pt[3 * s + 2]) - pt[3 * j + 2]};
+            double e[3] = {double(pt[3 * s]) - an[3 * j], double(pt[3 * s + 1]) - an[3 * j + 1],
+                           double(pt[3 * s + 2]) - an[3 * j + 2]};
             acc += double(w[s]) * std::sqrt(e[0] * e[0] + e[1] * e[1] + e[2] * e[2]);
         }
         out[0]->data[j] = float(acc);
@@ -73,17 +76,18 @@ void expect_cpu(const std::vector<const HostTensor*>& in, const std::vector<Host
 
 void expect_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    const uint32_t S = uint32_t(a.in[0].shape[0]);
+    struct { uint32_t S, A; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[2].shape[0])};
     uint32_t local = elementwise_local_size(d);
     while (local > 1 && local * 16 > d.max_shared_memory) local /= 2;
-    const uint64_t groups = (uint64_t(S) + local - 1) / local;
+    const uint64_t groups = (uint64_t(push.A) + local - 1) / local, tiles = (uint64_t(push.S) + local - 1) / local;
     if (groups > d.max_workgroup_count[0])
-        throw Error("expected_distance: " + std::to_string(S) + " points need more workgroups than the device's " +
+        throw Error("expected_distance: " + std::to_string(push.A) + " answers need more workgroups than the device's " +
                     std::to_string(d.max_workgroup_count[0]));
-    check_loop_budget(d, uint64_t(S) + 2 * groups + 8, "expected_distance over " + std::to_string(S) + " points");
-    a.seq.dispatch(pipeline(a.ctx, "expected_distance", 3, 4, {local}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
-                   &S, 4, uint32_t(groups));
+    check_loop_budget(d, uint64_t(push.S) + 2 * tiles + 8, "expected_distance over " + std::to_string(push.S) + " points");
+    a.seq.dispatch(pipeline(a.ctx, "expected_distance", 4, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), uint32_t(groups));
 }
 
 }  // namespace

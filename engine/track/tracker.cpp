@@ -18,6 +18,9 @@ namespace {
 
 
 using P = ops::pose::V3;
+constexpr int64_t kMaxAnswers = 512;
+
+int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
 }  // namespace
 
@@ -81,6 +84,11 @@ Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options)
     std::vector<float> pts;
     for (int64_t i = 0; i < s.n_samples(); ++i) pts.insert(pts.end(), &s.samples[size_t(i * 9)], &s.samples[size_t(i * 9 + 3)]);
     w.add("surface.points", HostTensor({s.n_samples(), 3}, pts));
+    // The GPU's Bayes risk is asked of every answer_stride-th sample (at most
+    // kMaxAnswers): the risk is smooth, and the host adds the best-held samples.
+    std::vector<float> ans;
+    for (int64_t i = 0; i < s.n_samples(); i += answer_stride(s)) ans.insert(ans.end(), &pts[size_t(3 * i)], &pts[size_t(3 * i + 3)]);
+    w.add("surface.answers", HostTensor({int64_t(ans.size() / 3), 3}, ans));
 }
 
 Tracker::~Tracker() = default;
@@ -106,7 +114,8 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
                                    g.input("fields", {F, H}), p, "track.evidence");
     std::vector<int> lp = ops::log_softmax(g, score, "track.belief");
     int m = ops::spin_marginal(g, lp[1], NS, "track.marginal");
-    int c = ops::expected_distance(g, g.weight("surface.points", {S, 3}), m, "track.risk");
+    const int64_t A = (S + answer_stride(s) - 1) / answer_stride(s);
+    int c = ops::expected_distance(g, g.weight("surface.points", {S, 3}), m, g.weight("surface.answers", {A, 3}), "track.risk");
     g.output(lp[0], "log");
     g.output(lp[1], "prob");
     g.output(m, "marginal");
@@ -290,7 +299,8 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     };
     Estimate e;
     e.sample_belief = marginal;
-    const int64_t best = int64_t(std::min_element(cost.begin(), cost.end()) - cost.begin());
+    const int64_t stride = answer_stride(s);
+    const int64_t best = stride * int64_t(std::min_element(cost.begin(), cost.end()) - cost.begin());
     e.contact = point(best);
     for (int64_t i = 0; i < S; ++i)
         if (dist(point(i), e.contact) <= 5.0) e.mass_within_5mm += marginal[size_t(i)];
@@ -414,12 +424,13 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             }
     }
     std::vector<std::array<double, 3>> cand(refined_contact.begin(), refined_contact.end());
-    std::vector<int64_t> by_cost(static_cast<size_t>(S));
+    std::vector<int64_t> by_cost(cost.size());
     std::iota(by_cost.begin(), by_cost.end(), 0);
     const size_t n_cost = std::min<size_t>(64, by_cost.size());
     std::partial_sort(by_cost.begin(), by_cost.begin() + long(n_cost), by_cost.end(),
                       [&](int64_t a, int64_t b) { return cost[size_t(a)] < cost[size_t(b)] || (cost[size_t(a)] == cost[size_t(b)] && a < b); });
-    for (size_t i = 0; i < n_cost; ++i) cand.push_back(point(by_cost[i]));
+    for (size_t i = 0; i < n_cost; ++i) cand.push_back(point(stride * by_cost[i]));
+    for (size_t i = 0; i < std::min<size_t>(64, order.size()); ++i) cand.push_back(point(order[i]));  // the best-held samples
     double best_risk = INFINITY;
     for (const auto& c : cand) {
         double r = 0;
