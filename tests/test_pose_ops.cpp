@@ -11,6 +11,7 @@
 #include <cmath>
 #include <random>
 
+#include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
 #include "tests/harness.h"
 
@@ -24,18 +25,6 @@ struct Scene {
     TensorMap in;
     ops::PoseEvidence p;
 };
-
-// Unit vector, and a unit vector orthogonal to it.
-void frame_pair(std::mt19937& rng, float* n, float* t) {
-    std::normal_distribution<float> g;
-    float a[3] = {g(rng), g(rng), g(rng)}, b[3] = {g(rng), g(rng), g(rng)};
-    float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    for (float& v : a) v /= la;
-    float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
-    float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    for (int i = 0; i < 3; ++i) n[i] = a[i], t[i] = b[i] / lb;
-}
 
 // A random proper rotation (row-major), from a unit quaternion.
 void rotation(std::mt19937& rng, float* r) {
@@ -65,13 +54,14 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
     for (int64_t s = 0; s < S; ++s) {
         float* r = &samples.data[size_t(s * 9)];
         for (int i = 0; i < 3; ++i) r[i] = u(rng);
-        frame_pair(rng, r + 3, r + 6);
+        check::random_unit_pair(rng, r + 3);  // normal, then its tangent t1
     }
     for (int64_t i = 0; i < D; ++i) {
         float* r = &dense.data[size_t(i * 6)];
-        float t[3];
+        float nt[6];
         for (int k = 0; k < 3; ++k) r[k] = u(rng);
-        frame_pair(rng, r + 3, t);
+        check::random_unit_pair(rng, nt);
+        for (int k = 0; k < 3; ++k) r[3 + k] = nt[k];
     }
     std::vector<int32_t> cells(size_t(V * 2));
     std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1), si(-1, int32_t(S) - 1);

@@ -12,18 +12,6 @@ namespace vtloc::check {
 
 namespace {
 
-// Unit rows: a random direction in r[0..2] and, orthogonal to it, r[3..5].
-void unit_pair(std::mt19937& rng, float* r) {
-    std::normal_distribution<float> g;
-    float a[3] = {g(rng), g(rng), g(rng)}, b[3] = {g(rng), g(rng), g(rng)};
-    float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
-    for (float& x : a) x /= la;
-    float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
-    for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
-    float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
-    for (int i = 0; i < 3; ++i) r[i] = a[i], r[3 + i] = b[i] / lb;
-}
-
 OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     OpCase c("pose_evidence", std::to_string(S) + " samples x " + std::to_string(NS) + " spins, " + std::to_string(K) + " terms");
     std::mt19937 rng(seed);
@@ -33,11 +21,11 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     for (int64_t s = 0; s < S; ++s) {
         float* r = &samples.data[size_t(s * 9)];
         for (int i = 0; i < 3; ++i) r[i] = u(rng);
-        unit_pair(rng, r + 3);
+        random_unit_pair(rng, r + 3);
     }
     for (int64_t i = 0; i < D; ++i) {
         float* r = &dense.data[size_t(i * 6)], t[6];
-        unit_pair(rng, t);
+        random_unit_pair(rng, t);
         for (int k = 0; k < 3; ++k) r[k] = u(rng), r[3 + k] = t[k];
     }
     std::vector<int32_t> cells(size_t(2 * V));
@@ -48,7 +36,7 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
         spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
     for (int64_t k = 0; k < K; ++k) {
         float* r = &terms.data[size_t(k * 16)], a[6];
-        unit_pair(rng, a);  // a rotation from two orthonormal columns and their cross product
+        random_unit_pair(rng, a);  // a rotation from two orthonormal columns and their cross product
         const float z[3] = {a[1] * a[5] - a[2] * a[4], a[2] * a[3] - a[0] * a[5], a[0] * a[4] - a[1] * a[3]};
         for (int i = 0; i < 3; ++i) r[3 * i] = a[i], r[3 * i + 1] = a[3 + i], r[3 * i + 2] = z[i];
         for (int i = 0; i < 3; ++i) r[9 + i] = u(rng);
@@ -85,6 +73,17 @@ OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
 }
 
 }  // namespace
+
+void random_unit_pair(std::mt19937& rng, float* r) {
+    std::normal_distribution<float> g;
+    float a[3] = {g(rng), g(rng), g(rng)}, b[3] = {g(rng), g(rng), g(rng)};
+    float la = std::sqrt(a[0] * a[0] + a[1] * a[1] + a[2] * a[2]);
+    for (float& x : a) x /= la;
+    float d = a[0] * b[0] + a[1] * b[1] + a[2] * b[2];
+    for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
+    float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
+    for (int i = 0; i < 3; ++i) r[i] = a[i], r[3 + i] = b[i] / lb;
+}
 
 std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
     std::vector<OpCase> v;

@@ -5,6 +5,7 @@
 // the device's limits pick), with no Catch2, golden file or Python. Cases live
 // in op_cases_*.cpp; an op of the registry with no case fails the self-test.
 #include <functional>
+#include <random>
 #include <string>
 #include <vector>
 
@@ -35,6 +36,9 @@ struct OpCase {
 
 // Seeded uniform values in [lo, hi) (std::mt19937; fixed for a seed).
 HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo = -1.0f, float hi = 1.0f);
+// A random unit vector in out[0..2] and a unit vector orthogonal to it in out[3..5]
+// (six normal draws from rng): a normal and its tangent (the multi-touch filter's cases).
+void random_unit_pair(std::mt19937& rng, float* out);
 
 // Balls in SPEC 2's layout (real slots, then the first index again) of very
 // different lengths in one subgroup, [S, NS] indices into P points: in each run of 8

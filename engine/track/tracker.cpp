@@ -274,7 +274,7 @@ void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<fl
 
 Estimate Tracker::estimate() const {
     if (touches_ == 0) throw Error("the tracker has no touch yet");
-    return finish(last_.log, last_.prob, last_.marginal, last_.cost, last_.to_window);
+    return finish(last_.log, last_.marginal, last_.cost, last_.to_window);
 }
 
 Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms) {
@@ -285,10 +285,10 @@ Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::
     std::vector<const std::vector<float>*> tp(W, nullptr);
     for (size_t i = 0; i < terms.size(); ++i) check_term(terms[i], i + 1), tp[i] = &terms[i];
     Step st = run_step(motions, tp, nullptr, nullptr);
-    return finish(st.log, st.prob, st.marginal, st.cost, st.to_window);
+    return finish(st.log, st.marginal, st.cost, st.to_window);
 }
 
-Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& prob, const std::vector<float>& marginal,
+Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& marginal,
                          const std::vector<float>& cost, const std::vector<Rigid>& to_window) const {
     const Surface& s = surface_;
     const int64_t S = s.n_samples(), NS = s.n_spin();
@@ -298,25 +298,22 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
     };
     Estimate e;
-    e.sample_belief = marginal;
     const int64_t stride = answer_stride(s);
-    const int64_t best = stride * int64_t(std::min_element(cost.begin(), cost.end()) - cost.begin());
-    e.contact = point(best);
-    for (int64_t i = 0; i < S; ++i)
-        if (dist(point(i), e.contact) <= 5.0) e.mass_within_5mm += marginal[size_t(i)];
 
-    // Modes: greedy non-maximum suppression over the samples' belief.
+    // Modes: greedy non-maximum suppression over the samples' belief; owner[j]: the
+    // first mode within the radius of sample j (-1: none), used for every mode mass below.
     std::vector<int64_t> order(static_cast<size_t>(S));
     std::iota(order.begin(), order.end(), 0);
     std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return marginal[size_t(a)] > marginal[size_t(b)]; });
-    std::vector<char> taken(static_cast<size_t>(S), 0);
+    std::vector<int> owner(static_cast<size_t>(S), -1);
     std::vector<int64_t> mode_sample;
     for (int64_t i : order) {
-        if (taken[size_t(i)] || int(e.modes.size()) >= opt_.n_modes) continue;
-        Mode m{point(i), 0};
+        if (int(e.modes.size()) >= opt_.n_modes) break;
+        if (owner[size_t(i)] >= 0) continue;
+        const int m = int(e.modes.size());
+        e.modes.push_back(Mode{point(i), 0});
         for (int64_t j = 0; j < S; ++j)
-            if (!taken[size_t(j)] && dist(point(j), m.contact) <= opt_.mode_radius_mm) taken[size_t(j)] = 1, m.probability += marginal[size_t(j)];
-        e.modes.push_back(m);
+            if (owner[size_t(j)] < 0 && dist(point(j), point(i)) <= opt_.mode_radius_mm) owner[size_t(j)] = m;
         mode_sample.push_back(i);
     }
 
@@ -381,48 +378,35 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         refined[size_t(m)] = x;
         refined_contact[size_t(m)] = axis_contact(s, grid, x, opt_.press_mm);
     }
-    // Relative to the least-improved refined mode, which the unrefined samples are taken to be like.
-    std::vector<int> mode_of(static_cast<size_t>(S), -1);
+    auto refined_mode = [&](int64_t i) { return owner[size_t(i)] < n_refine ? owner[size_t(i)] : -1; };
     std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
     for (int64_t i = 0; i < S; ++i)
-        for (int m = 0; m < n_refine; ++m)
-            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) {
-                mode_of[size_t(i)] = m, grid_mass[size_t(m)] += marginal[size_t(i)];
-                break;
-            }
+        if (refined_mode(i) >= 0) grid_mass[size_t(refined_mode(i))] += marginal[size_t(i)];
     const double fmax = *std::max_element(fit.begin(), fit.end());
     double held = 0, z = 0;
     for (int m = 0; m < n_refine; ++m) held += grid_mass[size_t(m)], z += std::exp(fit[size_t(m)] - fmax);
     std::vector<double> w(static_cast<size_t>(S));
     double total = 0;
     for (int64_t i = 0; i < S; ++i) {
-        const int m = mode_of[size_t(i)];
+        const int m = refined_mode(i);
         w[size_t(i)] = m < 0 || grid_mass[size_t(m)] <= 0
                            ? double(marginal[size_t(i)])
                            : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(fit[size_t(m)] - fmax) / z;
         total += w[size_t(i)];
     }
     for (double& v : w) v /= total;
+    // Mode masses under the re-weighted belief; the pose is the heaviest refined mode's.
+    for (int64_t i = 0; i < S; ++i)
+        if (owner[size_t(i)] >= 0) e.modes[size_t(owner[size_t(i)])].probability += w[size_t(i)];
     int best_mode = 0;
-    std::vector<double> mode_mass(static_cast<size_t>(n_refine), 0.0);
-    for (int m = 0; m < n_refine; ++m) {
-        for (int64_t i = 0; i < S; ++i)
-            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) mode_mass[size_t(m)] += w[size_t(i)];
-        if (mode_mass[size_t(m)] > mode_mass[size_t(best_mode)]) best_mode = m;
-    }
+    for (int m = 1; m < n_refine; ++m)
+        if (e.modes[size_t(m)].probability > e.modes[size_t(best_mode)].probability) best_mode = m;
     e.pose = refined[size_t(best_mode)];
     // The Bayes contact under the re-weighted belief, each refined mode's mass at
     // its refined contact (its peak; the grid spreads it over the spacing), among
     // those contacts and the samples the GPU's risk ranked best.
     std::vector<std::array<double, 3>> at(static_cast<size_t>(S));
-    for (int64_t i = 0; i < S; ++i) {
-        at[size_t(i)] = point(i);
-        for (int m = 0; m < n_refine; ++m)
-            if (dist(point(i), point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm) {
-                at[size_t(i)] = refined_contact[size_t(m)];
-                break;
-            }
-    }
+    for (int64_t i = 0; i < S; ++i) at[size_t(i)] = refined_mode(i) >= 0 ? refined_contact[size_t(refined_mode(i))] : point(i);
     std::vector<std::array<double, 3>> cand(refined_contact.begin(), refined_contact.end());
     std::vector<int64_t> by_cost(cost.size());
     std::iota(by_cost.begin(), by_cost.end(), 0);
@@ -440,22 +424,12 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     e.mass_within_5mm = 0;
     for (int64_t i = 0; i < S; ++i)
         if (dist(at[size_t(i)], e.contact) <= 5.0) e.mass_within_5mm += w[size_t(i)];
-    for (size_t m = 0; m < e.modes.size(); ++m) {
-        e.modes[m].probability = 0;
-        if (int(m) < n_refine) e.modes[m].contact = refined_contact[m];
-    }
-    for (int64_t i = 0; i < S; ++i)  // mode masses under the re-weighted belief
-        for (size_t m = 0; m < e.modes.size(); ++m)
-            if (dist(point(i), point(mode_sample[m])) <= opt_.mode_radius_mm) {
-                e.modes[m].probability += w[size_t(i)];
-                break;
-            }
+    for (int m = 0; m < n_refine; ++m) e.modes[size_t(m)].contact = refined_contact[size_t(m)];
     std::stable_sort(e.modes.begin(), e.modes.end(), [](const Mode& a, const Mode& b) { return a.probability > b.probability; });
     e.sample_belief.assign(w.begin(), w.end());
     e.pose_contact = axis_contact(s, grid, e.pose, opt_.press_mm);
     for (const Rigid& r : to_window) e.window_poses.push_back(compose(e.pose, r));
     e.window_poses.push_back(e.pose);
-    (void)prob;
     return e;
 }
 

@@ -97,7 +97,7 @@ private:
     Step run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
                   const Rigid* prior_motion, const std::vector<float>* prior);
     void check_term(const std::vector<float>& term, size_t touch) const;
-    Estimate finish(const std::vector<float>& log, const std::vector<float>& prob, const std::vector<float>& marginal,
+    Estimate finish(const std::vector<float>& log, const std::vector<float>& marginal,
                     const std::vector<float>& cost, const std::vector<Rigid>& to_window) const;
     Surface surface_;
     FilterOptions opt_;
