@@ -65,9 +65,9 @@ struct Session {
 // that holds the default model. Throws api::Error when none does.
 std::filesystem::path shipped_dir();
 // kDefaultModel, kRandomModel: base/shipped.h
-// The demo's example for the default model (examples/<name>.json): a test touch
-// of the synthetic benchmark that vtloc-lite never trained on.
-inline constexpr const char* kDefaultExample = "cone_test0";
+// The demo's example (examples/<name>.json): a tour of 8 touches whose last is a test touch
+// of the synthetic benchmark (multi-touch filter; --example picks a single touch).
+inline constexpr const char* kDefaultExample = "potato_tour";
 bool is_shipped_random_model(const std::string& path);
 std::string default_model_path();
 

@@ -12,19 +12,25 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kHelp =
-    "usage: vtloc demo [--example N] [--out DIR] [--model M] [--mm-per-px MM]\n"
+    "usage: vtloc demo [--example NAME] [--out DIR] [--model M] [--geometry-only] [--mm-per-px MM]\n"
     "\n"
-    "Runs the shipped default model (models/vtloc-lite.safetensors, trained on the\n"
-    "synthetic benchmark; docs/results.md) on a shipped example: by default a test touch\n"
-    "of the benchmark it never trained on (examples/cone_test0.json), or one of the mug\n"
-    "touches (real GelSight frames, not taken on the mug). Prints the predicted and the\n"
-    "true contact and the error, and writes a heat-map picture (PNG) and cloud (PLY).\n"
+    "By default, the engine's job: several touches on a shipped object and the robot's motions\n"
+    "between them (examples/potato_tour.json: 8 simulated touches along a tour of a potato, the\n"
+    "last one a test touch of the synthetic benchmark) go through the multi-touch filter with the\n"
+    "shipped model's heat-map of each touch (SPEC section 6). It prints the error of the contact\n"
+    "estimate after each touch and writes the belief after each touch side by side (belief.png).\n"
     "\n"
-    "  --example E   which example: 1..3 (examples/touch_0E.json) or a name\n"
-    "                (examples/E.json; default: cone_test0)\n"
-    "  --out DIR     where to write heatmap.png and heatmap.ply\n"
-    "                (default: <temp dir>/vtloc-demo)\n"
+    "--example picks a single touch instead: the shipped model (models/vtloc-lite.safetensors,\n"
+    "trained on the synthetic benchmark; docs/results.md) on one touch it never trained on\n"
+    "(cone_test0) or one of the mug touches (real GelSight frames, not taken on the mug),\n"
+    "printing the predicted and the true contact and writing a heat-map picture (PNG) and cloud\n"
+    "(PLY).\n"
+    "\n"
+    "  --example E   1..3 (examples/touch_0E.json) or a name (examples/E.json: a touch, or\n"
+    "                a touches file with true contacts; default: potato_tour)\n"
+    "  --out DIR     where to write the pictures (default: <temp dir>/vtloc-demo)\n"
     "  --model M     another weight file, e.g. your trained export\n"
+    "  --geometry-only  a sequence without the network term (no model is loaded)\n"
     "  --mm-per-px MM  the frame's pixel size in mm: rescale it to the model's sensor\n"
     "                pixel size before the crop (the model must record a sensor)\n";
 
@@ -53,14 +59,24 @@ Example read_example(const fs::path& json_path) {
     }
 }
 
+// A touches file ("format": "vtloc-touches/2") rather than a single-touch example.
+bool is_sequence_file(const fs::path& p) {
+    std::ifstream in(p);
+    const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+    return j.is_object() && j.contains("format") && j["format"] == "vtloc-touches/2";
+}
+
 double distance(const std::array<double, 3>& a, const std::array<double, 3>& b) {
     return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
 }  // namespace
 
+int demo_sequence(Session& s, const fs::path& json_path, const fs::path& model_path, bool geometry_only,
+                  const api::LocalizeOptions& opt, const fs::path& out);
+
 int cmd_demo(Session& s, int argc, char** argv) {
-    Args a(argc, argv, 2, {{"--example"}, {"--out"}, {"--model"}, {"--mm-per-px"}});
+    Args a(argc, argv, 2, {{"--example"}, {"--out"}, {"--model"}, {"--mm-per-px"}, {"--geometry-only", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -78,6 +94,8 @@ int cmd_demo(Session& s, int argc, char** argv) {
     const bool random = is_shipped_random_model(model_path.string());
     const fs::path json_path = root / "examples" / (name + ".json");
     if (!fs::exists(json_path)) throw api::Error(json_path.string() + ": no such example");
+    if (is_sequence_file(json_path)) return demo_sequence(s, json_path, model_path, a.flag("--geometry-only"), opt, out);
+    if (a.flag("--geometry-only")) throw UsageError("--geometry-only is for a sequence; " + name + " is a single touch");
     Example ex = read_example(json_path);
 
     api::Model model(s.gpu(), model_path.string());

@@ -5,6 +5,7 @@
 
 #include "base/error.h"
 #include "engine/api/api_internal.h"
+#include "engine/api/display_sample.h"
 #include "engine/io/mesh.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/render.h"
@@ -144,7 +145,7 @@ Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions
             // ~4 points per mm^2 (0.5 mm apart), within a memory bound.
             const int64_t n = std::clamp<int64_t>(int64_t(area * 4), 20000, 300000);
             HostTensor dense = io::sample_surface(mesh, n, io::kDefaultSampleSeed + 7, path);
-            HostTensor disp = io::sample_surface(mesh, 4096, io::kDefaultSampleSeed, path);
+            HostTensor disp = display_sample(mesh, 4096, path);  // evenly spaced: a picture without holes
             PointCloud d;
             for (int64_t i = 0; i < disp.shape[0]; ++i)
                 for (int k = 0; k < 3; ++k) d.xyz.push_back(disp.data[size_t(6 * i + k)]), d.normals.push_back(disp.data[size_t(6 * i + 3 + k)]);
@@ -222,7 +223,7 @@ uint64_t Tracker::device_bytes() const { return impl_->tracker.surface().device_
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
-                        const std::vector<std::string>& captions) {
+                        const std::vector<std::string>& captions, const std::vector<std::array<double, 3>>& truths) {
     guarded([&] {
         if (steps.empty()) throw Error(path + ": no estimate to draw");
         const PointCloud& c = tracker.display_cloud();
@@ -237,6 +238,7 @@ void render_tracker_png(const std::string& path, const Tracker& tracker, const s
             io::RenderOptions ro;
             ro.width = W, ro.height = H;
             ro.contact = std::array<float, 3>{float(steps[k].contact[0]), float(steps[k].contact[1]), float(steps[k].contact[2])};
+            if (k < truths.size()) ro.ground_truth = std::array<float, 3>{float(truths[k][0]), float(truths[k][1]), float(truths[k][2])};
             ro.caption = k < captions.size() ? captions[k] : "after touch " + std::to_string(steps[k].touches);
             if (steps[k].heatmap.size() != c.size()) throw Error(path + ": estimate " + std::to_string(k + 1) + " has no heat-map for the display cloud");
             const io::RgbImage panel = io::render_heatmap(cloud, steps[k].heatmap, ro);

@@ -5,11 +5,13 @@
 // on the next pyramid face, across a thread crest.
 #include "engine/sim/shapes.h"
 
+#include <algorithm>
 #include <cmath>
 #include <functional>
 
 #include "base/error.h"
 #include "engine/sim/mesh_builder.h"
+#include "engine/sim/primitives.h"
 
 namespace vtloc::sim {
 
@@ -258,6 +260,42 @@ TriangleMesh ridged_cylinder() {
     return mesh::radial_tube(160, zs, [](size_t i, size_t) { return i % 2 ? 25.0 : 22.6; });
 }
 
+// ---- smooth, without symmetry ---------------------------------------------
+
+// A potato, 100 mm long: an ellipsoid with nine smooth bumps and dents 14-30 mm
+// across, so the curvature changes at the sensor's scale everywhere and no
+// rotation maps it onto itself. The demo's sequence localises on it.
+TriangleMesh potato() {
+    struct Bump {
+        double x, y, z, height, width;  // direction (unnormalised), relative height, angular width (rad)
+    };
+    static const Bump bumps[] = {{1, 0.2, 0.1, 0.10, 0.45},  {-0.8, 0.5, 0.3, 0.08, 0.35}, {0.2, 1, -0.2, -0.07, 0.40},
+                                 {0.3, -0.9, 0.4, 0.09, 0.30}, {-0.2, -0.3, 1, 0.12, 0.50}, {0.5, 0.4, -1, -0.06, 0.35},
+                                 {-0.6, -0.7, -0.4, 0.07, 0.30}, {0.7, -0.3, 0.8, -0.05, 0.28}, {-1, 0, -0.5, 0.06, 0.40}};
+    TriangleMesh m = make_icosphere(1.0, 5);
+    const double axes[3] = {50, 34, 29};
+    for (size_t v = 0; v < m.vertex_count(); ++v) {
+        float* p = &m.positions[3 * v];
+        double r = 1;
+        for (const Bump& b : bumps) {
+            const double n = std::sqrt(b.x * b.x + b.y * b.y + b.z * b.z);
+            const double c = std::clamp((p[0] * b.x + p[1] * b.y + p[2] * b.z) / n, -1.0, 1.0);
+            const double a = std::acos(c);
+            r += b.height * std::exp(-0.5 * a * a / (b.width * b.width));
+        }
+        for (int k = 0; k < 3; ++k) p[k] = float(p[k] * r * axes[k]);
+    }
+    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
+    for (size_t i = 0; i < m.positions.size(); ++i) {
+        lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
+        hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
+    }
+    const double f = 100.0 / std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+    for (float& x : m.positions) x = float(x * f);
+    m.normals.clear();  // face normals, like every other shape
+    return m;
+}
+
 struct ShapeDef {
     const char* name;
     double scale_mm;  // largest dimension as built
@@ -288,6 +326,7 @@ const std::vector<ShapeDef>& shapes() {
         {"bolt", 110.8, bolt},
         {"knurled_cylinder", 100, knurled_cylinder},
         {"ridged_cylinder", 120, ridged_cylinder},
+        {"potato", 100, potato},
     };
     return defs;
 }

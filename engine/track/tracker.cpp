@@ -24,44 +24,6 @@ int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_sampl
 
 }  // namespace
 
-Rigid compose(const Rigid& a, const Rigid& b) {
-    Rigid o;
-    for (int r = 0; r < 3; ++r) {
-        for (int c = 0; c < 3; ++c)
-            o.R[size_t(r * 3 + c)] = a.R[size_t(r * 3)] * b.R[size_t(c)] + a.R[size_t(r * 3 + 1)] * b.R[size_t(3 + c)] +
-                                     a.R[size_t(r * 3 + 2)] * b.R[size_t(6 + c)];
-        o.t[size_t(r)] = a.t[size_t(r)] + a.R[size_t(r * 3)] * b.t[0] + a.R[size_t(r * 3 + 1)] * b.t[1] +
-                         a.R[size_t(r * 3 + 2)] * b.t[2];
-    }
-    return o;
-}
-
-Rigid inverse(const Rigid& a) {
-    Rigid o;
-    for (int r = 0; r < 3; ++r)
-        for (int c = 0; c < 3; ++c) o.R[size_t(r * 3 + c)] = a.R[size_t(c * 3 + r)];
-    for (int r = 0; r < 3; ++r)
-        o.t[size_t(r)] = -(o.R[size_t(r * 3)] * a.t[0] + o.R[size_t(r * 3 + 1)] * a.t[1] + o.R[size_t(r * 3 + 2)] * a.t[2]);
-    return o;
-}
-
-void check_rigid(const Rigid& m, const std::string& what) {
-    for (double v : m.R)
-        if (!std::isfinite(v)) throw Error(what + ": the rotation holds NaN or inf");
-    for (double v : m.t)
-        if (!std::isfinite(v)) throw Error(what + ": the translation holds NaN or inf");
-    for (int a = 0; a < 3; ++a)
-        for (int b = 0; b < 3; ++b) {
-            double d = 0;
-            for (int k = 0; k < 3; ++k) d += m.R[size_t(k * 3 + a)] * m.R[size_t(k * 3 + b)];
-            if (std::abs(d - (a == b ? 1.0 : 0.0)) > 1e-4)
-                throw Error(what + ": the 3x3 part is not a rotation (its columns are not orthonormal)");
-        }
-    const auto& R = m.R;
-    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
-    if (det < 0) throw Error(what + ": the 3x3 part is a reflection (determinant -1), not a rotation");
-}
-
 struct Tracker::Impl {
     rt::Context& ctx;
     WeightStore weights;

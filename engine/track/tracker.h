@@ -14,6 +14,7 @@
 #include <optional>
 #include <vector>
 
+#include "engine/rigid.h"
 #include "engine/track/surface.h"
 
 namespace vtloc {
@@ -22,16 +23,10 @@ class Context;
 }
 namespace track {
 
-// A rigid motion or pose: R row-major, then t. As a motion from touch a to b:
-// pose b in pose a's frame (Q = R_a^T R_b, q = R_a^T (t_b - t_a)).
-struct Rigid {
-    std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
-    std::array<double, 3> t{};
-};
-Rigid compose(const Rigid& a, const Rigid& b);  // a then b in a's frame: (Ra Rb, ta + Ra tb)
-Rigid inverse(const Rigid& a);
-// Throws naming `what` unless R is a rotation (orthonormal within 1e-4, det +1) and all finite.
-void check_rigid(const Rigid& m, const std::string& what);
+using vtloc::Rigid;
+using vtloc::check_rigid;
+using vtloc::compose;
+using vtloc::inverse;
 
 struct FilterOptions {
     double press_mm = 0.8;       // the press assumed for every touch (data: 0.3-1.5)

@@ -30,6 +30,7 @@ endif()
 
 run("installed vtloc demo" "${prefix}/bin/vtloc" demo --out "${WORK}/demo")
 string(FIND "${out}" "${share}/models/" at)
-if(at EQUAL -1 OR NOT EXISTS "${WORK}/demo/heatmap.png")
+string(FIND "${out}" "${share}/examples/potato_tour" at_ex)
+if(at EQUAL -1 OR at_ex EQUAL -1 OR NOT EXISTS "${WORK}/demo/belief.png")
   message(FATAL_ERROR "the installed demo did not use the installed files:\n${out}")
 endif()

@@ -120,6 +120,19 @@ def main():
             text = json.dumps(d)
         parts.append(text)
     put("dataset", "one_object.txt", "\n=====\n".join(parts))
+    touches_corpus()
+
+
+def touches_corpus():
+    rot = [[0.9396926207859084, -0.3420201433256687, 0, 12.0], [0.3420201433256687, 0.9396926207859084, 0, 1.5],
+           [0, 0, 1, -0.5], [0, 0, 0, 1]]
+    put("touches", "relative.json", json.dumps({
+        "format": "vtloc-touches/2", "motion": "relative", "object": "o.ply", "object_diameter_mm": 99,
+        "touches": [{"tactile": "a.png", "contact": [1, 2, 3]}, {"tactile": "b.png", "motion": rot},
+                    {"tactile": "c.png", "motion": {"Q": [[1, 0, 0], [0, 1, 0], [0, 0, 1]], "q": [0, 10, 0]}}]}))
+    put("touches", "flange.json", json.dumps({
+        "format": "vtloc-touches/2", "motion": "flange", "tool": rot,
+        "touches": [{"tactile": "a.png", "flange": rot}, {"tactile": "b.png", "flange": rot}]}))
 
 
 if __name__ == "__main__":

@@ -415,9 +415,11 @@ private:
 };
 
 // The belief after each touch, side by side on the tracker's display cloud
-// (one panel per estimate, captioned), so a person sees it converge.
+// (one panel per estimate, captioned; the true contact marked where `truths` has one), so a
+// person sees it converge.
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
-                        const std::vector<std::string>& captions = {});
+                        const std::vector<std::string>& captions = {},
+                        const std::vector<std::array<double, 3>>& truths = {});
 
 // ---- Outputs ----------------------------------------------------------------
 

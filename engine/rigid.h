@@ -1,0 +1,60 @@
+#pragma once
+// A rigid motion or pose (SPEC 6's conventions) and its checks, header-only so
+// that the file readers (engine/io) and the tracker (engine/track) share them
+// without a link dependency.
+#include <array>
+#include <cmath>
+#include <string>
+
+#include "base/error.h"
+
+namespace vtloc {
+
+// R row-major, then t. As a motion from touch a to b: pose b in pose a's frame
+// (Q = R_a^T R_b, q = R_a^T (t_b - t_a)).
+struct Rigid {
+    std::array<double, 9> R{1, 0, 0, 0, 1, 0, 0, 0, 1};
+    std::array<double, 3> t{};
+};
+
+// a then b in a's frame: (Ra Rb, ta + Ra tb).
+inline Rigid compose(const Rigid& a, const Rigid& b) {
+    Rigid o;
+    for (int r = 0; r < 3; ++r) {
+        for (int c = 0; c < 3; ++c)
+            o.R[size_t(r * 3 + c)] = a.R[size_t(r * 3)] * b.R[size_t(c)] + a.R[size_t(r * 3 + 1)] * b.R[size_t(3 + c)] +
+                                     a.R[size_t(r * 3 + 2)] * b.R[size_t(6 + c)];
+        o.t[size_t(r)] = a.t[size_t(r)] + a.R[size_t(r * 3)] * b.t[0] + a.R[size_t(r * 3 + 1)] * b.t[1] +
+                         a.R[size_t(r * 3 + 2)] * b.t[2];
+    }
+    return o;
+}
+
+inline Rigid inverse(const Rigid& a) {
+    Rigid o;
+    for (int r = 0; r < 3; ++r)
+        for (int c = 0; c < 3; ++c) o.R[size_t(r * 3 + c)] = a.R[size_t(c * 3 + r)];
+    for (int r = 0; r < 3; ++r)
+        o.t[size_t(r)] = -(o.R[size_t(r * 3)] * a.t[0] + o.R[size_t(r * 3 + 1)] * a.t[1] + o.R[size_t(r * 3 + 2)] * a.t[2]);
+    return o;
+}
+
+// Throws naming `what` unless R is a rotation (orthonormal within 1e-4, det +1) and all finite.
+inline void check_rigid(const Rigid& m, const std::string& what) {
+    for (double v : m.R)
+        if (!std::isfinite(v)) throw Error(what + ": the rotation holds NaN or inf");
+    for (double v : m.t)
+        if (!std::isfinite(v)) throw Error(what + ": the translation holds NaN or inf");
+    for (int a = 0; a < 3; ++a)
+        for (int b = 0; b < 3; ++b) {
+            double d = 0;
+            for (int k = 0; k < 3; ++k) d += m.R[size_t(k * 3 + a)] * m.R[size_t(k * 3 + b)];
+            if (std::abs(d - (a == b ? 1.0 : 0.0)) > 1e-4)
+                throw Error(what + ": the 3x3 part is not a rotation (its columns are not orthonormal)");
+        }
+    const auto& R = m.R;
+    const double det = R[0] * (R[4] * R[8] - R[5] * R[7]) - R[1] * (R[3] * R[8] - R[5] * R[6]) + R[2] * (R[3] * R[7] - R[4] * R[6]);
+    if (det < 0) throw Error(what + ": the 3x3 part is a reflection (determinant -1), not a rotation");
+}
+
+}  // namespace vtloc
