@@ -103,6 +103,25 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
     }
 }
 
+// The multi-touch filter's stage: per-touch medians on each backend, side by side.
+void tracker(std::FILE* f, const json& t) {
+    const json& any = t.contains("gpu") ? t["gpu"] : t["cpu"];
+    std::fprintf(f, "\n== multi-touch filter (%s: %lld hypotheses = %lld samples x %d spins, %.2f mm apart; "
+                 "window %d, touches %d..%d of %d timed) ==\n",
+                 any["object"].get<std::string>().c_str(), any["hypotheses"].get<long long>(), any["samples"].get<long long>(),
+                 any["spins"].get<int>(), any["spacing_mm"].get<double>(), any["window"].get<int>(), any["window"].get<int>() + 1,
+                 any["touches"].get<int>(), any["touches"].get<int>());
+    std::fprintf(f, "  %-16s %12s %12s %12s %10s %12s\n", "backend", "touch (ms)", "add_touch", "estimate", "runs", "memory (MiB)");
+    for (const char* b : {"gpu", "cpu"}) {
+        if (!t.contains(b)) continue;
+        const json& x = t[b];
+        std::fprintf(f, "  %-16s %12.2f %12.2f %12.2f %10d %12.1f\n", b[0] == 'g' ? "GPU" : "CPU reference", med(x["touch_ms"]),
+                     med(x["add_touch_ms"]), med(x["estimate_ms"]), x["reps"].get<int>(), double(x["device_bytes"].get<uint64_t>()) / 1048576.0);
+    }
+    if (t.contains("cpu_over_gpu")) std::fprintf(f, "  CPU reference / GPU per touch: %.3gx\n", t["cpu_over_gpu"].get<double>());
+    std::fprintf(f, "  surface built in %.0f ms (once per object)\n", any["surface_build_ms"].get<double>());
+}
+
 }  // namespace
 
 void print_report(const json& r, std::FILE* f) {
@@ -147,6 +166,7 @@ void print_report(const json& r, std::FILE* f) {
         std::fprintf(f, "\n== engine / PyTorch (times, below 1 = the engine is faster) ==\n");
         for (auto& [k, v] : r["engine_over_pytorch"].items()) std::fprintf(f, "  %-20s %10.3g\n", k.c_str(), v.get<double>());
     }
+    if (r.contains("tracker")) tracker(f, r["tracker"]);
     if (r.contains("cpu_over_gpu")) {
         std::fprintf(f, "\n== CPU reference / GPU (times, higher = GPU faster) ==\n");
         for (auto& [k, v] : r["cpu_over_gpu"].items()) std::fprintf(f, "  %-20s %10.3gx\n", k.c_str(), v.get<double>());

@@ -14,6 +14,7 @@
 #include "bench/model_bench.h"
 #include "bench/probe.h"
 #include "bench/report.h"
+#include "bench/tracker_bench.h"
 #include "bench/validation.h"
 #include "bench/versus.h"
 #include "base/error.h"
@@ -54,6 +55,12 @@ const char* kUsage = R"(usage: vtloc-bench [options]
   --stepped N          N of the one-dispatch-per-iteration ILU run (default 16; 0 skips)
   --batch LIST         batch sizes for throughput (default 1,4,16)
   --points LIST        point-branch sweep over cloud sizes (default 1024,4096,16384; needs a mesh)
+  --tracker FILE       the multi-touch filter's stage: a touches file with its "object" (default:
+                       examples/potato_tour.json), geometry only, on the GPU (--reps trackers) and
+                       on the CPU reference (--cpu-reps)
+  --tracker-touches N  touches per tracker run, the tour's motions repeated (default 12; the
+                       steady state past the window of 8 is what is timed)
+  --no-tracker         skip the tracker stage
   --no-probe           skip the fma peak probe
   --json FILE          write the report as JSON
   --plot FILE.png      draw latency over N and the per-stage breakdown
@@ -66,8 +73,9 @@ The GPU is the default Vulkan device (VTLOC_DEVICE picks another: index or name)
 struct Args {
     std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
     bench::ModelBenchOptions opt;
-    int cpu_reps = 2;
-    bool probe = true, vs_pytorch = false;
+    int cpu_reps = 2, tracker_touches = 12;
+    bool probe = true, vs_pytorch = false, tracker = true;
+    std::string tracker_tour;
 };
 
 std::vector<int64_t> int_list(const std::string& flag, const std::string& s) {
@@ -101,6 +109,10 @@ Args parse(int argc, char** argv) {
             a.probe = false;
             continue;
         }
+        if (f == "--no-tracker") {
+            a.tracker = false;
+            continue;
+        }
         if (f == "--vs-pytorch") {
             a.vs_pytorch = true;
             continue;
@@ -116,6 +128,8 @@ Args parse(int argc, char** argv) {
         else if (f == "--warmup") a.opt.warmup = one_int(f, v, 0);
         else if (f == "--profile-reps") a.opt.profile_reps = one_int(f, v, 1);
         else if (f == "--cpu-reps") a.cpu_reps = one_int(f, v, 1);
+        else if (f == "--tracker") a.tracker_tour = v;
+        else if (f == "--tracker-touches") a.tracker_touches = one_int(f, v, 9);
         else if (f == "--stepped") a.opt.stepped_iters = one_int(f, v, 0);
         else if (f == "--json") a.json_path = v;
         else if (f == "--plot") a.plot_path = v;
@@ -315,6 +329,21 @@ int run(int argc, char** argv) {
         report["pytorch"] = bench::run_pytorch(t);
         report["engine_over_pytorch"] = bench::engine_over_pytorch(report.contains("gpu") ? report["gpu"] : report["cpu"],
                                                                    report["pytorch"]);
+    }
+
+    if (a.tracker) {
+        bench::TrackerBenchOptions t;
+        t.tour = !a.tracker_tour.empty() ? a.tracker_tour : (data_dir() / "examples" / "potato_tour.json").string();
+        t.touches = a.tracker_touches;
+        json& tr = report["tracker"];
+        if (ctx) {
+            t.reps = a.opt.reps;
+            tr["gpu"] = bench::measure_tracker(ctx.get(), t);
+        }
+        t.reps = a.cpu_reps;  // the CPU reference always runs: the stage reports the two side by side
+        tr["cpu"] = bench::measure_tracker(nullptr, t);
+        if (tr.contains("gpu") && med(tr["gpu"]["touch_ms"]) > 0)
+            tr["cpu_over_gpu"] = med(tr["cpu"]["touch_ms"]) / med(tr["gpu"]["touch_ms"]);
     }
 
     if (ctx) {  // with VTLOC_VALIDATION=1 (the smoke test), a validation message fails the run

@@ -7,26 +7,8 @@
 
 namespace vtloc::api {
 
-namespace {
-
-double mesh_area(const io::TriangleMesh& m) {
-    double area = 0;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const float* a = &m.positions[size_t(m.triangles[t * 3]) * 3];
-        const float* b = &m.positions[size_t(m.triangles[t * 3 + 1]) * 3];
-        const float* c = &m.positions[size_t(m.triangles[t * 3 + 2]) * 3];
-        double u[3], v[3];
-        for (int k = 0; k < 3; ++k) u[k] = double(b[k]) - a[k], v[k] = double(c[k]) - a[k];
-        double x = u[1] * v[2] - u[2] * v[1], y = u[2] * v[0] - u[0] * v[2], z = u[0] * v[1] - u[1] * v[0];
-        area += 0.5 * std::sqrt(x * x + y * y + z * z);
-    }
-    return area;
-}
-
-}  // namespace
-
 HostTensor display_sample(const io::TriangleMesh& mesh, int64_t n, const std::string& source) {
-    const double area = mesh_area(mesh);
+    const double area = io::surface_area(mesh);
     if (!(area > 0) || n < 1) throw vtloc::Error(source + ": no surface to draw");
     // Random sequential addition saturates at ~0.55 coverage by discs of radius r/2,
     // i.e. n ~ 0.7 A / r^2; 4x candidates gets close to that count.

@@ -18,18 +18,6 @@ namespace {
 track::Rigid to_rigid(const Motion& m) { return {m.R, m.t}; }
 Motion to_motion(const track::Rigid& r) { return {r.R, r.t}; }
 
-double mesh_area(const io::TriangleMesh& m) {
-    double a = 0;
-    for (size_t t = 0; t < m.triangle_count(); ++t) {
-        const float* p[3];
-        for (int k = 0; k < 3; ++k) p[k] = &m.positions[3 * size_t(m.triangles[3 * t + size_t(k)])];
-        double u[3], v[3];
-        for (int k = 0; k < 3; ++k) u[k] = double(p[1][k]) - p[0][k], v[k] = double(p[2][k]) - p[0][k];
-        const double c[3] = {u[1] * v[2] - u[2] * v[1], u[2] * v[0] - u[0] * v[2], u[0] * v[1] - u[1] * v[0]};
-        a += 0.5 * std::sqrt(c[0] * c[0] + c[1] * c[1] + c[2] * c[2]);
-    }
-    return a;
-}
 
 track::SurfaceOptions surface_options(const TrackerOptions& o) {
     if (o.n_spin < 1 || o.n_spin > 720) throw Error("tracker: n_spin must be 1..720, got " + std::to_string(o.n_spin));
@@ -141,10 +129,7 @@ Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions
         try {
             io::TriangleMesh mesh = io::load_mesh(path);
             for (float& v : mesh.positions) v = float(v * o.object_units);
-            const double area = mesh_area(mesh);
-            // ~4 points per mm^2 (0.5 mm apart), within a memory bound.
-            const int64_t n = std::clamp<int64_t>(int64_t(area * 4), 20000, 300000);
-            HostTensor dense = io::sample_surface(mesh, n, io::kDefaultSampleSeed + 7, path);
+            HostTensor dense = io::tracker_dense_sample(mesh, path);
             HostTensor disp = display_sample(mesh, 4096, path);  // evenly spaced: a picture without holes
             PointCloud d;
             for (int64_t i = 0; i < disp.shape[0]; ++i)
@@ -219,7 +204,7 @@ std::vector<float> Tracker::sample_points() const {
 
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
 const PointCloud& Tracker::display_cloud() const { return impl_->display; }
-uint64_t Tracker::device_bytes() const { return impl_->tracker.surface().device_bytes(); }
+uint64_t Tracker::device_bytes() const { return impl_->tracker.device_bytes(); }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,

@@ -44,4 +44,12 @@ inline constexpr uint64_t kDefaultSampleSeed = 0;
 HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed = kDefaultSampleSeed,
                           const std::string& source = "mesh");
 
+// The mesh's total triangle area (object units squared).
+double surface_area(const TriangleMesh& mesh);
+
+// The multi-touch filter's dense sample of a mesh (api::Tracker, vtloc-bench):
+// about 4 points per unit^2 (0.5 mm apart in mm), between 20,000 and 300,000
+// points (a memory bound), seed kDefaultSampleSeed + 7.
+HostTensor tracker_dense_sample(const TriangleMesh& mesh, const std::string& source);
+
 }  // namespace vtloc::io

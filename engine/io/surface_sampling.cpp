@@ -72,4 +72,22 @@ HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed, co
     return out;
 }
 
+double surface_area(const TriangleMesh& mesh) {
+    double area = 0;
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+        V3 p[3];
+        for (size_t k = 0; k < 3; ++k) {
+            const float* q = &mesh.positions[3 * size_t(mesh.triangles[3 * t + k])];
+            p[k] = {q[0], q[1], q[2]};
+        }
+        area += 0.5 * norm(cross(p[1] - p[0], p[2] - p[0]));
+    }
+    return area;
+}
+
+HostTensor tracker_dense_sample(const TriangleMesh& mesh, const std::string& source) {
+    const int64_t n = std::clamp<int64_t>(int64_t(surface_area(mesh) * 4), 20000, 300000);
+    return sample_surface(mesh, n, kDefaultSampleSeed + 7, source);
+}
+
 }  // namespace vtloc::io

@@ -19,8 +19,19 @@ int64_t key_of(const float* p, const D3& lo, double h) {
     return (k[2] * 1048576 + k[1]) * 1048576 + k[0];
 }
 
+// Interleaves the bits of a cube's indices (z-order): cubes near in space get near codes.
+uint64_t morton(const float* p, const D3& lo, double h) {
+    uint64_t code = 0;
+    uint64_t k[3];
+    for (int i = 0; i < 3; ++i) k[i] = uint64_t(std::max(0.0, std::floor((double(p[i]) - lo[i]) / h)));
+    for (int bit = 0; bit < 21; ++bit)
+        for (int i = 0; i < 3; ++i) code |= ((k[i] >> bit) & 1u) << (3 * bit + i);
+    return code;
+}
+
 // One sample per occupied cube of side h: the dense point nearest the cube's
-// centre (lowest index on a tie), in the order the cubes are first met.
+// centre (lowest index on a tie), in z-order of the cubes, so that samples near
+// in index are near in space (the evidence shader's lanes then read nearby cells).
 std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo, double h) {
     const int64_t D = int64_t(dense.size() / 6);
     std::unordered_map<int64_t, size_t> slot;
@@ -43,6 +54,10 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
             best_d[it->second] = d;
         }
     }
+    std::vector<std::pair<uint64_t, int64_t>> order;
+    for (int64_t i : best) order.push_back({morton(&dense[size_t(i * 6)], lo, h), i});
+    std::sort(order.begin(), order.end());
+    for (size_t k = 0; k < order.size(); ++k) best[k] = order[k].second;
     return best;
 }
 

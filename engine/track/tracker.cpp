@@ -25,14 +25,17 @@ int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_sampl
 }  // namespace
 
 struct Tracker::Impl {
-    rt::Context& ctx;
+    rt::Context* ctx;  // null: the ops' CPU references run the step
     WeightStore weights;
     std::shared_ptr<ResidentWeights> resident;
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
-    explicit Impl(rt::Context& c) : ctx(c), resident(std::make_shared<ResidentWeights>(c)) {}
+    std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
+    explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
-Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options)
+Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options) : Tracker(&ctx, std::move(surface), options) {}
+
+Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
@@ -169,10 +172,11 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
     bool any_term = false;
     for (const auto* t : terms) any_term = any_term || (t && !t->empty());
     const int64_t n_term_fields = any_term ? m : 0, F = n_term_fields + (prior ? 1 : 0), K = m - 1 + (prior ? 1 : 0);
-    auto& ex = impl_->exec[{K, F}];
-    if (!ex)
-        ex = std::make_unique<GpuExecutor>(impl_->ctx, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1),
-                                           impl_->weights, impl_->resident);
+    const std::pair<int64_t, int64_t> key{K, F};
+    if (impl_->ctx && !impl_->exec.count(key))
+        impl_->exec[key] = std::make_unique<GpuExecutor>(*impl_->ctx, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1),
+                                                         impl_->weights, impl_->resident);
+    if (!impl_->ctx && !impl_->graphs.count(key)) impl_->graphs.emplace(key, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1));
     Step st;
     st.to_window.resize(size_t(m - 1));
     Rigid chain;  // touch k's pose in the current one's frame, from the newest back
@@ -198,7 +202,8 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
         if (terms[size_t(f)] && !terms[size_t(f)]->empty())
             for (int64_t h = 0; h < H; ++h)
                 fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
-    TensorMap out = ex->run({{"terms", tr}, {"fields", fields}});
+    const TensorMap in{{"terms", tr}, {"fields", fields}};
+    TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
     st.log = std::move(out.at("log").data);
     st.prob = std::move(out.at("prob").data);
     st.marginal = std::move(out.at("marginal").data);
@@ -232,6 +237,12 @@ void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<fl
     prior_log_ = beliefs_.front();
     last_ = std::move(st);
     ++touches_;
+}
+
+uint64_t Tracker::device_bytes() const {
+    uint64_t arenas = 0;  // the tables go up with the first step graph; count them from the start
+    for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;
+    return std::max(surface_.device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
 }
 
 Estimate Tracker::estimate() const {

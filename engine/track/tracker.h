@@ -61,6 +61,8 @@ struct Estimate {
 class Tracker {
 public:
     Tracker(rt::Context& ctx, Surface surface, FilterOptions options = {});
+    // ctx null: every step runs on the ops' CPU references (the oracle; vtloc-bench times it).
+    Tracker(rt::Context* ctx, Surface surface, FilterOptions options = {});
     ~Tracker();
     Tracker(const Tracker&) = delete;
     Tracker& operator=(const Tracker&) = delete;
@@ -77,6 +79,10 @@ public:
     Estimate evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms = {});
 
     const Surface& surface() const { return surface_; }
+    // What the tracker holds on the GPU now: the surface tables (resident) and
+    // the arenas of the step graphs built so far (one per window length); the
+    // CPU reference counts the same bytes, as what the GPU would hold.
+    uint64_t device_bytes() const;
     const FilterOptions& options() const { return opt_; }
     // A heat-map over `cloud` [N, >= 3]: each point's cell's sample belief, min-max normalised.
     std::vector<float> heatmap(const Estimate& e, const HostTensor& cloud) const;

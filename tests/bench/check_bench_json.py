@@ -123,6 +123,18 @@ def main(path, plot, reps, iters, batches, points):
         for k, v in r["cpu_over_gpu"].items():
             positive(v, f"cpu_over_gpu.{k}")
         need({"end_to_end", "cached_touch", "stage total"} <= set(r["cpu_over_gpu"]), "cpu_over_gpu keys")
+    t = r["tracker"]
+    for b, runs in (("gpu", reps), ("cpu", s["cpu_reps"])):
+        x = t[b]
+        need(x["reps"] == runs and x["touches"] > x["window"] > 0, f"tracker.{b} runs {x}")
+        steady = runs * (x["touches"] - x["window"])  # touches past the window, every run
+        for k in ("add_touch_ms", "estimate_ms", "touch_ms"):
+            stats(x[k], f"tracker.{b}.{k}", steady)
+        need(x["hypotheses"] == x["samples"] * x["spins"] and x["hypotheses"] >= 100000, f"tracker.{b} hypotheses")
+        positive(x["device_bytes"], f"tracker.{b}.device_bytes")
+        positive(x["surface_build_ms"], f"tracker.{b}.surface_build_ms")
+    need(t["gpu"]["hypotheses"] == t["cpu"]["hypotheses"], "tracker: both backends run the same hypotheses")
+    positive(t["cpu_over_gpu"], "tracker.cpu_over_gpu")
     with open(plot, "rb") as f:
         head = f.read(24)
     need(head[:8] == b"\x89PNG\r\n\x1a\n", "the plot is not a PNG")

@@ -405,7 +405,7 @@ public:
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
     const PointCloud& display_cloud() const;  // the points heatmap values refer to
-    uint64_t device_bytes() const;            // the surface tables resident on the GPU
+    uint64_t device_bytes() const;            // on the GPU now: the surface tables and the step graphs' arenas
     double spacing_mm() const;                // the hypothesis samples' spacing
 
     struct Impl;

@@ -1,0 +1,64 @@
+#include "bench/tracker_bench.h"
+
+#include <algorithm>
+#include <chrono>
+
+#include "base/error.h"
+#include "bench/model_bench.h"
+#include "engine/io/mesh_formats.h"
+#include "engine/io/object.h"
+#include "engine/io/touch_sequence.h"
+#include "engine/track/tracker.h"
+
+namespace vtloc::bench {
+
+namespace {
+
+double ms_since(std::chrono::steady_clock::time_point t0) {
+    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+}
+
+}  // namespace
+
+nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
+    const io::TouchSequence seq = io::read_touch_sequence(o.tour);
+    if (seq.object.empty()) throw Error(o.tour + ": the tracker bench needs the file's \"object\"");
+    std::vector<Rigid> cycle;  // the tour's motions, repeated for a steady state past the window
+    for (const auto& m : seq.relative_motions(o.tour))
+        if (m) cycle.push_back(*m);
+    if (cycle.empty()) throw Error(o.tour + ": the tracker bench needs at least two touches");
+    // The surface as api::Tracker builds it from a mesh.
+    const auto t0 = std::chrono::steady_clock::now();
+    const io::TriangleMesh mesh = io::load_mesh(seq.object);
+    const HostTensor dense = io::tracker_dense_sample(mesh, seq.object);
+    const track::Surface surface = track::build_surface(dense, true, track::SurfaceOptions{}, seq.object);
+    const double build_ms = ms_since(t0);
+
+    std::vector<double> add, est, both, first;
+    uint64_t bytes = 0;
+    int window = 0;
+    for (int r = 0; r < o.reps; ++r) {
+        track::Tracker tr(ctx, surface);
+        window = tr.options().online_window;
+        for (int i = 0; i < o.touches; ++i) {
+            std::optional<Rigid> m;
+            if (i) m = cycle[size_t(i - 1) % cycle.size()];
+            const auto a0 = std::chrono::steady_clock::now();
+            tr.add_touch(m);
+            const double a_ms = ms_since(a0);
+            const auto e0 = std::chrono::steady_clock::now();
+            const track::Estimate e = tr.estimate();
+            const double e_ms = ms_since(e0);
+            if (i == 0 && r > 0) first.push_back(a_ms + e_ms);  // rep 0 compiles the pipelines
+            if (i >= window) add.push_back(a_ms), est.push_back(e_ms), both.push_back(a_ms + e_ms);
+        }
+        bytes = tr.device_bytes();
+    }
+    return {{"object", seq.object}, {"hypotheses", surface.n_hypotheses()}, {"samples", surface.n_samples()},
+            {"spins", surface.n_spin()}, {"spacing_mm", surface.spacing_mm}, {"window", window},
+            {"touches", o.touches}, {"reps", o.reps}, {"surface_build_ms", build_ms},
+            {"add_touch_ms", stats_json(add)}, {"estimate_ms", stats_json(est)}, {"touch_ms", stats_json(both)},
+            {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}};
+}
+
+}  // namespace vtloc::bench

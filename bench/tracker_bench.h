@@ -1,0 +1,28 @@
+#pragma once
+// vtloc-bench's tracker stage: the multi-touch filter (SPEC 6) on a touches
+// file's object and motions, geometry only. Times add_touch (the GPU step with
+// its uploads and read-backs) and estimate (the CPU refinement and Bayes
+// contact) per touch in the steady state (the online window full, the prior
+// in use), on the GPU or on the ops' CPU references (ctx null).
+#include <nlohmann/json.hpp>
+#include <string>
+
+namespace vtloc {
+namespace rt {
+class Context;
+}
+namespace bench {
+
+struct TrackerBenchOptions {
+    std::string tour;   // a touches file with "object" (default: examples/potato_tour.json)
+    int touches = 12;   // the tour's motions repeated up to this many touches
+    int reps = 5;       // trackers run from the first touch
+};
+
+// JSON: object, hypotheses, samples, spins, spacing_mm, window, touches, reps,
+// surface_build_ms, add_touch_ms / estimate_ms / touch_ms (stats over the
+// steady-state touches of every rep), first_touch_ms, device_bytes.
+nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o);
+
+}  // namespace bench
+}  // namespace vtloc
