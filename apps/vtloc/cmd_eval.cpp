@@ -42,6 +42,8 @@ const char* kHelp =
     "  --filter K=V,...          with --sequence: the filter's knobs (press, sigma_d, sigma_a, allowance,\n"
     "                            network_weight, hypotheses, n_spin); fit them with --end-split train\n"
     "  --end-split test|train    with --sequence: windows end at test touches (default) or train ones\n"
+    "  --plot FILE.png           with --sequence: ND (solid) and ND up to symmetry (dashed) against T, all\n"
+    "                            objects, a line per method and noise\n"
     "  --cloud full|xyz|view     the object cloud: points.csv with its normals (default), its points\n"
     "                            with estimated normals (xyz), or the single view a depth camera sees\n"
     "                            (view.xyz of vtloc synth --view; estimated normals facing the camera)\n"
@@ -258,7 +260,7 @@ std::string image_path(const sim::ObjectRecord& o, const sim::TouchRecord& t) {
 int cmd_eval(Session& s, int argc, char** argv) {
     std::vector<OptionSpec> specs{{"--model"},     {"--data"},     {"--split"},      {"--objects"},
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
-                                  {"--markdown"},  {"--per-touch"}, {"--render"},    {"--render-count"},
+                                  {"--markdown"},  {"--plot"},      {"--per-touch"}, {"--render"},    {"--render-count"},
                                   {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
                                   {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}};
     Args a(argc, argv, 2, specs);
@@ -267,6 +269,8 @@ int cmd_eval(Session& s, int argc, char** argv) {
         return 0;
     }
     if (a.get("--sequence")) return eval::run_sequence(s, a);
+    for (const char* o : {"--geometry-only", "--odometry-noise", "--filter", "--end-split", "--plot"})
+        if (a.get(o)) throw UsageError(std::string(o) + " is for --sequence");
     eval::Options opt = parse(a);
     if (opt.model.empty()) opt.model = default_model_path();
 

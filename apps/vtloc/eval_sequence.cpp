@@ -14,6 +14,7 @@
 #include <sstream>
 
 #include "apps/vtloc/eval.h"
+#include "engine/io/line_chart.h"
 #include "apps/vtloc/report.h"
 #include "base/atomic_write.h"
 #include "base/error.h"
@@ -281,10 +282,32 @@ int run_sequence(Session& s, const Args& a) {
     for (const auto& [key, objs] : per_object)
         for (const auto& [name, sc] : objs) {
             const Score m = sc.mean();
-            per_obj[key.method + (key.noise ? " (noise)" : "") + " T" + std::to_string(key.T)][name] = {{"nd", m.nd}, {"nd_symmetry", m.nd_sym}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"mm", m.mm}, {"touches", sc.n}};
+            per_obj[key.method + (key.noise ? " (noise)" : "") + " T" + std::to_string(key.T)][name] = {{"nd", m.nd}, {"nd_symmetry", m.nd_sym}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"mm", m.mm}, {"touches", sc.n}};
         }
     std::printf("\nwindows   %d (ending at the %s touches with order >= 7)\n", windows, end_split.c_str());
     if (auto p = a.get("--markdown")) write_file_atomic(*p, md), std::printf("wrote     %s\n", p->c_str());
+    if (auto p = a.get("--plot")) {
+        io::LineChart chart;
+        chart.title = "ND against the number of touches (" + data + ", all objects, surface protocol)";
+        chart.x_label = "touches T (the window ending at each test touch)";
+        chart.y_label = "ND (%)";
+        for (int T : Ts) chart.x.push_back(T);
+        std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> lines;  // method -> ND, ND up to symmetry
+        for (const nlohmann::json& r : rows) {
+            if (r["subset"] != "all") continue;
+            const std::string name = r["method"].get<std::string>() + (r["odometry_noise"].get<bool>() ? ", noise" : "");
+            auto& [nd, sym] = lines[name];
+            nd.resize(Ts.size(), NAN), sym.resize(Ts.size(), NAN);
+            const size_t i = size_t(std::find(Ts.begin(), Ts.end(), r["T"].get<int>()) - Ts.begin());
+            nd[i] = r["nd"].get<double>(), sym[i] = r["nd_symmetry"].get<double>();
+        }
+        for (const auto& [name, l] : lines) {
+            chart.series.push_back({name, l.first, false});
+            chart.series.push_back({name + " (up to symmetry)", l.second, true});
+        }
+        io::save_line_chart_png(*p, chart);
+        std::printf("wrote     %s\n", p->c_str());
+    }
     if (auto p = a.get("--json")) {
         nlohmann::json j{{"format", "vtloc-eval-sequence/1"}, {"data", data}, {"model", geometry_only ? "" : model_path},
                          {"rows", rows}, {"per_object", per_obj}};
