@@ -29,7 +29,8 @@ seqdata="${VTLOC_SEQUENCE_DATA:-$root/build/synth-default}"
 [ -d "$seqdata" ] || bash "$root/data/synth/make_dataset.sh" "$seqdata" 0
 for objects in known unknown; do
   build/vtloc eval --model "$1" --data "$seqdata" --objects "$objects" --sequence 1,2,3,4,6,8 \
-    --odometry-noise 0.5,0.5 --json "$out/sequence.$objects.json" --markdown "$out/sequence.$objects.md"
+    --odometry-noise 0.5,0.5 --json "$out/sequence.$objects.json" --markdown "$out/sequence.$objects.md" \
+    --plot "$out/sequence.$objects.png"
 done
 # ILU N ablation on the first model: accuracy per N and this engine's time per touch.
 model="$1"; name="$(basename "$model" .safetensors)"
