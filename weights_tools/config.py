@@ -75,7 +75,7 @@ _MCR_TINY["point"].update(use_normals=False, sa=[  # MSG: two scales per stage
     {"npoint": 8, "radii": [0.4, 0.8], "nsample": [8, 16], "mlps": [[16, 32], [16, 32]]},
 ])
 
-# Lite configs: trainable on a 2-core CPU in about 90 minutes (see README "Training").
+# Lite configs: trainable on a 2-core CPU in about 90 minutes (see docs/training.md).
 # Frames are 120 x 160, so crop 120 keeps the whole height and drops 20 columns a side.
 _LITE = {
     "name": "vtloc-lite",

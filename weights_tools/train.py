@@ -8,7 +8,7 @@ Trains on the ``train`` and ``extra`` touches of the ``seen`` objects; a fixed s
 each seen object's ``train`` contacts is held out for validation (test touches are never
 read).  A batch holds touches of one object, so the point encoder runs once per batch.
 Writes RUN_DIR/checkpoint.pt (atomically, every few minutes), RUN_DIR/log.csv and at the
-end RUN_DIR/model.safetensors with ``vtloc.provenance`` metadata.  See README "Training".
+end RUN_DIR/model.safetensors with ``vtloc.provenance`` metadata.  See docs/training.md.
 """
 
 import argparse

@@ -5,7 +5,7 @@
 // about the sensor axis, fixed press, no noise), and rank the candidates by
 // how much their rendered frame looks like the observed one.
 //
-// Image distance (docs/eval.md, README "Synthetic benchmark"): both frames minus
+// Image distance (docs/eval.md, docs/usage.md "Synthetic benchmark"): both frames minus
 // their empty-sensor background, averaged over the three channels into one
 // signed float image, blurred (Gaussian, blur_sigma_px), then
 // d = 1 - NCC(observed, rendered) (zero-mean normalised cross-correlation over

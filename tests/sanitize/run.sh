@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Sanitizer runs of the C++ test suite (clang; README "Tests"):
+# Sanitizer runs of the C++ test suite (clang; docs/testing.md):
 #   asan: every target built with ASan + UBSan (build-asan/), the whole
 #         vtloc_tests suite in one process, leaks checked (LSan) at exit;
 #   tsan: every target built with TSan (build-tsan/), the tests that use
