@@ -67,7 +67,8 @@ const char* kTrackerDoc =
     "Tracker(context, object) with object a mesh or cloud path, or an N x 6 array (points and\n"
     "normals, object units). add_touch(motion=None, result=None, object=None): the first touch\n"
     "takes no motion, each later one the 4 x 4 motion from the previous touch (pose b in pose a's\n"
-    "frame); result: that touch's TouchResult on `object` (a network term). estimate() -> dict.";
+    "frame); result: that touch's TouchResult on `object` (a network term). estimate() -> dict.\n"
+    "candidates: a C x 3 array: hypotheses only at these points (the paper's candidates protocol).";
 
 }  // namespace
 
@@ -75,9 +76,16 @@ void bind_tracker(py::module_& m) {
     py::class_<api::Tracker>(m, "Tracker", kTrackerDoc)
         .def(py::init([](api::Context& ctx, const py::object& object, double press_mm, double sigma_d_mm, double sigma_a_deg,
                          double odometry_mm, double odometry_deg, int window, int n_spin, int64_t hypotheses,
-                         double network_weight, double object_units) {
-                 const api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
-                                                       n_spin, hypotheses, network_weight, object_units);
+                         double network_weight, double object_units, const py::object& candidates) {
+                 api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
+                                                 n_spin, hypotheses, network_weight, object_units);
+                 if (!candidates.is_none()) {  // C x 3, the candidates protocol
+                     const auto c = candidates.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
+                     if (c.ndim() != 2 || c.shape(1) != 3)
+                         throw api::Error("candidates: expected a C x 3 array of contact points");
+                     const auto r = c.unchecked<2>();
+                     for (py::ssize_t i = 0; i < c.shape(0); ++i) o.candidates.push_back({r(i, 0), r(i, 1), r(i, 2)});
+                 }
                  if (py::isinstance<py::str>(object)) return api::Tracker(ctx, object.cast<std::string>(), o);
                  api::PointCloud c = to_cloud(object, "object");
                  for (float& v : c.xyz) v = float(v * object_units);
@@ -86,7 +94,7 @@ void bind_tracker(py::module_& m) {
              py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 1.0,
              py::arg("sigma_a_deg") = 6.0, py::arg("odometry_mm") = 0.0, py::arg("odometry_deg") = 0.0, py::arg("window") = 8,
              py::arg("n_spin") = 36, py::arg("hypotheses") = 120000, py::arg("network_weight") = 0.5,
-             py::arg("object_units") = 1.0, py::keep_alive<1, 2>())
+             py::arg("object_units") = 1.0, py::arg("candidates") = py::none(), py::keep_alive<1, 2>())
         .def(
             "add_touch",
             [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object) {

@@ -80,7 +80,8 @@ class Tracker:
     def __init__(self, context: Context, object: Union[str, npt.NDArray[np.floating]], press_mm: float = 0.8,
                  sigma_d_mm: float = 1.0, sigma_a_deg: float = 6.0, odometry_mm: float = 0.0,
                  odometry_deg: float = 0.0, window: int = 8, n_spin: int = 36, hypotheses: int = 120000,
-                 network_weight: float = 0.5, object_units: float = 1.0) -> None: ...
+                 network_weight: float = 0.5, object_units: float = 1.0,
+                 candidates: Optional[npt.NDArray[np.floating]] = None) -> None: ...  # C x 3: hypotheses only there
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
                   object: Optional[Object] = None) -> None: ...
     def estimate(self) -> Dict[str, Any]: ...   # contact, pose (4x4), pose_contact, window_poses, modes, ...

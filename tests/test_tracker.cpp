@@ -13,6 +13,7 @@
 #include "engine/sim/mesh_builder.h"
 #include "engine/track/tracker.h"
 #include "tests/harness.h"
+#include "tests/io_test_util.h"
 
 using namespace vtloc;
 using track::Rigid;
@@ -185,4 +186,38 @@ TEST_CASE("the tracker's CPU reference follows the GPU tracker touch by touch", 
     }
     CHECK(gpu.device_bytes() > cpu.surface().device_bytes());  // tables plus the step graphs' arenas
     test::require_no_validation_messages();
+}
+
+TEST_CASE("the candidates protocol: hypotheses only at the candidates, the true one found", "[track]") {
+    Tour t = tour(prism_dense(40000), 4, 6);
+    // 12 candidates: the last touch's contact among 11 other surface points.
+    const HostTensor dense = prism_dense(40000);
+    track::SurfaceOptions o;
+    std::mt19937 rng(3);
+    const size_t truth = 5;
+    for (size_t c = 0; c < 12; ++c) {
+        if (c == truth) {
+            for (double v : t.contacts.back()) o.candidates.push_back(float(v));
+            continue;
+        }
+        const int64_t i = int64_t(rng() % uint32_t(dense.shape[0]));
+        o.candidates.insert(o.candidates.end(), &dense.data[size_t(i * 6)], &dense.data[size_t(i * 6 + 3)]);
+    }
+    track::Tracker tr(test::gpu(), track::build_surface(dense, true, o, "prism"));
+    CHECK(tr.surface().n_samples() == 12);
+    CHECK(tr.surface().spacing_mm == 0);
+    for (int k = 0; k < 3; ++k) CHECK(tr.surface().samples[9 * truth + size_t(k)] == float(t.contacts.back()[size_t(k)]));
+    std::vector<Rigid> motions;
+    for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+    const track::Estimate e = tr.evaluate_window(motions);
+    REQUIRE(e.sample_belief.size() == 12);
+    const size_t best = size_t(std::max_element(e.sample_belief.begin(), e.sample_belief.end()) - e.sample_belief.begin());
+    CHECK(best == truth);
+    CHECK(e.sample_belief[truth] > 0.5f);  // 4 touches: the true candidate holds most of the belief (0.58)
+    o.candidates.push_back(NAN);
+    o.candidates.push_back(0);
+    o.candidates.push_back(0);
+    test::require_error([&] { track::build_surface(dense, true, o, "prism"); }, {"prism", "candidate 13 is not finite"});
+    o.candidates.pop_back();
+    test::require_error([&] { track::build_surface(dense, true, o, "prism"); }, {"prism", "x, y, z triples"});
 }

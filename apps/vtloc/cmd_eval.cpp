@@ -234,7 +234,7 @@ void add_methods(eval::Report& rep, const eval::MethodResult& result, const sim:
     for (const eval::MethodResult& m : methods) {
         for (eval::Row& r : eval::make_rows(m, jobs)) rep.rows.push_back(r);
         if (m.skipped) rep.notes.push_back(m.method + " " + m.note);
-        else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (README)");
+        else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (docs/usage.md)");
     }
 }
 

@@ -154,11 +154,21 @@ int run_sequence(Session& s, const Args& a) {
         // With noise, the filter is told the robot's odometry accuracy (a robot's stated spec, not a
         // fitted knob): its widths grow with the steps and the lever arm (SPEC 6).
         std::optional<api::Tracker> noisy_tracker;
+        api::TrackerOptions tn = to;
         if (noise) {
-            api::TrackerOptions tn = to;
             tn.odometry_mm = noise->first, tn.odometry_deg = noise->second;
             noisy_tracker.emplace(s.gpu(), mesh, tn);
         }
+        // The candidates protocol (the paper's): hypotheses only at the object's candidates S^c.
+        const HostTensor cands = o.candidates();
+        std::vector<std::array<double, 3>> cand_points;
+        for (int64_t c = 0; c < cands.shape[0]; ++c)
+            cand_points.push_back({cands.data[size_t(3 * c)], cands.data[size_t(3 * c + 1)], cands.data[size_t(3 * c + 2)]});
+        api::TrackerOptions tc = to, tcn = tn;
+        tc.candidates = tcn.candidates = cand_points;
+        api::Tracker cand_clean(s.gpu(), mesh, tc);
+        std::optional<api::Tracker> cand_noisy;
+        if (noise) cand_noisy.emplace(s.gpu(), mesh, tcn);
         std::vector<const sim::TouchRecord*> tour;
         for (const sim::TouchRecord& t : o.touches)
             if (t.order >= 0) tour.push_back(&t);
@@ -176,7 +186,6 @@ int run_sequence(Session& s, const Args& a) {
             std::vector<float> cand = o.candidates().data;
             encoded = model->encode_object(cloud, cand);
         }
-        const HostTensor cands = o.candidates();
         for (size_t end = 7; end < tour.size(); ++end) {
             if (tour[end]->split != end_split) continue;
             const sim::TouchRecord& truth = *tour[end];
@@ -190,6 +199,7 @@ int run_sequence(Session& s, const Args& a) {
                     all.push_back(with_noise ? noisy(m, noise->first, noise->second, rng) : m);
                 }
                 api::Tracker& tracker = with_noise ? *noisy_tracker : clean;
+                api::Tracker& cand_tracker = with_noise ? *cand_noisy : cand_clean;
                 for (int T : Ts) {
                     std::vector<api::Motion> motions(all.end() - (T - 1), all.end());
                     // The third row drops the network term of the window's train frames, which a
@@ -240,16 +250,15 @@ int run_sequence(Session& s, const Args& a) {
                         sc.rot = rotation_error_deg(e.pose.R, truth.R);
                         sc.within5 = sc.mm <= 5 ? 1 : 0;
                         sc.mass5 = e.mass_within_5mm;
-                        // Candidates protocol: the candidate with the least expected distance under the belief.
-                        const std::vector<float> pts = tracker.sample_points();
+                        // Candidates protocol: the belief over the candidates' poses alone; the answer is the
+                        // candidate of least expected distance under it.
+                        const api::TrackerEstimate ec = cand_tracker.evaluate_window(motions, res, net ? &*encoded : nullptr);
                         double best = INFINITY;
                         P3 pick{};
-                        for (int64_t c = 0; c < cands.shape[0]; ++c) {
-                            const P3 q{cands.data[size_t(3 * c)], cands.data[size_t(3 * c + 1)], cands.data[size_t(3 * c + 2)]};
+                        for (size_t c = 0; c < cand_points.size(); ++c) {
                             double r = 0;
-                            for (size_t k = 0; k < e.sample_belief.size(); ++k)
-                                if (e.sample_belief[k] > 1e-7f) r += e.sample_belief[k] * dist(q, P3{pts[3 * k], pts[3 * k + 1], pts[3 * k + 2]});
-                            if (r < best) best = r, pick = q;
+                            for (size_t k = 0; k < cand_points.size(); ++k) r += ec.sample_belief[k] * dist(cand_points[c], cand_points[k]);
+                            if (r < best) best = r, pick = cand_points[c];
                         }
                         sc.cand_nd = 100 * dist(pick, truth.contact) / o.diameter_mm;
                         per_object[{method, with_noise, T}][o.name].add(sc);

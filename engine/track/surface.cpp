@@ -131,17 +131,41 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
     s.diameter = std::sqrt(ext[0] * ext[0] + ext[1] * ext[1] + ext[2] * ext[2]);
 
     // Spacing: bisect h (on a log scale) until the samples are about target / NS.
+    if (!o.candidates.empty()) {
+        if (o.candidates.size() % 3) throw Error(source + ": candidates must be x, y, z triples");
+        for (size_t c = 0; c < o.candidates.size(); c += 3) {
+            const float* q = &o.candidates[c];
+            if (!std::isfinite(q[0]) || !std::isfinite(q[1]) || !std::isfinite(q[2]))
+                throw Error(source + ": candidate " + std::to_string(c / 3 + 1) + " is not finite");
+            int64_t best = 0;
+            double best_d = INFINITY;
+            for (int64_t i = 0; i < D; ++i) {
+                const float* p = &s.dense[size_t(i * 6)];
+                const double d = (double(p[0]) - q[0]) * (double(p[0]) - q[0]) + (double(p[1]) - q[1]) * (double(p[1]) - q[1]) +
+                                 (double(p[2]) - q[2]) * (double(p[2]) - q[2]);
+                if (d < best_d) best_d = d, best = i;
+            }
+            const float* n = &s.dense[size_t(best * 6 + 3)];
+            const D3 t1 = tangent_of(D3{-double(n[0]), -double(n[1]), -double(n[2])});
+            s.samples.insert(s.samples.end(), q, q + 3);
+            s.samples.insert(s.samples.end(), n, n + 3);
+            for (double v : t1) s.samples.push_back(float(v));
+        }
+        s.spacing_mm = 0;  // the truth is among the candidates: no grid allowance in distance
+    }
     const double want = double(o.target_hypotheses) / o.n_spin;
     double h_lo = std::max(1e-3, s.diameter * 1e-4), h_hi = std::max(2 * s.diameter, 1e-2);
     std::vector<int64_t> picked;
-    for (int it = 0; it < 24; ++it) {
+    for (int it = 0; it < 24 && o.candidates.empty(); ++it) {
         const double h = std::sqrt(h_lo * h_hi);
         picked = pick_samples(s.dense, lo, h);
         if (double(picked.size()) > want) h_lo = h;
         else h_hi = h;
     }
-    s.spacing_mm = h_hi;
-    picked = pick_samples(s.dense, lo, s.spacing_mm);
+    if (o.candidates.empty()) {
+        s.spacing_mm = h_hi;
+        picked = pick_samples(s.dense, lo, s.spacing_mm);
+    }
     for (int64_t i : picked) {
         const float* p = &s.dense[size_t(i * 6)];
         const D3 t1 = tangent_of(D3{-double(p[3]), -double(p[4]), -double(p[5])});

@@ -162,3 +162,16 @@ def test_depth_view_equals_the_cli(cli, tiny, tiny_path, touch, tmp_path):
         tiny.encode_depth(str(tmp_path / "depth.png"), (1, 2, 3))
     with pytest.raises(vtloc.Error, match="viewpoint: only for clouds given as arrays"):
         tiny.encode_object(str(tmp_path / "depth.png"), viewpoint=(0, 0, 0))
+
+
+def test_tracker_candidates_protocol(ctx, root):
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    cands = np.loadtxt(os.path.join(root, "examples", "mug_candidates.csv"), delimiter=",", comments="#")
+    t = vtloc.Tracker(ctx, mug_path, candidates=cands)
+    # One hypothesis sample per candidate, at the candidate itself.
+    assert t.sample_points.shape == (len(cands), 3)
+    assert np.allclose(t.sample_points, cands, atol=1e-4)
+    t.add_touch()
+    assert t.estimate()["sample_belief"].shape == (len(cands),)
+    with pytest.raises(vtloc.Error, match="C x 3"):
+        vtloc.Tracker(ctx, mug_path, candidates=np.zeros((4, 2)))

@@ -359,6 +359,9 @@ struct TrackerOptions {
     double mode_radius_mm = 5;   // the modes' non-maximum suppression
     double grid_allowance = 0.25; // the grid's widths grow by this share of its spacing and spin step (fitted)
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
+    // The candidates protocol (the paper's S^c): hypotheses only at these contact points (in
+    // the tracker's units, after object_units), n_spin each; empty: the whole surface.
+    std::vector<std::array<double, 3>> candidates;
 };
 
 struct TrackerMode {
