@@ -23,11 +23,12 @@ ALLOWED = {
     "engine/track": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # multi-touch filter
     "engine/check": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # device self-test
     "engine/io": ["base", "engine"],              # files in and out (no Vulkan, no graph)
-    "engine/sim": ["base", "engine", "engine/io", "engine/model"],  # synthetic touches, datasets
+    "engine/sensor": ["base", "engine", "engine/io"],  # GelSight model: calibration, gel shading, height field
+    "engine/sim": ["base", "engine", "engine/io", "engine/model", "engine/sensor"],  # synthetic touches, datasets
     # The public API reaches the engine through the model layer (never a single op);
     # runtime only for device selection, engine/ only for tensors and dump files.
-    "engine/api": ["base", "runtime", "engine", "engine/io", "engine/model", "engine/check", "engine/track"],
-    "apps": ["base", "engine", "engine/io", "engine/sim", "engine/api", "engine/track"],
+    "engine/api": ["base", "runtime", "engine", "engine/io", "engine/model", "engine/check", "engine/track", "engine/sensor"],
+    "apps": ["base", "engine", "engine/io", "engine/sim", "engine/api", "engine/track", "engine/sensor"],
     "python": ["engine/api"],
 }
 # bench/ and tests/ may include anything: they measure and check single layers.

@@ -1,6 +1,6 @@
 #pragma once
 // Shared by the renderer tests (test_sim_renderer.cpp, test_sim_calibration.cpp).
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/touch_renderer.h"
 
 namespace vtloc::test {

@@ -4,7 +4,7 @@
 #include <cmath>
 
 #include "engine/io/mesh.h"
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/metrics.h"
 #include "engine/sim/point_filtering.h"
 #include "engine/sim/shapes.h"

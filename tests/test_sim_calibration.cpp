@@ -5,7 +5,7 @@
 
 #include "base/error.h"
 #include "engine/safetensors.h"
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/primitives.h"
 #include "engine/sim/touch_renderer.h"
 #include "tests/harness.h"

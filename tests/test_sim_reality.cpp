@@ -4,7 +4,7 @@
 #include <cmath>
 #include <filesystem>
 
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/reality_check.h"
 #include "tests/harness.h"
 

@@ -5,7 +5,7 @@
 #include "apps/vtloc/eval.h"
 #include "base/error.h"
 #include "engine/io/mesh_formats.h"
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/point_filtering.h"
 
 namespace vtloc::cli::eval {

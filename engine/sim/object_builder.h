@@ -8,11 +8,16 @@
 #include <string>
 #include <vector>
 
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/dataset_builder.h"
 
 namespace vtloc::sim {
+
+// The sensor model lives in engine/sensor; the simulator names it as before.
+using sensor::Calibration;
+using sensor::default_calibration_path;
+using sensor::load_calibration;
 
 struct Job {
     int index = 0;

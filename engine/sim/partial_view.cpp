@@ -10,13 +10,13 @@
 #include "engine/io/file_bytes.h"
 #include "engine/io/splitmix64.h"
 #include "engine/model/cloud_reduce.h"
-#include "engine/sim/height_field.h"
+#include "engine/sensor/height_field.h"
 
 namespace vtloc::sim {
 
 namespace {
 
-using detail::V3;
+using sensor::V3;
 
 V3 cross(const V3& a, const V3& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
 V3 unit(const V3& a) {
@@ -28,7 +28,7 @@ V3 unit(const V3& a) {
 
 PartialView render_partial_view(const io::TriangleMesh& mesh, uint64_t seed, int n_points, int pixels) {
     if (n_points < 1 || pixels < 8) throw Error("partial view: n_points >= 1 and pixels >= 8 needed");
-    const detail::MeshCache m(mesh);
+    const sensor::MeshCache m(mesh);
     // The bounding sphere (centre of the box, farthest vertex).
     V3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
     for (size_t i = 0; i < m.pos.size(); ++i) lo[i % 3] = std::min(lo[i % 3], m.pos[i]), hi[i % 3] = std::max(hi[i % 3], m.pos[i]);
@@ -44,9 +44,9 @@ PartialView render_partial_view(const io::TriangleMesh& mesh, uint64_t seed, int
     } while (z[0] * z[0] + z[1] * z[1] + z[2] * z[2] > 1 || z[0] * z[0] + z[1] * z[1] + z[2] * z[2] < 1e-6);
     z = unit(z);
     const V3 x = unit(cross(std::abs(z[0]) < 0.9 ? V3{1, 0, 0} : V3{0, 1, 0}, z)), y = cross(z, x);
-    detail::SensorFrame f{x, y, z, {c[0] - 2 * r * z[0], c[1] - 2 * r * z[1], c[2] - 2 * r * z[2]}};
-    detail::PixelGrid g{pixels, pixels, 2.0 * r / pixels, 0, 0};
-    const detail::HeightField hf = detail::rasterise(m, f, g);
+    sensor::SensorFrame f{x, y, z, {c[0] - 2 * r * z[0], c[1] - 2 * r * z[1], c[2] - 2 * r * z[2]}};
+    sensor::PixelGrid g{pixels, pixels, 2.0 * r / pixels, 0, 0};
+    const sensor::HeightField hf = sensor::rasterise(m, f, g);
     std::vector<float> pts;  // x y z per visible pixel
     for (int row = 0; row < g.rows; ++row)
         for (int col = 0; col < g.cols; ++col) {

@@ -16,10 +16,15 @@
 #include <vector>
 
 #include "engine/io/mesh.h"
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 #include "engine/sim/metrics.h"
 
 namespace vtloc::sim {
+
+// The sensor model lives in engine/sensor; the simulator names it as before.
+using sensor::Calibration;
+using sensor::default_calibration_path;
+using sensor::load_calibration;
 
 struct PointFilterOptions {
     int spins = 8;              // spins 0, 360/spins, ... degrees

@@ -6,9 +6,14 @@
 #include <string>
 #include <vector>
 
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 
 namespace vtloc::sim {
+
+// The sensor model lives in engine/sensor; the simulator names it as before.
+using sensor::Calibration;
+using sensor::default_calibration_path;
+using sensor::load_calibration;
 
 // The contact as an image shows it: diff = sum over channels of |frame -
 // empty| (the frame's own empty frame), Gaussian-smoothed (sigma 1.5 px);

@@ -10,14 +10,15 @@
 #include <string>
 
 #include "base/error.h"
-#include "engine/sim/gel_shading.h"
-#include "engine/sim/height_field.h"
+#include "engine/sensor/gel_shading.h"
+#include "engine/sim/frame_finish.h"
+#include "engine/sensor/height_field.h"
 
 namespace vtloc::sim {
 
 namespace {
 
-using detail::V3;
+using sensor::V3;
 
 constexpr double kMarginMm = 2.0;  // the sensor body reaches this far beyond its window
 
@@ -48,8 +49,8 @@ void tangents(const V3& a, V3& t1, V3& t2) {
 struct TouchRenderer::Impl {
     Calibration calib;
     double mm_per_px = 0;
-    detail::MeshCache mesh;
-    detail::GelShader shader;
+    sensor::MeshCache mesh;
+    sensor::GelShader shader;
     std::vector<float> bg_shading;  // the undeformed gel's shading (no background)
 
     Impl(const Calibration& c, const io::TriangleMesh& m, double mmpp)
@@ -65,12 +66,12 @@ struct TouchRenderer::Impl {
         return look.background;
     }
 
-    Touch touch(const detail::SensorFrame& f, double press, const Appearance& look, uint64_t seed, bool strict,
+    Touch touch(const sensor::SensorFrame& f, double press, const Appearance& look, uint64_t seed, bool strict,
                 const std::vector<double>& sigmas) const;
 };
 
 TouchRenderer::TouchRenderer(const Calibration& calib, const io::TriangleMesh& mesh, std::optional<double> mm_per_px)
-    : drape_sigmas_mm_(detail::default_drape_sigmas_mm()) {
+    : drape_sigmas_mm_(sensor::default_drape_sigmas_mm()) {
     const size_t px = size_t(calib.height) * calib.width;
     if (calib.height < 3 || calib.width < 3 || calib.bins < 2 || calib.real_bg.size() != px * 3 ||
         calib.depth_bg.size() != px || calib.poly[0].size() != size_t(calib.bins) * calib.bins * 6 ||
@@ -107,7 +108,7 @@ Touch TouchRenderer::render(const Vec3& point, const Vec3& normal, const TouchPa
     tangents(n, t1, t2);
     const double tilt = p.tilt_deg * d2r, dir = p.tilt_dir_deg * d2r;
     V3 lean = add(scale(t1, std::cos(dir)), scale(t2, std::sin(dir)));
-    detail::SensorFrame f;
+    sensor::SensorFrame f;
     f.z = unit(scale(add(scale(n, std::cos(tilt)), scale(lean, std::sin(tilt))), -1));
     tangents(f.z, t1, t2);
     const double spin = p.spin_deg * d2r;
@@ -118,7 +119,7 @@ Touch TouchRenderer::render(const Vec3& point, const Vec3& normal, const TouchPa
 }
 
 Touch TouchRenderer::render_at(const SensorPose& s, double press_mm, const Appearance& look, uint64_t seed) const {
-    detail::SensorFrame f;
+    sensor::SensorFrame f;
     for (int k = 0; k < 3; ++k) f.x[k] = s.R[k * 3 + 0], f.y[k] = s.R[k * 3 + 1], f.z[k] = s.R[k * 3 + 2];
     f.origin = s.t;
     const double tol = 1e-6;
@@ -128,7 +129,7 @@ Touch TouchRenderer::render_at(const SensorPose& s, double press_mm, const Appea
     return impl_->touch(f, press_mm, look, seed, false, drape_sigmas_mm_);
 }
 
-Touch TouchRenderer::Impl::touch(const detail::SensorFrame& f, double press, const Appearance& look, uint64_t seed,
+Touch TouchRenderer::Impl::touch(const sensor::SensorFrame& f, double press, const Appearance& look, uint64_t seed,
                                  bool strict, const std::vector<double>& sigmas) const {
     if (!(press > 0 && press <= 20)) throw Error("touch renderer: press_mm must be in (0, 20]");
     if (!(look.noise_sigma >= 0) || !(look.blur_sigma_px >= 0) || !(look.blur_sigma_px <= 100) ||
@@ -139,8 +140,8 @@ Touch TouchRenderer::Impl::touch(const detail::SensorFrame& f, double press, con
     const int H = calib.height, W = calib.width;
     // The margin in pixels, capped at a window's size (a user's very fine pixel size must not explode the grid).
     const int M = int(std::min(std::ceil(kMarginMm / mm_per_px - 1e-9), double(std::max(H, W))));
-    detail::PixelGrid g{H + 2 * M, W + 2 * M, mm_per_px, 0, 0};
-    detail::HeightField hf = detail::rasterise(mesh, f, g);
+    sensor::PixelGrid g{H + 2 * M, W + 2 * M, mm_per_px, 0, 0};
+    sensor::HeightField hf = sensor::rasterise(mesh, f, g);
 
     Touch out;
     if (strict && !hf.centre_hit) {
@@ -164,7 +165,7 @@ Touch TouchRenderer::Impl::touch(const detail::SensorFrame& f, double press, con
     for (size_t i = 0; i < ind.size(); ++i) ind[i] = float(std::max(0.0, ws - hf.w[i]));
     for (int r = 0; r < H; ++r)
         for (int c = 0; c < W; ++c) out.contact_pixels += ind[size_t(r + M) * g.cols + c + M] > 0;
-    detail::drape_gel(ind, g.rows, g.cols, mm_per_px, sigmas);
+    sensor::drape_gel(ind, g.rows, g.cols, mm_per_px, sigmas);
 
     out.indentation_mm.resize(size_t(H) * W);
     std::vector<float> height(size_t(H) * W);

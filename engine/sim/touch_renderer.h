@@ -27,9 +27,15 @@
 #include <vector>
 
 #include "engine/io/mesh.h"
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 
 namespace vtloc::sim {
+
+// The sensor model lives in engine/sensor (the engine's too); the simulator names it as before.
+using sensor::Calibration;
+using sensor::default_calibration_path;
+using sensor::load_calibration;
+
 
 using Vec3 = std::array<double, 3>;
 

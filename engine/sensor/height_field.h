@@ -1,14 +1,15 @@
 #pragma once
 // The object's height field seen by the sensor: an orthographic z-buffer of
 // the mesh along the sensor axis over a pixel grid, front and back faces
-// alike, plus the exact hit of the centre ray. Internal to the renderer.
+// alike, plus the exact hit of the centre ray. The renderer's, and what
+// render-and-compare (SPEC 9) will press.
 #include <array>
 #include <cstdint>
 #include <vector>
 
 #include "engine/io/mesh.h"
 
-namespace vtloc::sim::detail {
+namespace vtloc::sensor {
 
 using V3 = std::array<double, 3>;
 
@@ -50,4 +51,4 @@ struct HeightField {
 
 HeightField rasterise(const MeshCache& mesh, const SensorFrame& frame, const PixelGrid& grid);
 
-}  // namespace vtloc::sim::detail
+}  // namespace vtloc::sensor

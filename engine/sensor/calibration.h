@@ -6,7 +6,7 @@
 #include <string>
 #include <vector>
 
-namespace vtloc::sim {
+namespace vtloc::sensor {
 
 struct Calibration {
     int height = 120, width = 160;   // pixels
@@ -34,4 +34,4 @@ Calibration load_calibration(const std::string& path);
 // install's share/vtloc/data/gelsight/. Throws vtloc::Error when none exists.
 std::string default_calibration_path();
 
-}  // namespace vtloc::sim
+}  // namespace vtloc::sensor

@@ -1,7 +1,7 @@
 // Reading the GelSight calibration (data/gelsight/README.md) with every
 // tensor's dtype, shape and values checked, so the renderer can index it
 // without further checks.
-#include "engine/sim/calibration.h"
+#include "engine/sensor/calibration.h"
 
 #include <cmath>
 #include <cstdlib>
@@ -15,7 +15,7 @@
 #define VTLOC_SOURCE_DIR ""
 #endif
 
-namespace vtloc::sim {
+namespace vtloc::sensor {
 
 namespace {
 
@@ -130,4 +130,4 @@ std::string default_calibration_path() {
     throw Error("cannot find the GelSight calibration (tried " + list + "); set VTLOC_GELSIGHT_CALIB");
 }
 
-}  // namespace vtloc::sim
+}  // namespace vtloc::sensor

@@ -1,14 +1,13 @@
 #pragma once
 // The gel's side of a touch: Taxim-style deformation of the pressed height
-// field, the polynomial shading of the real sensor, and the appearance
-// (gain, brightness, blur, noise). Internal to the renderer.
+// field and the polynomial shading of the real sensor (the renderer's; the
+// shape-from-frame of SPEC 9 inverts the shading).
 #include <cstdint>
 #include <vector>
 
-#include "engine/sim/calibration.h"
-#include "engine/sim/touch_renderer.h"
+#include "engine/sensor/calibration.h"
 
-namespace vtloc::sim::detail {
+namespace vtloc::sensor {
 
 // Gaussian blur widths (sigma, mm), applied in order; after each blur the
 // contact region is restored (the gel never sinks below the undeformed
@@ -38,9 +37,4 @@ private:
     std::vector<double> poly_;  // [mag][dir][channel][6]
 };
 
-// shading + background -> gain, brightness, blur, noise, clip, round.
-// `background` is H*W*3 (real_bg or the user's own).
-std::vector<uint8_t> finish_frame(const std::vector<float>& shading, const std::vector<float>& background, int H,
-                                  int W, const Appearance& look, uint64_t seed, bool noise);
-
-}  // namespace vtloc::sim::detail
+}  // namespace vtloc::sensor

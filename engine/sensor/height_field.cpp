@@ -4,7 +4,7 @@
 // centres. Edge functions are evaluated with the edge's endpoints in a
 // canonical order, so the two triangles sharing an edge compute the same
 // value bit for bit and every pixel centre on it is covered: no cracks.
-#include "engine/sim/height_field.h"
+#include "engine/sensor/height_field.h"
 
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@
 
 #include "base/error.h"
 
-namespace vtloc::sim::detail {
+namespace vtloc::sensor {
 
 namespace {
 
@@ -150,4 +150,4 @@ HeightField rasterise(const MeshCache& m, const SensorFrame& f, const PixelGrid&
     return hf;
 }
 
-}  // namespace vtloc::sim::detail
+}  // namespace vtloc::sensor
