@@ -1,0 +1,55 @@
+#pragma once
+// The gel's shape from one frame (SPEC 9), the CPU reference: the colour change
+// against the sensor's empty frame, inverted through the calibration into the
+// gel surface's gradient (per-tile lookup tables), a contact mask from the
+// indentation's gradient, and a Poisson solve inside the mask for the
+// indentation. docs/gel_shape.md gives the method, its constants and what the
+// 49 real ball presses say of it.
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include "engine/sensor/calibration.h"
+
+namespace vtloc::sensor {
+
+// The calibration's shading inverted: for each of tiles_y x tiles_x image tiles,
+// an n^3 table over the colour change (each channel in [-256, 256), cells of
+// 512 / n) holding the gel's gradient (g_row, g_col) whose predicted colour
+// change falls there, averaged as surface normals over the tile's pixels on a
+// `step`-pixel grid and every (magnitude, direction) bin but the last; empty
+// cells take the mean of their filled neighbours, repeatedly.
+struct GradientLut {
+    int n = 64, tiles_y = 3, tiles_x = 4, height = 0, width = 0;
+    std::vector<float> table;  // [tiles_y][tiles_x][n][n][n][2]
+};
+GradientLut build_gradient_lut(const Calibration& c, int n = 64, int tiles_y = 3, int tiles_x = 4, int step = 4);
+
+struct ShapeOptions {
+    int refine_bins = 0;          // > 0: search the table's bins within this many of the lookup's, at the pixel
+    double mask_threshold = 0.7;  // on the 3x3 mean of the indentation's gradient magnitude
+    int open_radius = 2, close_radius = 2;  // the mask's opening and closing (discs, pixels)
+    int sor_iterations = 50;      // red-black SOR sweeps of the Poisson solve
+    double sor_omega = 1.85;
+};
+
+struct GelShape {
+    int height = 0, width = 0;
+    std::vector<float> grad_row, grad_col;  // the indentation's gradient (mm per mm), H x W
+    std::vector<float> depth_mm;            // the indentation, >= 0 in the contact, 0 outside it
+    std::vector<uint8_t> mask;              // the contact (0/1)
+};
+
+// frame, empty: H x W x 3 in the calibration's stored channel order (its size).
+// Throws vtloc::Error for frames of another size.
+GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vector<uint8_t>& frame,
+                   const std::vector<uint8_t>& empty, const ShapeOptions& o = {});
+
+// The least-squares sphere through points (x, y, z triples): centre and radius.
+struct Sphere {
+    std::array<double, 3> centre{};
+    double radius = 0;
+};
+Sphere fit_sphere(const std::vector<double>& xyz);
+
+}  // namespace vtloc::sensor
