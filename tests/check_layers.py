@@ -23,7 +23,7 @@ ALLOWED = {
     "engine/track": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # multi-touch filter
     "engine/check": ["base", "runtime", "engine", "engine/ops", "engine/model"],  # device self-test
     "engine/io": ["base", "engine"],              # files in and out (no Vulkan, no graph)
-    "engine/sensor": ["base", "engine", "engine/io"],  # GelSight model: calibration, gel shading, height field
+    "engine/sensor": ["base", "engine", "engine/io", "engine/ops"],  # ops: the gel ops' CPU mirrors  # GelSight model: calibration, gel shading, height field
     "engine/sim": ["base", "engine", "engine/io", "engine/model", "engine/sensor"],  # synthetic touches, datasets
     # The public API reaches the engine through the model layer (never a single op);
     # runtime only for device selection, engine/ only for tensors and dump files.

@@ -84,7 +84,6 @@ TEST_CASE("gel shape: a ball press rendered with the calibration comes back", "[
     // fitted on the real presses (0.7, deep presses) keeps only part of it; 0.5 finds the contact.
     ShapeOptions o;
     o.mask_threshold = 0.5;
-    o.refine_bins = GENERATE(0, 3);
     const GelShape s = gel_shape(c, lut(), render(h), render(c.depth_bg), o);
     size_t both = 0, either = 0;
     double se = 0, deepest = 0;
@@ -95,7 +94,7 @@ TEST_CASE("gel shape: a ball press rendered with the calibration comes back", "[
         if (ind[i] > 0) se += std::pow(s.depth_mm[i] - ind[i] * px, 2), ++n;
     }
     const double rms = std::sqrt(se / n), depth_mm = d * px, iou = double(both) / double(either);
-    INFO("synthetic press, refine " << o.refine_bins << ": depth " << depth_mm << " mm, reconstructed " << deepest
+    INFO("synthetic press: depth " << depth_mm << " mm, reconstructed " << deepest
                                     << " mm, RMS inside the contact " << rms << " mm, mask IoU " << iou);
     CHECK(iou > 0.85);  // measured 0.94
     // The cap comes out too deep (1.5x): the tables overestimate steep slopes (the colours saturate
@@ -111,7 +110,6 @@ TEST_CASE("gel shape: the 49 real ball presses give the 2 mm ball", "[sensor]") 
     const size_t frame = size_t(c.height) * c.width * 3;
     std::vector<double> radius, offset;
     ShapeOptions o;  // the defaults: the mask threshold 0.7 was fitted on these presses (numpy prototype)
-    o.refine_bins = GENERATE(0, 3);
     for (int i = 0; i < c.n_press; ++i) {
         const std::vector<uint8_t> f(c.press_imgs.begin() + long(i * frame), c.press_imgs.begin() + long((i + 1) * frame));
         const GelShape s = gel_shape(c, lut(), f, c.press_f0, o);
@@ -124,8 +122,7 @@ TEST_CASE("gel shape: the 49 real ball presses give the 2 mm ball", "[sensor]") 
         offset.push_back(std::hypot(sx / m - c.press_center[size_t(2 * i)], sy / m - c.press_center[size_t(2 * i + 1)]));
     }
     const double med_r = median(radius), med_off = median(offset);
-    INFO("refine " << o.refine_bins << ": median fitted radius " << med_r << " mm, median mask centre offset " << med_off << " px");
-    INFO("real presses, refine " << o.refine_bins << ": median fitted radius " << med_r << " mm, mask centre offset " << med_off << " px");
+    INFO("real presses: median fitted radius " << med_r << " mm, mask centre offset " << med_off << " px");
     CHECK(std::abs(med_r - 2.0) <= 0.2 * 2.0);  // SPEC 9 / #43's goal on the median frame
     // The annotation itself is off by a few pixels (frames 6 and 24 share one while 1.4-1.7 px apart).
     CHECK(med_off < 4);

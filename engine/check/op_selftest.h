@@ -52,6 +52,7 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo& d);  // conv2d, pools, tac
 std::vector<OpCase> point_cases(const rt::DeviceInfo& d);  // fps, ball_query, grouping, cloud_normalize
 std::vector<OpCase> head_cases(const rt::DeviceInfo& d);   // GMA, chamfer, ILU, top-K, heat-map
 std::vector<OpCase> track_cases(const rt::DeviceInfo& d);  // the multi-touch filter's ops
+std::vector<OpCase> gel_cases(const rt::DeviceInfo& d);    // the gel's shape from a frame
 
 struct OpCaseResult {
     std::string op, variant;

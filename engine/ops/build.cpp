@@ -142,6 +142,14 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
     return g.add1("pose_evidence", {samples, dense, cells, spins, terms, fields}, q, name);
 }
 
+int gel_gradient(Graph& g, int frame, int empty, int tables, int64_t n, int64_t tiles_y, int64_t tiles_x, const std::string& name) {
+    return g.add1("gel_gradient", {frame, empty, tables}, {{"n", d(n)}, {"tiles_y", d(tiles_y)}, {"tiles_x", d(tiles_x)}}, name);
+}
+
+int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name) {
+    return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}}, name);
+}
+
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }
 
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {

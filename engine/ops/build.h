@@ -102,6 +102,12 @@ struct PoseEvidence {
 int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,
                   const PoseEvidence& p, const std::string& name = "");
 // score [M] -> {log probabilities, probabilities}.
+// The gel's shape from a frame (SPEC 9): the indentation's gradient from a frame, its empty
+// frame and the inverted calibration's tables [tiles_y * tiles_x, n^3, 2]; and the height
+// inside a contact mask from that gradient (red-black SOR).
+int gel_gradient(Graph& g, int frame, int empty, int tables, int64_t n, int64_t tiles_y, int64_t tiles_x,
+                 const std::string& name = "");
+int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name = "");
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
 // prob [S * n_spin] -> [S].
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");

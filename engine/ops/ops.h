@@ -42,6 +42,8 @@ extern const OpDef op_retrieve;     // retrieve.cpp (topk + heatmap)
 extern const OpDef op_ilu_retrieve; // ilu_retrieve.cpp (ilu + retrieve)
 extern const OpDef op_pose_evidence;     // pose_evidence.cpp (multi-touch filter)
 extern const OpDef op_log_softmax;       // log_softmax.cpp
+extern const OpDef op_gel_gradient;      // gel_shape.cpp (the gel's shape from a frame)
+extern const OpDef op_masked_poisson;    // gel_shape.cpp
 extern const OpDef op_spin_marginal;     // pose_reduce.cpp
 extern const OpDef op_expected_distance; // pose_reduce.cpp
 extern const OpDef op_fps;              // fps.cpp (point cloud)

@@ -34,6 +34,8 @@ const OpDef* const kOps[] = {
     &ops::op_log_softmax,
     &ops::op_spin_marginal,
     &ops::op_expected_distance,
+    &ops::op_gel_gradient,
+    &ops::op_masked_poisson,
     &ops::op_fps,
     &ops::op_ball_query,
     &ops::op_point_group,

@@ -7,6 +7,7 @@
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
+#include "engine/ops/gel_ops.h"
 #include "engine/sensor/gel_shading.h"
 
 namespace vtloc::sensor {
@@ -14,17 +15,6 @@ namespace vtloc::sensor {
 namespace {
 
 constexpr double kLo = -256, kHi = 256;  // colour-change range of the tables
-
-// numpy.gradient along rows and columns: central inside, one-sided at the borders.
-void gradient(const std::vector<double>& f, int H, int W, std::vector<double>& gr, std::vector<double>& gc) {
-    gr.assign(f.size(), 0), gc.assign(f.size(), 0);
-    auto at = [&](int r, int c) { return f[size_t(r) * W + size_t(c)]; };
-    for (int r = 0; r < H; ++r)
-        for (int c = 0; c < W; ++c) {
-            gr[size_t(r) * W + size_t(c)] = r == 0 ? at(1, c) - at(0, c) : r == H - 1 ? at(r, c) - at(r - 1, c) : 0.5 * (at(r + 1, c) - at(r - 1, c));
-            gc[size_t(r) * W + size_t(c)] = c == 0 ? at(r, 1) - at(r, 0) : c == W - 1 ? at(r, c) - at(r, c - 1) : 0.5 * (at(r, c + 1) - at(r, c - 1));
-        }
-}
 
 int cell_of(double v, int n) { return std::clamp(int(std::floor((v - kLo) / ((kHi - kLo) / n))), 0, n - 1); }
 
@@ -130,81 +120,28 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
 
 GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vector<uint8_t>& frame,
                    const std::vector<uint8_t>& empty, const ShapeOptions& o) {
-    const int H = c.height, W = c.width, n = lut.n, ty = lut.tiles_y, tx = lut.tiles_x;
+    const int H = c.height, W = c.width;
     const size_t HW = size_t(H) * W;
     if (frame.size() != HW * 3 || empty.size() != HW * 3)
         throw Error("gel shape: frames must be " + std::to_string(W) + "x" + std::to_string(H) + " RGB, the calibration's size");
     if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
-    // The gel's gradient: the four nearest tiles' tables, blended by the pixel's place between their centres.
-    auto lookup = [&](int r, int col, const double dc3[3], double& g_row, double& g_col) {
-        const size_t cell = (size_t(cell_of(dc3[0], n)) * n + size_t(cell_of(dc3[1], n))) * n + size_t(cell_of(dc3[2], n));
-        const double fy = std::clamp((r + 0.5) * ty / H - 0.5, 0.0, double(ty - 1)), fx = std::clamp((col + 0.5) * tx / W - 0.5, 0.0, double(tx - 1));
-        const int a0 = ty > 1 ? std::min(int(fy), ty - 2) : 0, b0 = tx > 1 ? std::min(int(fx), tx - 2) : 0;
-        const double wy = fy - a0, wx = fx - b0;
-        g_row = g_col = 0;
-        for (int da = 0; da < 2; ++da)
-            for (int db = 0; db < 2; ++db) {
-                const double w = (da ? wy : 1 - wy) * (db ? wx : 1 - wx);
-                const int a = std::min(a0 + da, ty - 1), b = std::min(b0 + db, tx - 1);
-                const float* g = &lut.table[((size_t(a) * tx + size_t(b)) * n * n * n + cell) * 2];
-                g_row += w * g[0], g_col += w * g[1];
-            }
-    };
-    std::vector<double> gr(HW), gc(HW), zr(HW), zc(HW);
-    const double none[3] = {0, 0, 0};
+    // The indentation's gradient, as op gel_gradient computes it.
+    const std::vector<float> f(frame.begin(), frame.end()), e(empty.begin(), empty.end());
+    std::vector<float> grad(HW * 2);
     for (int r = 0; r < H; ++r)
         for (int col = 0; col < W; ++col) {
-            const size_t p = size_t(r) * W + size_t(col);
-            const double d[3] = {double(frame[3 * p]) - empty[3 * p], double(frame[3 * p + 1]) - empty[3 * p + 1],
-                                 double(frame[3 * p + 2]) - empty[3 * p + 2]};
-            lookup(r, col, d, gr[p], gc[p]);
-            lookup(r, col, none, zr[p], zc[p]);  // the table's answer for the untouched gel here
+            float* g = &grad[(size_t(r) * W + size_t(col)) * 2];
+            ops::gel::indentation_gradient(lut.table.data(), lut.n, lut.tiles_y, lut.tiles_x, H, W, f.data(), e.data(), r, col, g[0], g[1]);
         }
-    // The table's answer refined at the pixel itself: the (magnitude, direction) bin near it whose
-    // predicted colour change is nearest the measured one (the tables average over a tile and a cell).
-    std::vector<float> flat;
-    if (o.refine_bins > 0) GelShader(c).shade(c.depth_bg, flat);
-    const int NB = c.bins - 1;
-    const double dm = 0.5 * M_PI / (c.bins - 1), dd = 2 * M_PI / (c.bins - 1);
-    for (int r = 0; r < H && o.refine_bins > 0; ++r)
-        for (int col = 0; col < W; ++col) {
-            const size_t p = size_t(r) * W + size_t(col);
-            const int m0 = std::clamp(int(std::atan(std::hypot(gr[p], gc[p])) / dm), 0, NB - 1);
-            const int d0 = std::clamp(int((std::atan2(gr[p], gc[p]) + M_PI) / dd), 0, NB - 1);
-            const double basis[6] = {double(col) * col, double(r) * r, double(col) * r, double(col), double(r), 1};
-            double best = INFINITY;
-            int bm = m0, bd = d0;
-            for (int m = std::max(0, m0 - o.refine_bins); m <= std::min(NB - 1, m0 + o.refine_bins); ++m)
-                for (int k = -2 * o.refine_bins; k <= 2 * o.refine_bins; ++k) {
-                    const int d = ((d0 + k) % NB + NB) % NB;
-                    double e = 0;
-                    for (int ch = 0; ch < 3; ++ch) {
-                        const float* q = &c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6];
-                        double v = -double(flat[3 * p + size_t(ch)]) - (double(frame[3 * p + size_t(ch)]) - empty[3 * p + size_t(ch)]);
-                        for (int j = 0; j < 6; ++j) v += double(q[j]) * basis[j];
-                        e += v * v;
-                    }
-                    if (e < best) best = e, bm = m, bd = d;
-                }
-            const double th = std::min((bm + 0.5) * dm, M_PI / 2 - 1e-3), ph = (bd + 0.5) * dd - M_PI;
-            gr[p] = std::tan(th) * std::sin(ph), gc[p] = std::tan(th) * std::cos(ph);
-        }
-    // The indentation's gradient: less the untouched gel's. Where the refinement ran, that is the
-    // undeformed gel's own slope; from the tables alone, their own answer for no colour change
-    // (a tile's table averages over its pixels, so it is biased where the gel's slope varies).
-    std::vector<double> bg(c.depth_bg.begin(), c.depth_bg.end()), br, bc;
-    gradient(bg, H, W, br, bc);
-    if (o.refine_bins == 0) br.swap(zr), bc.swap(zc);
     GelShape s;
     s.height = H, s.width = W;
     cv::Mat mag(H, W, CV_64F);
+    s.grad_row.resize(HW), s.grad_col.resize(HW);
     for (size_t p = 0; p < HW; ++p) {
-        gr[p] -= br[p], gc[p] -= bc[p];
-        mag.at<double>(int(p / W), int(p % W)) = std::hypot(gr[p], gc[p]);
+        s.grad_row[p] = grad[2 * p], s.grad_col[p] = grad[2 * p + 1];
+        mag.at<double>(int(p / W), int(p % W)) = std::hypot(double(grad[2 * p]), double(grad[2 * p + 1]));
     }
-    s.grad_row.assign(gr.begin(), gr.end());
-    s.grad_col.assign(gc.begin(), gc.end());
-    // The contact: where the mean slope over 3x3 passes the threshold, opened, closed, its largest piece.
+    // The contact: where the mean slope over 3x3 passes the threshold, closed, filled, opened, its largest piece.
     cv::blur(mag, mag, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_REPLICATE);
     cv::Mat m = mag > o.mask_threshold;
     m /= 255;
@@ -215,22 +152,11 @@ GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vect
     if (o.open_radius > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disc(o.open_radius));
     m = largest_piece(m);
     s.mask.assign(m.datastart, m.dataend);
-    // Poisson: lap(z) = div(g) inside the mask, z = 0 outside (red-black SOR).
-    std::vector<double> dr, unused, dc, f(HW), z(HW, 0);
-    gradient(gr, H, W, dr, unused);
-    gradient(gc, H, W, unused, dc);
-    for (size_t p = 0; p < HW; ++p) f[p] = dr[p] + dc[p];
-    for (int it = 0; it < o.sor_iterations; ++it)
-        for (int colour = 0; colour < 2; ++colour)
-            for (int r = 0; r < H; ++r)
-                for (int col = (r + colour) % 2; col < W; col += 2) {
-                    const size_t p = size_t(r) * W + size_t(col);
-                    if (!s.mask[p]) continue;
-                    const double nb = (r > 0 ? z[p - W] : 0) + (r + 1 < H ? z[p + W] : 0) + (col > 0 ? z[p - 1] : 0) + (col + 1 < W ? z[p + 1] : 0);
-                    z[p] = (1 - o.sor_omega) * z[p] + o.sor_omega * (nb - f[p]) / 4;
-                }
+    // The height inside the mask, as op masked_poisson computes it.
+    std::vector<float> mask(s.mask.begin(), s.mask.end()), z(HW);
+    ops::gel::masked_poisson(grad.data(), mask.data(), H, W, o.sor_iterations, float(o.sor_omega), z.data());
     s.depth_mm.resize(HW);
-    for (size_t p = 0; p < HW; ++p) s.depth_mm[p] = float(s.mask[p] ? z[p] * c.mm_per_px : 0.0);
+    for (size_t p = 0; p < HW; ++p) s.depth_mm[p] = s.mask[p] ? float(double(z[p]) * c.mm_per_px) : 0.0f;
     return s;
 }
 

@@ -3,7 +3,8 @@
 // against the sensor's empty frame, inverted through the calibration into the
 // gel surface's gradient (per-tile lookup tables), a contact mask from the
 // indentation's gradient, and a Poisson solve inside the mask for the
-// indentation. docs/gel_shape.md gives the method, its constants and what the
+// indentation. The gradient and the solve are ops gel_gradient and
+// masked_poisson's CPU references (engine/ops/gel_ops.h); the mask is OpenCV's. docs/gel_shape.md gives the method, its constants and what the
 // 49 real ball presses say of it.
 #include <array>
 #include <cstdint>
@@ -26,7 +27,6 @@ struct GradientLut {
 GradientLut build_gradient_lut(const Calibration& c, int n = 64, int tiles_y = 3, int tiles_x = 4, int step = 4);
 
 struct ShapeOptions {
-    int refine_bins = 0;          // > 0: search the table's bins within this many of the lookup's, at the pixel
     double mask_threshold = 0.7;  // on the 3x3 mean of the indentation's gradient magnitude
     int open_radius = 2, close_radius = 2;  // the mask's opening and closing (discs, pixels)
     int sor_iterations = 50;      // red-black SOR sweeps of the Poisson solve

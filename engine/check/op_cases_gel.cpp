@@ -1,0 +1,46 @@
+// Self-test cases of the gel's shape ops (gel_gradient, masked_poisson): grey-level
+// frames, random tables, a disc-shaped contact.
+#include <cmath>
+
+#include "engine/check/op_selftest.h"
+#include "engine/ops/build.h"
+
+namespace vtloc::check {
+
+namespace {
+
+// Integral grey levels in [0, 255], as frames hold.
+HostTensor grey_frame(int64_t H, int64_t W, uint32_t seed) {
+    HostTensor t = random_tensor({H, W, 3}, seed, 0.0f, 255.0f);
+    for (float& v : t.data) v = std::floor(v);
+    return t;
+}
+
+OpCase gradient_case(int64_t H, int64_t W, int64_t n, int64_t ty, int64_t tx, uint32_t seed) {
+    OpCase c("gel_gradient", std::to_string(H) + "x" + std::to_string(W) + ", " + std::to_string(ty) + "x" +
+                                 std::to_string(tx) + " tables of " + std::to_string(n) + "^3");
+    const int g = ops::gel_gradient(c.g, c.input("frame", grey_frame(H, W, seed)), c.input("empty", grey_frame(H, W, seed + 1)),
+                                    c.input("tables", random_tensor({ty * tx, n * n * n, 2}, seed + 2, -3.0f, 3.0f)), n, ty, tx);
+    c.output(g, "gradient");
+    return c;
+}
+
+OpCase poisson_case(int64_t H, int64_t W, int64_t iterations, uint32_t seed) {
+    OpCase c("masked_poisson", std::to_string(H) + "x" + std::to_string(W) + ", " + std::to_string(iterations) + " sweeps");
+    HostTensor mask({H, W});
+    for (int64_t r = 0; r < H; ++r)
+        for (int64_t col = 0; col < W; ++col)
+            mask.data[size_t(r * W + col)] = std::hypot(double(r) - 0.45 * H, double(col) - 0.55 * W) < 0.35 * double(std::min(H, W));
+    c.output(ops::masked_poisson(c.g, c.input("gradient", random_tensor({H, W, 2}, seed, -1.0f, 1.0f)), c.input("mask", mask),
+                                 iterations, 1.85),
+             "height");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> gel_cases(const rt::DeviceInfo&) {
+    return {gradient_case(13, 17, 8, 2, 3, 11), gradient_case(120, 160, 16, 3, 4, 12), poisson_case(23, 31, 20, 13)};
+}
+
+}  // namespace vtloc::check

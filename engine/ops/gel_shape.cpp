@@ -1,0 +1,97 @@
+// The gel's shape from a frame (SPEC 9, docs/gel_shape.md), its two GPU steps:
+// gel_gradient: frame [H, W, 3], empty [H, W, 3] (grey levels), tables [T, n^3, 2]
+//   -> the indentation's gradient [H, W, 2] (params n, tiles_y, tiles_x; T = tiles_y * tiles_x);
+// masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact) -> the height [H, W]
+//   (params iterations, omega): red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside.
+// CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
+// shaders/masked_poisson.comp (one workgroup: the sweeps need a barrier between colours).
+#include <cmath>
+
+#include "base/error.h"
+#include "engine/ops/common.h"
+#include "engine/ops/gel_ops.h"
+#include "engine/ops/ops.h"
+
+namespace vtloc::ops {
+namespace {
+
+int int_param(const Params& p, const char* k, double lo, double hi) {
+    const double v = p.get(k, -1);
+    if (!(v >= lo && v <= hi) || v != std::floor(v))
+        throw Error(std::string(k) + " must be an integer in [" + std::to_string(int64_t(lo)) + ", " + std::to_string(int64_t(hi)) + "]");
+    return int(v);
+}
+
+std::vector<TensorDesc> gradient_infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 3, 3);
+    expect_f32(in);
+    const int n = int_param(p, "n", 2, 256), ty = int_param(p, "tiles_y", 1, 64), tx = int_param(p, "tiles_x", 1, 64);
+    const Shape& f = in[0].shape;
+    if (f.size() != 3 || f[2] != 3 || f[0] < 1 || f[1] < 1) throw Error("gel_gradient: the frame must be [H, W, 3], got " + shape_str(f));
+    if (in[1].shape != f) throw Error("gel_gradient: the empty frame must be " + shape_str(f) + ", got " + shape_str(in[1].shape));
+    const Shape want{int64_t(ty) * tx, int64_t(n) * n * n, 2};
+    if (in[2].shape != want) throw Error("gel_gradient: the tables must be " + shape_str(want) + ", got " + shape_str(in[2].shape));
+    to_u32(in[2].shape[0] * in[2].shape[1] * 2, "table size");
+    to_u32(f[0] * f[1] * 3, "frame size");
+    return {TensorDesc{{f[0], f[1], 2}}};
+}
+
+void gradient_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    const int n = int(p.get("n", 0)), ty = int(p.get("tiles_y", 0)), tx = int(p.get("tiles_x", 0));
+    const int H = int(in[0]->shape[0]), W = int(in[0]->shape[1]);
+    for (int r = 0; r < H; ++r)
+        for (int c = 0; c < W; ++c) {
+            float* g = &out[0]->data[(size_t(r) * size_t(W) + size_t(c)) * 2];
+            gel::indentation_gradient(in[2]->data.data(), n, ty, tx, H, W, in[0]->data.data(), in[1]->data.data(), r, c, g[0], g[1]);
+        }
+}
+
+void gradient_gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    struct { int32_t H, W, n, ty, tx; } push{int32_t(a.in[0].shape[0]), int32_t(a.in[0].shape[1]), int32_t(a.params.get("n", 0)),
+                                             int32_t(a.params.get("tiles_y", 0)), int32_t(a.params.get("tiles_x", 0))};
+    const uint64_t HW = uint64_t(push.H) * uint64_t(push.W);
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups(HW, local, d);
+    check_loop_budget(d, (HW + uint64_t(groups) * local - 1) / (uint64_t(groups) * local) * 8, "gel_gradient");
+    a.seq.dispatch(pipeline(a.ctx, "gel_gradient", 4, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), groups);
+}
+
+std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 2, 2);
+    expect_f32(in);
+    int_param(p, "iterations", 0, 100000);
+    const double w = p.get("omega", -1);
+    if (!(w > 0 && w < 2)) throw Error("masked_poisson: omega must be in (0, 2)");
+    const Shape& g = in[0].shape;
+    if (g.size() != 3 || g[2] != 2 || g[0] < 1 || g[1] < 1) throw Error("masked_poisson: the gradient must be [H, W, 2], got " + shape_str(g));
+    if (in[1].shape != Shape{g[0], g[1]}) throw Error("masked_poisson: the mask must be " + shape_str({g[0], g[1]}) + ", got " + shape_str(in[1].shape));
+    to_u32(g[0] * g[1] * 2, "gradient size");
+    return {TensorDesc{{g[0], g[1]}}};
+}
+
+void poisson_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    gel::masked_poisson(in[0]->data.data(), in[1]->data.data(), int(in[0]->shape[0]), int(in[0]->shape[1]),
+                        int(p.get("iterations", 0)), float(p.get("omega", 1)), out[0]->data.data());
+}
+
+void poisson_gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    struct { int32_t H, W, iterations; float omega; } push{int32_t(a.in[0].shape[0]), int32_t(a.in[0].shape[1]),
+                                                          int32_t(a.params.get("iterations", 0)), float(a.params.get("omega", 1))};
+    const uint32_t local = elementwise_local_size(d);
+    const uint64_t per = (uint64_t(push.H) * uint64_t(push.W) + local - 1) / local;
+    check_loop_budget(d, per * (2 * uint64_t(push.iterations) + 1), "masked_poisson");
+    a.seq.dispatch(pipeline(a.ctx, "masked_poisson", 3, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), 1);
+}
+
+}  // namespace
+
+const OpDef op_gel_gradient{"gel_gradient", gradient_infer, gradient_cpu, gradient_gpu, 0, {"n", "tiles_y", "tiles_x"}};
+const OpDef op_masked_poisson{"masked_poisson", poisson_infer, poisson_cpu, poisson_gpu, 0, {"iterations", "omega"}};
+
+}  // namespace vtloc::ops
