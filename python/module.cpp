@@ -13,6 +13,7 @@ using namespace vtloc;
 namespace vtloc::python {
 void bind_model(py::module_& m);
 void bind_tracker(py::module_& m);
+void bind_gel_shape(py::module_& m);
 }
 
 namespace {
@@ -87,4 +88,5 @@ PYBIND11_MODULE(vtloc, m) {
     python::bind_results(m);
     python::bind_model(m);
     python::bind_tracker(m);
+    python::bind_gel_shape(m);
 }

@@ -18,7 +18,8 @@ const char* kUsage =
     "commands:\n"
     "  demo       run the shipped model on a shipped example; write a heat-map PNG and PLY\n"
     "  localize   localise one touch (tactile image + object mesh or point cloud)\n"
-    "  sequence   several touches with known motions: a belief over the contact candidates\n"
+    "  sequence   several touches and the robot's motions between them: the sensor's pose on the object\n"
+    "  shape      the gel's shape (indentation, contact) from one frame\n"
     "  info       a weight file's config, parameter count, size and tensors\n"
     "  devices    Vulkan devices and the limits the engine uses\n"
     "  check      cross-check the device against the CPU reference (model, or --ops: every op)\n"
@@ -39,6 +40,7 @@ Command find_command(const std::string& name) {
     if (name == "demo") return cli::cmd_demo;
     if (name == "localize" || name == "localise") return cli::cmd_localize;
     if (name == "sequence") return cli::cmd_sequence;
+    if (name == "shape") return cli::cmd_shape;
     if (name == "info") return cli::cmd_info;
     if (name == "devices") return cli::cmd_devices;
     if (name == "check") return cli::cmd_check;

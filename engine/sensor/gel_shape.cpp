@@ -118,6 +118,24 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
     return lut;
 }
 
+std::vector<uint8_t> contact_mask(const std::vector<float>& grad, int H, int W, const ShapeOptions& o) {
+    if (grad.size() != size_t(H) * size_t(W) * 2) throw Error("contact mask: the gradient must be H x W x 2");
+    cv::Mat mag(H, W, CV_64F);
+    for (size_t p = 0; p < size_t(H) * size_t(W); ++p)
+        mag.at<double>(int(p / size_t(W)), int(p % size_t(W))) = std::hypot(double(grad[2 * p]), double(grad[2 * p + 1]));
+    // Where the mean slope over 3x3 passes the threshold; closed and filled before the opening: a
+    // shallow press's steep ring is thinner than the opening's disc, and only its filled disc
+    // survives it; then the largest piece.
+    cv::blur(mag, mag, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_REPLICATE);
+    cv::Mat m = mag > o.mask_threshold;
+    m /= 255;
+    if (o.close_radius > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disc(o.close_radius));
+    m = fill_holes(m);
+    if (o.open_radius > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disc(o.open_radius));
+    m = largest_piece(m);
+    return std::vector<uint8_t>(m.datastart, m.dataend);
+}
+
 GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vector<uint8_t>& frame,
                    const std::vector<uint8_t>& empty, const ShapeOptions& o) {
     const int H = c.height, W = c.width;
@@ -135,23 +153,9 @@ GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vect
         }
     GelShape s;
     s.height = H, s.width = W;
-    cv::Mat mag(H, W, CV_64F);
     s.grad_row.resize(HW), s.grad_col.resize(HW);
-    for (size_t p = 0; p < HW; ++p) {
-        s.grad_row[p] = grad[2 * p], s.grad_col[p] = grad[2 * p + 1];
-        mag.at<double>(int(p / W), int(p % W)) = std::hypot(double(grad[2 * p]), double(grad[2 * p + 1]));
-    }
-    // The contact: where the mean slope over 3x3 passes the threshold, closed, filled, opened, its largest piece.
-    cv::blur(mag, mag, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_REPLICATE);
-    cv::Mat m = mag > o.mask_threshold;
-    m /= 255;
-    // Closed and filled before the opening: a shallow press's steep ring is thinner than the
-    // opening's disc, and only its filled disc survives it.
-    if (o.close_radius > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disc(o.close_radius));
-    m = fill_holes(m);
-    if (o.open_radius > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disc(o.open_radius));
-    m = largest_piece(m);
-    s.mask.assign(m.datastart, m.dataend);
+    for (size_t p = 0; p < HW; ++p) s.grad_row[p] = grad[2 * p], s.grad_col[p] = grad[2 * p + 1];
+    s.mask = contact_mask(grad, H, W, o);
     // The height inside the mask, as op masked_poisson computes it.
     std::vector<float> mask(s.mask.begin(), s.mask.end()), z(HW);
     ops::gel::masked_poisson(grad.data(), mask.data(), H, W, o.sor_iterations, float(o.sor_omega), z.data());

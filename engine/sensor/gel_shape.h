@@ -40,6 +40,9 @@ struct GelShape {
     std::vector<uint8_t> mask;              // the contact (0/1)
 };
 
+// The contact (0/1, H x W) from the indentation's gradient [H, W, 2] (row, col).
+std::vector<uint8_t> contact_mask(const std::vector<float>& grad, int H, int W, const ShapeOptions& o = {});
+
 // frame, empty: H x W x 3 in the calibration's stored channel order (its size).
 // Throws vtloc::Error for frames of another size.
 GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vector<uint8_t>& frame,

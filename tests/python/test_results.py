@@ -175,3 +175,16 @@ def test_tracker_candidates_protocol(ctx, root):
     assert t.estimate()["sample_belief"].shape == (len(cands),)
     with pytest.raises(vtloc.Error, match="C x 3"):
         vtloc.Tracker(ctx, mug_path, candidates=np.zeros((4, 2)))
+
+
+def test_gel_shape_reader(ctx, root):
+    reader = vtloc.GelShapeReader(ctx)
+    frame = os.path.join(root, "examples", "touch_01.png")  # a real 4 mm ball press
+    s = reader.read(frame)
+    assert s["depth_mm"].shape == (reader.height, reader.width) and s["mask"].dtype == np.uint8
+    assert s["mask"].sum() > 100 and 0.2 < float(s["depth_mm"].max()) < 4.0
+    assert np.all(s["depth_mm"][s["mask"] == 0] == 0)
+    none = reader.read(frame, empty=frame)  # the frame as its own background: nothing pressed
+    assert none["mask"].sum() == 0
+    with pytest.raises(vtloc.Error, match="another aspect"):
+        reader.read(np.zeros((100, 100, 3), np.uint8))

@@ -424,6 +424,48 @@ void render_tracker_png(const std::string& path, const Tracker& tracker, const s
                         const std::vector<std::string>& captions = {},
                         const std::vector<std::array<double, 3>>& truths = {});
 
+// ---- The gel's shape from a frame (SPEC 9; docs/gel_shape.md) -------------
+
+struct GelShapeOptions {
+    std::string calibration;       // a Taxim-style calibration file; empty: the shipped GelSight one
+    double mask_threshold = 0.7;   // the contact: 3x3 mean slope above this (fitted on the real presses)
+    int iterations = 50;           // red-black SOR sweeps of the height
+};
+
+struct GelShape {
+    int height = 0, width = 0;     // the calibration's pixels
+    double mm_per_px = 0;
+    std::vector<float> depth_mm;   // the indentation, row-major; 0 outside the contact
+    std::vector<float> grad_row, grad_col;  // the indentation's gradient (mm per mm)
+    std::vector<uint8_t> mask;     // the contact, 0/1
+};
+
+// Reads the gel's shape from frames on the GPU: the colour change against the
+// sensor's empty frame inverted through the calibration into gradients, a
+// contact mask, and the height inside it. A frame larger than the calibration
+// with the same aspect is resampled to it (real frames: 240x320, 480x640);
+// another aspect or a smaller frame is an error.
+class GelShapeReader {
+public:
+    explicit GelShapeReader(Context& context, const GelShapeOptions& options = {});
+    ~GelShapeReader();
+    GelShapeReader(GelShapeReader&&) noexcept;
+    GelShapeReader& operator=(GelShapeReader&&) noexcept;
+    // empty: the sensor's frame with nothing pressed; null: the calibration's own.
+    GelShape read(const TactileImage& frame, const TactileImage* empty = nullptr);
+    int height() const;
+    int width() const;
+
+private:
+    struct Impl;
+    std::unique_ptr<Impl> impl_;
+};
+
+// Writes DIR/height.png (16-bit grey, micrometres, like vtloc synth --indentation), DIR/shape.ply
+// (the contact's points: x, y in mm from the frame's top-left, z the indentation) and
+// DIR/shape.png (frame | slope | height | mask). Returns the three paths.
+std::vector<std::string> write_gel_shape(const std::string& dir, const GelShape& shape, const TactileImage& frame);
+
 // ---- Outputs ----------------------------------------------------------------
 
 // PLY point cloud of the object with `contact_prob` and an RGB colour per point

@@ -1,0 +1,71 @@
+// vtloc shape: the gel's shape from one frame (SPEC 9; docs/gel_shape.md).
+#include <cmath>
+#include <cstdio>
+
+#include "apps/vtloc/report.h"
+
+namespace vtloc::cli {
+
+namespace {
+
+const char* kHelp =
+    "usage: vtloc shape --tactile FRAME.png --out DIR [--background EMPTY.png] [--calibration C]\n"
+    "                   [--json]\n"
+    "\n"
+    "The gel's shape from a GelSight frame (SPEC section 9): the colour change against the sensor's\n"
+    "empty frame, inverted through the calibration into the gel's slopes, a contact mask, and the\n"
+    "indentation inside it (on the GPU). Writes DIR/height.png (16-bit grey, micrometres),\n"
+    "DIR/shape.ply (the contact's points, mm) and DIR/shape.png (frame | slope | height | contact).\n"
+    "\n"
+    "  --tactile FRAME.png    the frame: the calibration's size, or larger with the same aspect\n"
+    "                         (resampled; real frames are 240x320 or 480x640)\n"
+    "  --background EMPTY.png the sensor's frame with nothing pressed (default: the calibration's)\n"
+    "  --calibration C        a Taxim-style calibration (default: the shipped GelSight one,\n"
+    "                         data/gelsight, CC BY 4.0)\n"
+    "  --out DIR              where to write the three files\n"
+    "  --json                 print the summary as JSON\n";
+
+}  // namespace
+
+int cmd_shape(Session& s, int argc, char** argv) {
+    Args a(argc, argv, 2, {{"--tactile"}, {"--background"}, {"--calibration"}, {"--out"}, {"--json", false}});
+    if (a.help()) {
+        std::fputs(kHelp, stdout);
+        return 0;
+    }
+    const std::string tactile = a.required("--tactile"), out = a.required("--out");
+    api::GelShapeOptions o;
+    o.calibration = a.get("--calibration").value_or("");
+    const api::TactileImage frame = api::load_tactile_image(tactile);
+    std::optional<api::TactileImage> empty;
+    if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
+    api::GelShapeReader reader(s.gpu(), o);
+    const api::GelShape g = reader.read(frame, empty ? &*empty : nullptr);
+    double deepest = 0, cx = 0, cy = 0, area = 0;
+    for (int r = 0; r < g.height; ++r)
+        for (int c = 0; c < g.width; ++c) {
+            const size_t i = size_t(r) * size_t(g.width) + size_t(c);
+            deepest = std::max(deepest, double(g.depth_mm[i]));
+            if (g.mask[i]) cx += c, cy += r, area += 1;
+        }
+    const std::vector<std::string> files = api::write_gel_shape(out, g, frame);
+    if (a.flag("--json")) {
+        nlohmann::json j{{"tactile", tactile}, {"size", {g.width, g.height}}, {"mm_per_px", g.mm_per_px},
+                         {"max_depth_mm", deepest}, {"contact_area_mm2", area * g.mm_per_px * g.mm_per_px},
+                         {"contact_centre_px", area > 0 ? nlohmann::json{cx / area, cy / area} : nlohmann::json(nullptr)},
+                         {"outputs", files}};
+        std::printf("%s\n", j.dump(2).c_str());
+        return 0;
+    }
+    std::printf("frame     %s (%dx%d) at the calibration's %dx%d, %.4f mm per pixel\n", tactile.c_str(), frame.width,
+                frame.height, g.width, g.height, g.mm_per_px);
+    if (area > 0)
+        std::printf("contact   %.1f mm^2 centred at pixel (%.1f, %.1f); deepest %.3f mm\n", area * g.mm_per_px * g.mm_per_px,
+                    cx / area, cy / area, deepest);
+    else
+        std::printf("contact   none found (no slope above the mask's threshold)\n");
+    for (const std::string& f : files) std::printf("wrote     %s\n", f.c_str());
+    return 0;
+}
+
+}  // namespace vtloc::cli

@@ -1,0 +1,75 @@
+// api::GelShapeReader: the GPU pipeline equals engine/sensor's CPU one on real presses,
+// larger frames of the same aspect are resampled, other sizes are errors.
+#include <catch2/catch.hpp>
+#include <cmath>
+
+#include "engine/sensor/gel_shape.h"
+#include "tests/harness.h"
+#include "vtloc/vtloc.h"
+
+using namespace vtloc;
+
+namespace {
+
+// Real press i of the calibration as the RGB frame a PNG gives (the file stores BGR).
+api::TactileImage press(const sensor::Calibration& c, int i) {
+    api::TactileImage im;
+    im.height = c.height, im.width = c.width;
+    const size_t n = size_t(c.height) * size_t(c.width);
+    for (size_t p = 0; p < n; ++p)
+        for (int k = 2; k >= 0; --k) im.rgb.push_back(c.press_imgs[size_t(i) * n * 3 + 3 * p + size_t(k)]);
+    return im;
+}
+
+}  // namespace
+
+TEST_CASE("gel shape reader: the GPU pipeline equals the CPU one on real presses", "[api][sensor]") {
+    const sensor::Calibration c = sensor::load_calibration(sensor::default_calibration_path());
+    const sensor::GradientLut lut = sensor::build_gradient_lut(c);
+    api::Context ctx(api::ContextOptions{"", api::Validation::On});
+    api::GelShapeReader reader(ctx);
+    CHECK((reader.width() == 160 && reader.height() == 120));
+    for (int i : {0, 17, 40}) {
+        INFO("press " << i);
+        const size_t n = size_t(c.height) * size_t(c.width);
+        const std::vector<uint8_t> bgr(c.press_imgs.begin() + long(size_t(i) * n * 3), c.press_imgs.begin() + long(size_t(i + 1) * n * 3));
+        const sensor::GelShape cpu = sensor::gel_shape(c, lut, bgr, c.press_f0);
+        const api::GelShape gpu = reader.read(press(c, i));
+        REQUIRE(gpu.depth_mm.size() == n);
+        size_t differ = 0;
+        double worst = 0;
+        for (size_t p = 0; p < n; ++p) {
+            differ += gpu.mask[p] != cpu.mask[p];
+            worst = std::max(worst, double(std::abs(gpu.depth_mm[p] - cpu.depth_mm[p])));
+        }
+        CHECK(differ == 0);  // the gradients agree to fp32 rounding: no pixel crosses the threshold
+        // 50 SOR sweeps accumulate the gradients' rounding: within a micrometre.
+        CHECK(worst < 1e-3);
+    }
+    CHECK(ctx.take_validation_messages().empty());
+}
+
+TEST_CASE("gel shape reader: a larger frame of the same aspect is resampled, others refused", "[api][sensor]") {
+    const sensor::Calibration c = sensor::load_calibration(sensor::default_calibration_path());
+    api::Context ctx;
+    api::GelShapeReader reader(ctx);
+    const api::TactileImage small = press(c, 8);
+    api::TactileImage big;  // every pixel doubled: area resampling gives the frame back exactly
+    big.height = 2 * small.height, big.width = 2 * small.width;
+    for (int r = 0; r < big.height; ++r)
+        for (int col = 0; col < big.width; ++col)
+            for (int k = 0; k < 3; ++k) big.rgb.push_back(small.rgb[(size_t(r / 2) * size_t(small.width) + size_t(col / 2)) * 3 + size_t(k)]);
+    CHECK(reader.read(big).depth_mm == reader.read(small).depth_mm);
+    api::TactileImage square;
+    square.height = square.width = 120;
+    square.rgb.assign(120 * 120 * 3, 100);
+    CHECK_THROWS_WITH(reader.read(square), Catch::Contains("frame: 120x120 for the calibration's 160x120: another aspect"));
+    api::TactileImage tiny;
+    tiny.height = 60, tiny.width = 80;
+    tiny.rgb.assign(60 * 80 * 3, 100);
+    CHECK_THROWS_WITH(reader.read(tiny), Catch::Contains("smaller than the calibration"));
+    CHECK_THROWS_WITH(reader.read(small, &square), Catch::Contains("empty frame: 120x120"));
+    api::GelShapeOptions bad;
+    bad.calibration = "/no/such/calib.safetensors";
+    CHECK_THROWS_WITH(api::GelShapeReader(ctx, bad), Catch::Contains("/no/such/calib.safetensors"));
+}
