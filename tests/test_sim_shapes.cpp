@@ -1,6 +1,7 @@
 // Procedural training objects: valid closed meshes at their design size, the
 // simple solids uniform and the toothed set non-uniform by SPEC section 5.
 #include <catch2/catch.hpp>
+#include <random>
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -157,4 +158,31 @@ TEST_CASE("distance up to symmetry, and the symmetry's JSON", "[sim][symmetry]")
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 1}}, {"order", 2}, {"flip", {0, 0.5, 1}}}, "o.json"),
                       Catch::Contains("o.json: symmetry flip axis must be perpendicular"));
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"axis", {0, 0, 1}}}, "o.json"), Catch::Contains("o.json: symmetry must be"));
+}
+
+TEST_CASE("distance up to symmetry: the closed form equals the nearest of every group element", "[sim][symmetry]") {
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<double> u(-30, 30);
+    for (int order : {1, 2, 3, 7, 63, 80})
+        for (int variant = 0; variant < 3; ++variant) {
+            sim::Symmetry s;
+            s.order = order;
+            s.point = {u(rng) / 10, u(rng) / 10, u(rng) / 10};
+            s.axis = variant == 0 ? sim::Vec3d{0, 0, 1} : sim::Vec3d{0.3, -0.5, 0.8};
+            if (variant == 2) {  // a flip axis perpendicular to the tilted axis
+                const sim::Vec3d a = s.axis;
+                s.flip = sim::Vec3d{a[1], -a[0], 0};
+            }
+            if (order == 1 && variant != 2) continue;  // no group
+            for (int i = 0; i < 50; ++i) {
+                const sim::Vec3d p{u(rng), u(rng), u(rng)}, t{u(rng), u(rng), u(rng)};
+                double brute = 1e300;
+                for (const sim::Mat3d& R : s.rotations()) {
+                    const sim::Vec3d q = s.apply(R, t);
+                    brute = std::min(brute, std::sqrt((p[0] - q[0]) * (p[0] - q[0]) + (p[1] - q[1]) * (p[1] - q[1]) + (p[2] - q[2]) * (p[2] - q[2])));
+                }
+                INFO("order " << order << " variant " << variant);
+                CHECK(sim::distance_up_to_symmetry(s, p, t) == Approx(brute).margin(1e-6));
+            }
+        }
 }
