@@ -75,6 +75,9 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     for (const std::optional<Rigid>& m : file.relative_motions(touches_path)) motions.push_back(m ? std::optional(to_motion(*m)) : std::nullopt);
     api::TrackerOptions to;
     to.window = a.integer("--window", to.window, 1, 64);
+    if (a.get("--window") && size_t(to.window) > file.touches.size())
+        throw UsageError("--window " + std::to_string(to.window) + " is longer than the " + std::to_string(file.touches.size()) +
+                         " touches of " + touches_path);
     to.object_units = a.number("--object-units", 1.0);
     const bool geometry_only = a.flag("--geometry-only");
 
