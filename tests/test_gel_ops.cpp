@@ -36,7 +36,7 @@ TEST_CASE("gel_gradient matches the CPU reference", "[op][gel][gel_gradient]") {
     }
 }
 
-TEST_CASE("gel_gradient: no colour change, no gradient; one cell's table, its value", "[op][gel][gel_gradient]") {
+TEST_CASE("gel_gradient: no colour change gives no gradient, and one cell gives its table value", "[op][gel][gel_gradient]") {
     const int n = 4;
     std::vector<float> lut(size_t(n * n * n * 2), 0.f);
     const float d[3] = {100, -3, 0};  // cells 2, 1, 2 of 4: (v + 256) / 128, floored
