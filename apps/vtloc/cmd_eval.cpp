@@ -1,6 +1,7 @@
 // vtloc eval: the paper's metrics for a weight file on a dataset (docs/eval.md).
 #include <algorithm>
 #include <cstdio>
+#include <fstream>
 #include <filesystem>
 #include <set>
 
@@ -43,7 +44,8 @@ const char* kHelp =
     "                            network_weight, hypotheses, n_spin); fit them with --end-split train\n"
     "  --end-split test|train    with --sequence: windows end at test touches (default) or train ones\n"
     "  --plot FILE.png           with --sequence: ND (solid) and ND up to symmetry (dashed) against T, all\n"
-    "                            objects, a line per method and noise\n"
+    "                            objects, a colour per method and noise\n"
+    "  --replot REPORT.json      with --plot, no --data: redraw the plot of a saved --sequence report\n"
     "  --cloud full|xyz|view     the object cloud: points.csv with its normals (default), its points\n"
     "                            with estimated normals (xyz), or the single view a depth camera sees\n"
     "                            (view.xyz of vtloc synth --view; estimated normals facing the camera)\n"
@@ -262,10 +264,19 @@ int cmd_eval(Session& s, int argc, char** argv) {
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
                                   {"--markdown"},  {"--plot"},      {"--per-touch"}, {"--render"},    {"--render-count"},
                                   {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
-                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}};
+                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}, {"--replot"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
+        return 0;
+    }
+    if (auto r = a.get("--replot")) {  // a saved report's plot, redrawn
+        std::ifstream in(*r);
+        if (!in) throw api::Error(*r + ": cannot open");
+        const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
+        if (j.is_discarded() || !j.is_object() || j.value("format", "") != "vtloc-eval-sequence/1" || !j.contains("rows"))
+            throw api::Error(*r + ": not a vtloc-eval-sequence/1 report");
+        eval::plot_sequence(a.required("--plot"), j["rows"], j.value("data", std::string()));
         return 0;
     }
     if (a.get("--sequence")) return eval::run_sequence(s, a);

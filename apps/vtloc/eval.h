@@ -14,6 +14,8 @@ namespace vtloc::cli::eval {
 
 // vtloc eval --sequence (eval_sequence.cpp): SPEC 6's protocols; prints and writes its own report.
 int run_sequence(Session& s, const Args& a);
+// ND and ND up to symmetry against T (the "all" rows of a vtloc-eval-sequence/1 report) as a PNG.
+void plot_sequence(const std::string& path, const nlohmann::json& rows, const std::string& data);
 
 struct Options {
     std::string model, data;

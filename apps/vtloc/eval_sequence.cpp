@@ -94,6 +94,36 @@ std::vector<int> parse_ts(const std::string& v) {
 
 }  // namespace
 
+void plot_sequence(const std::string& path, const nlohmann::json& rows, const std::string& data) {
+    io::LineChart chart;
+    chart.title = "ND against the number of touches (" + data + ", all objects, surface protocol)";
+    chart.x_label = "touches T (the window ending at each test touch)";
+    chart.y_label = "ND (%)";
+    std::vector<int> Ts;
+    for (const nlohmann::json& r : rows) Ts.push_back(r.at("T").get<int>());
+    std::sort(Ts.begin(), Ts.end());
+    Ts.erase(std::unique(Ts.begin(), Ts.end()), Ts.end());
+    if (Ts.empty()) throw api::Error(path + ": the report has no rows to plot");
+    for (int T : Ts) chart.x.push_back(T);
+    std::vector<std::string> order;  // methods in the report's order, each with its ND and ND up to symmetry
+    std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> lines;
+    for (const nlohmann::json& r : rows) {
+        if (r.at("subset") != "all") continue;
+        const std::string name = r.at("method").get<std::string>() + (r.at("odometry_noise").get<bool>() ? ", noise" : "");
+        if (!lines.count(name)) order.push_back(name);
+        auto& [nd, sym] = lines[name];
+        nd.resize(Ts.size(), NAN), sym.resize(Ts.size(), NAN);
+        const size_t i = size_t(std::find(Ts.begin(), Ts.end(), r.at("T").get<int>()) - Ts.begin());
+        nd[i] = r.at("nd").get<double>(), sym[i] = r.at("nd_symmetry").get<double>();
+    }
+    for (size_t k = 0; k < order.size(); ++k) {  // one colour per method: solid ND, dashed up to symmetry
+        chart.series.push_back({order[k], lines[order[k]].first, false, int(k)});
+        chart.series.push_back({"  up to symmetry", lines[order[k]].second, true, int(k)});
+    }
+    io::save_line_chart_png(path, chart);
+    std::printf("wrote     %s\n", path.c_str());
+}
+
 int run_sequence(Session& s, const Args& a) {
     const std::string data = a.required("--data");
     const std::vector<int> Ts = parse_ts(a.get("--sequence").value_or("1,2,3,4,6,8"));
@@ -311,28 +341,7 @@ int run_sequence(Session& s, const Args& a) {
         }
     std::printf("\nwindows   %d (ending at the %s touches with order >= 7)\n", windows, end_split.c_str());
     if (auto p = a.get("--markdown")) write_file_atomic(*p, md), std::printf("wrote     %s\n", p->c_str());
-    if (auto p = a.get("--plot")) {
-        io::LineChart chart;
-        chart.title = "ND against the number of touches (" + data + ", all objects, surface protocol)";
-        chart.x_label = "touches T (the window ending at each test touch)";
-        chart.y_label = "ND (%)";
-        for (int T : Ts) chart.x.push_back(T);
-        std::map<std::string, std::pair<std::vector<double>, std::vector<double>>> lines;  // method -> ND, ND up to symmetry
-        for (const nlohmann::json& r : rows) {
-            if (r["subset"] != "all") continue;
-            const std::string name = r["method"].get<std::string>() + (r["odometry_noise"].get<bool>() ? ", noise" : "");
-            auto& [nd, sym] = lines[name];
-            nd.resize(Ts.size(), NAN), sym.resize(Ts.size(), NAN);
-            const size_t i = size_t(std::find(Ts.begin(), Ts.end(), r["T"].get<int>()) - Ts.begin());
-            nd[i] = r["nd"].get<double>(), sym[i] = r["nd_symmetry"].get<double>();
-        }
-        for (const auto& [name, l] : lines) {
-            chart.series.push_back({name, l.first, false});
-            chart.series.push_back({name + " (up to symmetry)", l.second, true});
-        }
-        io::save_line_chart_png(*p, chart);
-        std::printf("wrote     %s\n", p->c_str());
-    }
+    if (auto p = a.get("--plot")) plot_sequence(*p, rows, data);
     if (auto p = a.get("--json")) {
         nlohmann::json j{{"format", "vtloc-eval-sequence/1"}, {"data", data}, {"model", geometry_only ? "" : model_path},
                          {"rows", rows}, {"per_object", per_obj}};

@@ -15,7 +15,8 @@ namespace {
 
 const cv::Scalar kInk(40, 40, 40), kGrid(225, 225, 225);
 // BGR, distinguishable in colour and in grey.
-const cv::Scalar kColours[] = {{180, 90, 30}, {40, 40, 200}, {60, 160, 60}, {170, 60, 160}, {0, 140, 230}, {120, 120, 120}};
+const cv::Scalar kColours[] = {{180, 90, 30}, {40, 40, 200}, {60, 160, 60}, {170, 60, 160}, {0, 140, 230},
+                               {120, 120, 120}, {200, 170, 40}, {40, 100, 120}};
 
 void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.5, int align = 0) {
     int base = 0;
@@ -47,7 +48,7 @@ void save_line_chart_png(const std::string& path, const LineChart& c) {
     const double step = raw <= mag ? mag : raw <= 2 * mag ? 2 * mag : raw <= 5 * mag ? 5 * mag : 10 * mag, top = 5 * step;
     const double x_lo = *std::min_element(c.x.begin(), c.x.end()), x_hi = *std::max_element(c.x.begin(), c.x.end());
     cv::Mat img(c.height, c.width, CV_8UC3, cv::Scalar(255, 255, 255));
-    const int L = 80, R = c.width - 330, T = 60, B = c.height - 60;
+    const int L = 80, R = c.width - 400, T = 60, B = c.height - 60;
     auto px = [&](double x) { return L + (x_hi > x_lo ? (x - x_lo) / (x_hi - x_lo) : 0.5) * (R - L); };
     auto py = [&](double y) { return B - y / top * (B - T); };
     char buf[32];
@@ -68,7 +69,8 @@ void save_line_chart_png(const std::string& path, const LineChart& c) {
     text(img, c.y_label, cv::Point(L, T - 10), 0.5, 1);
     for (size_t k = 0; k < c.series.size(); ++k) {
         const ChartSeries& s = c.series[k];
-        const cv::Scalar col = kColours[k % (sizeof kColours / sizeof kColours[0])];
+        const size_t pick = s.colour >= 0 ? size_t(s.colour) : k;
+        const cv::Scalar col = kColours[pick % (sizeof kColours / sizeof kColours[0])];
         for (size_t i = 0; i < c.x.size(); ++i) {
             if (!std::isfinite(s.y[i])) continue;
             const cv::Point2d p(px(c.x[i]), py(s.y[i]));
@@ -79,7 +81,7 @@ void save_line_chart_png(const std::string& path, const LineChart& c) {
                 else cv::line(img, p, q, col, 2, cv::LINE_AA);
             }
         }
-        const int ly = T + 10 + int(k) * 24;
+        const int ly = T + 10 + int(k) * 22;
         if (s.dashed) dashed_line(img, cv::Point2d(R + 15, ly), cv::Point2d(R + 45, ly), col);
         else cv::line(img, cv::Point(R + 15, ly), cv::Point(R + 45, ly), col, 2, cv::LINE_AA);
         text(img, s.name, cv::Point(R + 52, ly + 5), 0.42);

@@ -10,13 +10,14 @@ struct ChartSeries {
     std::string name;
     std::vector<double> y;  // one per x; NaN: no point
     bool dashed = false;
+    int colour = -1;        // an index into the palette; -1: the series' own index
 };
 
 struct LineChart {
     std::string title, x_label, y_label;
     std::vector<double> x;
     std::vector<ChartSeries> series;
-    int width = 1000, height = 560;
+    int width = 1100, height = 600;
 };
 
 // Throws vtloc::Error naming `path` when there is nothing to draw or it cannot be written.
