@@ -57,4 +57,10 @@ inline void check_rigid(const Rigid& m, const std::string& what) {
     if (det < 0) throw Error(what + ": the 3x3 part is a reflection (determinant -1), not a rotation");
 }
 
+// The sensor's motion between two flange poses (robot frame) with the flange-to-sensor
+// tool: sensor_k = flange_k tool, motion = sensor_a^-1 sensor_b.
+inline Rigid sensor_motion(const Rigid& flange_a, const Rigid& flange_b, const Rigid& tool) {
+    return compose(inverse(compose(flange_a, tool)), compose(flange_b, tool));
+}
+
 }  // namespace vtloc

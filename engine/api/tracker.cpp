@@ -118,7 +118,7 @@ std::vector<Motion> motions_from_flange_poses(const std::vector<Motion>& flange,
         std::vector<Motion> out;
         for (size_t k = 0; k < flange.size(); ++k) {
             track::check_rigid(to_rigid(flange[k]), "flange pose " + std::to_string(k + 1));
-            if (k) out.push_back(compose(inverse(compose(flange[k - 1], tool)), compose(flange[k], tool)));
+            if (k) out.push_back(to_motion(sensor_motion(to_rigid(flange[k - 1]), to_rigid(flange[k]), to_rigid(tool))));
         }
         return out;
     });

@@ -62,8 +62,7 @@ std::vector<std::optional<Rigid>> TouchSequence::relative_motions(const std::str
         return out;
     }
     if (!tool) throw Error(name + ": flange poses need the tool transform (\"tool\" or --tool)");
-    for (size_t i = 1; i < touches.size(); ++i)  // sensor_k = flange_k tool; motion = sensor_{k-1}^-1 sensor_k
-        out[i] = compose(inverse(compose(*touches[i - 1].flange, *tool)), compose(*touches[i].flange, *tool));
+    for (size_t i = 1; i < touches.size(); ++i) out[i] = sensor_motion(*touches[i - 1].flange, *touches[i].flange, *tool);
     return out;
 }
 

@@ -14,10 +14,6 @@ namespace vtloc::sensor {
 
 namespace {
 
-constexpr double kLo = -256, kHi = 256;  // colour-change range of the tables
-
-int cell_of(double v, int n) { return std::clamp(int(std::floor((v - kLo) / ((kHi - kLo) / n))), 0, n - 1); }
-
 // Empty cells (count 0) take the mean of their filled 6-neighbours, pass after pass.
 void fill_empty(std::vector<double>& val, std::vector<double>& cnt, int n) {
     std::vector<uint8_t> filled(cnt.size());
@@ -99,7 +95,7 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
                                 const float* p = &c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6];
                                 double s = 0;
                                 for (int k = 0; k < 6; ++k) s += double(p[k]) * basis[k];
-                                q[ch] = cell_of(s - f[ch], n);
+                                q[ch] = ops::gel::cell_of(float(s - f[ch]), n);  // the cell the lookup reads
                             }
                             const size_t i = (size_t(q[0]) * n + size_t(q[1])) * n + size_t(q[2]);
                             val[2 * i] += nr[size_t(m) * NB + d], val[2 * i + 1] += nc[size_t(m) * NB + d], cnt[i] += 1;
