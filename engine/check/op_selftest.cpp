@@ -69,7 +69,7 @@ OpsCheck check_ops(rt::Context& ctx, const std::string& filter,
                    const std::function<void(size_t, size_t, const OpCaseResult&)>& progress) {
     const auto t0 = std::chrono::steady_clock::now();
     std::vector<OpCase> all;
-    for (auto family : {dense_cases, image_cases, point_cases, head_cases, track_cases, gel_cases})
+    for (auto family : {dense_cases, image_cases, point_cases, head_cases, track_cases, gel_cases, codebook_cases})
         for (OpCase& c : family(ctx.info())) all.push_back(std::move(c));
     OpsCheck r;
     std::set<std::string> covered;

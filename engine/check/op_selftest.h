@@ -53,6 +53,7 @@ std::vector<OpCase> point_cases(const rt::DeviceInfo& d);  // fps, ball_query, g
 std::vector<OpCase> head_cases(const rt::DeviceInfo& d);   // GMA, chamfer, ILU, top-K, heat-map
 std::vector<OpCase> track_cases(const rt::DeviceInfo& d);  // the multi-touch filter's ops
 std::vector<OpCase> gel_cases(const rt::DeviceInfo& d);    // the gel's shape from a frame
+std::vector<OpCase> codebook_cases(const rt::DeviceInfo& d);  // render-and-compare
 
 struct OpCaseResult {
     std::string op, variant;

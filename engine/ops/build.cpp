@@ -150,6 +150,19 @@ int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double 
     return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}}, name);
 }
 
+int codebook_render(Graph& g, int samples, int points, int bins, const CodebookRender& p, const std::string& name) {
+    return g.add1("codebook_render", {samples, points, bins},
+                  {{"G", d(p.G)}, {"cell", p.cell}, {"splat", p.splat}, {"cap", p.cap}, {"facing", p.facing},
+                   {"origin_x", p.origin[0]}, {"origin_y", p.origin[1]}, {"origin_z", p.origin[2]}, {"coarse", p.coarse},
+                   {"nx", d(p.dims[0])}, {"ny", d(p.dims[1])}, {"nz", d(p.dims[2])}, {"max_bin", d(p.max_bin)}},
+                  name);
+}
+
+int codebook_score(Graph& g, int heights, int spins, int measured, double cell, double win, double cap, double weight,
+                   const std::string& name) {
+    return g.add1("codebook_score", {heights, spins, measured}, {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}}, name);
+}
+
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }
 
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {

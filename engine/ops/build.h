@@ -113,6 +113,20 @@ std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
 // points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
 int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "");
+// Render-and-compare (SPEC 9; engine/ops/codebook_math.h says how). The binning of the
+// dense points: origin, cell size `coarse`, dims, and the largest bin's count.
+struct CodebookRender {
+    int64_t G = 26;
+    double cell = 1, splat = 0.75, cap = 8, facing = 0.3;
+    double origin[3] = {0, 0, 0}, coarse = 1;
+    int64_t dims[3] = {1, 1, 1};
+    int64_t max_bin = 1;
+};
+// samples [S, 9], points [D, 6] (binned), bins [nx*ny*nz, 2] I32 -> heights [S, G*G].
+int codebook_render(Graph& g, int samples, int points, int bins, const CodebookRender& p, const std::string& name = "");
+// heights [S, G*G], spins [NS, 2], measured [R, C] (cells of `win` mm) -> log term [S*NS].
+int codebook_score(Graph& g, int heights, int spins, int measured, double cell, double win, double cap, double weight,
+                   const std::string& name = "");
 
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers

@@ -1,0 +1,61 @@
+// Self-test cases of render-and-compare's ops (codebook_render, codebook_score):
+// random surface points binned as the codebook bins them, random height maps and
+// a non-negative measured map.
+#include <cmath>
+#include <random>
+
+#include "engine/check/op_selftest.h"
+#include "engine/ops/build.h"
+#include "engine/track/codebook.h"
+
+namespace vtloc::check {
+
+namespace {
+
+OpCase render_case(int64_t S, int64_t D, int64_t G, uint32_t seed) {
+    OpCase c("codebook_render", std::to_string(S) + " samples, " + std::to_string(D) + " points, " + std::to_string(G) + "^2 cells");
+    std::mt19937 rng(seed);
+    std::vector<float> dense(size_t(6 * D)), samples(size_t(9 * S));
+    for (int64_t i = 0; i < D; ++i) {  // points on a 15 mm sphere, each with its unit normal
+        float u[6];
+        random_unit_pair(rng, u);
+        for (int k = 0; k < 3; ++k) dense[size_t(6 * i + k)] = 15 * u[k], dense[size_t(6 * i + 3 + k)] = u[k];
+    }
+    for (int64_t i = 0; i < S; ++i) {  // samples: a point, its normal and a tangent
+        float u[6];
+        random_unit_pair(rng, u);
+        for (int k = 0; k < 3; ++k)
+            samples[size_t(9 * i + k)] = 15 * u[k], samples[size_t(9 * i + 3 + k)] = u[k], samples[size_t(9 * i + 6 + k)] = u[3 + k];
+    }
+    const track::BinnedPoints b = track::bin_points(dense, 9.0);
+    ops::CodebookRender p;
+    p.G = G, p.cell = 0.9, p.splat = 0.7, p.cap = 5, p.coarse = b.coarse, p.max_bin = b.max_bin;
+    for (int k = 0; k < 3; ++k) p.origin[k] = b.origin[k], p.dims[k] = b.dims[k];
+    const int64_t NB = b.dims[0] * b.dims[1] * b.dims[2];
+    c.output(ops::codebook_render(c.g, c.input("samples", HostTensor({S, 9}, samples)), c.input("points", HostTensor({D, 6}, b.points)),
+                                  c.input("bins", HostTensor::from_ints({NB, 2}, b.bins)), p),
+             "heights");
+    return c;
+}
+
+OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32_t seed) {
+    OpCase c("codebook_score", std::to_string(S) + " maps of " + std::to_string(G) + "^2, " + std::to_string(NS) + " spins, " +
+                                   std::to_string(R) + "x" + std::to_string(C) + " window");
+    HostTensor spins({NS, 2});
+    for (int64_t j = 0; j < NS; ++j)
+        spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * double(j) / double(NS))), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
+    HostTensor meas = random_tensor({R, C}, seed + 1, -0.3f, 1.2f);
+    for (float& v : meas.data) v = std::max(0.0f, v);
+    c.output(ops::codebook_score(c.g, c.input("heights", random_tensor({S, G * G}, seed, -1.0f, 3.0f)), c.input("spins", spins),
+                                 c.input("measured", meas), 1.0, 0.996, 8.0, 1.5),
+             "term");
+    return c;
+}
+
+}  // namespace
+
+std::vector<OpCase> codebook_cases(const rt::DeviceInfo&) {
+    return {render_case(7, 4001, 13, 21), render_case(33, 12000, 27, 22), score_case(11, 27, 36, 15, 20, 23), score_case(3, 5, 7, 1, 3, 24)};
+}
+
+}  // namespace vtloc::check

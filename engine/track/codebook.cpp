@@ -1,0 +1,258 @@
+#include "engine/track/codebook.h"
+
+#include <algorithm>
+#include <cmath>
+#include <filesystem>
+#include <map>
+#include <tuple>
+
+#include "base/error.h"
+#include "engine/executor.h"
+#include "engine/ops/build.h"
+#include "engine/resident_weights.h"
+#include "engine/safetensors.h"
+#include "engine/weights.h"
+
+namespace vtloc::track {
+
+namespace {
+
+int64_t grid_cells(const CodebookOptions& o) { return 2 * int64_t(std::ceil(o.reach_mm / o.cell_mm)) + 1; }
+
+void check_options(const CodebookOptions& o) {
+    if (!(o.cell_mm >= 0.1 && o.cell_mm <= 10) || !(o.splat_mm > 0 && o.splat_mm <= 8 * o.cell_mm) || !(o.cap_mm > 0) ||
+        !(o.reach_mm > 0 && o.reach_mm <= 200) || !std::isfinite(o.facing) || !(o.min_density >= 0))
+        throw Error("codebook options: cell 0.1-10 mm, splat in (0, 8 cells], cap > 0, reach in (0, 200] mm");
+}
+
+std::string num(double v) {
+    char b[32];
+    std::snprintf(b, sizeof b, "%.6g", v);
+    return b;
+}
+
+std::map<std::string, std::string> metadata_of(const CodebookOptions& o, int64_t G) {
+    return {{"format", Codebook::kFormat}, {"cell_mm", num(o.cell_mm)}, {"splat_mm", num(o.splat_mm)},
+            {"cap_mm", num(o.cap_mm)},     {"facing", num(o.facing)},   {"reach_mm", num(o.reach_mm)},
+            {"G", std::to_string(G)}};
+}
+
+}  // namespace
+
+BinnedPoints bin_points(const std::vector<float>& dense, double coarse) {
+    const int64_t D = int64_t(dense.size() / 6);
+    if (D == 0 || dense.size() % 6) throw Error("codebook: no surface points to render");
+    if (!(coarse > 0)) throw Error("codebook: the bin size must be positive");
+    BinnedPoints b;
+    float hi[3];
+    for (int k = 0; k < 3; ++k) b.origin[k] = hi[k] = dense[size_t(k)];
+    for (int64_t i = 0; i < D; ++i)
+        for (int k = 0; k < 3; ++k) b.origin[k] = std::min(b.origin[k], dense[size_t(6 * i + k)]), hi[k] = std::max(hi[k], dense[size_t(6 * i + k)]);
+    // At most 64 bins per axis: a larger object gets larger bins (each sample reads 27).
+    b.coarse = std::max(coarse, double(std::max({hi[0] - b.origin[0], hi[1] - b.origin[1], hi[2] - b.origin[2]})) / 64.0);
+    const float inv = float(1.0 / b.coarse);
+    for (int k = 0; k < 3; ++k) b.dims[k] = std::clamp<int64_t>(int64_t(std::floor((hi[k] - b.origin[k]) * inv)) + 1, 1, 64);
+    auto bin_of = [&](const float* p) {
+        int64_t c[3];
+        for (int k = 0; k < 3; ++k) c[k] = std::clamp<int64_t>(int64_t(std::floor((p[k] - b.origin[k]) * inv)), 0, b.dims[k] - 1);
+        return (c[2] * b.dims[1] + c[1]) * b.dims[0] + c[0];
+    };
+    const int64_t NB = b.dims[0] * b.dims[1] * b.dims[2];
+    std::vector<int32_t> count(size_t(NB), 0), first(size_t(NB) + 1, 0);
+    for (int64_t i = 0; i < D; ++i) ++count[size_t(bin_of(&dense[size_t(6 * i)]))];
+    for (int64_t c = 0; c < NB; ++c) first[size_t(c + 1)] = first[size_t(c)] + count[size_t(c)];
+    b.points.resize(dense.size());
+    std::vector<int32_t> at(first.begin(), first.end() - 1);
+    for (int64_t i = 0; i < D; ++i) {
+        const int32_t k = at[size_t(bin_of(&dense[size_t(6 * i)]))]++;
+        std::copy(&dense[size_t(6 * i)], &dense[size_t(6 * i + 6)], &b.points[size_t(6 * k)]);
+    }
+    b.bins.resize(size_t(2 * NB));
+    for (int64_t c = 0; c < NB; ++c) {
+        b.bins[size_t(2 * c)] = first[size_t(c)], b.bins[size_t(2 * c + 1)] = count[size_t(c)];
+        b.max_bin = std::max<int64_t>(b.max_bin, count[size_t(c)]);
+    }
+    return b;
+}
+
+namespace {
+// Points per mm^2 of a cloud, from the mean distance to the nearest neighbour
+// (0.5 / sqrt(density) for points spread evenly over a surface), over at most
+// 2000 points; a neighbour beyond the bins searched counts at the bin size.
+double cloud_density(const Surface& s) {
+    const BinnedPoints b = bin_points(s.dense, 0.5);
+    const int64_t D = s.n_dense(), step = std::max<int64_t>(1, D / 2000);
+    const float inv = float(1.0 / b.coarse);
+    double sum = 0;
+    int64_t n = 0;
+    for (int64_t i = 0; i < D; i += step, ++n) {
+        const float* p = &s.dense[size_t(6 * i)];
+        int64_t c[3];
+        for (int k = 0; k < 3; ++k) c[k] = std::clamp<int64_t>(int64_t(std::floor((p[k] - b.origin[k]) * inv)), 0, b.dims[k] - 1);
+        double best = b.coarse * b.coarse;
+        for (int64_t z = std::max<int64_t>(0, c[2] - 1); z <= std::min(b.dims[2] - 1, c[2] + 1); ++z)
+            for (int64_t y = std::max<int64_t>(0, c[1] - 1); y <= std::min(b.dims[1] - 1, c[1] + 1); ++y)
+                for (int64_t x = std::max<int64_t>(0, c[0] - 1); x <= std::min(b.dims[0] - 1, c[0] + 1); ++x) {
+                    const int64_t bin = (z * b.dims[1] + y) * b.dims[0] + x;
+                    for (int32_t k = b.bins[size_t(2 * bin)]; k < b.bins[size_t(2 * bin)] + b.bins[size_t(2 * bin + 1)]; ++k) {
+                        const float* q = &b.points[size_t(6 * k)];
+                        const double d = double(q[0] - p[0]) * (q[0] - p[0]) + double(q[1] - p[1]) * (q[1] - p[1]) + double(q[2] - p[2]) * (q[2] - p[2]);
+                        if (d > 0 && d < best) best = d;
+                    }
+                }
+        sum += std::sqrt(best);
+    }
+    const double mean = sum / double(n);
+    return 0.25 / (mean * mean);
+}
+}  // namespace
+
+Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o) {
+    check_options(o);
+    if (!s.from_mesh && cloud_density(s) < o.min_density)
+        throw Error("render-and-compare needs a dense cloud (about " + num(o.min_density) + " point per mm^2 or more); this one has about " +
+                    num(cloud_density(s)) + " per mm^2 (" + std::to_string(s.n_dense()) + " points)");
+    Codebook b;
+    b.options = o;
+    b.G = grid_cells(o);
+    b.samples = s.samples;
+    // A bin reaches every point that can land in a map: the map's half width and the cap.
+    const double half = double(b.G - 1) / 2 * o.cell_mm + o.splat_mm;
+    const BinnedPoints bp = bin_points(s.dense, std::sqrt(2 * half * half + o.cap_mm * o.cap_mm));
+    ops::CodebookRender p;
+    p.G = b.G, p.cell = o.cell_mm, p.splat = o.splat_mm, p.cap = o.cap_mm, p.facing = o.facing, p.coarse = bp.coarse;
+    p.max_bin = bp.max_bin;
+    for (int k = 0; k < 3; ++k) p.origin[k] = bp.origin[k], p.dims[k] = bp.dims[k];
+    Graph g;
+    const int64_t S = s.n_samples(), D = int64_t(bp.points.size() / 6);
+    g.output(ops::codebook_render(g, g.input("samples", {S, 9}), g.input("points", {D, 6}),
+                                  g.input("bins", {bp.dims[0] * bp.dims[1] * bp.dims[2], 2}, ElemType::I32), p, "codebook.render"),
+             "heights");
+    const TensorMap in{{"samples", HostTensor({S, 9}, s.samples)},
+                       {"points", HostTensor({D, 6}, bp.points)},
+                       {"bins", HostTensor::from_ints({bp.dims[0] * bp.dims[1] * bp.dims[2], 2}, bp.bins)}};
+    TensorMap out;
+    if (ctx) {
+        GpuExecutor ex(*ctx, g, WeightStore{});
+        out = ex.run(in);
+    } else {
+        out = run_cpu(g, WeightStore{}, in);
+    }
+    b.heights = std::move(out.at("heights").data);
+    return b;
+}
+
+void save_codebook(const std::string& path, const Codebook& b) {
+    write_safetensors(path,
+                      {TensorBlob::f32("heights", {b.n_samples(), b.G * b.G}, b.heights),
+                       TensorBlob::f32("samples", {b.n_samples(), 9}, b.samples)},
+                      metadata_of(b.options, b.G));
+}
+
+Codebook load_codebook(const std::string& path, const Surface& s, const CodebookOptions& o) {
+    check_options(o);
+    SafetensorsFile f = SafetensorsFile::load(path);
+    const auto& md = f.metadata();
+    const auto fmt = md.find("format");
+    if (fmt == md.end() || fmt->second != Codebook::kFormat)
+        throw Error(path + ": not a " + std::string(Codebook::kFormat) + " codebook (format '" +
+                    (fmt == md.end() ? std::string("none") : fmt->second) + "')");
+    Codebook b;
+    b.options = o;
+    b.G = grid_cells(o);
+    if (metadata_of(o, b.G) != md)
+        throw Error(path + ": a codebook rendered with other options (cell, splat, cap, facing, reach); delete it to rebuild");
+    const TensorInfo& h = f.at("heights");
+    const TensorInfo& sm = f.at("samples");
+    if (sm.shape != Shape{s.n_samples(), 9} || h.shape != Shape{s.n_samples(), b.G * b.G})
+        throw Error(path + ": a codebook of another surface (" + shape_str(sm.shape) + " samples, this object has " +
+                    std::to_string(s.n_samples()) + "); delete it to rebuild");
+    b.samples = f.to_f32(sm);
+    if (b.samples != s.samples) throw Error(path + ": a codebook of another surface (its samples differ); delete it to rebuild");
+    b.heights = f.to_f32(h);
+    for (float v : b.heights)
+        if (!std::isfinite(v)) throw Error(path + ": the codebook holds a non-finite height");
+    return b;
+}
+
+Codebook cached_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o, const std::string& path) {
+    if (!path.empty() && std::filesystem::exists(path)) return load_codebook(path, s, o);
+    Codebook b = render_codebook(ctx, s, o);
+    if (!path.empty()) save_codebook(path, b);
+    return b;
+}
+
+HostTensor window_map(const std::vector<float>& depth_mm, int H, int W, double mm_per_px, double cell_mm, double* win_mm) {
+    if (H < 1 || W < 1 || depth_mm.size() != size_t(H) * size_t(W))
+        throw Error("render-and-compare: the indentation map has " + std::to_string(depth_mm.size()) + " values for " +
+                    std::to_string(H) + " x " + std::to_string(W) + " pixels");
+    if (!(mm_per_px > 0) || !std::isfinite(mm_per_px)) throw Error("render-and-compare: mm_per_px must be positive");
+    for (float v : depth_mm)
+        if (!std::isfinite(v)) throw Error("render-and-compare: the indentation map holds NaN or infinity");
+    const int R = std::max(1, int(std::lround(H * mm_per_px / cell_mm))), C = std::max(1, int(std::lround(W * mm_per_px / cell_mm)));
+    *win_mm = H * mm_per_px / R;
+    HostTensor m({R, C});
+    std::vector<int> n(size_t(R * C), 0);
+    for (int r = 0; r < H; ++r)
+        for (int c = 0; c < W; ++c) {
+            const int rr = std::min(R - 1, int((r + 0.5) * R / H)), cc = std::min(C - 1, int((c + 0.5) * C / W));
+            m.data[size_t(rr * C + cc)] += std::max(0.0f, depth_mm[size_t(r * W + c)]);
+            ++n[size_t(rr * C + cc)];
+        }
+    for (size_t k = 0; k < n.size(); ++k) m.data[k] = n[k] ? m.data[k] / float(n[k]) : 0.0f;
+    return m;
+}
+
+struct CodebookScorer::Impl {
+    rt::Context* ctx;
+    WeightStore weights;
+    std::shared_ptr<ResidentWeights> resident;
+    CodebookOptions options;
+    int64_t S, G, NS;
+    double weight;
+    using Key = std::tuple<int64_t, int64_t, double>;  // the window: R, C, cell size
+    std::map<Key, std::unique_ptr<GpuExecutor>> exec;
+    std::map<Key, Graph> graphs;
+    Graph graph(int64_t R, int64_t C, double win) const {
+        Graph g;
+        g.output(ops::codebook_score(g, g.weight("codebook.heights", {S, G * G}), g.weight("codebook.spins", {NS, 2}),
+                                     g.input("measured", {R, C}), options.cell_mm, win, options.cap_mm, weight, "codebook.score"),
+                 "term");
+        return g;
+    }
+};
+
+CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, double weight)
+    : impl_(std::make_unique<Impl>()) {
+    if (book.samples != s.samples) throw Error("render-and-compare: the codebook was rendered for another surface");
+    if (!(weight >= 0) || !std::isfinite(weight)) throw Error("render-and-compare: the term's weight must be >= 0");
+    Impl& m = *impl_;
+    m.ctx = ctx;
+    m.options = book.options;
+    m.S = s.n_samples(), m.G = book.G, m.NS = s.n_spin(), m.weight = weight;
+    m.weights.add("codebook.heights", HostTensor({m.S, m.G * m.G}, book.heights));
+    m.weights.add("codebook.spins", HostTensor({m.NS, 2}, s.spins));
+    if (ctx) m.resident = std::make_shared<ResidentWeights>(*ctx);
+}
+
+CodebookScorer::~CodebookScorer() = default;
+
+std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px) {
+    Impl& m = *impl_;
+    double win = 0;
+    HostTensor meas = window_map(depth_mm, H, W, mm_per_px, m.options.cell_mm, &win);
+    const Impl::Key key{meas.shape[0], meas.shape[1], win};  // one executor serves every touch of a sensor
+    if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(meas.shape[0], meas.shape[1], win), m.weights, m.resident);
+    if (!m.ctx && !m.graphs.count(key)) m.graphs.emplace(key, m.graph(meas.shape[0], meas.shape[1], win));
+    const TensorMap in{{"measured", meas}};
+    TensorMap out = m.ctx ? m.exec.at(key)->run(in) : run_cpu(m.graphs.at(key), m.weights, in);
+    return std::move(out.at("term").data);
+}
+
+uint64_t CodebookScorer::device_bytes() const {
+    uint64_t arenas = 0;
+    for (const auto& [k, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;
+    return 4 * uint64_t(impl_->S) * uint64_t(impl_->G * impl_->G + 2 * impl_->NS) + arenas;
+}
+
+}  // namespace vtloc::track

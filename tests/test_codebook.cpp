@@ -1,0 +1,245 @@
+// Render-and-compare (SPEC 9; engine/track/codebook): the codebook_render and
+// codebook_score ops against their CPU references at odd sizes with fixed seeds,
+// the maps of known shapes, a rendered touch scoring its own hypothesis near the
+// top, the cache (round trip, stale, foreign, corrupt) and bad input by name.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <filesystem>
+#include <fstream>
+#include <random>
+
+#include "base/error.h"
+#include "engine/io/mesh.h"
+#include "engine/ops/build.h"
+#include "engine/ops/codebook_math.h"
+#include "engine/safetensors.h"
+#include "engine/sim/mesh_builder.h"
+#include "engine/sim/touch_renderer.h"
+#include "engine/track/codebook.h"
+#include "tests/harness.h"
+#include "tests/io_test_util.h"
+
+using namespace vtloc;
+
+namespace {
+
+// Points on a bumpy sphere of radius ~20 mm with outward normals, and samples on it.
+HostTensor bumpy_points(int64_t n, uint32_t seed) {
+    std::mt19937 rng(seed);
+    std::normal_distribution<float> g;
+    HostTensor t({n, 6});
+    for (int64_t i = 0; i < n; ++i) {
+        float v[3] = {g(rng), g(rng), g(rng)};
+        const float l = std::sqrt(v[0] * v[0] + v[1] * v[1] + v[2] * v[2]);
+        const float r = 20.0f + 1.5f * std::sin(3 * v[0] / l) * std::cos(2 * v[1] / l);
+        for (int k = 0; k < 3; ++k) t.data[size_t(6 * i + k)] = r * v[k] / l, t.data[size_t(6 * i + 3 + k)] = v[k] / l;
+    }
+    return t;
+}
+
+HostTensor samples_of(const HostTensor& pts, int64_t S) {
+    HostTensor s({S, 9});
+    for (int64_t i = 0; i < S; ++i) {
+        const float* p = &pts.data[size_t(6 * ((i * 7919) % pts.shape[0]))];
+        const std::array<double, 3> t1 = track::tangent_of({-p[3], -p[4], -p[5]});
+        for (int k = 0; k < 6; ++k) s.data[size_t(9 * i + k)] = p[k];
+        for (int k = 0; k < 3; ++k) s.data[size_t(9 * i + 6 + k)] = float(t1[size_t(k)]);
+    }
+    return s;
+}
+
+struct RenderCase {
+    Graph g;
+    TensorMap in;
+};
+
+RenderCase render_case(int64_t S, int64_t D, int64_t G, double cell, double coarse, uint32_t seed) {
+    const HostTensor pts = bumpy_points(D, seed);
+    const track::BinnedPoints b = track::bin_points(pts.data, coarse);
+    ops::CodebookRender p;
+    p.G = G, p.cell = cell, p.splat = 0.8 * cell, p.cap = 6, p.facing = 0.3, p.coarse = b.coarse, p.max_bin = b.max_bin;
+    for (int k = 0; k < 3; ++k) p.origin[k] = b.origin[k], p.dims[k] = b.dims[k];
+    RenderCase c;
+    const int64_t NB = b.dims[0] * b.dims[1] * b.dims[2];
+    c.g.output(ops::codebook_render(c.g, c.g.input("samples", {S, 9}), c.g.input("points", {D, 6}),
+                                    c.g.input("bins", {NB, 2}, ElemType::I32), p),
+               "heights");
+    c.in = {{"samples", samples_of(pts, S)}, {"points", HostTensor({D, 6}, b.points)}, {"bins", HostTensor::from_ints({NB, 2}, b.bins)}};
+    return c;
+}
+
+// A 60 x 45 x 20 mm prism on an irregular hexagon (test_tracker.cpp's).
+io::TriangleMesh prism() { return sim::mesh::extrude({{0, 0}, {50, 0}, {60, 25}, {35, 45}, {10, 38}, {-5, 15}}, 0, 20); }
+
+track::Surface prism_surface(int64_t hypotheses) {
+    track::SurfaceOptions o;
+    o.target_hypotheses = hypotheses;
+    return track::build_surface(io::sample_surface(prism(), 40000, 7, "prism"), true, o, "prism");
+}
+
+}  // namespace
+
+TEST_CASE("codebook_render matches the CPU reference", "[op][codebook][codebook_render]") {
+    struct Case {
+        int64_t S, D, G;
+        double cell, coarse;
+    };
+    // One bin and many; maps of 1, 5 and 27 cells a side; coarse bins that cut the maps short.
+    for (const Case& k : {Case{1, 7, 1, 1.0, 100}, Case{13, 3001, 5, 0.7, 8}, Case{37, 20000, 27, 1.0, 21}, Case{5, 5000, 11, 2.0, 3}}) {
+        INFO(k.S << " samples, " << k.D << " points, G " << k.G);
+        RenderCase c = render_case(k.S, k.D, k.G, k.cell, k.coarse, uint32_t(k.S * 3 + k.G));
+        // Heights are minima of identical fp32 values: they agree exactly.
+        test::run_gpu_and_compare(c.g, WeightStore{}, c.in, {0, 0});
+    }
+}
+
+TEST_CASE("codebook_score matches the CPU reference", "[op][codebook][codebook_score]") {
+    struct Case {
+        int64_t S, G, NS, R, C;
+    };
+    for (const Case& k : {Case{1, 1, 1, 1, 1}, Case{3, 5, 7, 3, 4}, Case{17, 27, 36, 15, 20}, Case{9, 9, 5, 1, 13}}) {
+        INFO(k.S << " samples, G " << k.G << ", " << k.NS << " spins, window " << k.R << "x" << k.C);
+        Graph g;
+        g.output(ops::codebook_score(g, g.input("heights", {k.S, k.G * k.G}), g.input("spins", {k.NS, 2}), g.input("measured", {k.R, k.C}),
+                                     0.9, 1.1, 6.0, 2.5),
+                 "term");
+        HostTensor spins({k.NS, 2});
+        for (int64_t j = 0; j < k.NS; ++j)
+            spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * j / k.NS)), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * j / k.NS));
+        HostTensor meas = test::random_tensor({k.R, k.C}, uint32_t(k.S + k.R), -0.2f, 1.2f);
+        for (float& v : meas.data) v = std::max(0.0f, v);
+        TensorMap in{{"heights", test::random_tensor({k.S, k.G * k.G}, uint32_t(k.S * k.G), -1.0f, 3.0f)}, {"spins", spins}, {"measured", meas}};
+        test::run_gpu_and_compare(g, WeightStore{}, in);
+    }
+}
+
+TEST_CASE("codebook_score: a map scored against itself is best, and no press is no evidence", "[op][codebook]") {
+    const int G = 9, R = 3, C = 5;
+    ops::book::ScoreParams s{G, R, C, 1.0f, 1.0f, 6.0f, 1.0f};
+    std::vector<float> map(size_t(G * G));
+    for (int j = 0; j < G; ++j)
+        for (int i = 0; i < G; ++i) map[size_t(j * G + i)] = 0.1f * float((i - 4) * (i - 4)) + 0.05f * float(j);
+    // The measured map that hypothesis (map, spin 0) predicts at a 0.6 mm press.
+    std::vector<float> m(size_t(R * C));
+    float wmin = 6;
+    for (int r = 0; r < R; ++r)
+        for (int c = 0; c < C; ++c) wmin = std::min(wmin, map[size_t((r + 3) * G + c + 2)]);
+    for (int r = 0; r < R; ++r)
+        for (int c = 0; c < C; ++c) m[size_t(r * C + c)] = std::max(0.0f, wmin + 0.6f - map[size_t((r + 3) * G + c + 2)]);
+    CHECK(ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, m.data()) == 0.0f);
+    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, m.data()) < -0.01f);  // a quarter turn
+    std::vector<float> none(size_t(R * C), 0.0f);
+    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, none.data()) == 0.0f);
+    CHECK(ops::book::unordered(ops::book::ordered(-2.5f)) == -2.5f);
+    CHECK(ops::book::ordered(-1.0f) < ops::book::ordered(-0.5f));
+    CHECK(ops::book::ordered(-0.5f) < ops::book::ordered(0.25f));
+}
+
+TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[codebook]") {
+    // Points on the plane z = 0 (normal +z) over x in [-30, 5]: a sample at the origin
+    // looks down -z; cells beyond x = 5 see nothing (the cap).
+    std::vector<float> dense;
+    for (double x = -30; x <= 5.0001; x += 0.4)
+        for (double y = -30; y <= 30.0001; y += 0.4) dense.insert(dense.end(), {float(x), float(y), 0, 0, 0, 1});
+    track::Surface s;
+    s.dense = dense;
+    s.samples = {0, 0, 0, 0, 0, 1, 1, 0, 0};  // t1 = +x
+    s.spins = {1, 0};
+    s.spacing_mm = 0.4, s.from_mesh = true;
+    track::CodebookOptions o;
+    const track::Codebook b = track::render_codebook(nullptr, s, o);
+    REQUIRE(b.G == 27);
+    const int64_t c = (b.G - 1) / 2;
+    CHECK(b.heights[size_t(c * b.G + c)] == 0.0f);
+    CHECK(b.heights[size_t(c * b.G + c + 4)] == 0.0f);                    // x = 4
+    CHECK(b.heights[size_t(c * b.G + c + 7)] == float(o.cap_mm));         // x = 7: off the face
+    CHECK(b.heights[size_t(0)] == 0.0f);                                  // a corner, still on the face
+    // The same on the GPU.
+    const track::Codebook bg = track::render_codebook(&test::gpu(), s, o);
+    CHECK(bg.heights == b.heights);
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("a rendered touch scores its own pose near the top", "[codebook][slow]") {
+    const track::Surface s = prism_surface(20000);
+    const track::Codebook b = track::render_codebook(&test::gpu(), s, {});
+    track::CodebookScorer scorer(&test::gpu(), b, s, 1.0);
+    sim::TouchRenderer ren(sim::load_calibration(sim::default_calibration_path()), prism());
+    const int64_t S = s.n_samples(), NS = s.n_spin();
+    int tested = 0, near_top = 0;
+    // Touches at every 97th sample (vertical faces near edges and the top face alike), spin 3 steps.
+    for (int64_t i = 0; i < S && tested < 8; i += 97) {
+        const float* p = &s.samples[size_t(9 * i)];
+        sim::TouchParams tp;
+        tp.press_mm = 0.9;
+        tp.spin_deg = 3 * 360.0 / NS;
+        const sim::Touch t = ren.render({p[0], p[1], p[2]}, {p[3], p[4], p[5]}, tp, sim::Appearance{}, 1);
+        if (!t.ok) continue;
+        ++tested;
+        const std::vector<float> term = scorer.term(t.indentation_mm, ren.calibration().height, ren.calibration().width,
+                                                    ren.calibration().mm_per_px);
+        REQUIRE(term.size() == size_t(S * NS));
+        const float own = term[size_t(i * NS + 3)];
+        int64_t better = 0;
+        for (float v : term) better += v > own;
+        INFO("sample " << i << ": " << better << " of " << term.size() << " hypotheses score better");
+        near_top += better <= int64_t(term.size() / 50);  // the top 2 %
+    }
+    REQUIRE(tested >= 5);
+    CHECK(near_top >= tested - 1);
+    // The CPU reference gives the same term.
+    track::CodebookScorer cpu(nullptr, b, s, 1.0);
+    const float* p = &s.samples[0];
+    const sim::Touch t = ren.render({p[0], p[1], p[2]}, {p[3], p[4], p[5]}, sim::TouchParams{}, sim::Appearance{}, 1);
+    if (t.ok) {
+        const auto& cal = ren.calibration();
+        const std::vector<float> a = scorer.term(t.indentation_mm, cal.height, cal.width, cal.mm_per_px);
+        const std::vector<float> r = cpu.term(t.indentation_mm, cal.height, cal.width, cal.mm_per_px);
+        test::require_close(HostTensor({int64_t(a.size())}, a), HostTensor({int64_t(r.size())}, r), {}, "codebook term");
+    }
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("the codebook cache round-trips and refuses stale, foreign and corrupt files by name", "[codebook]") {
+    const track::Surface s = prism_surface(4000);
+    const std::string path = test::temp_path("prism.codebook");
+    std::filesystem::remove(path);
+    const track::Codebook a = track::cached_codebook(&test::gpu(), s, {}, path);
+    REQUIRE(std::filesystem::exists(path));
+    const track::Codebook b = track::cached_codebook(nullptr, s, {}, path);  // read, not rendered
+    CHECK(b.heights == a.heights);
+    // Another surface: stale.
+    const track::Surface other = prism_surface(8000);
+    test::require_error([&] { track::load_codebook(path, other); }, {path, "another surface", "delete it"});
+    // Other options: stale too.
+    track::CodebookOptions o;
+    o.cell_mm = 0.5;
+    test::require_error([&] { track::load_codebook(path, s, o); }, {path, "other options"});
+    // A weight file is not a codebook.
+    const std::string foreign = test::temp_path("foreign.codebook");
+    write_safetensors(foreign, {TensorBlob::f32("heights", {1, 1}, {0.0f})}, {{"format", "vtloc-weights/1"}});
+    test::require_error([&] { track::load_codebook(foreign, s); }, {foreign, "not a vtloc-codebook/1"});
+    // Truncated.
+    std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
+    test::require_error([&] { track::load_codebook(path, s); }, {path});
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("render-and-compare refuses sparse clouds and bad maps by name", "[codebook]") {
+    // A 1024-point cloud of a 60 mm prism: far below a point per mm^2.
+    track::Surface s = track::build_surface(io::sample_surface(prism(), 1024, 7, "prism"), false, {}, "sparse.ply");
+    test::require_error([&] { track::render_codebook(nullptr, s, {}); }, {"dense cloud", "per mm^2", "1024 points"});
+    // 40,000 points over its ~10,600 mm^2 (about 4 per mm^2) are enough.
+    track::SurfaceOptions few;
+    few.target_hypotheses = 2000;
+    const track::Surface dense = track::build_surface(io::sample_surface(prism(), 40000, 7, "prism"), false, few, "dense.ply");
+    CHECK(track::render_codebook(nullptr, dense, {}).n_samples() == dense.n_samples());
+    double win = 0;
+    test::require_error([&] { track::window_map({1, 2, 3}, 2, 2, 0.1, 1, &win); }, {"3 values for 2 x 2"});
+    test::require_error([&] { track::window_map({1, NAN, 3, 4}, 2, 2, 0.1, 1, &win); }, {"NaN"});
+    const HostTensor m = track::window_map(std::vector<float>(120 * 160, 0.5f), 120, 160, 0.1245, 1.0, &win);
+    CHECK(m.shape == Shape{15, 20});
+    CHECK(win == Approx(0.996));
+    CHECK(m.data[7] == 0.5f);
+}
