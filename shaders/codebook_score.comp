@@ -3,6 +3,7 @@
 // the measured depth, against the measured indentation (engine/ops/codebook.cpp says
 // what; engine/ops/codebook_math.h is the CPU mirror, operation for operation).
 layout(local_size_x_id = 0) in;
+layout(constant_id = 1) const int RC_MAX = 1;  // R * C: the window's depths are seen once and kept
 
 layout(std430, binding = 0) readonly buffer Book_ { float book[]; };   // [S, G*G]
 layout(std430, binding = 1) readonly buffer Spins_ { float spins[]; }; // [NS, 2]
@@ -35,23 +36,22 @@ void main() {
         if (!(depth > 1e-6)) { outv[h] = 0.0; continue; }
         const uint base = (h / uint(p.NS)) * uint(p.G) * uint(p.G), j = h % uint(p.NS);
         const float cs = spins[2u * j], sn = spins[2u * j + 1u];
+        float seen[RC_MAX];
         float wmin = p.cap;
         for (int r = 0; r < p.R; ++r)
             for (int c = 0; c < p.C; ++c) {
                 precise float u = (float(c) - hc) * p.win, v = (float(r) - hr) * p.win;
                 precise float a = u * cs - v * sn, b = u * sn + v * cs;
                 precise float fa = a * p.inv_cell + half_, fb = b * p.inv_cell + half_;
-                wmin = min(wmin, book_at(base, fa, fb));
+                const float w = book_at(base, fa, fb);
+                seen[r * p.C + c] = w;
+                wmin = min(wmin, w);
             }
         precise float err = 0.0;
-        for (int r = 0; r < p.R; ++r)
-            for (int c = 0; c < p.C; ++c) {
-                precise float u = (float(c) - hc) * p.win, v = (float(r) - hr) * p.win;
-                precise float a = u * cs - v * sn, b = u * sn + v * cs;
-                precise float fa = a * p.inv_cell + half_, fb = b * p.inv_cell + half_;
-                precise float e = m[r * p.C + c] - max(0.0, wmin + depth - book_at(base, fa, fb));
-                err += e * e;
-            }
+        for (int k = 0; k < RC; ++k) {
+            precise float e = m[k] - max(0.0, wmin + depth - seen[k]);
+            err += e * e;
+        }
         outv[h] = -p.weight * err / (float(RC) * depth * depth);
     }
 }

@@ -5,7 +5,11 @@ ending at the seen objects' train touches; --objects all on a dataset of trainin
 and the belief's calibration; the best by mean ND up to symmetry is the default in
 engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 
-    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--out fit.json]
+With --render, the knob is render-and-compare's inverse temperature (render_weight, SPEC 9):
+the "MidasTouch-style" row alone (--rows render --render-compare), each frame's gel shape
+read from the frame as a robot would.
+
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--render] [--out fit.json]
 """
 import argparse
 import itertools
@@ -21,12 +25,16 @@ GRID = {
 }
 
 
-def run(vtloc, data, objects, knobs):
+GRID_RENDER = {"render_weight": [1, 3, 10, 30]}
+
+
+def run(vtloc, data, objects, knobs, render=False):
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "fit.json")
         arg = ",".join(f"{k}={v}" for k, v in knobs.items())
+        extra = ["--render-compare", "--rows", "render"] if render else []
         subprocess.run([vtloc, "eval", "--data", data, "--objects", objects, "--sequence", "4,8", "--geometry-only",
-                        "--end-split", "train", "--filter", arg, "--json", out], check=True, stdout=subprocess.DEVNULL)
+                        "--end-split", "train", "--filter", arg, "--json", out] + extra, check=True, stdout=subprocess.DEVNULL)
         with open(out) as f:
             rows = [r for r in json.load(f)["rows"] if r["subset"] == "all" and not r["odometry_noise"]]
     return {f"T{r['T']}": {k: r[k] for k in ("nd", "nd_symmetry", "within_5mm", "mass_within_5mm")} for r in rows}
@@ -37,12 +45,14 @@ def main():
     ap.add_argument("--vtloc", default="build/vtloc")
     ap.add_argument("--data", required=True)
     ap.add_argument("--objects", default="known", help="known (the seen objects) or all")
+    ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--out")
     a = ap.parse_args()
+    grid = GRID_RENDER if a.render else GRID
     results = []
-    for values in itertools.product(*GRID.values()):
-        knobs = dict(zip(GRID, values))
-        r = run(a.vtloc, a.data, a.objects, knobs)
+    for values in itertools.product(*grid.values()):
+        knobs = dict(zip(grid, values))
+        r = run(a.vtloc, a.data, a.objects, knobs, a.render)
         score = sum(v["nd_symmetry"] for v in r.values()) / len(r)
         results.append({"knobs": knobs, "score": score, "rows": r})
         print(json.dumps(knobs), f"mean ND up to symmetry {score:.2f}",
@@ -51,7 +61,7 @@ def main():
     print("best", json.dumps(best["knobs"]), f"{best['score']:.2f}")
     if a.out:
         with open(a.out, "w") as f:
-            json.dump({"grid": GRID, "results": results, "best": best}, f, indent=1)
+            json.dump({"grid": grid, "results": results, "best": best}, f, indent=1)
 
 
 if __name__ == "__main__":

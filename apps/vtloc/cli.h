@@ -97,6 +97,7 @@ std::string point_str(const std::array<double, 3>& p, int digits = 2);
 
 int cmd_demo(Session& s, int argc, char** argv);
 int cmd_localize(Session& s, int argc, char** argv);
+int localize_codebook(Session& s, int argc, char** argv);  // vtloc localize --method codebook
 int cmd_sequence(Session& s, int argc, char** argv);
 int cmd_shape(Session& s, int argc, char** argv);
 int cmd_info(Session& s, int argc, char** argv);

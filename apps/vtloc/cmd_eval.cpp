@@ -39,9 +39,16 @@ const char* kHelp =
     "                            both protocols (surface, candidates), rows for geometry alone and\n"
     "                            geometry + the model's heat-map (e.g. 1,2,3,4,6,8; needs mesh.ply)\n"
     "  --geometry-only           with --sequence: no network rows (no model needed)\n"
+    "  --render-compare          with --sequence: rows for geometry + render-and-compare (SPEC 9): each\n"
+    "                            frame's gel shape (against the object's background.png) scored against\n"
+    "                            what every hypothesis would press (\"MidasTouch-style\"), and, where the\n"
+    "                            dataset has vtloc synth --indentation maps, the same on those (oracle)\n"
+    "  --rows R,...              with --sequence: only these rows of geometry, network, network-test,\n"
+    "                            render, oracle (default: every row the other options ask for)\n"
     "  --odometry-noise MM,DEG   with --sequence: also rows with seeded Gaussian noise on every motion\n"
     "  --filter K=V,...          with --sequence: the filter's knobs (press, sigma_d, sigma_a, allowance,\n"
-    "                            network_weight, hypotheses, n_spin); fit them with --end-split train\n"
+    "                            network_weight, render_weight, hypotheses, n_spin); fit them with\n"
+    "                            --end-split train\n"
     "  --end-split test|train    with --sequence: windows end at test touches (default) or train ones\n"
     "  --plot FILE.png           with --sequence: ND (solid) and ND up to symmetry (dashed) against T, all\n"
     "                            objects, a colour per method and noise\n"
@@ -264,7 +271,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
                                   {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
                                   {"--markdown"},  {"--plot"},      {"--per-touch"}, {"--render"},    {"--render-count"},
                                   {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
-                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}, {"--replot"}};
+                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}, {"--replot"}, {"--render-compare", false}, {"--rows"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -280,7 +287,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
         return 0;
     }
     if (a.get("--sequence")) return eval::run_sequence(s, a);
-    for (const char* o : {"--geometry-only", "--odometry-noise", "--filter", "--end-split", "--plot"})
+    for (const char* o : {"--geometry-only", "--odometry-noise", "--filter", "--end-split", "--plot", "--render-compare", "--rows"})
         if (a.get(o)) throw UsageError(std::string(o) + " is for --sequence");
     eval::Options opt = parse(a);
     if (opt.model.empty()) opt.model = default_model_path();

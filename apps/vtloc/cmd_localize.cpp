@@ -14,6 +14,8 @@ const char* kHelp =
     "Localises one touch: where on the object the tactile image was taken, with a\n"
     "heat-map over the object's points.\n"
     "\n"
+    "  --method network|codebook the model (default), or render-and-compare alone (SPEC 9; see\n"
+    "                            vtloc localize --method codebook --help)\n"
     "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
     "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
     "%s"
@@ -118,7 +120,14 @@ void print_text(const Session& s, const Run& run, const nlohmann::json& outputs,
 }  // namespace
 
 int cmd_localize(Session& s, int argc, char** argv) {
-    std::vector<OptionSpec> specs{{"--model"},     {"--tactile"}, {"--candidates"},
+    // --method codebook has options of its own (localize_codebook.cpp).
+    for (int i = 2; i + 1 < argc; ++i)
+        if (std::string(argv[i]) == "--method") {
+            const std::string m = argv[i + 1];
+            if (m == "codebook") return localize_codebook(s, argc, argv);
+            if (m != "network") throw UsageError("--method must be network (the model, default) or codebook (render-and-compare)");
+        }
+    std::vector<OptionSpec> specs{{"--method"}, {"--model"},     {"--tactile"}, {"--candidates"},
                                   {"--json", false}, {"--heatmap"}, {"--render"}, {"--dump"},
                                   {"--profile", false}};
     for (OptionSpec& o : touch_option_specs()) specs.push_back(o);

@@ -11,6 +11,7 @@
 #include <fstream>
 #include <map>
 #include <random>
+#include <set>
 #include <sstream>
 
 #include "apps/vtloc/eval.h"
@@ -76,6 +77,9 @@ struct RowKey {
     int T;
     bool operator<(const RowKey& o) const { return std::tie(method, noise, T) < std::tie(o.method, o.noise, o.T); }
 };
+
+constexpr const char* kRender = "Geometry + render-and-compare (MidasTouch-style)";
+constexpr const char* kOracle = "Geometry + render-and-compare (oracle maps)";
 
 std::vector<int> parse_ts(const std::string& v) {
     std::vector<int> out;
@@ -158,9 +162,10 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "sigma_a") to.sigma_a_deg = v;
             else if (k == "allowance") to.grid_allowance = v;
             else if (k == "network_weight") to.network_weight = v;
+            else if (k == "render_weight") to.render_weight = v;
             else if (k == "hypotheses") to.hypotheses = int64_t(v);
             else if (k == "n_spin") to.n_spin = int(v);
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, hypotheses, n_spin)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, render_weight, hypotheses, n_spin)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");
@@ -171,6 +176,19 @@ int run_sequence(Session& s, const Args& a) {
         model_path = a.get("--model").value_or(default_model_path());
         model.emplace(load_model(s, model_path, api::Backend::Gpu));
     }
+    const bool render_compare = a.flag("--render-compare");
+    // --rows: only these rows (fitting a knob needs only the rows it moves).
+    std::set<std::string> rows_wanted{"geometry", "network", "network-test", "render", "oracle"};
+    if (auto r = a.get("--rows")) {
+        rows_wanted.clear();
+        std::stringstream ss(*r);
+        std::string item;
+        while (std::getline(ss, item, ','))
+            if (item == "geometry" || item == "network" || item == "network-test" || item == "render" || item == "oracle") rows_wanted.insert(item);
+            else throw UsageError("--rows takes geometry, network, network-test, render, oracle; got '" + item + "'");
+    }
+    std::optional<api::GelShapeReader> reader;
+    if (render_compare) reader.emplace(s.gpu());
     std::map<RowKey, std::map<std::string, Score>> per_object;  // row -> object -> sum
     std::map<std::string, std::string> subset_of;
     int windows = 0;
@@ -208,6 +226,13 @@ int run_sequence(Session& s, const Args& a) {
                 throw api::Error(o.folder + "/touches.csv: the collection order skips " + std::to_string(i));
         std::optional<api::Object> encoded;
         std::map<size_t, api::TouchResult> results;
+        // Render-and-compare: each touch's gel shape read from its frame, and the renderer's own
+        // indentation map (the oracle) where the dataset has them.
+        std::map<size_t, api::GelShape> measured, oracle;
+        std::optional<api::TactileImage> empty_frame;
+        const bool has_oracle = render_compare && !tour.empty() &&
+                                fs::exists(fs::path(image_path(o, *tour[0])).replace_extension(".depth.png"));
+        if (render_compare) empty_frame = api::load_tactile_image((fs::path(o.folder) / "background.png").string());
         if (model) {
             api::PointCloud cloud;
             for (int64_t i = 0; i < o.points.shape[0]; ++i)
@@ -234,10 +259,25 @@ int run_sequence(Session& s, const Args& a) {
                     std::vector<api::Motion> motions(all.end() - (T - 1), all.end());
                     // The third row drops the network term of the window's train frames, which a
                     // trained model has seen (SPEC 6): only test frames speak for themselves.
-                    for (const char* method : {"Geometry", "Geometry + network", "Geometry + network (test frames)"}) {
-                        const bool net = std::string(method) != "Geometry";
+                    for (const char* method : {"Geometry", "Geometry + network", "Geometry + network (test frames)", kRender, kOracle}) {
+                        const bool rc = std::string(method) == kRender, orc = std::string(method) == kOracle;
+                        const bool net = std::string(method) != "Geometry" && !rc && !orc;
                         const bool test_only = std::string(method) == "Geometry + network (test frames)";
                         if (net && !model) continue;
+                        if ((rc && !render_compare) || (orc && !has_oracle)) continue;
+                        const std::string row_name = rc ? "render" : orc ? "oracle" : test_only ? "network-test" : net ? "network" : "geometry";
+                        if (!rows_wanted.count(row_name)) continue;
+                        std::vector<const api::GelShape*> shapes;
+                        if (rc || orc)
+                            for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
+                                auto& cache = rc ? measured : oracle;
+                                if (!cache.count(i)) {
+                                    const std::string img = image_path(o, *tour[i]);
+                                    cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
+                                                  : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(), d.sensor.mm_per_px);
+                                }
+                                shapes.push_back(&cache[i]);
+                            }
                         std::vector<const api::TouchResult*> res;
                         if (net)
                             for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
@@ -249,7 +289,7 @@ int run_sequence(Session& s, const Args& a) {
                                     results[i] = model->localize(*encoded, api::load_tactile_image(image_path(o, *tour[i])));
                                 res.push_back(&results[i]);
                             }
-                        const api::TrackerEstimate e = tracker.evaluate_window(motions, res, net ? &*encoded : nullptr);
+                        const api::TrackerEstimate e = tracker.evaluate_window(motions, res, net ? &*encoded : nullptr, shapes);
                         Score sc;
                         sc.n = 1;
                         sc.mm = dist(e.contact, truth.contact);
@@ -282,7 +322,7 @@ int run_sequence(Session& s, const Args& a) {
                         sc.mass5 = e.mass_within_5mm;
                         // Candidates protocol: the belief over the candidates' poses alone; the answer is the
                         // candidate of least expected distance under it.
-                        const api::TrackerEstimate ec = cand_tracker.evaluate_window(motions, res, net ? &*encoded : nullptr);
+                        const api::TrackerEstimate ec = cand_tracker.evaluate_window(motions, res, net ? &*encoded : nullptr, shapes);
                         double best = INFINITY;
                         P3 pick{};
                         for (size_t c = 0; c < cand_points.size(); ++c) {

@@ -10,6 +10,7 @@
 #include "base/atomic_write.h"
 
 #include "engine/api/api_internal.h"
+#include "engine/io/image.h"
 #include "engine/sensor/gel_shape_gpu.h"
 
 namespace vtloc::api {
@@ -142,6 +143,23 @@ std::vector<std::string> write_gel_shape(const std::string& dir, const GelShape&
                     sheet);
         write_png(pic, sheet);
         return std::vector<std::string>{height, ply, pic};
+    });
+}
+
+}  // namespace vtloc::api
+
+namespace vtloc::api {
+
+GelShape load_indentation(const std::string& path, double mm_per_px) {
+    return guarded([&] {
+        if (!(mm_per_px > 0) || !std::isfinite(mm_per_px)) throw Error(path + ": mm_per_px must be a positive number");
+        const io::DepthImage d = io::load_depth_image(path);
+        GelShape s;
+        s.height = d.height, s.width = d.width, s.mm_per_px = mm_per_px;
+        s.depth_mm.resize(d.depth.size());
+        s.mask.resize(d.depth.size());
+        for (size_t i = 0; i < d.depth.size(); ++i) s.depth_mm[i] = float(d.depth[i]) * 1e-3f, s.mask[i] = d.depth[i] > 0;
+        return s;
     });
 }
 

@@ -9,6 +9,7 @@
 #include "engine/io/mesh.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/render.h"
+#include "engine/track/codebook.h"
 #include "engine/track/tracker.h"
 
 namespace vtloc::api {
@@ -53,14 +54,40 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
 }  // namespace
 
 struct Tracker::Impl {
+    rt::Context* ctx;
     track::Tracker tracker;
     PointCloud display;
     HostTensor display_tensor;
-    double network_weight, object_units;
-    Impl(rt::Context& ctx, track::Surface s, const TrackerOptions& o, PointCloud disp)
-        : tracker(ctx, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
-          object_units(o.object_units) {
+    double network_weight, object_units, render_weight;
+    std::string codebook_cache;
+    std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
+    Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
+        : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
+          object_units(o.object_units), render_weight(o.render_weight), codebook_cache(o.codebook_cache) {
+        if (!(render_weight >= 0) || !std::isfinite(render_weight)) throw Error("tracker: render_weight must be >= 0");
         display_tensor = HostTensor({int64_t(display.size()), 3}, display.xyz);
+    }
+
+    // Render-and-compare's term for one touch's gel shape (SPEC 9), or none.
+    std::vector<float> shape_field(const GelShape* g, size_t touch) {
+        if (!g) return {};
+        if (g->height < 1 || g->width < 1 || g->depth_mm.size() != size_t(g->height) * size_t(g->width))
+            throw Error("touch " + std::to_string(touch) + ": its gel shape has " + std::to_string(g->depth_mm.size()) + " heights for " +
+                        std::to_string(g->height) + " x " + std::to_string(g->width) + " pixels");
+        if (!scorer) {
+            const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, codebook_cache);
+            scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), render_weight);
+        }
+        // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
+        return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px);
+    }
+
+    // Every term a touch has, summed (log fields multiply).
+    std::vector<float> touch_field(const TouchResult* r, const Object* object, const GelShape* g, size_t touch) {
+        std::vector<float> f = network_field(r, object, touch), h = shape_field(g, touch);
+        if (f.empty()) return h;
+        for (size_t i = 0; i < h.size(); ++i) f[i] += h[i];
+        return f;
     }
 
     // The network's heat-map over `object`'s cloud as a log field over the
@@ -165,9 +192,9 @@ Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 
-void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* network, const Object* object) {
+void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* network, const Object* object, const GelShape* shape) {
     guarded([&] {
-        std::vector<float> f = impl_->network_field(network, object, size_t(impl_->tracker.touches() + 1));
+        std::vector<float> f = impl_->touch_field(network, object, shape, size_t(impl_->tracker.touches() + 1));
         impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, f);
     });
 }
@@ -179,21 +206,30 @@ TrackerEstimate Tracker::estimate() const {
 }
 
 TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, const std::vector<const TouchResult*>& network,
-                                         const Object* object) {
+                                         const Object* object, const std::vector<const GelShape*>& shapes) {
     return guarded([&] {
         std::vector<track::Rigid> m;
         for (const Motion& x : motions) m.push_back(to_rigid(x));
+        const size_t W = motions.size() + 1;
+        if (!network.empty() && network.size() != W)
+            throw Error("window: " + std::to_string(network.size()) + " network results for " + std::to_string(W) + " touches");
+        if (!shapes.empty() && shapes.size() != W)
+            throw Error("window: " + std::to_string(shapes.size()) + " gel shapes for " + std::to_string(W) + " touches");
         std::vector<std::vector<float>> terms;
         bool any = false;
-        for (size_t i = 0; i < network.size(); ++i) {
-            terms.push_back(impl_->network_field(network[i], object, i + 1));
-            any = any || network[i];
+        for (size_t i = 0; i < W; ++i) {
+            const TouchResult* r = network.empty() ? nullptr : network[i];
+            const GelShape* g = shapes.empty() ? nullptr : shapes[i];
+            terms.push_back(impl_->touch_field(r, object, g, i + 1));
+            any = any || r || g;
         }
         if (!any) terms.clear();
-        else if (terms.size() != motions.size() + 1)
-            throw Error("window: " + std::to_string(terms.size()) + " network results for " + std::to_string(motions.size() + 1) + " touches");
         return impl_->convert(impl_->tracker.evaluate_window(m, terms), int(motions.size() + 1));
     });
+}
+
+std::vector<float> Tracker::shape_term(const GelShape& shape) {
+    return guarded([&] { return impl_->shape_field(&shape, 1); });
 }
 
 std::vector<float> Tracker::belief() const { return impl_->tracker.belief(); }

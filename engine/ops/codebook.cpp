@@ -137,6 +137,7 @@ std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Par
     if (G < 1 || G * G != b[1]) throw Error("codebook_score: a height map must be square (G*G values), got " + std::to_string(b[1]));
     if (sp.size() != 2 || sp[1] != 2 || sp[0] < 1) throw Error("codebook_score: spins must be [NS > 0, 2], got " + shape_str(sp));
     if (m.size() != 2 || m[0] < 1 || m[1] < 1) throw Error("codebook_score: the measured map must be [R, C], got " + shape_str(m));
+    if (m[0] * m[1] > 4096) throw Error("codebook_score: a window of at most 4096 cells, got " + shape_str(m));
     score_params(p, G, m[0], m[1]);
     to_u32(b[0] * b[1], "codebook size");
     to_u32(b[0] * sp[0], "hypothesis count");
@@ -163,7 +164,8 @@ void score_gpu(const GpuOpArgs& a) {
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.H), local, d);
     const uint64_t strides = (uint64_t(push.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
     check_loop_budget(d, strides * (3 * uint64_t(s.R) * uint64_t(s.C) + 2 * uint64_t(s.R) + 2), "codebook_score");
-    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 4, sizeof(push), {local}),
+    // Each invocation keeps the window's R * C depths (private memory): one bilinear read per cell, not two.
+    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 4, sizeof(push), {local, uint32_t(s.R * s.C)}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);

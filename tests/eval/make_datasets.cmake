@@ -5,7 +5,7 @@
 #   cmake -DVTLOC=<exe> -DOUT=<dir> -P make_datasets.cmake
 # (and the renders of earlier runs, which eval.run.outputs counts)
 file(REMOVE_RECURSE "${OUT}/ds" "${OUT}/ds_missing" "${OUT}/render")
-execute_process(COMMAND "${VTLOC}" synth --out "${OUT}/ds" --shape sphere --shape comb_fine --contacts 20 --seed 3
+execute_process(COMMAND "${VTLOC}" synth --out "${OUT}/ds" --shape sphere --shape comb_fine --contacts 20 --seed 3 --indentation
                         --n-points 128 --view
                 RESULT_VARIABLE rc OUTPUT_VARIABLE out ERROR_VARIABLE err)
 if(NOT rc EQUAL 0 OR NOT EXISTS "${OUT}/ds/dataset.json")

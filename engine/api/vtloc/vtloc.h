@@ -356,6 +356,13 @@ struct TrackerOptions {
     int n_spin = 36;             // spin hypotheses (10 degrees apart)
     int64_t hypotheses = 120000; // surface samples x spins, about
     double network_weight = 0.5; // temperature of the network's heat-map term (add_touch with a TouchResult)
+    // Render-and-compare (SPEC 9): the inverse temperature of a touch's measured gel shape
+    // against what each hypothesis would press (add_touch with a GelShape; fitted on train windows).
+    double render_weight = 4;
+    // Where the object's codebook (the height maps render-and-compare needs) is cached: read
+    // when present and made for this object and these options (else an error naming it),
+    // written after the first render. Empty: rendered in memory at the first GelShape.
+    std::string codebook_cache;
     double mode_radius_mm = 5;   // the modes' non-maximum suppression
     double grid_allowance = 0.25; // the grid's widths grow by this share of its spacing and spin step (fitted)
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
@@ -386,6 +393,8 @@ struct TrackerEstimate {
 // cloud is used as it is (normals required; coarser: a pose is checked against
 // the nearest cloud point's tangent plane). add_touch costs the same however
 // many touches came before.
+struct GelShape;  // below: the gel's shape from a frame
+
 class Tracker {
 public:
     Tracker(Context& context, const std::string& object_path, const TrackerOptions& options = {});
@@ -396,14 +405,18 @@ public:
 
     // The first touch takes no motion, every later one the motion from the
     // previous touch. network: that touch's TouchResult (its heat-map over
-    // `object`'s cloud becomes a touch term); null = geometry only.
+    // `object`'s cloud becomes a touch term); shape: its gel's shape (GelShapeReader
+    // or load_indentation), scored by render-and-compare; null = geometry only.
     void add_touch(const std::optional<Motion>& motion, const TouchResult* network = nullptr,
-                   const Object* object = nullptr);
+                   const Object* object = nullptr, const GelShape* shape = nullptr);
     int touches() const;
     TrackerEstimate estimate() const;
-    // The windowed form: motions between W touches (W - 1), optional results per touch.
+    // The windowed form: motions between W touches (W - 1), optional results and shapes per touch.
     TrackerEstimate evaluate_window(const std::vector<Motion>& motions,
-                                    const std::vector<const TouchResult*>& network = {}, const Object* object = nullptr);
+                                    const std::vector<const TouchResult*>& network = {}, const Object* object = nullptr,
+                                    const std::vector<const GelShape*>& shapes = {});
+    // Render-and-compare's log term of one gel shape over the hypotheses (belief() order).
+    std::vector<float> shape_term(const GelShape& shape);
     std::vector<float> belief() const;        // over hypotheses, sums to 1
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
@@ -460,6 +473,11 @@ private:
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
+
+// A gel indentation as a 16-bit PNG in micrometres (vtloc synth --indentation's
+// touches/<id>.depth.png, vtloc shape's height.png) at mm_per_px: the contact is
+// where it is above zero. Throws naming the file for another pixel type.
+GelShape load_indentation(const std::string& path, double mm_per_px);
 
 // Writes DIR/height.png (16-bit grey, micrometres, like vtloc synth --indentation), DIR/shape.ply
 // (the contact's points: x, y in mm from the frame's top-left, z the indentation) and
