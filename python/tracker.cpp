@@ -44,6 +44,20 @@ api::TrackerOptions options(double press_mm, double sigma_d_mm, double sigma_a_d
     return o;
 }
 
+// A gel shape as GelShapeReader.read returns it: a dict with depth_mm (H x W, mm) and mm_per_px.
+api::GelShape to_shape(const py::object& o) {
+    if (!py::isinstance<py::dict>(o)) throw api::Error("shape: expected GelShapeReader.read's dict (depth_mm, mm_per_px)");
+    const py::dict d = o.cast<py::dict>();
+    if (!d.contains("depth_mm") || !d.contains("mm_per_px")) throw api::Error("shape: the dict needs depth_mm and mm_per_px");
+    const auto a = d["depth_mm"].cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
+    if (a.ndim() != 2) throw api::Error("shape: depth_mm must be an H x W array");
+    api::GelShape s;
+    s.height = int(a.shape(0)), s.width = int(a.shape(1));
+    s.mm_per_px = d["mm_per_px"].cast<double>();
+    s.depth_mm.assign(a.data(), a.data() + a.size());
+    return s;
+}
+
 py::dict estimate_dict(const api::TrackerEstimate& e) {
     py::dict d;
     d["touches"] = e.touches;
@@ -67,7 +81,8 @@ const char* kTrackerDoc =
     "Tracker(context, object) with object a mesh or cloud path, or an N x 6 array (points and\n"
     "normals, object units). add_touch(motion=None, result=None, object=None): the first touch\n"
     "takes no motion, each later one the 4 x 4 motion from the previous touch (pose b in pose a's\n"
-    "frame); result: that touch's TouchResult on `object` (a network term). estimate() -> dict.\n"
+    "frame); result: that touch's TouchResult on `object` (a network term); shape: its gel's shape\n"
+    "(GelShapeReader.read's dict: render-and-compare, SPEC 9). estimate() -> dict.\n"
     "candidates: a C x 3 array: hypotheses only at these points (the paper's candidates protocol).";
 
 }  // namespace
@@ -76,9 +91,11 @@ void bind_tracker(py::module_& m) {
     py::class_<api::Tracker>(m, "Tracker", kTrackerDoc)
         .def(py::init([](api::Context& ctx, const py::object& object, double press_mm, double sigma_d_mm, double sigma_a_deg,
                          double odometry_mm, double odometry_deg, int window, int n_spin, int64_t hypotheses,
-                         double network_weight, double object_units, const py::object& candidates) {
+                         double network_weight, double object_units, const py::object& candidates, double render_weight,
+                         const std::string& codebook_cache) {
                  api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
                                                  n_spin, hypotheses, network_weight, object_units);
+                 o.render_weight = render_weight, o.codebook_cache = codebook_cache;
                  if (!candidates.is_none()) {  // C x 3, the candidates protocol
                      const auto c = candidates.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
                      if (c.ndim() != 2 || c.shape(1) != 3)
@@ -94,16 +111,32 @@ void bind_tracker(py::module_& m) {
              py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 1.0,
              py::arg("sigma_a_deg") = 6.0, py::arg("odometry_mm") = 0.0, py::arg("odometry_deg") = 0.0, py::arg("window") = 8,
              py::arg("n_spin") = 36, py::arg("hypotheses") = 120000, py::arg("network_weight") = 0.5,
-             py::arg("object_units") = 1.0, py::arg("candidates") = py::none(), py::keep_alive<1, 2>())
+             py::arg("object_units") = 1.0, py::arg("candidates") = py::none(), py::arg("render_weight") = api::TrackerOptions{}.render_weight,
+             py::arg("codebook_cache") = "", py::keep_alive<1, 2>())
         .def(
             "add_touch",
-            [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object) {
+            [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object,
+               const py::object& shape) {
                 std::optional<api::Motion> mo;
                 if (!motion.is_none()) mo = to_motion(motion, "motion");
+                std::optional<api::GelShape> g;
+                if (!shape.is_none()) g = to_shape(shape);
                 py::gil_scoped_release release;
-                t.add_touch(mo, result, object);
+                t.add_touch(mo, result, object, g ? &*g : nullptr);
             },
-            py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr)
+            py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr, py::arg("shape") = py::none())
+        .def(
+            "shape_term",
+            [](api::Tracker& t, const py::object& shape) {
+                const api::GelShape g = to_shape(shape);
+                std::vector<float> v;
+                {
+                    py::gil_scoped_release release;
+                    v = t.shape_term(g);
+                }
+                return floats(v);
+            },
+            py::arg("shape"), "Render-and-compare's log term of one gel shape over the hypotheses (belief order).")
         .def("estimate", [](const api::Tracker& t) { return estimate_dict(t.estimate()); })
         .def(
             "evaluate_window",

@@ -81,9 +81,12 @@ class Tracker:
                  sigma_d_mm: float = 1.0, sigma_a_deg: float = 6.0, odometry_mm: float = 0.0,
                  odometry_deg: float = 0.0, window: int = 8, n_spin: int = 36, hypotheses: int = 120000,
                  network_weight: float = 0.5, object_units: float = 1.0,
-                 candidates: Optional[npt.NDArray[np.floating]] = None) -> None: ...  # C x 3: hypotheses only there
+                 candidates: Optional[npt.NDArray[np.floating]] = None,  # C x 3: hypotheses only there
+                 render_weight: float = 4.0, codebook_cache: str = "") -> None: ...
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
-                  object: Optional[Object] = None) -> None: ...
+                  object: Optional[Object] = None,
+                  shape: Optional[Dict[str, Any]] = None) -> None: ...  # GelShapeReader.read's dict
+    def shape_term(self, shape: Dict[str, Any]) -> npt.NDArray[np.float32]: ...  # render-and-compare, belief order
     def estimate(self) -> Dict[str, Any]: ...   # contact, pose (4x4), pose_contact, window_poses, modes, ...
     def evaluate_window(self, motions: List[npt.NDArray[np.floating]]) -> Dict[str, Any]: ...
     @property

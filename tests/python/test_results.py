@@ -188,3 +188,24 @@ def test_gel_shape_reader(ctx, root):
     assert none["mask"].sum() == 0
     with pytest.raises(vtloc.Error, match="another aspect"):
         reader.read(np.zeros((100, 100, 3), np.uint8))
+
+
+def test_tracker_render_and_compare(ctx, root, tmp_path):
+    # A 0.8 mm cap pressed into the gel (as GelShapeReader.read gives it), scored against every pose on the potato.
+    obj = os.path.join(root, "examples", "potato_tour.ply")
+    cache = str(tmp_path / "potato.codebook")
+    t = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
+    r, c = np.mgrid[0:120, 0:160] * 0.1245
+    cap = np.maximum(0.0, 0.8 - ((r - 7.5) ** 2 + (c - 10.0) ** 2) / 40.0).astype(np.float32)
+    shape = {"depth_mm": cap, "mm_per_px": 0.1245}
+    term = t.shape_term(shape)
+    assert term.shape == (len(t.sample_points) * t.n_spin,) and np.all(term <= 0) and term.min() < term.max()
+    assert os.path.exists(cache)
+    t.add_touch(shape=shape)
+    e = t.estimate()
+    assert e["touches"] == 1 and abs(float(t.belief.sum()) - 1) < 1e-3
+    # A second tracker reads the cache and scores the same.
+    t2 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
+    assert np.array_equal(t2.shape_term(shape), term)
+    with pytest.raises(vtloc.Error, match="depth_mm and mm_per_px"):
+        t.add_touch(np.eye(4), shape={"depth_mm": shape["depth_mm"]})
