@@ -25,7 +25,7 @@ GRID = {
 }
 
 
-GRID_RENDER = {"render_weight": [1, 3, 10, 30]}
+GRID_RENDER = {"render_weight": [0.25, 1, 4]}
 
 
 def run(vtloc, data, objects, knobs, render=False):

@@ -358,7 +358,7 @@ struct TrackerOptions {
     double network_weight = 0.5; // temperature of the network's heat-map term (add_touch with a TouchResult)
     // Render-and-compare (SPEC 9): the inverse temperature of a touch's measured gel shape
     // against what each hypothesis would press (add_touch with a GelShape; fitted on train windows).
-    double render_weight = 4;
+    double render_weight = 0.25;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
