@@ -150,8 +150,11 @@ void save_codebook(const std::string& path, const Codebook& b) {
 }
 
 Codebook load_codebook(const std::string& path, const Surface& s, const CodebookOptions& o) {
+    return parse_codebook(SafetensorsFile::load(path), path, s, o);
+}
+
+Codebook parse_codebook(const SafetensorsFile& f, const std::string& path, const Surface& s, const CodebookOptions& o) {
     check_options(o);
-    SafetensorsFile f = SafetensorsFile::load(path);
     const auto& md = f.metadata();
     const auto fmt = md.find("format");
     if (fmt == md.end() || fmt->second != Codebook::kFormat)

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/safetensors.h"
 #include "engine/tensor.h"
 #include "engine/track/surface.h"
 
@@ -57,6 +58,8 @@ void save_codebook(const std::string& path, const Codebook& b);
 // Throws vtloc::Error naming the path for another format or version, a malformed
 // file, or a codebook of another surface or options (stale: delete it to rebuild).
 Codebook load_codebook(const std::string& path, const Surface& s, const CodebookOptions& o = {});
+// The same on a parsed file (`path` names it in errors; the fuzz target's entry).
+Codebook parse_codebook(const SafetensorsFile& f, const std::string& path, const Surface& s, const CodebookOptions& o = {});
 // load_codebook where `path` exists and holds this surface's, else render and save
 // (path empty: render only).
 Codebook cached_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o, const std::string& path);

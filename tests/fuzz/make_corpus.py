@@ -121,6 +121,18 @@ def main():
         parts.append(text)
     put("dataset", "one_object.txt", "\n=====\n".join(parts))
     touches_corpus()
+    codebook_corpus()
+
+
+def codebook_corpus():
+    # fuzz_codebook.cpp's two samples (on z = 0, looking down), their 27 x 27 maps (default options).
+    samples = [0, 0, 0, 0, 0, 1, 1, 0, 0, 3, 0, 0, 0, 0, 1, 1, 0, 0]
+    heights = [0.01 * (i % 27) for i in range(2 * 27 * 27)]
+    meta = {"format": "vtloc-codebook/1", "cell_mm": "1", "splat_mm": "0.75", "cap_mm": "8", "facing": "0.3",
+            "reach_mm": "12.5", "G": "27"}
+    put("codebook", "two_samples.safetensors", safetensors({
+        "heights": ("F32", [2, 27 * 27], struct.pack(f"<{len(heights)}f", *heights)),
+        "samples": ("F32", [2, 9], struct.pack("<18f", *samples))}, meta))
 
 
 def touches_corpus():
