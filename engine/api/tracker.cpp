@@ -243,7 +243,9 @@ std::vector<float> Tracker::sample_points() const {
 
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
 const PointCloud& Tracker::display_cloud() const { return impl_->display; }
-uint64_t Tracker::device_bytes() const { return impl_->tracker.device_bytes(); }
+uint64_t Tracker::device_bytes() const {
+    return impl_->tracker.device_bytes() + (impl_->scorer ? impl_->scorer->device_bytes() : 0);
+}
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,

@@ -6,7 +6,7 @@
 
 #include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
-#include "engine/track/codebook.h"
+#include "engine/ops/codebook_bins.h"
 
 namespace vtloc::check {
 
@@ -27,7 +27,7 @@ OpCase render_case(int64_t S, int64_t D, int64_t G, uint32_t seed) {
         for (int k = 0; k < 3; ++k)
             samples[size_t(9 * i + k)] = 15 * u[k], samples[size_t(9 * i + 3 + k)] = u[k], samples[size_t(9 * i + 6 + k)] = u[3 + k];
     }
-    const track::BinnedPoints b = track::bin_points(dense, 9.0);
+    const ops::book::BinnedPoints b = ops::book::bin_points(dense, 9.0);
     ops::CodebookRender p;
     p.G = G, p.cell = 0.9, p.splat = 0.7, p.cap = 5, p.coarse = b.coarse, p.max_bin = b.max_bin;
     for (int k = 0; k < 3; ++k) p.origin[k] = b.origin[k], p.dims[k] = b.dims[k];

@@ -103,9 +103,10 @@ void render_gpu(const GpuOpArgs& a) {
         float inv_cell, splat, cap, facing, ox, oy, oz, inv_coarse;
         int32_t nx, ny, nz;
     } push{int32_t(a.in[0].shape[0]), r.G, r.inv_cell, r.splat, r.cap, r.facing, r.origin.x, r.origin.y, r.origin.z, r.inv_coarse, r.nx, r.ny, r.nz};
-    const uint32_t local = subgroup_group_size(d);
+    const uint32_t local = elementwise_local_size(d);
     // A workgroup per sample; its invocations stride over the bins' points. The
-    // densest 27 bins bound one invocation's loop.
+    // densest 27 bins bound one invocation's loop (a wide workgroup: more headroom
+    // under lavapipe's loop limiter for dense objects).
     const int64_t most = count_param(a.params, "max_bin", 1 << 30);
     const int64_t per_splat = int64_t(std::pow(2.0 * r.splat / r.cell + 2, 2));
     check_loop_budget(d, uint64_t(27 * ((most + local - 1) / local + 1) * (per_splat + 1)) + uint64_t(r.G) * r.G * 2 / local + 4,

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/ops/codebook_bins.h"
 #include "engine/safetensors.h"
 #include "engine/tensor.h"
 #include "engine/track/surface.h"
@@ -30,16 +31,9 @@ struct CodebookOptions {
     double min_density = 1.0; // points per mm^2 a cloud needs (SPEC 9)
 };
 
-// The dense points binned on a coarse grid for codebook_render.
-struct BinnedPoints {
-    std::vector<float> points;   // [D, 6], bin by bin
-    std::vector<int32_t> bins;   // [nx*ny*nz, 2] first, count
-    float origin[3] = {0, 0, 0};
-    double coarse = 1;
-    int64_t dims[3] = {1, 1, 1};
-    int64_t max_bin = 1;
-};
-BinnedPoints bin_points(const std::vector<float>& dense, double coarse);
+// The dense points binned on a coarse grid for codebook_render (engine/ops/codebook_bins.h).
+using ops::book::BinnedPoints;
+using ops::book::bin_points;
 
 struct Codebook {
     static constexpr const char* kFormat = "vtloc-codebook/1";

@@ -421,7 +421,7 @@ public:
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
     const PointCloud& display_cloud() const;  // the points heatmap values refer to
-    uint64_t device_bytes() const;            // on the GPU now: the surface tables and the step graphs' arenas
+    uint64_t device_bytes() const;            // on the GPU now: the surface tables, the step graphs' arenas, the codebook
     double spacing_mm() const;                // the hypothesis samples' spacing
 
     struct Impl;
