@@ -100,6 +100,7 @@ int cmd_localize(Session& s, int argc, char** argv);
 int localize_codebook(Session& s, int argc, char** argv);  // vtloc localize --method codebook
 int cmd_sequence(Session& s, int argc, char** argv);
 int cmd_shape(Session& s, int argc, char** argv);
+int cmd_calibrate(Session& s, int argc, char** argv);
 int cmd_info(Session& s, int argc, char** argv);
 int cmd_devices(Session& s, int argc, char** argv);
 int cmd_synth(Session& s, int argc, char** argv);

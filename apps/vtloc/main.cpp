@@ -20,6 +20,7 @@ const char* kUsage =
     "  localize   localise one touch (tactile image + object mesh or point cloud)\n"
     "  sequence   several touches and the robot's motions between them: the sensor's pose on the object\n"
     "  shape      the gel's shape (indentation, contact) from one frame\n"
+    "  calibrate  a GelSight calibration of your own from ball presses\n"
     "  info       a weight file's config, parameter count, size and tensors\n"
     "  devices    Vulkan devices and the limits the engine uses\n"
     "  check      cross-check the device against the CPU reference (model, or --ops: every op)\n"
@@ -41,6 +42,7 @@ Command find_command(const std::string& name) {
     if (name == "localize" || name == "localise") return cli::cmd_localize;
     if (name == "sequence") return cli::cmd_sequence;
     if (name == "shape") return cli::cmd_shape;
+    if (name == "calibrate") return cli::cmd_calibrate;
     if (name == "info") return cli::cmd_info;
     if (name == "devices") return cli::cmd_devices;
     if (name == "check") return cli::cmd_check;

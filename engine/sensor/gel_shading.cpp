@@ -39,23 +39,27 @@ GelShader::GelShader(const Calibration& c) : H_(c.height), W_(c.width), bins_(c.
                     poly_[((size_t(m) * bins_ + d) * 3 + ch) * 6 + k] = c.poly[ch][(size_t(m) * bins_ + d) * 6 + k];
 }
 
+std::array<double, 2> height_gradient(const std::vector<float>& h, int H, int W, int r, int c) {
+    auto at = [&](int y, int x) { return double(h[size_t(y) * size_t(W) + size_t(x)]); };
+    // numpy.gradient: central differences inside, one-sided at the borders.
+    const double g_row = H == 1 ? 0 : r == 0 ? at(1, c) - at(0, c) : r == H - 1 ? at(r, c) - at(r - 1, c) : 0.5 * (at(r + 1, c) - at(r - 1, c));
+    const double g_col = W == 1 ? 0 : c == 0 ? at(r, 1) - at(r, 0) : c == W - 1 ? at(r, c) - at(r, c - 1) : 0.5 * (at(r, c + 1) - at(r, c - 1));
+    return {g_row, g_col};
+}
+
+std::array<int, 2> table_bin(double g_row, double g_col, int bins) {
+    const double mag_step = 0.5 * M_PI / (bins - 1), dir_step = 2 * M_PI / (bins - 1);
+    const int mag = int(std::floor(std::atan(std::sqrt(g_row * g_row + g_col * g_col)) / mag_step));
+    const int dir = int(std::floor((std::atan2(g_row, g_col) + M_PI) / dir_step));
+    return {std::clamp(mag, 0, bins - 1), std::clamp(dir, 0, bins - 1)};
+}
+
 void GelShader::shade(const std::vector<float>& h, std::vector<float>& out) const {
     out.resize(size_t(H_) * W_ * 3);
-    const double mag_step = 0.5 * M_PI / (bins_ - 1), dir_step = 2 * M_PI / (bins_ - 1);
-    auto at = [&](int r, int c) { return double(h[size_t(r) * W_ + c]); };
     for (int r = 0; r < H_; ++r)
         for (int c = 0; c < W_; ++c) {
-            // numpy.gradient: central differences inside, one-sided at the borders.
-            double g_row = r == 0        ? at(1, c) - at(0, c)
-                           : r == H_ - 1 ? at(r, c) - at(r - 1, c)
-                                         : 0.5 * (at(r + 1, c) - at(r - 1, c));
-            double g_col = c == 0        ? at(r, 1) - at(r, 0)
-                           : c == W_ - 1 ? at(r, c) - at(r, c - 1)
-                                         : 0.5 * (at(r, c + 1) - at(r, c - 1));
-            int mag = int(std::floor(std::atan(std::sqrt(g_row * g_row + g_col * g_col)) / mag_step));
-            int dir = int(std::floor((std::atan2(g_row, g_col) + M_PI) / dir_step));
-            mag = std::clamp(mag, 0, bins_ - 1);
-            dir = std::clamp(dir, 0, bins_ - 1);
+            const auto [g_row, g_col] = height_gradient(h, H_, W_, r, c);
+            const auto [mag, dir] = table_bin(g_row, g_col, bins_);
             const double x = c, y = r;
             const double basis[6] = {x * x, y * y, x * y, x, y, 1};
             const double* p = &poly_[(size_t(mag) * bins_ + dir) * 18];

@@ -2,6 +2,7 @@
 // The gel's side of a touch: Taxim-style deformation of the pressed height
 // field and the polynomial shading of the real sensor (the renderer's; the
 // shape-from-frame of SPEC 9 inverts the shading).
+#include <array>
 #include <cstdint>
 #include <vector>
 
@@ -24,6 +25,12 @@ inline const std::vector<double>& default_drape_sigmas_mm() {
 // In place on a rows x cols indentation map (mm, >= 0): the map as given is
 // the undeformed intersection (the contact region where > 0).
 void drape_gel(std::vector<float>& ind, int rows, int cols, double mm_per_px, const std::vector<double>& sigmas_mm);
+
+// numpy.gradient of a height map (H x W) at (r, c): (d/drow, d/dcol), central
+// differences inside, one-sided at the borders.
+std::array<double, 2> height_gradient(const std::vector<float>& h, int H, int W, int r, int c);
+// The table's (magnitude, direction) bin of a gradient (data/gelsight/README.md, step 3).
+std::array<int, 2> table_bin(double g_row, double g_col, int bins);
 
 // The polynomial table applied to a height map (pixels, H x W): writes
 // H * W * 3 shading values (stored order) without the background.

@@ -17,34 +17,6 @@
 
 namespace vtloc::sim {
 
-DetectedContact detect_contact(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, int H, int W) {
-    DetectedContact d;
-    const size_t n = size_t(H) * W;
-    if (frame.size() != n * 3 || empty.size() != n * 3) return d;
-    cv::Mat diff(H, W, CV_32F);
-    for (size_t i = 0; i < n; ++i) {
-        float s = 0;
-        for (int c = 0; c < 3; ++c) s += std::abs(float(frame[i * 3 + c]) - float(empty[i * 3 + c]));
-        diff.at<float>(int(i / W), int(i % W)) = s;
-    }
-    cv::GaussianBlur(diff, diff, cv::Size(0, 0), 1.5, 1.5, cv::BORDER_REFLECT);
-    double mx = 0;
-    cv::minMaxLoc(diff, nullptr, &mx);
-    if (!(mx > 0)) return d;
-    cv::Mat mask = diff > kContactFraction * mx;
-    cv::Mat labels, stats, centroids;
-    int k = cv::connectedComponentsWithStats(mask, labels, stats, centroids, 8, CV_32S);
-    int best = 0, best_area = 0;
-    for (int l = 1; l < k; ++l)
-        if (stats.at<int>(l, cv::CC_STAT_AREA) > best_area) best = l, best_area = stats.at<int>(l, cv::CC_STAT_AREA);
-    if (best == 0) return d;
-    d.found = true;
-    d.cx = centroids.at<double>(best, 0);
-    d.cy = centroids.at<double>(best, 1);
-    d.radius = std::sqrt(best_area / M_PI);
-    return d;
-}
-
 namespace {
 
 double median(std::vector<double> v) {
@@ -185,10 +157,10 @@ RealityReport reality_check(const Calibration& c, const RealityOptions& o) {
         f.annotated_r = c.press_radius[i];
         // Radii at or past the ball's own are presses to its full width: the
         // sphere is enlarged to 1.05 r (README) so that d stays defined.
-        const double r = f.annotated_r * c.mm_per_px;
-        const double R = std::max(o.ball_radius_mm, 1.05 * r);
+        const sensor::BallCap cap = sensor::ball_cap(f.annotated_r * c.mm_per_px, o.ball_radius_mm);
+        const double R = cap.sphere_mm;
         f.ball_radius_mm = R;
-        f.press_mm = R - std::sqrt(R * R - r * r);
+        f.press_mm = cap.depth_mm;
         auto it = renderers.find(R);
         if (it == renderers.end()) {
             it = renderers.emplace(R, TouchRenderer(c, make_icosphere(R, o.sphere_subdivisions))).first;

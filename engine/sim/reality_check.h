@@ -6,6 +6,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/sensor/ball_press.h"
 #include "engine/sensor/calibration.h"
 
 namespace vtloc::sim {
@@ -15,18 +16,10 @@ using sensor::Calibration;
 using sensor::default_calibration_path;
 using sensor::load_calibration;
 
-// The contact as an image shows it: diff = sum over channels of |frame -
-// empty| (the frame's own empty frame), Gaussian-smoothed (sigma 1.5 px);
-// pixels above kContactFraction of the smoothed maximum; the largest
-// 8-connected component's centroid and equivalent-area radius sqrt(A/pi).
-struct DetectedContact {
-    bool found = false;
-    double cx = 0, cy = 0;  // column, row (pixels)
-    double radius = 0;      // pixels
-};
-inline constexpr double kContactFraction = 0.25;
-DetectedContact detect_contact(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, int height,
-                               int width);
+// The image-based contact detector lives with the sensor model.
+using sensor::DetectedContact;
+using sensor::detect_contact;
+using sensor::kContactFraction;
 
 struct RealityFrame {
     int index = 0;
