@@ -20,7 +20,8 @@ const char* kHelp =
     "\n"
     "The paper's metrics (mm Error, ND, Top-1, Top-5, MPE; docs/eval.md) of a weight file on a\n"
     "dataset in the layout of docs/dataset.md, per subset (non-uniform / uniform / all),\n"
-    "averaged per object and then over objects, with the Chance and Point Filtering baselines.\n"
+    "averaged per object and then over objects, with the Chance, Point Filtering and Codebook\n"
+    "(render-and-compare alone, MidasTouch-style) baselines.\n"
     "Each object is encoded once with its candidates (its test contacts); its touches run in\n"
     "batches.\n"
     "\n"
@@ -62,14 +63,14 @@ const char* kHelp =
     "  --render DIR              heat-map pictures of the k worst and k best touches\n"
     "  --render-count k          k for --render (default 3)\n"
     "  --skip-bad                evaluate the touches that can be read; report the others\n"
-    "  --no-baselines            leave out the Chance and Point Filtering rows\n"
+    "  --no-baselines            leave out the Chance, Point Filtering and Codebook rows\n"
     "  --backend gpu|cpu         Vulkan (default) or the plain C++ reference ops\n"
     "  --mm-per-px MM            the frames' pixel size in mm (default: the dataset's sensor.mm_per_px);\n"
     "                            frames are rescaled to the model's sensor pixel size before the crop\n"
     "                            when it differs (models that record no sensor: never, unless given)\n"
     "\n"
-    "Chance is exact (every candidate taken as the prediction once). Point Filtering needs\n"
-    "mesh.ply in every object folder and is skipped with a note otherwise. Exit status: 0 ok,\n"
+    "Chance is exact (every candidate taken as the prediction once). Point Filtering and Codebook\n"
+    "need mesh.ply in every object folder and are skipped with a note otherwise. Exit status: 0 ok,\n"
     "1 bad input or runtime error, 2 usage error.\n";
 
 // Sim-library errors as the CLI's one-line errors.
@@ -233,17 +234,19 @@ void warn_trained_unseen(const eval::Options& opt, const std::vector<eval::Job>&
 }
 
 // The model's rows, then the baselines' (unless --no-baselines), and their notes.
-void add_methods(eval::Report& rep, const eval::MethodResult& result, const sim::Dataset& d,
+void add_methods(Session& s, eval::Report& rep, const eval::MethodResult& result, const sim::Dataset& d,
                  const std::vector<eval::Job>& jobs) {
     std::vector<eval::MethodResult> methods{result};
     if (rep.opt.baselines) {
         methods.push_back(eval::run_chance(jobs));
         methods.push_back(eval::run_point_filtering(d, jobs));
+        methods.push_back(eval::run_codebook(s, jobs, rep.opt.backend));
     }
     for (const eval::MethodResult& m : methods) {
         for (eval::Row& r : eval::make_rows(m, jobs)) rep.rows.push_back(r);
         if (m.skipped) rep.notes.push_back(m.method + " " + m.note);
         else if (m.method == "Point Filtering") rep.notes.push_back("Point Filtering: " + m.note + " (docs/usage.md)");
+        else if (m.method == "Codebook") rep.notes.push_back("Codebook: " + m.note + " (docs/render_compare.md)");
     }
 }
 
@@ -325,7 +328,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
     rep.touches_run = int(result.rows.size());
     rep.time_per_touch_ms = engine_ms / double(result.rows.size());
 
-    add_methods(rep, result, d, jobs);
+    add_methods(s, rep, result, d, jobs);
 
     print_run_lines(s, opt, rep, jobs.size(), info);
     if (!rep.skips.empty()) rep.notes.insert(rep.notes.begin(), skip_summary(rep.skips, selected));

@@ -58,7 +58,7 @@ struct TouchRow {
 
 // A method's results: per job, the touch scores that its rows average.
 struct MethodResult {
-    std::string method;   // the model's config name, "Chance", "Point Filtering"
+    std::string method;   // the model's config name, "Chance", "Point Filtering", "Codebook"
     std::string label;    // in tables: "Chance (analytic)"; empty = method
     std::string note;     // "analytic", "skipped: ...", ...
     bool skipped = false;
@@ -101,6 +101,9 @@ MethodResult run_chance(const std::vector<Job>& jobs);
 // Skipped (with a note) for jobs without mesh.ply; the calibration is the
 // shipped one (sim::default_calibration_path()).
 MethodResult run_point_filtering(const sim::Dataset& d, const std::vector<Job>& jobs);
+// Render-and-compare alone (SPEC 9; the paper's fourth baseline): skipped (with a note) for
+// jobs without mesh.ply or on the CPU backend.
+MethodResult run_codebook(Session& s, const std::vector<Job>& jobs, api::Backend backend);
 
 // ---- eval_report.cpp --------------------------------------------------------
 // Rows for non-uniform / uniform / all (a subset without objects is left out).

@@ -1,5 +1,7 @@
-// vtloc eval: the rows that need no trained model (Chance, Point Filtering).
+// vtloc eval: the rows that need no trained model (Chance, Point Filtering, Codebook).
+#include <algorithm>
 #include <cstdio>
+#include <numeric>
 #include <filesystem>
 
 #include "apps/vtloc/eval.h"
@@ -98,6 +100,60 @@ MethodResult run_point_filtering(const sim::Dataset& d, const std::vector<Job>& 
     }
     progress.finish();
     if (unrenderable > 0) res.note += ", " + std::to_string(unrenderable) + " candidates not renderable (ranked last)";
+    return res;
+}
+
+MethodResult run_codebook(Session& s, const std::vector<Job>& jobs, api::Backend backend) {
+    MethodResult res;
+    res.method = "Codebook";
+    res.label = "Codebook (MidasTouch-style)";
+    int without_mesh = 0;
+    for (const Job& job : jobs) without_mesh += job.rec->has_mesh ? 0 : 1;
+    if (without_mesh > 0 || backend != api::Backend::Gpu) {
+        res.skipped = true;
+        res.note = without_mesh > 0 ? "skipped: " + std::to_string(without_mesh) + " of " + std::to_string(jobs.size()) + " objects have no mesh.ply"
+                                    : "skipped: render-and-compare runs on the GPU only (--backend cpu)";
+        return res;
+    }
+    // The paper's candidates protocol: poses at the object's candidates only, the belief from
+    // the frame's gel shape against what each would press (SPEC 9), candidates ranked by it.
+    size_t total = 0, blind = 0, touches = 0;
+    for (const Job& j : jobs) total += j.touches.size();
+    Progress progress("codebook", total);
+    api::GelShapeReader reader(s.gpu());
+    int spins = 0;
+    for (const Job& job : jobs) {
+        const sim::ObjectRecord& o = *job.rec;
+        const std::filesystem::path dir(o.folder);
+        api::TrackerOptions to;
+        for (const sim::Point3& c : job.geom.candidates) to.candidates.push_back({c[0], c[1], c[2]});
+        api::Tracker tracker(s.gpu(), (dir / "mesh.ply").string(), to);
+        spins = tracker.n_spin();
+        std::optional<api::TactileImage> empty;
+        if (o.has_background) empty = api::load_tactile_image((dir / "background.png").string());
+        std::vector<sim::TouchScore> scores;
+        for (const sim::TouchRecord* t : job.touches) {
+            const api::GelShape shape = reader.read(api::load_tactile_image(image_path(o, *t)), empty ? &*empty : nullptr);
+            blind += std::none_of(shape.mask.begin(), shape.mask.end(), [](uint8_t m) { return m != 0; });
+            ++touches;
+            const api::TrackerEstimate e = tracker.evaluate_window({}, {}, nullptr, {&shape});
+            if (e.sample_belief.size() != job.geom.candidates.size())
+                throw api::Error("codebook: the belief is over " + std::to_string(e.sample_belief.size()) + " poses, not the " +
+                                 std::to_string(job.geom.candidates.size()) + " candidates");
+            std::vector<int> ranking(job.geom.candidates.size());
+            std::iota(ranking.begin(), ranking.end(), 0);
+            std::stable_sort(ranking.begin(), ranking.end(), [&](int a, int b) { return e.sample_belief[size_t(a)] > e.sample_belief[size_t(b)]; });
+            const sim::Point3 pred = job.geom.candidates[size_t(ranking[0])];
+            scores.push_back(sim::score(sim::touch_metrics(job.geom, pred, t->contact, ranking, {}, job.topk)));
+            progress.advance();
+        }
+        res.scores.push_back(std::move(scores));
+    }
+    progress.finish();
+    char note[160];
+    std::snprintf(note, sizeof note, "render-and-compare alone at the candidates' poses, %d spins; %zu of %zu frames show no contact to the gel-shape reader (no evidence)",
+                  spins, blind, touches);
+    res.note = note;
     return res;
 }
 

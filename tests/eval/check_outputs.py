@@ -34,7 +34,7 @@ def main(report, table, per_touch, render_dir, k):
                 fail(f"row {r['method']}/{r['subset']}: {m} = {v!r}")
         if r["objects"] and not (0 <= r["top1"] <= r["top5"] <= 100):
             fail(f"row {r['method']}/{r['subset']}: top1 {r['top1']} top5 {r['top5']}")
-    for m in (j["config"], "Chance", "Point Filtering"):
+    for m in (j["config"], "Chance", "Point Filtering", "Codebook"):
         if methods.get(m) != ["non-uniform", "uniform", "all"]:
             fail(f"rows of {m!r}: {methods.get(m)}")
     chance = [r for r in j["rows"] if r["method"] == "Chance"]
