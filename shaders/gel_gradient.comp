@@ -1,13 +1,15 @@
 #version 450
 // The indentation's gradient per pixel (engine/ops/gel_shape.cpp; CPU mirror engine/ops/gel_ops.h):
 // the four nearest tiles' tables at the colour change's cell, blended by the pixel's place
-// between the tile centres, less the same for no colour change.
+// between the tile centres, less the same for no colour change; where that slope is gentle, the
+// pixel's linearised inverse of the shading instead.
 layout(local_size_x_id = 0) in;
 layout(std430, binding = 0) readonly buffer Frame_ { float frame[]; };  // [H, W, 3]
 layout(std430, binding = 1) readonly buffer Empty_ { float empty[]; };  // [H, W, 3]
 layout(std430, binding = 2) readonly buffer Lut_ { float lut[]; };      // [ty * tx, n^3, 2]
-layout(std430, binding = 3) writeonly buffer Out_ { float outv[]; };    // [H, W, 2]
-layout(push_constant) uniform Push { int H; int W; int n; int ty; int tx; } p;
+layout(std430, binding = 3) readonly buffer Linear_ { float linear[]; };  // [H, W, 6]
+layout(std430, binding = 4) writeonly buffer Out_ { float outv[]; };    // [H, W, 2]
+layout(push_constant) uniform Push { int H; int W; int n; int ty; int tx; float gentle; } p;
 
 int cell_of(float v) {
     precise float q = floor((v + 256.0) * float(p.n) / 512.0);
@@ -38,6 +40,13 @@ void main() {
         const int r = int(q / uint(p.W)), c = int(q % uint(p.W));
         const vec3 d = vec3(frame[3u * q] - empty[3u * q], frame[3u * q + 1u] - empty[3u * q + 1u], frame[3u * q + 2u] - empty[3u * q + 2u]);
         precise vec2 g = table_gradient(r, c, d) - table_gradient(r, c, vec3(0.0));
+        precise float m2 = g.x * g.x + g.y * g.y;
+        if (p.gentle > 0.0 && m2 <= p.gentle * p.gentle) {
+            const uint b = 6u * q;
+            precise float lr = (linear[b] * d.x + linear[b + 1u] * d.y) + linear[b + 2u] * d.z;
+            precise float lc = (linear[b + 3u] * d.x + linear[b + 4u] * d.y) + linear[b + 5u] * d.z;
+            g = vec2(lr, lc);
+        }
         outv[2u * q] = g.x;
         outv[2u * q + 1u] = g.y;
     }

@@ -1,6 +1,7 @@
 #version 450
-// lap(z) = div(grad) inside the mask, z = 0 outside: red-black SOR (engine/ops/gel_shape.cpp; CPU
-// mirror engine/ops/gel_ops.h). One workgroup, a barrier between colours: within a colour the
+// lap(z) = div(grad) inside the mask, z = 0 outside it in the image, the image's border free (a
+// ghost neighbour continues the gradient): red-black SOR (engine/ops/gel_shape.cpp; CPU mirror
+// engine/ops/gel_ops.h). One workgroup, a barrier between colours: within a colour the
 // updates read only the other colour, so the result is the reference's in any lane order.
 layout(local_size_x_id = 0) in;
 layout(std430, binding = 0) readonly buffer Grad_ { float grad[]; };  // [H, W, 2]
@@ -29,9 +30,12 @@ void main() {
         for (uint q = gl_LocalInvocationID.x; q < HW; q += L) {
             const int r = int(q / uint(p.W)), c = int(q % uint(p.W));
             if (((r + c) & 1) != colour || !(mask[q] > 0.5)) continue;
-            precise float nb = ((r > 0 ? z[q - uint(p.W)] : 0.0) + (r + 1 < p.H ? z[q + uint(p.W)] : 0.0)) +
-                               ((c > 0 ? z[q - 1u] : 0.0) + (c + 1 < p.W ? z[q + 1u] : 0.0));
-            precise float v = (1.0 - p.omega) * z[q] + p.omega * ((nb - divergence(r, c)) * 0.25);
+            const int inside = int(r > 0) + int(r + 1 < p.H) + int(c > 0) + int(c + 1 < p.W);
+            if (inside == 0) continue;
+            const float gr = grad[2u * q], gc = grad[2u * q + 1u];
+            precise float nb = ((r > 0 ? z[q - uint(p.W)] : -gr) + (r + 1 < p.H ? z[q + uint(p.W)] : gr)) +
+                               ((c > 0 ? z[q - 1u] : -gc) + (c + 1 < p.W ? z[q + 1u] : gc));
+            precise float v = (1.0 - p.omega) * z[q] + p.omega * ((nb - divergence(r, c)) / float(inside));
             z[q] = v;
         }
         memoryBarrierBuffer();

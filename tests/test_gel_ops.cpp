@@ -1,9 +1,12 @@
-// The gel's shape ops (gel_gradient, masked_poisson) against their CPU references
-// (engine/ops/gel_ops.h) at odd sizes with fixed seeds, and their shape errors.
+// The gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson) against their CPU
+// references (engine/ops/gel_ops.h, gel_mask.h) at odd sizes with fixed seeds, and their shape errors.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <random>
 
 #include "engine/ops/build.h"
+#include "engine/ops/gel_mask.h"
 #include "engine/ops/gel_ops.h"
 #include "tests/harness.h"
 
@@ -17,6 +20,57 @@ HostTensor grey(int64_t H, int64_t W, uint32_t seed) {
     return t;
 }
 
+// A gradient [H, W, 2] of slope 9 where on(r, c), 0 elsewhere, in a direction varying by pixel:
+// the 3x3 mean then passes 0.7 wherever a neighbour is on.
+template <class F>
+HostTensor slope_field(int64_t H, int64_t W, F on) {
+    HostTensor g({H, W, 2});
+    for (int64_t r = 0; r < H; ++r)
+        for (int64_t c = 0; c < W; ++c) {
+            const float s = on(r, c) ? 9.0f : 0.0f, a = 0.37f * float(r * W + c);
+            g.data[size_t(r * W + c) * 2] = s * std::cos(a), g.data[size_t(r * W + c) * 2 + 1] = s * std::sin(a);
+        }
+    return g;
+}
+
+struct MaskInput {
+    const char* what;
+    HostTensor grad;
+};
+
+// Holes, rings, equal pieces (the tie rule), noise (slopes near the threshold), none and all.
+std::vector<MaskInput> mask_inputs(int64_t H, int64_t W, uint32_t seed) {
+    const double cy = 0.5 * double(H), cx = 0.5 * double(W);
+    auto ring = [&](int64_t r, int64_t c) {
+        const double d = std::hypot(double(r) - cy, double(c) - cx);
+        return d > 0.2 * double(std::min(H, W)) && d < 0.2 * double(std::min(H, W)) + 2.5;
+    };
+    auto squares = [&](int64_t r, int64_t c) {  // 5x5 after the mean, none at the far edges
+        return r % 11 >= 4 && r % 11 < 7 && c % 11 >= 4 && c % 11 < 7 && r < H - 4 && c < W - 4;
+    };
+    auto holed = [](int64_t r, int64_t c) {  // 13x13 blocks with holes of 3 and 1 pixels, a pixel's bridge
+        const int64_t y = r % 17, x = c % 17;
+        return y < 13 && x < 13 && !(y >= 4 && y < 9 && x >= 4 && x < 9) && !(y == 11 && x == 11);
+    };
+    std::vector<MaskInput> v{{"ring", slope_field(H, W, ring)},
+                             {"equal squares", slope_field(H, W, squares)},
+                             {"holed blocks", slope_field(H, W, holed)},
+                             {"noise", test::random_tensor({H, W, 2}, seed, -1.0f, 1.0f)},
+                             {"none", HostTensor({H, W, 2})},
+                             {"all", slope_field(H, W, [](int64_t, int64_t) { return true; })}};
+    // Rings and blobs of random places and sizes over noise of slope up to 0.8.
+    HostTensor mixed = test::random_tensor({H, W, 2}, seed + 1, -0.55f, 0.55f);
+    std::mt19937 rng(seed + 2);
+    for (int k = 0; k < 6; ++k) {
+        const double y = double(rng() % uint32_t(H)), x = double(rng() % uint32_t(W)), rad = 1 + rng() % 9, w = 1 + rng() % 4;
+        for (int64_t r = 0; r < H; ++r)
+            for (int64_t c = 0; c < W; ++c)
+                if (std::abs(std::hypot(double(r) - y, double(c) - x) - rad) < w) mixed.data[size_t(r * W + c) * 2] += 1.5f;
+    }
+    v.push_back({"rings and blobs over noise", mixed});
+    return v;
+}
+
 }  // namespace
 
 TEST_CASE("gel_gradient matches the CPU reference", "[op][gel][gel_gradient]") {
@@ -26,13 +80,19 @@ TEST_CASE("gel_gradient matches the CPU reference", "[op][gel][gel_gradient]") {
     for (const Case& k : {Case{1, 1, 2, 1, 1}, Case{7, 13, 8, 1, 1}, Case{13, 17, 8, 2, 5}, Case{120, 160, 64, 3, 4}}) {
         INFO(k.H << "x" << k.W << " n " << k.n << " tiles " << k.ty << "x" << k.tx);
         Graph g;
-        const int out = ops::gel_gradient(g, g.input("frame", {k.H, k.W, 3}), g.input("empty", {k.H, k.W, 3}),
-                                          g.input("tables", {k.ty * k.tx, k.n * k.n * k.n, 2}), k.n, k.ty, k.tx);
-        g.output(out, "gradient");
-        const uint32_t seed = uint32_t(k.H * 31 + k.n);
-        TensorMap in{{"frame", grey(k.H, k.W, seed)}, {"empty", grey(k.H, k.W, seed + 1)},
-                     {"tables", test::random_tensor({k.ty * k.tx, k.n * k.n * k.n, 2}, seed + 2, -3.0f, 3.0f)}};
-        test::run_gpu_and_compare(g, WeightStore{}, in);
+        for (double gentle : {0.0, 1.5, 1e5}) {  // tables only, both (half the pixels each), linear only
+            INFO("gentle " << gentle);
+            Graph g;
+            const int out = ops::gel_gradient(g, g.input("frame", {k.H, k.W, 3}), g.input("empty", {k.H, k.W, 3}),
+                                              g.input("tables", {k.ty * k.tx, k.n * k.n * k.n, 2}), g.input("linear", {k.H, k.W, 6}),
+                                              k.n, k.ty, k.tx, gentle);
+            g.output(out, "gradient");
+            const uint32_t seed = uint32_t(k.H * 31 + k.n);
+            TensorMap in{{"frame", grey(k.H, k.W, seed)}, {"empty", grey(k.H, k.W, seed + 1)},
+                         {"tables", test::random_tensor({k.ty * k.tx, k.n * k.n * k.n, 2}, seed + 2, -3.0f, 3.0f)},
+                         {"linear", test::random_tensor({k.H, k.W, 6}, seed + 3, -0.01f, 0.01f)}};
+            test::run_gpu_and_compare(g, WeightStore{}, in);
+        }
     }
 }
 
@@ -46,9 +106,14 @@ TEST_CASE("gel_gradient: no colour change gives no gradient, and one cell gives 
     ops::gel::table_gradient(lut.data(), n, 1, 1, 5, 5, 2, 2, d, gr, gc);
     CHECK(gr == 0.75f);
     CHECK(gc == -0.5f);
-    const float frame[3] = {7, 7, 7};
-    ops::gel::indentation_gradient(lut.data(), n, 1, 1, 1, 1, frame, frame, 0, 0, gr, gc);
+    const float frame[3] = {7, 7, 7}, linear[6] = {1, 2, 3, 4, 5, 6};
+    ops::gel::indentation_gradient(lut.data(), n, 1, 1, 1, 1, frame, frame, linear, 0.0f, 0, 0, gr, gc);
     CHECK((gr == 0.0f && gc == 0.0f));
+    // A gentle slope (here none) takes the linear inverse: L d.
+    const float empty[3] = {5, 7, 8};
+    ops::gel::indentation_gradient(lut.data(), n, 1, 1, 1, 1, frame, empty, linear, 0.5f, 0, 0, gr, gc);
+    CHECK(gr == 1 * 2.0f + 2 * 0.0f + 3 * -1.0f);
+    CHECK(gc == 4 * 2.0f + 5 * 0.0f + 6 * -1.0f);
 }
 
 TEST_CASE("masked_poisson matches the CPU reference and solves a known cap", "[op][gel][masked_poisson]") {
@@ -77,13 +142,64 @@ TEST_CASE("masked_poisson matches the CPU reference and solves a known cap", "[o
     CHECK(z[0] == 0.0f);
 }
 
+TEST_CASE("gel_contact_mask matches the CPU reference exactly", "[op][gel][gel_contact_mask]") {
+    struct Radii {
+        int64_t close, open;
+    };
+    for (auto [H, W] : {std::pair<int64_t, int64_t>{1, 1}, {1, 9}, {7, 13}, {31, 29}, {120, 160}})
+        for (Radii rad : {Radii{2, 2}, Radii{0, 0}, Radii{1, 3}}) {
+            if (rad.close != 2 && H * W > 1000) continue;  // the other radii at the small sizes only
+            for (const MaskInput& m : mask_inputs(H, W, uint32_t(H * 1000 + W))) {
+                INFO(H << "x" << W << ", " << m.what << ", close " << rad.close << ", open " << rad.open);
+                Graph g;
+                g.output(ops::gel_contact_mask(g, g.input("gradient", {H, W, 2}), 0.7, rad.close, rad.open), "mask");
+                const TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, {{"gradient", m.grad}}, {0.0, 0.0});
+                const std::vector<float>& mask = out.at("mask").data;
+                CHECK(std::count_if(mask.begin(), mask.end(), [](float v) { return v != 0.0f && v != 1.0f; }) == 0);
+            }
+        }
+}
+
+TEST_CASE("gel_contact_mask's reference: holes filled, the first of equal pieces, none and all", "[op][gel][gel_contact_mask]") {
+    const int H = 40, W = 50;
+    auto mask_of = [&](const MaskInput& m) { return ops::gel::contact_mask(m.grad.data.data(), H, W, 0.7f, 2, 2); };
+    const std::vector<MaskInput> in = mask_inputs(H, W, 5);
+    // Equal 5x5 squares after the 3x3 mean, each opened to the disc of radius 2: the first in
+    // raster order, centred at (5, 5). (A piece at the image's edge loses less to the opening:
+    // the disc reads only pixels inside the image.)
+    const std::vector<uint8_t> sq = mask_of(in[1]);
+    for (int r = 0; r < H; ++r)
+        for (int c = 0; c < W; ++c) CHECK(sq[size_t(r * W + c)] == ((r - 5) * (r - 5) + (c - 5) * (c - 5) <= 4));
+    // The ring comes back as a disc; the blocks' holes are filled.
+    const std::vector<uint8_t> ring = mask_of(in[0]), holed = mask_of(in[2]);
+    CHECK(ring[size_t(H / 2 * W + W / 2)] == 1);
+    for (int r = 5; r < 8; ++r)
+        for (int c = 5; c < 8; ++c) CHECK(holed[size_t(r * W + c)] == 1);
+    CHECK(holed[size_t(11 * W + 11)] == 1);
+    const std::vector<uint8_t> none = mask_of(in[4]), all = mask_of(in[5]);
+    CHECK(std::count(none.begin(), none.end(), 1) == 0);
+    CHECK(std::count(all.begin(), all.end(), 1) == H * W);
+}
+
 TEST_CASE("the gel's shape ops refuse bad shapes by name", "[op][gel]") {
     Graph g;
     const int f = g.input("f", {4, 5, 3});
-    CHECK_THROWS_WITH(ops::gel_gradient(g, f, g.input("e", {4, 6, 3}), g.input("t", {1, 8, 2}), 2, 1, 1),
+    const int lin = g.input("lin", {4, 5, 6});
+    CHECK_THROWS_WITH(ops::gel_gradient(g, f, g.input("e", {4, 6, 3}), g.input("t", {1, 8, 2}), lin, 2, 1, 1, 0),
                       Catch::Contains("empty frame must be [4, 5, 3]"));
-    CHECK_THROWS_WITH(ops::gel_gradient(g, f, f, g.input("t2", {2, 8, 2}), 2, 1, 1), Catch::Contains("tables must be [1, 8, 2]"));
-    CHECK_THROWS_WITH(ops::gel_gradient(g, g.input("f1", {4, 5}), f, g.input("t3", {1, 8, 2}), 2, 1, 1), Catch::Contains("[H, W, 3]"));
+    CHECK_THROWS_WITH(ops::gel_gradient(g, f, f, g.input("t2", {2, 8, 2}), lin, 2, 1, 1, 0), Catch::Contains("tables must be [1, 8, 2]"));
+    CHECK_THROWS_WITH(ops::gel_gradient(g, g.input("f1", {4, 5}), f, g.input("t3", {1, 8, 2}), lin, 2, 1, 1, 0), Catch::Contains("[H, W, 3]"));
+    CHECK_THROWS_WITH(ops::gel_gradient(g, f, f, g.input("t4", {1, 8, 2}), g.input("lin2", {4, 5, 2}), 2, 1, 1, 0),
+                      Catch::Contains("linear inverse must be [4, 5, 6]"));
+    CHECK_THROWS_WITH(ops::gel_gradient(g, f, f, g.input("t5", {1, 8, 2}), lin, 2, 1, 1, -1), Catch::Contains("gentle must be >= 0"));
     CHECK_THROWS_WITH(ops::masked_poisson(g, g.input("gr", {4, 5, 2}), g.input("m", {5, 4}), 5, 1.5), Catch::Contains("mask must be [4, 5]"));
     CHECK_THROWS_WITH(ops::masked_poisson(g, g.input("gr2", {4, 5, 2}), g.input("m2", {4, 5}), 5, 2.5), Catch::Contains("omega"));
+    CHECK_THROWS_WITH(ops::gel_contact_mask(g, g.input("gr3", {4, 5, 3}), 0.7, 2, 2),
+                      Catch::Contains("gel_contact_mask: the gradient must be [H, W, 2], got [4, 5, 3]"));
+    const int gr = g.input("gr4", {4, 5, 2});
+    CHECK_THROWS_WITH(ops::gel_contact_mask(g, gr, 0.7, -1, 2),
+                      Catch::Contains("gel_contact_mask: close_radius must be an integer in [0, 64], got -1"));
+    CHECK_THROWS_WITH(ops::gel_contact_mask(g, gr, 0.7, 2, 65),
+                      Catch::Contains("gel_contact_mask: open_radius must be an integer in [0, 64], got 65"));
+    CHECK_THROWS_WITH(ops::gel_contact_mask(g, gr, NAN, 2, 2), Catch::Contains("gel_contact_mask: threshold must be a finite number"));
 }

@@ -120,7 +120,7 @@ MethodResult run_codebook(Session& s, const std::vector<Job>& jobs, api::Backend
     size_t total = 0, blind = 0, touches = 0;
     for (const Job& j : jobs) total += j.touches.size();
     Progress progress("codebook", total);
-    api::GelShapeReader reader(s.gpu());
+    api::GelShapeReader reader(s.gpu(), api::GelShapeOptions::rendered_frames());
     int spins = 0;
     for (const Job& job : jobs) {
         const sim::ObjectRecord& o = *job.rec;

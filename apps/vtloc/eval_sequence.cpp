@@ -188,7 +188,7 @@ int run_sequence(Session& s, const Args& a) {
             else throw UsageError("--rows takes geometry, network, network-test, render, oracle; got '" + item + "'");
     }
     std::optional<api::GelShapeReader> reader;
-    if (render_compare) reader.emplace(s.gpu());
+    if (render_compare) reader.emplace(s.gpu(), api::GelShapeOptions::rendered_frames());
     std::map<RowKey, std::map<std::string, Score>> per_object;  // row -> object -> sum
     std::map<std::string, std::string> subset_of;
     int windows = 0;

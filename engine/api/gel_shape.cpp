@@ -47,6 +47,7 @@ GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
             throw Error("gel shape: mask_threshold must be > 0 and iterations 1..10000");
         sensor::Calibration c = sensor::load_calibration(o.calibration.empty() ? sensor::default_calibration_path() : o.calibration);
         sensor::GradientLut lut = sensor::build_gradient_lut(c);
+        static_assert(sensor::kRenderedMaskThreshold == 0.05, "GelShapeOptions::rendered_frames() repeats it");
         sensor::ShapeOptions so;
         so.mask_threshold = o.mask_threshold, so.sor_iterations = o.iterations;
         impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so);

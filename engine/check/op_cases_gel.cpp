@@ -1,6 +1,7 @@
-// Self-test cases of the gel's shape ops (gel_gradient, masked_poisson): grey-level
-// frames, random tables, a disc-shaped contact.
+// Self-test cases of the gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson):
+// grey-level frames, random tables, rings and blobs of slope over noise, a disc-shaped contact.
 #include <cmath>
+#include <random>
 
 #include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
@@ -20,7 +21,8 @@ OpCase gradient_case(int64_t H, int64_t W, int64_t n, int64_t ty, int64_t tx, ui
     OpCase c("gel_gradient", std::to_string(H) + "x" + std::to_string(W) + ", " + std::to_string(ty) + "x" +
                                  std::to_string(tx) + " tables of " + std::to_string(n) + "^3");
     const int g = ops::gel_gradient(c.g, c.input("frame", grey_frame(H, W, seed)), c.input("empty", grey_frame(H, W, seed + 1)),
-                                    c.input("tables", random_tensor({ty * tx, n * n * n, 2}, seed + 2, -3.0f, 3.0f)), n, ty, tx);
+                                    c.input("tables", random_tensor({ty * tx, n * n * n, 2}, seed + 2, -3.0f, 3.0f)),
+                                    c.input("linear", random_tensor({H, W, 6}, seed + 3, -0.01f, 0.01f)), n, ty, tx, 1.5);
     c.output(g, "gradient");
     return c;
 }
@@ -37,10 +39,28 @@ OpCase poisson_case(int64_t H, int64_t W, int64_t iterations, uint32_t seed) {
     return c;
 }
 
+// Rings and blobs of slope over noise near the threshold: holes, several pieces, a fringe.
+OpCase mask_case(int64_t H, int64_t W, int64_t close_radius, int64_t open_radius, uint32_t seed) {
+    OpCase c("gel_contact_mask", std::to_string(H) + "x" + std::to_string(W) + ", close " + std::to_string(close_radius) + ", open " +
+                                     std::to_string(open_radius));
+    HostTensor grad = random_tensor({H, W, 2}, seed, -0.55f, 0.55f);
+    std::mt19937 rng(seed + 1);
+    for (int k = 0; k < 8; ++k) {
+        const double y = double(rng() % uint32_t(H)), x = double(rng() % uint32_t(W)), rad = 1 + rng() % 12, w = 1 + rng() % 4;
+        for (int64_t r = 0; r < H; ++r)
+            for (int64_t col = 0; col < W; ++col)
+                if (std::abs(std::hypot(double(r) - y, double(col) - x) - rad) < w) grad.data[size_t(r * W + col) * 2] += 1.5f;
+    }
+    c.output(ops::gel_contact_mask(c.g, c.input("gradient", grad), 0.7, close_radius, open_radius), "mask");
+    c.tol = {0.0, 0.0};  // 0/1: the same fp32 slopes on both sides, then integer steps
+    return c;
+}
+
 }  // namespace
 
 std::vector<OpCase> gel_cases(const rt::DeviceInfo&) {
-    return {gradient_case(13, 17, 8, 2, 3, 11), gradient_case(120, 160, 16, 3, 4, 12), poisson_case(23, 31, 20, 13)};
+    return {gradient_case(13, 17, 8, 2, 3, 11), gradient_case(120, 160, 16, 3, 4, 12), mask_case(37, 29, 1, 3, 14),
+            mask_case(120, 160, 2, 2, 15), poisson_case(23, 31, 20, 13)};
 }
 
 }  // namespace vtloc::check

@@ -142,12 +142,19 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
     return g.add1("pose_evidence", {samples, dense, cells, spins, terms, fields}, q, name);
 }
 
-int gel_gradient(Graph& g, int frame, int empty, int tables, int64_t n, int64_t tiles_y, int64_t tiles_x, const std::string& name) {
-    return g.add1("gel_gradient", {frame, empty, tables}, {{"n", d(n)}, {"tiles_y", d(tiles_y)}, {"tiles_x", d(tiles_x)}}, name);
+int gel_gradient(Graph& g, int frame, int empty, int tables, int linear, int64_t n, int64_t tiles_y, int64_t tiles_x, double gentle,
+                 const std::string& name) {
+    return g.add1("gel_gradient", {frame, empty, tables, linear},
+                  {{"n", d(n)}, {"tiles_y", d(tiles_y)}, {"tiles_x", d(tiles_x)}, {"gentle", gentle}}, name);
 }
 
 int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name) {
     return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}}, name);
+}
+
+int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius, const std::string& name) {
+    return g.add1("gel_contact_mask", {gradient}, {{"threshold", threshold}, {"close_radius", d(close_radius)}, {"open_radius", d(open_radius)}},
+                  name);  // output 1, the workspace, stays internal
 }
 
 int codebook_render(Graph& g, int samples, int points, int bins, const CodebookRender& p, const std::string& name) {

@@ -105,9 +105,14 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
 // The gel's shape from a frame (SPEC 9): the indentation's gradient from a frame, its empty
 // frame and the inverted calibration's tables [tiles_y * tiles_x, n^3, 2]; and the height
 // inside a contact mask from that gradient (red-black SOR).
-int gel_gradient(Graph& g, int frame, int empty, int tables, int64_t n, int64_t tiles_y, int64_t tiles_x,
-                 const std::string& name = "");
+// gentle > 0: where the tables' slope is at most this, linear [H, W, 6]'s inverse instead.
+int gel_gradient(Graph& g, int frame, int empty, int tables, int linear, int64_t n, int64_t tiles_y, int64_t tiles_x,
+                 double gentle, const std::string& name = "");
 int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name = "");
+// The contact mask [H, W] (exact 0/1) from that gradient (engine/ops/gel_mask.h): the 3x3 mean slope
+// above threshold, closed, holes filled, opened (disc radii, 0: none), the largest piece.
+int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius,
+                     const std::string& name = "");
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
 // prob [S * n_spin] -> [S].
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");

@@ -37,9 +37,13 @@ inline void table_gradient(const float* lut, int n, int ty, int tx, int H, int W
 }
 
 // The indentation's gradient at (r, c): the tables' answer for the colour change (frame - empty)
-// less their answer for none (the untouched gel there). frame, empty: [H, W, 3].
+// less their answer for none (the untouched gel there). Where that slope is gentle (|g| <= gentle,
+// gentle > 0), the shading linearised about the untouched gel instead: g = L d with the pixel's
+// 2 x 3 matrix L (row then column; `linear`: [H, W, 6]), as the tables' cells are too coarse
+// for the small colour changes of gentle slopes. frame, empty: [H, W, 3].
 inline void indentation_gradient(const float* lut, int n, int ty, int tx, int H, int W, const float* frame,
-                                 const float* empty, int r, int c, float& g_row, float& g_col) {
+                                 const float* empty, const float* linear, float gentle, int r, int c, float& g_row,
+                                 float& g_col) {
     const uint64_t p = uint64_t(r) * uint64_t(W) + uint64_t(c);
     const float d[3] = {frame[3 * p] - empty[3 * p], frame[3 * p + 1] - empty[3 * p + 1], frame[3 * p + 2] - empty[3 * p + 2]};
     const float none[3] = {0, 0, 0};
@@ -48,6 +52,12 @@ inline void indentation_gradient(const float* lut, int n, int ty, int tx, int H,
     table_gradient(lut, n, ty, tx, H, W, r, c, none, zr, zc);
     g_row -= zr;
     g_col -= zc;
+    const float m2 = g_row * g_row + g_col * g_col;
+    if (gentle > 0.0f && m2 <= gentle * gentle) {
+        const float* L = &linear[6 * p];
+        g_row = (L[0] * d[0] + L[1] * d[1]) + L[2] * d[2];
+        g_col = (L[3] * d[0] + L[4] * d[1]) + L[5] * d[2];
+    }
 }
 
 // div(g) at (r, c) with numpy.gradient's differences (central inside, one-sided at the border).
@@ -65,8 +75,11 @@ inline float divergence(const float* grad, int H, int W, int r, int c) {
     return dr + dc;
 }
 
-// Red-black SOR for lap(z) = div(grad) where mask > 0.5, z = 0 elsewhere: `iterations` sweeps
-// (red, (r + c) even, then black), z zeroed first. Within a colour the updates are independent.
+// Red-black SOR for lap(z) = div(grad) where mask > 0.5, z = 0 elsewhere in the image: `iterations`
+// sweeps (red, (r + c) even, then black), z zeroed first. The image's own border is free, not
+// zero: a neighbour beyond it is a ghost continuing the pixel's gradient (z -/+ g), since a
+// contact larger than the window (a large object pressed gently) goes on beyond the frame.
+// Within a colour the updates are independent.
 inline void masked_poisson(const float* grad, const float* mask, int H, int W, int iterations, float omega, float* z) {
     const uint64_t HW = uint64_t(H) * uint64_t(W);
     std::fill(z, z + HW, 0.0f);
@@ -76,9 +89,12 @@ inline void masked_poisson(const float* grad, const float* mask, int H, int W, i
                 for (int c = (r + colour) % 2; c < W; c += 2) {
                     const uint64_t p = uint64_t(r) * uint64_t(W) + uint64_t(c);
                     if (!(mask[p] > 0.5f)) continue;
-                    const float nb = ((r > 0 ? z[p - uint64_t(W)] : 0.0f) + (r + 1 < H ? z[p + uint64_t(W)] : 0.0f)) +
-                                     ((c > 0 ? z[p - 1] : 0.0f) + (c + 1 < W ? z[p + 1] : 0.0f));
-                    z[p] = (1.0f - omega) * z[p] + omega * ((nb - divergence(grad, H, W, r, c)) * 0.25f);
+                    const float gr = grad[2 * p], gc = grad[2 * p + 1];
+                    const int inside = (r > 0) + (r + 1 < H) + (c > 0) + (c + 1 < W);
+                    if (inside == 0) continue;  // a 1 x 1 image: nothing pins it
+                    const float nb = ((r > 0 ? z[p - uint64_t(W)] : -gr) + (r + 1 < H ? z[p + uint64_t(W)] : gr)) +
+                                     ((c > 0 ? z[p - 1] : -gc) + (c + 1 < W ? z[p + 1] : gc));
+                    z[p] = (1.0f - omega) * z[p] + omega * ((nb - divergence(grad, H, W, r, c)) / float(inside));
                 }
 }
 

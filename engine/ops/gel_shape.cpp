@@ -1,8 +1,10 @@
 // The gel's shape from a frame (SPEC 9, docs/gel_shape.md), its two GPU steps:
-// gel_gradient: frame [H, W, 3], empty [H, W, 3] (grey levels), tables [T, n^3, 2]
-//   -> the indentation's gradient [H, W, 2] (params n, tiles_y, tiles_x; T = tiles_y * tiles_x);
+// gel_gradient: frame [H, W, 3], empty [H, W, 3] (grey levels), tables [T, n^3, 2], linear
+//   [H, W, 6] -> the indentation's gradient [H, W, 2] (params n, tiles_y, tiles_x, gentle; T =
+//   tiles_y * tiles_x): the tables' answer, or the linearised inverse where it is gentle;
 // masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact) -> the height [H, W]
-//   (params iterations, omega): red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside.
+//   (params iterations, omega): red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside
+//   it, the image's border free.
 // CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
 // shaders/masked_poisson.comp (one workgroup: the sweeps need a barrier between colours).
 #include <cmath>
@@ -23,14 +25,19 @@ int int_param(const Params& p, const char* k, double lo, double hi) {
 }
 
 std::vector<TensorDesc> gradient_infer(const std::vector<TensorDesc>& in, const Params& p) {
-    expect_input_count(in, 3, 3);
+    expect_input_count(in, 4, 4);
     expect_f32(in);
     const int n = int_param(p, "n", 2, 256), ty = int_param(p, "tiles_y", 1, 64), tx = int_param(p, "tiles_x", 1, 64);
+    const double gentle = p.get("gentle", -1);
+    if (!(gentle >= 0 && gentle < 1e6)) throw Error("gel_gradient: gentle must be >= 0 (0: the tables everywhere)");
     const Shape& f = in[0].shape;
     if (f.size() != 3 || f[2] != 3 || f[0] < 1 || f[1] < 1) throw Error("gel_gradient: the frame must be [H, W, 3], got " + shape_str(f));
     if (in[1].shape != f) throw Error("gel_gradient: the empty frame must be " + shape_str(f) + ", got " + shape_str(in[1].shape));
     const Shape want{int64_t(ty) * tx, int64_t(n) * n * n, 2};
     if (in[2].shape != want) throw Error("gel_gradient: the tables must be " + shape_str(want) + ", got " + shape_str(in[2].shape));
+    if (in[3].shape != Shape{f[0], f[1], 6})
+        throw Error("gel_gradient: the linear inverse must be " + shape_str({f[0], f[1], 6}) + ", got " + shape_str(in[3].shape));
+    to_u32(f[0] * f[1] * 6, "linear inverse size");
     to_u32(in[2].shape[0] * in[2].shape[1] * 2, "table size");
     to_u32(f[0] * f[1] * 3, "frame size");
     return {TensorDesc{{f[0], f[1], 2}}};
@@ -42,20 +49,22 @@ void gradient_cpu(const std::vector<const HostTensor*>& in, const std::vector<Ho
     for (int r = 0; r < H; ++r)
         for (int c = 0; c < W; ++c) {
             float* g = &out[0]->data[(size_t(r) * size_t(W) + size_t(c)) * 2];
-            gel::indentation_gradient(in[2]->data.data(), n, ty, tx, H, W, in[0]->data.data(), in[1]->data.data(), r, c, g[0], g[1]);
+            gel::indentation_gradient(in[2]->data.data(), n, ty, tx, H, W, in[0]->data.data(), in[1]->data.data(),
+                                      in[3]->data.data(), float(p.get("gentle", 0)), r, c, g[0], g[1]);
         }
 }
 
 void gradient_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    struct { int32_t H, W, n, ty, tx; } push{int32_t(a.in[0].shape[0]), int32_t(a.in[0].shape[1]), int32_t(a.params.get("n", 0)),
-                                             int32_t(a.params.get("tiles_y", 0)), int32_t(a.params.get("tiles_x", 0))};
+    struct { int32_t H, W, n, ty, tx; float gentle; } push{int32_t(a.in[0].shape[0]), int32_t(a.in[0].shape[1]), int32_t(a.params.get("n", 0)),
+                                                           int32_t(a.params.get("tiles_y", 0)), int32_t(a.params.get("tiles_x", 0)),
+                                                           float(a.params.get("gentle", 0))};
     const uint64_t HW = uint64_t(push.H) * uint64_t(push.W);
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(HW, local, d);
     check_loop_budget(d, (HW + uint64_t(groups) * local - 1) / (uint64_t(groups) * local) * 8, "gel_gradient");
-    a.seq.dispatch(pipeline(a.ctx, "gel_gradient", 4, sizeof(push), {local}),
+    a.seq.dispatch(pipeline(a.ctx, "gel_gradient", 5, sizeof(push), {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.out[0].view, rt::Access::Write}},
+                    {a.in[3].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
 
@@ -91,7 +100,7 @@ void poisson_gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_gel_gradient{"gel_gradient", gradient_infer, gradient_cpu, gradient_gpu, 0, {"n", "tiles_y", "tiles_x"}};
+const OpDef op_gel_gradient{"gel_gradient", gradient_infer, gradient_cpu, gradient_gpu, 0, {"n", "tiles_y", "tiles_x", "gentle"}};
 const OpDef op_masked_poisson{"masked_poisson", poisson_infer, poisson_cpu, poisson_gpu, 0, {"iterations", "omega"}};
 
 }  // namespace vtloc::ops

@@ -36,6 +36,7 @@ const OpDef* const kOps[] = {
     &ops::op_expected_distance,
     &ops::op_gel_gradient,
     &ops::op_masked_poisson,
+    &ops::op_gel_contact_mask,
     &ops::op_codebook_render,
     &ops::op_codebook_score,
     &ops::op_fps,

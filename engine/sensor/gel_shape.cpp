@@ -4,10 +4,10 @@
 #include <cmath>
 #include <string>
 
-#include <opencv2/imgproc.hpp>
-
 #include "base/error.h"
+#include "engine/ops/gel_mask.h"
 #include "engine/ops/gel_ops.h"
+#include "engine/sensor/gel_linear_inverse.h"
 #include "engine/sensor/gel_shading.h"
 
 namespace vtloc::sensor {
@@ -40,37 +40,12 @@ void fill_empty(std::vector<double>& val, std::vector<double>& cnt, int n) {
     }
 }
 
-cv::Mat disc(int r) {
-    cv::Mat k(2 * r + 1, 2 * r + 1, CV_8U, cv::Scalar(0));
-    for (int y = -r; y <= r; ++y)
-        for (int x = -r; x <= r; ++x) k.at<uint8_t>(y + r, x + r) = x * x + y * y <= r * r;
-    return k;
-}
-
-// m (0/1) with its holes filled: background not 4-connected to the border joins it.
-cv::Mat fill_holes(const cv::Mat& m) {
-    cv::Mat bg;
-    cv::copyMakeBorder(1 - m, bg, 1, 1, 1, 1, cv::BORDER_CONSTANT, cv::Scalar(1));
-    cv::floodFill(bg, cv::Point(0, 0), cv::Scalar(2), nullptr, cv::Scalar(0), cv::Scalar(0), 4);
-    return cv::Mat(bg(cv::Rect(1, 1, m.cols, m.rows)) != 2) / 255;
-}
-
-// The largest 4-connected piece of m (0/1), its holes filled.
-cv::Mat largest_piece(const cv::Mat& m) {
-    cv::Mat labels, stats, centroids;
-    const int n = cv::connectedComponentsWithStats(m, labels, stats, centroids, 4, CV_32S);
-    int best = 0, area = 0;
-    for (int l = 1; l < n; ++l)
-        if (stats.at<int>(l, cv::CC_STAT_AREA) > area) area = stats.at<int>(l, cv::CC_STAT_AREA), best = l;
-    return fill_holes(best ? cv::Mat(cv::Mat(labels == best) / 255) : cv::Mat::zeros(m.size(), CV_8U));
-}
-
 }  // namespace
 
 GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int tiles_x, int step) {
     if (n < 2 || n > 256 || tiles_y < 1 || tiles_x < 1 || step < 1) throw Error("gradient table: bad size");
     const int H = c.height, W = c.width, NB = c.bins - 1;  // the last bins are reached only at exactly 90 deg / +pi
-    GradientLut lut{n, tiles_y, tiles_x, H, W, {}};
+    GradientLut lut{n, tiles_y, tiles_x, H, W, {}, build_linear_inverse(c)};
     lut.table.assign(size_t(tiles_y) * tiles_x * n * n * n * 2, 0.f);
     std::vector<float> flat;
     GelShader(c).shade(c.depth_bg, flat);
@@ -116,20 +91,7 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
 
 std::vector<uint8_t> contact_mask(const std::vector<float>& grad, int H, int W, const ShapeOptions& o) {
     if (grad.size() != size_t(H) * size_t(W) * 2) throw Error("contact mask: the gradient must be H x W x 2");
-    cv::Mat mag(H, W, CV_64F);
-    for (size_t p = 0; p < size_t(H) * size_t(W); ++p)
-        mag.at<double>(int(p / size_t(W)), int(p % size_t(W))) = std::hypot(double(grad[2 * p]), double(grad[2 * p + 1]));
-    // Where the mean slope over 3x3 passes the threshold; closed and filled before the opening: a
-    // shallow press's steep ring is thinner than the opening's disc, and only its filled disc
-    // survives it; then the largest piece.
-    cv::blur(mag, mag, cv::Size(3, 3), cv::Point(-1, -1), cv::BORDER_REPLICATE);
-    cv::Mat m = mag > o.mask_threshold;
-    m /= 255;
-    if (o.close_radius > 0) cv::morphologyEx(m, m, cv::MORPH_CLOSE, disc(o.close_radius));
-    m = fill_holes(m);
-    if (o.open_radius > 0) cv::morphologyEx(m, m, cv::MORPH_OPEN, disc(o.open_radius));
-    m = largest_piece(m);
-    return std::vector<uint8_t>(m.datastart, m.dataend);
+    return ops::gel::contact_mask(grad.data(), H, W, float(o.mask_threshold), o.close_radius, o.open_radius);
 }
 
 GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vector<uint8_t>& frame,
@@ -138,14 +100,16 @@ GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vect
     const size_t HW = size_t(H) * W;
     if (frame.size() != HW * 3 || empty.size() != HW * 3)
         throw Error("gel shape: frames must be " + std::to_string(W) + "x" + std::to_string(H) + " RGB, the calibration's size");
-    if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
+    if (lut.height != H || lut.width != W || lut.linear.size() != HW * 6)
+        throw Error("gel shape: the gradient table belongs to another calibration");
     // The indentation's gradient, as op gel_gradient computes it.
     const std::vector<float> f(frame.begin(), frame.end()), e(empty.begin(), empty.end());
     std::vector<float> grad(HW * 2);
     for (int r = 0; r < H; ++r)
         for (int col = 0; col < W; ++col) {
             float* g = &grad[(size_t(r) * W + size_t(col)) * 2];
-            ops::gel::indentation_gradient(lut.table.data(), lut.n, lut.tiles_y, lut.tiles_x, H, W, f.data(), e.data(), r, col, g[0], g[1]);
+            ops::gel::indentation_gradient(lut.table.data(), lut.n, lut.tiles_y, lut.tiles_x, H, W, f.data(), e.data(), lut.linear.data(),
+                                           float(o.gentle_slope), r, col, g[0], g[1]);
         }
     GelShape s;
     s.height = H, s.width = W;

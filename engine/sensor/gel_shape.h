@@ -3,8 +3,9 @@
 // against the sensor's empty frame, inverted through the calibration into the
 // gel surface's gradient (per-tile lookup tables), a contact mask from the
 // indentation's gradient, and a Poisson solve inside the mask for the
-// indentation. The gradient and the solve are ops gel_gradient and
-// masked_poisson's CPU references (engine/ops/gel_ops.h); the mask is OpenCV's. docs/gel_shape.md gives the method, its constants and what the
+// indentation. The gradient, the mask and the solve are ops gel_gradient,
+// gel_contact_mask and masked_poisson's CPU references (engine/ops/gel_ops.h,
+// engine/ops/gel_mask.h). docs/gel_shape.md gives the method, its constants and what the
 // 49 real ball presses say of it.
 #include <array>
 #include <cstdint>
@@ -22,12 +23,21 @@ namespace vtloc::sensor {
 // cells take the mean of their filled neighbours, repeatedly.
 struct GradientLut {
     int n = 64, tiles_y = 3, tiles_x = 4, height = 0, width = 0;
-    std::vector<float> table;  // [tiles_y][tiles_x][n][n][n][2]
+    std::vector<float> table;   // [tiles_y][tiles_x][n][n][n][2]
+    std::vector<float> linear;  // [H][W][6]: build_linear_inverse, for gentle slopes
 };
 GradientLut build_gradient_lut(const Calibration& c, int n = 64, int tiles_y = 3, int tiles_x = 4, int step = 4);
 
+// The mask threshold for frames rendered by vtloc synth's renderer, whose presses (a large object,
+// 0.3-1.5 mm) are gentle: chosen on renders of the procedural solids (docs/gel_shape.md). The
+// default 0.7 is the real sensor's, from its ball presses, whose non-local halo the renderer lacks.
+inline constexpr double kRenderedMaskThreshold = 0.05;
+
 struct ShapeOptions {
     double mask_threshold = 0.7;  // on the 3x3 mean of the indentation's gradient magnitude
+    // Where the tables' slope is at most this, the linearised inverse (gel_linear_inverse.h)
+    // gives the gradient; 0: the tables everywhere. Fitted on renders of the procedural solids.
+    double gentle_slope = 0.35;
     int open_radius = 2, close_radius = 2;  // the mask's opening and closing (discs, pixels)
     int sor_iterations = 50;      // red-black SOR sweeps of the Poisson solve
     double sor_omega = 1.85;
@@ -40,7 +50,8 @@ struct GelShape {
     std::vector<uint8_t> mask;              // the contact (0/1)
 };
 
-// The contact (0/1, H x W) from the indentation's gradient [H, W, 2] (row, col).
+// The contact (0/1, H x W) from the indentation's gradient [H, W, 2] (row, col): op
+// gel_contact_mask's reference (a radius <= 0: no closing / opening).
 std::vector<uint8_t> contact_mask(const std::vector<float>& grad, int H, int W, const ShapeOptions& o = {});
 
 // frame, empty: H x W x 3 in the calibration's stored channel order (its size).

@@ -8,24 +8,25 @@ namespace vtloc::sensor {
 
 struct GelShapeGpu::Impl {
     WeightStore weights;
-    std::unique_ptr<GpuExecutor> gradient, poisson;
+    std::unique_ptr<GpuExecutor> exec;
 };
 
 GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options)
     : calib_(std::move(calib)), opt_(options), impl_(std::make_unique<Impl>()) {
     const int64_t H = calib_.height, W = calib_.width, n = lut.n, T = int64_t(lut.tiles_y) * lut.tiles_x;
     if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
+    if (lut.linear.size() != size_t(H * W * 6)) throw Error("gel shape: the gradient table has no linear inverse");
     impl_->weights.add("gel.tables", HostTensor({T, n * n * n, 2}, std::move(lut.table)));
+    impl_->weights.add("gel.linear", HostTensor({H, W, 6}, std::move(lut.linear)));
     Graph g;
-    g.output(ops::gel_gradient(g, g.input("frame", {H, W, 3}), g.input("empty", {H, W, 3}), g.weight("gel.tables", {T, n * n * n, 2}),
-                               n, lut.tiles_y, lut.tiles_x, "gel.gradient"),
-             "gradient");
-    impl_->gradient = std::make_unique<GpuExecutor>(ctx, g, impl_->weights);
-    Graph p;
-    p.output(ops::masked_poisson(p, p.input("gradient", {H, W, 2}), p.input("mask", {H, W}), opt_.sor_iterations, opt_.sor_omega,
-                                 "gel.height"),
-             "height");
-    impl_->poisson = std::make_unique<GpuExecutor>(ctx, p, impl_->weights);
+    const int grad = ops::gel_gradient(g, g.input("frame", {H, W, 3}), g.input("empty", {H, W, 3}),
+                                       g.weight("gel.tables", {T, n * n * n, 2}), g.weight("gel.linear", {H, W, 6}), n,
+                                       lut.tiles_y, lut.tiles_x, opt_.gentle_slope, "gel.gradient");
+    const int mask = ops::gel_contact_mask(g, grad, opt_.mask_threshold, opt_.close_radius, opt_.open_radius, "gel.mask");
+    g.output(grad, "gradient");
+    g.output(mask, "mask");
+    g.output(ops::masked_poisson(g, grad, mask, opt_.sor_iterations, opt_.sor_omega, "gel.height"), "height");
+    impl_->exec = std::make_unique<GpuExecutor>(ctx, g, impl_->weights);
 }
 
 GelShapeGpu::~GelShapeGpu() = default;
@@ -37,16 +38,15 @@ GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<u
         throw Error("gel shape: frames must be " + std::to_string(W) + "x" + std::to_string(H) + " RGB, the calibration's size");
     HostTensor f({H, W, 3}), e({H, W, 3});
     for (size_t i = 0; i < HW * 3; ++i) f.data[i] = frame[i], e.data[i] = empty[i];
-    TensorMap out = impl_->gradient->run({{"frame", f}, {"empty", e}});
-    HostTensor grad = std::move(out.at("gradient"));
+    const TensorMap out = impl_->exec->run({{"frame", f}, {"empty", e}});
+    const HostTensor &grad = out.at("gradient"), &mask = out.at("mask"), &z = out.at("height");
     GelShape s;
     s.height = H, s.width = W;
-    s.grad_row.resize(HW), s.grad_col.resize(HW);
-    for (size_t p = 0; p < HW; ++p) s.grad_row[p] = grad.data[2 * p], s.grad_col[p] = grad.data[2 * p + 1];
-    s.mask = contact_mask(grad.data, H, W, opt_);
-    HostTensor mask({H, W});
-    for (size_t p = 0; p < HW; ++p) mask.data[p] = s.mask[p];
-    const HostTensor z = impl_->poisson->run({{"gradient", grad}, {"mask", mask}}).at("height");
+    s.grad_row.resize(HW), s.grad_col.resize(HW), s.mask.resize(HW);
+    for (size_t p = 0; p < HW; ++p) {
+        s.grad_row[p] = grad.data[2 * p], s.grad_col[p] = grad.data[2 * p + 1];
+        s.mask[p] = mask.data[p] > 0.5f;
+    }
     s.depth_mm.resize(HW);
     for (size_t p = 0; p < HW; ++p) s.depth_mm[p] = s.mask[p] ? float(double(z.data[p]) * calib_.mm_per_px) : 0.0f;
     return s;

@@ -1,8 +1,7 @@
 #pragma once
-// The gel's shape from a frame on the GPU (SPEC 9): op gel_gradient, the
-// contact mask on the CPU (engine/sensor/gel_shape: OpenCV's morphology on
-// 120 x 160 pixels), then op masked_poisson. Holds the calibration's tables as
-// resident weights and one executor per graph.
+// The gel's shape from a frame on the GPU (SPEC 9): ops gel_gradient,
+// gel_contact_mask and masked_poisson in one graph, one submit a frame. Holds
+// the calibration's tables as resident weights.
 #include <cstdint>
 #include <memory>
 #include <vector>

@@ -443,6 +443,13 @@ struct GelShapeOptions {
     std::string calibration;       // a Taxim-style calibration file; empty: the shipped GelSight one
     double mask_threshold = 0.7;   // the contact: 3x3 mean slope above this (fitted on the real presses)
     int iterations = 50;           // red-black SOR sweeps of the height
+    // For frames rendered by `vtloc synth` (gentle presses of large objects, no optical halo): a
+    // mask threshold of 0.05, chosen on renders of the procedural solids (docs/gel_shape.md).
+    static GelShapeOptions rendered_frames() {
+        GelShapeOptions o;
+        o.mask_threshold = 0.05;
+        return o;
+    }
 };
 
 struct GelShape {
