@@ -73,3 +73,35 @@ TEST_CASE("gel shape reader: a larger frame of the same aspect is resampled, oth
     bad.calibration = "/no/such/calib.safetensors";
     CHECK_THROWS_WITH(api::GelShapeReader(ctx, bad), Catch::Contains("/no/such/calib.safetensors"));
 }
+
+TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the shapes themselves", "[api][tracker]") {
+    // Two gentle caps pressed into the gel, one motion between them, on the potato; the terms are
+    // computed once (touch_term) and reused, as vtloc eval does across windows.
+    api::Context ctx;
+    api::TrackerOptions o;
+    o.hypotheses = 20000;
+    api::Tracker t(ctx, std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply", o);
+    auto cap = [](double r0, double c0) {
+        api::GelShape g;
+        g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
+        for (int r = 0; r < g.height; ++r)
+            for (int c = 0; c < g.width; ++c) {
+                const double y = r * g.mm_per_px - r0, x = c * g.mm_per_px - c0;
+                g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0)));
+            }
+        return g;
+    };
+    const api::GelShape a = cap(7.5, 10.0), b = cap(6.0, 11.0);
+    const api::Motion m{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {3, 0, 0}};
+    const api::TrackerEstimate direct = t.evaluate_window({m}, {}, nullptr, {&a, &b});
+    const std::vector<std::vector<float>> terms{t.touch_term(nullptr, nullptr, &a), t.touch_term(nullptr, nullptr, &b)};
+    const api::TrackerEstimate reused = t.evaluate_window_terms({m}, terms);
+    CHECK(terms[0] == t.shape_term(a));
+    CHECK(reused.sample_belief == direct.sample_belief);
+    CHECK(reused.contact == direct.contact);
+    CHECK(t.touch_term(nullptr, nullptr, nullptr).empty());  // no network, no shape: no term
+    CHECK(t.evaluate_window_terms({m}, {{}, {}}).sample_belief == t.evaluate_window({m}).sample_belief);
+    CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0]}), Catch::Contains("1 touch terms for 2 touches"));
+    CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0], std::vector<float>(7)}), Catch::Contains("7"));
+    CHECK(ctx.take_validation_messages().empty());
+}

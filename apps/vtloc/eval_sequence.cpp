@@ -13,6 +13,7 @@
 #include <random>
 #include <set>
 #include <sstream>
+#include <tuple>
 
 #include "apps/vtloc/eval.h"
 #include "engine/io/line_chart.h"
@@ -226,6 +227,8 @@ int run_sequence(Session& s, const Args& a) {
                 throw api::Error(o.folder + "/touches.csv: the collection order skips " + std::to_string(i));
         std::optional<api::Object> encoded;
         std::map<size_t, api::TouchResult> results;
+        // (hypothesis set: 0 surface, 1 candidates; row; tour index) -> that touch's term.
+        std::map<std::tuple<int, std::string, size_t>, std::vector<float>> term_cache;
         // Render-and-compare: each touch's gel shape read from its frame, and the renderer's own
         // indentation map (the oracle) where the dataset has them.
         std::map<size_t, api::GelShape> measured, oracle;
@@ -243,6 +246,10 @@ int run_sequence(Session& s, const Args& a) {
         }
         for (size_t end = 7; end < tour.size(); ++end) {
             if (tour[end]->split != end_split) continue;
+            // Windows end later and later: terms of touches before the longest window's start go.
+            const size_t longest = size_t(*std::max_element(Ts.begin(), Ts.end())), first = end + 1 > longest ? end + 1 - longest : 0;
+            for (auto it = term_cache.begin(); it != term_cache.end();)
+                it = std::get<2>(it->first) < first ? term_cache.erase(it) : std::next(it);
             const sim::TouchRecord& truth = *tour[end];
             for (bool with_noise : {false, true}) {
                 if (with_noise && !noise) continue;
@@ -267,29 +274,38 @@ int run_sequence(Session& s, const Args& a) {
                         if ((rc && !render_compare) || (orc && !has_oracle)) continue;
                         const std::string row_name = rc ? "render" : orc ? "oracle" : test_only ? "network-test" : net ? "network" : "geometry";
                         if (!rows_wanted.count(row_name)) continue;
-                        std::vector<const api::GelShape*> shapes;
-                        if (rc || orc)
+                        // Each touch's term once per row and hypothesis set (the clean and the noisy filter
+                        // share theirs): a touch sits in up to 8 windows.
+                        auto window_terms = [&](api::Tracker& scorer, int set) {
+                            std::vector<std::vector<float>> terms;
                             for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
-                                auto& cache = rc ? measured : oracle;
-                                if (!cache.count(i)) {
-                                    const std::string img = image_path(o, *tour[i]);
-                                    cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
-                                                  : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(), d.sensor.mm_per_px);
+                                const auto key = std::make_tuple(set, row_name, i);
+                                auto it = term_cache.find(key);
+                                if (it == term_cache.end()) {
+                                    const api::GelShape* g = nullptr;
+                                    if (rc || orc) {
+                                        auto& cache = rc ? measured : oracle;
+                                        if (!cache.count(i)) {
+                                            const std::string img = image_path(o, *tour[i]);
+                                            cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
+                                                          : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(),
+                                                                                  d.sensor.mm_per_px);
+                                        }
+                                        g = &cache[i];
+                                    }
+                                    const api::TouchResult* r = nullptr;
+                                    if (net && !(test_only && tour[i]->split != "test")) {
+                                        if (!results.count(i))
+                                            results[i] = model->localize(*encoded, api::load_tactile_image(image_path(o, *tour[i])));
+                                        r = &results[i];
+                                    }
+                                    it = term_cache.emplace(key, scorer.touch_term(r, net ? &*encoded : nullptr, g)).first;
                                 }
-                                shapes.push_back(&cache[i]);
+                                terms.push_back(it->second);
                             }
-                        std::vector<const api::TouchResult*> res;
-                        if (net)
-                            for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
-                                if (test_only && tour[i]->split != "test") {
-                                    res.push_back(nullptr);
-                                    continue;
-                                }
-                                if (!results.count(i))
-                                    results[i] = model->localize(*encoded, api::load_tactile_image(image_path(o, *tour[i])));
-                                res.push_back(&results[i]);
-                            }
-                        const api::TrackerEstimate e = tracker.evaluate_window(motions, res, net ? &*encoded : nullptr, shapes);
+                            return terms;
+                        };
+                        const api::TrackerEstimate e = tracker.evaluate_window_terms(motions, window_terms(clean, 0));
                         Score sc;
                         sc.n = 1;
                         sc.mm = dist(e.contact, truth.contact);
@@ -322,7 +338,7 @@ int run_sequence(Session& s, const Args& a) {
                         sc.mass5 = e.mass_within_5mm;
                         // Candidates protocol: the belief over the candidates' poses alone; the answer is the
                         // candidate of least expected distance under it.
-                        const api::TrackerEstimate ec = cand_tracker.evaluate_window(motions, res, net ? &*encoded : nullptr, shapes);
+                        const api::TrackerEstimate ec = cand_tracker.evaluate_window_terms(motions, window_terms(cand_clean, 1));
                         double best = INFINITY;
                         P3 pick{};
                         for (size_t c = 0; c < cand_points.size(); ++c) {

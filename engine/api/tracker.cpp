@@ -228,6 +228,21 @@ TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, con
     });
 }
 
+std::vector<float> Tracker::touch_term(const TouchResult* network, const Object* object, const GelShape* shape) {
+    return guarded([&] { return impl_->touch_field(network, object, shape, 1); });
+}
+
+TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms) {
+    return guarded([&] {
+        std::vector<track::Rigid> m;
+        for (const Motion& x : motions) m.push_back(to_rigid(x));
+        if (!terms.empty() && terms.size() != motions.size() + 1)
+            throw Error("window: " + std::to_string(terms.size()) + " touch terms for " + std::to_string(motions.size() + 1) + " touches");
+        const bool any = std::any_of(terms.begin(), terms.end(), [](const std::vector<float>& t) { return !t.empty(); });
+        return impl_->convert(impl_->tracker.evaluate_window(m, any ? terms : std::vector<std::vector<float>>{}), int(motions.size() + 1));
+    });
+}
+
 std::vector<float> Tracker::shape_term(const GelShape& shape) {
     return guarded([&] { return impl_->shape_field(&shape, 1); });
 }

@@ -417,6 +417,12 @@ public:
                                     const std::vector<const GelShape*>& shapes = {});
     // Render-and-compare's log term of one gel shape over the hypotheses (belief() order).
     std::vector<float> shape_term(const GelShape& shape);
+    // One touch's whole log term (the network's heat-map on `object` and/or render-and-compare of
+    // its gel shape; empty: neither), to be reused: the windows of an evaluation share touches,
+    // and evaluate_window_terms scores none of them again.
+    std::vector<float> touch_term(const TouchResult* network, const Object* object, const GelShape* shape);
+    // The windowed form over precomputed touch_term()s (one per touch; empty vectors: none).
+    TrackerEstimate evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms);
     std::vector<float> belief() const;        // over hypotheses, sums to 1
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
