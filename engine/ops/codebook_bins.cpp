@@ -7,6 +7,11 @@
 
 namespace vtloc::ops::book {
 
+void BinnedPoints::cell_of(const float* p, int64_t c[3]) const {
+    const float inv = float(1.0 / coarse);
+    for (int k = 0; k < 3; ++k) c[k] = std::clamp<int64_t>(int64_t(std::floor((p[k] - origin[k]) * inv)), 0, dims[k] - 1);
+}
+
 BinnedPoints bin_points(const std::vector<float>& dense, double coarse) {
     const int64_t D = int64_t(dense.size() / 6);
     if (D == 0 || dense.size() % 6) throw Error("codebook: no surface points to render");
@@ -22,8 +27,8 @@ BinnedPoints bin_points(const std::vector<float>& dense, double coarse) {
     for (int k = 0; k < 3; ++k) b.dims[k] = std::clamp<int64_t>(int64_t(std::floor((hi[k] - b.origin[k]) * inv)) + 1, 1, 64);
     auto bin_of = [&](const float* p) {
         int64_t c[3];
-        for (int k = 0; k < 3; ++k) c[k] = std::clamp<int64_t>(int64_t(std::floor((p[k] - b.origin[k]) * inv)), 0, b.dims[k] - 1);
-        return (c[2] * b.dims[1] + c[1]) * b.dims[0] + c[0];
+        b.cell_of(p, c);
+        return b.index_of(c);
     };
     const int64_t NB = b.dims[0] * b.dims[1] * b.dims[2];
     std::vector<int32_t> count(size_t(NB), 0), first(size_t(NB) + 1, 0);

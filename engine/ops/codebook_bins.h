@@ -13,6 +13,9 @@ struct BinnedPoints {
     double coarse = 1;
     int64_t dims[3] = {1, 1, 1};
     int64_t max_bin = 1;
+    // The bin (x, y, z) holding point p, clamped to the grid; its index (z * ny + y) * nx + x.
+    void cell_of(const float* p, int64_t c[3]) const;
+    int64_t index_of(const int64_t c[3]) const { return (c[2] * dims[1] + c[1]) * dims[0] + c[0]; }
 };
 // dense [D, 6]: points and normals. Bins of at least `coarse` mm, at most 64 per axis.
 // Throws vtloc::Error for no points or a bin size <= 0.

@@ -47,18 +47,17 @@ namespace {
 double cloud_density(const Surface& s) {
     const BinnedPoints b = bin_points(s.dense, 0.5);
     const int64_t D = s.n_dense(), step = std::max<int64_t>(1, D / 2000);
-    const float inv = float(1.0 / b.coarse);
     double sum = 0;
     int64_t n = 0;
     for (int64_t i = 0; i < D; i += step, ++n) {
         const float* p = &s.dense[size_t(6 * i)];
         int64_t c[3];
-        for (int k = 0; k < 3; ++k) c[k] = std::clamp<int64_t>(int64_t(std::floor((p[k] - b.origin[k]) * inv)), 0, b.dims[k] - 1);
+        b.cell_of(p, c);
         double best = b.coarse * b.coarse;
         for (int64_t z = std::max<int64_t>(0, c[2] - 1); z <= std::min(b.dims[2] - 1, c[2] + 1); ++z)
             for (int64_t y = std::max<int64_t>(0, c[1] - 1); y <= std::min(b.dims[1] - 1, c[1] + 1); ++y)
                 for (int64_t x = std::max<int64_t>(0, c[0] - 1); x <= std::min(b.dims[0] - 1, c[0] + 1); ++x) {
-                    const int64_t bin = (z * b.dims[1] + y) * b.dims[0] + x;
+                    const int64_t at[3] = {x, y, z}, bin = b.index_of(at);
                     for (int32_t k = b.bins[size_t(2 * bin)]; k < b.bins[size_t(2 * bin)] + b.bins[size_t(2 * bin + 1)]; ++k) {
                         const float* q = &b.points[size_t(6 * k)];
                         const double d = double(q[0] - p[0]) * (q[0] - p[0]) + double(q[1] - p[1]) * (q[1] - p[1]) + double(q[2] - p[2]) * (q[2] - p[2]);
