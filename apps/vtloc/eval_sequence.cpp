@@ -179,14 +179,20 @@ int run_sequence(Session& s, const Args& a) {
     }
     const bool render_compare = a.flag("--render-compare");
     // --rows: only these rows (fitting a knob needs only the rows it moves).
-    std::set<std::string> rows_wanted{"geometry", "network", "network-test", "render", "oracle"};
+    const std::set<std::string> all_rows{"geometry", "network", "network-test", "render", "oracle"};
+    std::set<std::string> rows_wanted = all_rows;
     if (auto r = a.get("--rows")) {
         rows_wanted.clear();
         std::stringstream ss(*r);
         std::string item;
-        while (std::getline(ss, item, ','))
-            if (item == "geometry" || item == "network" || item == "network-test" || item == "render" || item == "oracle") rows_wanted.insert(item);
-            else throw UsageError("--rows takes geometry, network, network-test, render, oracle; got '" + item + "'");
+        while (std::getline(ss, item, ',')) {
+            if (!all_rows.count(item)) {
+                std::string names;
+                for (const std::string& n : all_rows) names += (names.empty() ? "" : ", ") + n;
+                throw UsageError("--rows takes " + names + "; got '" + item + "'");
+            }
+            rows_wanted.insert(item);
+        }
     }
     std::optional<api::GelShapeReader> reader;
     if (render_compare) reader.emplace(s.gpu(), api::GelShapeOptions::rendered_frames());
