@@ -161,7 +161,7 @@ TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[code
     test::require_no_validation_messages();
 }
 
-TEST_CASE("a rendered touch scores its own pose near the top", "[codebook][slow]") {
+TEST_CASE("a rendered touch scores its own pose near the top", "[codebook]") {
     const track::Surface s = prism_surface(20000);
     const track::Codebook b = track::render_codebook(&test::gpu(), s, {});
     track::CodebookScorer scorer(&test::gpu(), b, s, 1.0);
