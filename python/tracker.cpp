@@ -140,12 +140,24 @@ void bind_tracker(py::module_& m) {
         .def("estimate", [](const api::Tracker& t) { return estimate_dict(t.estimate()); })
         .def(
             "evaluate_window",
-            [](api::Tracker& t, const py::list& motions) {
+            [](api::Tracker& t, const py::list& motions, const py::object& terms) {
                 std::vector<api::Motion> ms;
                 for (size_t i = 0; i < motions.size(); ++i) ms.push_back(to_motion(motions[i], "motions[" + std::to_string(i) + "]"));
-                return estimate_dict(t.evaluate_window(ms));
+                if (terms.is_none()) return estimate_dict(t.evaluate_window(ms));
+                std::vector<std::vector<float>> ts;
+                for (const py::handle& h : terms.cast<py::list>()) {
+                    if (h.is_none()) {
+                        ts.emplace_back();
+                        continue;
+                    }
+                    const auto a = h.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
+                    ts.emplace_back(a.data(), a.data() + a.size());
+                }
+                return estimate_dict(t.evaluate_window_terms(ms, ts));
             },
-            py::arg("motions"), "The windowed form (geometry only): a list of the W - 1 motions between W touches.")
+            py::arg("motions"), py::arg("terms") = py::none(),
+            "The windowed form: a list of the W - 1 motions between W touches; terms: one log term per touch "
+            "(shape_term's, or None), computed once and reused across windows.")
         .def_property_readonly("touches", &api::Tracker::touches)
         .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })
         .def_property_readonly("sample_points", [](const api::Tracker& t) {

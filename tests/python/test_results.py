@@ -209,5 +209,15 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     # A second tracker reads the cache and scores the same.
     t2 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
     assert np.array_equal(t2.shape_term(shape), term)
+    # The windowed form over precomputed terms: the same as the geometry alone when none, and the term
+    # counts when given.
+    step = np.eye(4)
+    step[0, 3] = 3.0
+    geo = t.evaluate_window([step])
+    assert np.array_equal(t.evaluate_window([step], terms=[None, None])["sample_belief"], geo["sample_belief"])
+    both = t.evaluate_window([step], terms=[term, term])
+    assert not np.array_equal(both["sample_belief"], geo["sample_belief"])
+    with pytest.raises(vtloc.Error, match="1 touch terms for 2 touches"):
+        t.evaluate_window([step], terms=[term])
     with pytest.raises(vtloc.Error, match="depth_mm and mm_per_px"):
         t.add_touch(np.eye(4), shape={"depth_mm": shape["depth_mm"]})
