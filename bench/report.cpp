@@ -122,6 +122,21 @@ void tracker(std::FILE* f, const json& t) {
     std::fprintf(f, "  surface built in %.0f ms (once per object)\n", any["surface_build_ms"].get<double>());
 }
 
+// The gel stage (SPEC 9): a frame's shape and one touch's render-and-compare.
+void gel(std::FILE* f, const json& g) {
+    std::fprintf(f, "\n== the gel's shape and render-and-compare (%s, %dx%d) ==\n", g["frame"].get<std::string>().c_str(),
+                 g["size"][0].get<int>(), g["size"][1].get<int>());
+    if (g.contains("shape_ms")) std::fprintf(f, "  shape of one frame, GPU      %10.2f ms\n", med(g["shape_ms"]));
+    std::fprintf(f, "  shape of one frame, CPU ref  %10.2f ms\n", med(g["shape_cpu_ms"]));
+    if (g.contains("codebook")) {
+        const json& c = g["codebook"];
+        std::fprintf(f, "  codebook of %s: %lld hypotheses, %lld dense points, rendered in %.0f ms (once per object)\n",
+                     c["object"].get<std::string>().c_str(), c["hypotheses"].get<long long>(), c["dense_points"].get<long long>(),
+                     c["render_ms"].get<double>());
+        std::fprintf(f, "  one touch scored against it  %10.2f ms\n", med(c["score_ms"]));
+    }
+}
+
 }  // namespace
 
 void print_report(const json& r, std::FILE* f) {
@@ -167,6 +182,7 @@ void print_report(const json& r, std::FILE* f) {
         for (auto& [k, v] : r["engine_over_pytorch"].items()) std::fprintf(f, "  %-20s %10.3g\n", k.c_str(), v.get<double>());
     }
     if (r.contains("tracker")) tracker(f, r["tracker"]);
+    if (r.contains("gel")) gel(f, r["gel"]);
     if (r.contains("cpu_over_gpu")) {
         std::fprintf(f, "\n== CPU reference / GPU (times, higher = GPU faster) ==\n");
         for (auto& [k, v] : r["cpu_over_gpu"].items()) std::fprintf(f, "  %-20s %10.3gx\n", k.c_str(), v.get<double>());

@@ -14,7 +14,9 @@
 #include "bench/model_bench.h"
 #include "bench/probe.h"
 #include "bench/report.h"
+#include "bench/gel_bench.h"
 #include "bench/tracker_bench.h"
+#include "engine/io/touch_sequence.h"
 #include "bench/validation.h"
 #include "bench/versus.h"
 #include "base/error.h"
@@ -61,6 +63,9 @@ const char* kUsage = R"(usage: vtloc-bench [options]
   --tracker-touches N  touches per tracker run, the tour's motions repeated (default 12; the
                        steady state past the window of 8 is what is timed)
   --no-tracker         skip the tracker stage
+  --no-gel             skip the gel stage (SPEC 9): the gel's shape from one real frame, on the GPU
+                       and the CPU reference, and render-and-compare on the tracker stage's object
+                       (its codebook rendered once, one touch scored)
   --no-probe           skip the fma peak probe
   --json FILE          write the report as JSON
   --plot FILE.png      draw latency over N and the per-stage breakdown
@@ -74,7 +79,7 @@ struct Args {
     std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
     bench::ModelBenchOptions opt;
     int cpu_reps = 2, tracker_touches = 12;
-    bool probe = true, vs_pytorch = false, tracker = true;
+    bool probe = true, vs_pytorch = false, tracker = true, gel = true;
     std::string tracker_tour;
 };
 
@@ -111,6 +116,10 @@ Args parse(int argc, char** argv) {
         }
         if (f == "--no-tracker") {
             a.tracker = false;
+            continue;
+        }
+        if (f == "--no-gel") {
+            a.gel = false;
             continue;
         }
         if (f == "--vs-pytorch") {
@@ -344,6 +353,14 @@ int run(int argc, char** argv) {
         tr["cpu"] = bench::measure_tracker(nullptr, t);
         if (tr.contains("gpu") && med(tr["gpu"]["touch_ms"]) > 0)
             tr["cpu_over_gpu"] = med(tr["cpu"]["touch_ms"]) / med(tr["gpu"]["touch_ms"]);
+    }
+
+    if (a.gel) {
+        bench::GelBenchOptions g;
+        const std::string tour = !a.tracker_tour.empty() ? a.tracker_tour : (data_dir() / "examples" / "potato_tour.json").string();
+        g.object = io::read_touch_sequence(tour).object;
+        g.reps = ctx ? a.opt.reps : a.cpu_reps;
+        report["gel"] = bench::measure_gel(ctx.get(), g);
     }
 
     if (ctx) {  // with VTLOC_VALIDATION=1 (the smoke test), a validation message fails the run

@@ -135,6 +135,14 @@ def main(path, plot, reps, iters, batches, points):
         positive(x["surface_build_ms"], f"tracker.{b}.surface_build_ms")
     need(t["gpu"]["hypotheses"] == t["cpu"]["hypotheses"], "tracker: both backends run the same hypotheses")
     positive(t["cpu_over_gpu"], "tracker.cpu_over_gpu")
+    gl = r["gel"]  # the gel stage: a frame's shape on both backends, one touch's render-and-compare
+    need(gl["size"] == [160, 120], f"gel.size {gl['size']}")
+    stats(gl["shape_ms"], "gel.shape_ms", reps)
+    stats(gl["shape_cpu_ms"], "gel.shape_cpu_ms", reps)
+    cb = gl["codebook"]
+    need(cb["hypotheses"] >= 100000 and cb["dense_points"] > 0, f"gel.codebook {cb}")
+    positive(cb["render_ms"], "gel.codebook.render_ms")
+    stats(cb["score_ms"], "gel.codebook.score_ms", reps)
     with open(plot, "rb") as f:
         head = f.read(24)
     need(head[:8] == b"\x89PNG\r\n\x1a\n", "the plot is not a PNG")
