@@ -10,6 +10,7 @@
 #include <utility>
 
 #include "engine/io/mesh.h"
+#include "engine/sim/everyday_shapes.h"
 #include "engine/sim/mesh_builder.h"
 #include "engine/sim/shapes.h"
 #include "engine/sim/symmetry.h"
@@ -126,7 +127,11 @@ TEST_CASE("declared symmetry groups hold: each shape maps onto itself within 0.2
         ++declared;
         INFO(name);
         const io::TriangleMesh mesh = sim::make_shape(name);
-        CHECK(sim::symmetry_residual_mm(s, mesh, 400) <= 0.2);
+        // The everyday objects' groups on fewer points: 11 more meshes of 20-80k
+        // triangles, most of them turned at 24 angles, would add seconds.
+        const bool everyday = std::any_of(sim::everyday_shapes().begin(), sim::everyday_shapes().end(),
+                                          [&](const sim::EverydayShape& e) { return name == e.name; });
+        CHECK(sim::symmetry_residual_mm(s, mesh, everyday ? 150 : 400) <= 0.2);
         // ... and the check can fail: a quarter turn is no symmetry of the box, a tilted axis none of the cone.
     }
     CHECK(declared >= 8);

@@ -10,6 +10,7 @@
 #include <functional>
 
 #include "base/error.h"
+#include "engine/sim/everyday_shapes.h"
 #include "engine/sim/mesh_builder.h"
 #include "engine/sim/primitives.h"
 
@@ -302,8 +303,14 @@ struct ShapeDef {
     std::function<TriangleMesh()> build;
 };
 
+// The everyday objects (everyday_shapes.cpp) follow the solids and toothed parts.
+std::vector<ShapeDef> with_everyday(std::vector<ShapeDef> defs) {
+    for (const EverydayShape& e : everyday_shapes()) defs.push_back({e.name, e.scale_mm, e.build});
+    return defs;
+}
+
 const std::vector<ShapeDef>& shapes() {
-    static const std::vector<ShapeDef> defs = {
+    static const std::vector<ShapeDef> defs = with_everyday({
         {"box", 100, box},
         {"cylinder", 100, cylinder},
         {"sphere", 100, sphere},
@@ -327,7 +334,7 @@ const std::vector<ShapeDef>& shapes() {
         {"knurled_cylinder", 100, knurled_cylinder},
         {"ridged_cylinder", 120, ridged_cylinder},
         {"potato", 100, potato},
-    };
+    });
     return defs;
 }
 

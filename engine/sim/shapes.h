@@ -5,7 +5,8 @@
 // The non-uniform shapes carry 1-3 mm teeth, ridges and threads at that size:
 // the dataset builder, which rescales each object's largest dimension into
 // 50-250 mm, should keep them near shape_scale_mm so the features stay at a
-// realistic scale for the GelSight pad (the rule itself is scale-free).
+// realistic scale for the GelSight pad (the rule itself is scale-free). The
+// registry also holds 25 everyday objects (mug, spoon, key, ...: everyday_shapes.h).
 #include <string>
 #include <vector>
 

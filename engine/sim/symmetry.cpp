@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "base/error.h"
+#include "engine/sim/everyday_shapes.h"
 
 namespace vtloc::sim {
 
@@ -127,6 +128,8 @@ Symmetry symmetry_from_json(const nlohmann::json& j, const std::string& where) {
 }
 
 Symmetry shape_symmetry(const std::string& name) {
+    for (const EverydayShape& e : everyday_shapes())
+        if (name == e.name) return e.symmetry;
     Symmetry s;  // every revolved shape turns about z through the origin
     const Vec3d x{1, 0, 0};
     if (name == "box") s.order = 2, s.flip = x;
