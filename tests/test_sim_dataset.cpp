@@ -217,6 +217,16 @@ TEST_CASE("dataset builder: deterministic, resumable, split as documented", "[si
     CHECK(rr.resumed == 2);
     CHECK(slurp(comb / "touches.csv") == before);
 
+    // Pinned splits: kept as given; the unpinned objects split among themselves.
+    std::vector<ObjectSource> pinned = objs;
+    for (ObjectSource& s : pinned) s.split = "unseen";
+    pinned[2].split.clear();  // the comb, alone in its subset: never unseen then
+    CHECK(build_dataset(pinned, o).resumed == 3);
+    for (const ObjectRecord& ob : read_dataset(o.out).objects) CHECK(ob.object_split == (ob.name == "comb_fine" ? "seen" : "unseen"));
+    pinned[0].split = "seen", pinned[1].split = "seen";
+    build_dataset(pinned, o);
+    for (const ObjectRecord& ob : read_dataset(o.out).objects) CHECK(ob.object_split == "seen");
+
     // Other options into the same folder are refused.
     o.seed = 6;
     require_error([&] { build_dataset(objs, o); }, {"ds_build_a", "other options"});
@@ -260,6 +270,18 @@ TEST_CASE("dataset builder: object list errors", "[sim]") {
     CHECK(*l[0].scale_mm == 50.0);
     CHECK(l[1].source == "/data/meshes/a.off");
     CHECK_FALSE(l[1].scale_mm);
+    CHECK(l[1].split.empty());
+    std::ofstream(d / "list4.txt") << "shape:sphere 50 unseen\nshape:box seen # pinned\n";
+    auto p = read_object_list((d / "list4.txt").string());
+    REQUIRE(p.size() == 2);
+    CHECK((*p[0].scale_mm == 50.0 && p[0].split == "unseen"));
+    CHECK((!p[1].scale_mm && p[1].split == "seen"));
+    std::ofstream(d / "list5.txt") << "shape:sphere seen unseen\n";
+    require_error([&] { read_object_list((d / "list5.txt").string()); }, {"list5.txt:1", "twice"});
+    std::ofstream(d / "list6.txt") << "shape:sphere\nshape:box seen 50\n";
+    require_error([&] { read_object_list((d / "list6.txt").string()); }, {"list6.txt:2", "[seen|unseen]"});
+    std::ofstream(d / "list7.txt") << "shape:sphere 50 60\n";
+    require_error([&] { read_object_list((d / "list7.txt").string()); }, {"list7.txt:1", "expected"});
 }
 
 TEST_CASE("dataset builder: --indentation writes each touch's ground-truth indentation", "[sim]") {

@@ -70,14 +70,19 @@ std::vector<ObjectSource> read_object_list(const std::string& path, const std::s
         if (line.empty()) continue;
         std::istringstream in(line);
         ObjectSource s;
-        std::string scale, more;
-        in >> s.source >> scale >> more;
-        if (!more.empty()) throw Error(path + ":" + std::to_string(lineno) + ": expected '<source> [scale_mm]'");
-        if (!scale.empty()) {
+        in >> s.source;
+        const std::string where = path + ":" + std::to_string(lineno);
+        for (std::string word; in >> word;) {
+            if (word == "seen" || word == "unseen") {
+                if (!s.split.empty()) throw Error(where + ": the split is given twice");
+                s.split = word;
+                continue;
+            }
+            if (s.scale_mm || !s.split.empty()) throw Error(where + ": expected '<source> [scale_mm] [seen|unseen]'");
             char* end = nullptr;
-            double v = std::strtod(scale.c_str(), &end);
+            double v = std::strtod(word.c_str(), &end);
             if (*end || !(v > 0) || !std::isfinite(v))
-                throw Error(path + ":" + std::to_string(lineno) + ": scale '" + scale + "' is not a positive number");
+                throw Error(where + ": scale '" + word + "' is not a positive number (nor seen/unseen)");
             s.scale_mm = v;
         }
         if (s.source.rfind("shape:", 0) != 0 && fs::path(s.source).is_relative()) s.source = (base / s.source).string();
@@ -187,13 +192,17 @@ std::vector<ObjectRecord> build_all(const std::vector<Job>& jobs, Shared& sh, in
     return built;
 }
 
-// Object-level 7:3 split, stratified by subset, from the dataset seed.
-void split_objects(std::vector<ObjectRecord>& built, const BuildOptions& opt) {
+// Object-level 7:3 split, stratified by subset, from the dataset seed, over the
+// objects whose list line does not pin their split (all of them, in a list
+// without pins: the split every earlier dataset was built with).
+void split_objects(std::vector<ObjectRecord>& built, const std::vector<ObjectSource>& sources, const BuildOptions& opt) {
     io::SplitMix64 split_rng(opt.seed ^ 0x5EEDull);
     for (const char* subset : {"non-uniform", "uniform"}) {
         std::vector<size_t> idx;
-        for (size_t i = 0; i < built.size(); ++i)
-            if (built[i].subset == subset) idx.push_back(i);
+        for (size_t i = 0; i < built.size(); ++i) {
+            if (!sources[i].split.empty()) built[i].object_split = sources[i].split;
+            else if (built[i].subset == subset) idx.push_back(i);
+        }
         for (size_t i = idx.size(); i > 1; --i) std::swap(idx[i - 1], idx[size_t(split_rng.next_u64() % i)]);
         size_t n_unseen = size_t(std::lround(opt.unseen_fraction * double(idx.size())));
         if (idx.size() >= 2) n_unseen = std::clamp<size_t>(n_unseen, 1, idx.size() - 1);
@@ -214,7 +223,7 @@ BuildReport build_dataset(const std::vector<ObjectSource>& objects, const BuildO
     Shared sh{opt, calib, background};
     int resumed = 0;
     std::vector<ObjectRecord> built = build_all(jobs, sh, resumed);
-    split_objects(built, opt);
+    split_objects(built, objects, opt);
 
     Dataset d;
     d.root = opt.out;

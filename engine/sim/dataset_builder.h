@@ -14,9 +14,13 @@ namespace vtloc::sim {
 struct ObjectSource {
     std::string source;               // "shape:<name>" or a mesh file path
     std::optional<double> scale_mm;   // largest bounding-box side; drawn when absent
+    // "seen" / "unseen" pins the object's split; absent: the seeded stratified
+    // split among the objects left unpinned (so a benchmark can grow without
+    // moving an object a model was trained on into its unknown set).
+    std::string split;
 };
 
-// One object per line: `<source> [scale_mm]`, `#` starts a comment. Relative
+// One object per line: `<source> [scale_mm] [seen|unseen]`, `#` starts a comment. Relative
 // mesh paths resolve against mesh_dir (default: the list's folder). Throws
 // vtloc::Error naming the file and line.
 std::vector<ObjectSource> read_object_list(const std::string& path, const std::string& mesh_dir = "");
