@@ -115,11 +115,10 @@ struct Score {
 Score score(const Calibration& c, std::vector<BallPress> ps, const std::vector<uint8_t>& empty, const sensor::CalibrateOptions& o,
             int rounds, std::vector<double>* per_press) {
     Score s;
-    for (BallPress& p : ps) {
+    for (size_t i = 0; i < ps.size(); ++i) {
+        BallPress& p = ps[i];
         if (p.radius_px == 0) {
-            const sensor::DetectedContact d = sensor::detect_contact(p.frame, empty, c.height, c.width);
-            if (!d.found) throw Error("calibrate: a held-out press shows no contact");
-            p.cx = d.cx, p.cy = d.cy, p.radius_px = d.radius;
+            p = sensor::detected_circle(std::move(p), empty, c.height, c.width, "held-out press " + std::to_string(i));
             for (int r = 0; r < rounds; ++r) p = sensor::refine_circle(c, p, o);
         }
         const sensor::PressResidual r = sensor::press_residual(c, p, o);

@@ -168,14 +168,17 @@ Calibration fit_calibration(const std::vector<BallPress>& presses, const std::ve
     return c;
 }
 
-PressResidual press_residual(const Calibration& c, const BallPress& p, const CalibrateOptions& o) {
+namespace {
+
+// The residual with the table's shader built once by the caller (2 MB of
+// tables: refine_circle scores ~40 circles per press).
+PressResidual residual_with(const Calibration& c, const GelShader& shader, const BallPress& p, const CalibrateOptions& o) {
     const int H = c.height, W = c.width;
-    check_press(p, 0, H, W);
     CalibrateOptions q = o;
     q.mm_per_px = c.mm_per_px;
     std::vector<float> h = press_height_px(p, H, W, q), shade;
     for (size_t i = 0; i < h.size(); ++i) h[i] += c.depth_bg[i];
-    GelShader(c).shade(h, shade);
+    shader.shade(h, shade);
     PressResidual res;
     double nin = 0, nout = 0;
     for (int r = 0; r < H; ++r)
@@ -193,11 +196,26 @@ PressResidual press_residual(const Calibration& c, const BallPress& p, const Cal
     return res;
 }
 
+}  // namespace
+
+PressResidual press_residual(const Calibration& c, const BallPress& p, const CalibrateOptions& o) {
+    check_press(p, 0, c.height, c.width);
+    return residual_with(c, GelShader(c), p, o);
+}
+
+BallPress detected_circle(BallPress p, const std::vector<uint8_t>& empty, int H, int W, const std::string& name) {
+    const DetectedContact d = detect_contact(p.frame, empty, H, W);
+    if (!d.found) throw Error("calibrate: " + name + ": no contact found (the frame equals the empty frame)");
+    p.cx = d.cx, p.cy = d.cy, p.radius_px = d.radius;
+    return p;
+}
+
 BallPress refine_circle(const Calibration& c, BallPress p, const CalibrateOptions& o) {
     check_press(p, 0, c.height, c.width);
+    const GelShader shader(c);
     auto cost = [&](const BallPress& q) {
         if (!(q.radius_px > 1 && q.cx >= 0 && q.cx < c.width && q.cy >= 0 && q.cy < c.height)) return HUGE_VAL;
-        const PressResidual r = press_residual(c, q, o);
+        const PressResidual r = residual_with(c, shader, q, o);
         const double area = M_PI * q.radius_px * q.radius_px, all = double(c.height) * c.width;
         return (r.inside * area + r.outside * (all - area)) / all;
     };
@@ -222,11 +240,8 @@ CalibrateRun calibrate(std::vector<BallPress> presses, const std::vector<uint8_t
     for (size_t i = 0; i < presses.size(); ++i) {
         BallPress& p = presses[i];
         if (p.radius_px != 0) continue;
-        if (p.frame.size() == size_t(H) * size_t(W) * 3 && empty.size() == p.frame.size()) {
-            const DetectedContact d = detect_contact(p.frame, empty, H, W);
-            if (!d.found) throw Error("calibrate: press " + std::to_string(i) + ": no contact found (the frame equals the empty frame)");
-            p.cx = d.cx, p.cy = d.cy, p.radius_px = d.radius;
-        }
+        if (p.frame.size() == size_t(H) * size_t(W) * 3 && empty.size() == p.frame.size())
+            p = detected_circle(std::move(p), empty, H, W, "press " + std::to_string(i));
         detected.push_back(i);
     }
     CalibrateRun run;

@@ -57,6 +57,10 @@ PressResidual press_residual(const Calibration& c, const BallPress& p, const Cal
 // make it too wide and off-centre) and alternates fitting and refining.
 BallPress refine_circle(const Calibration& c, BallPress p, const CalibrateOptions& o = {});
 
+// The press with the contact detect_contact finds in its frame as its circle;
+// throws vtloc::Error naming the press (`name`) when the frame shows none.
+BallPress detected_circle(BallPress p, const std::vector<uint8_t>& empty, int H, int W, const std::string& name);
+
 // The whole fit: presses whose radius_px is 0 get the detected contact, then
 // fitting and refining (only those) alternate until their circles move less
 // than 0.25 px at the median or after max_rounds refinements. Presses with
