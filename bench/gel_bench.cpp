@@ -2,6 +2,7 @@
 
 #include <chrono>
 
+#include "bench/clock.h"
 #include "bench/model_bench.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/object.h"
@@ -11,14 +12,6 @@
 #include "engine/track/surface.h"
 
 namespace vtloc::bench {
-
-namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
-}  // namespace
 
 nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
     const sensor::Calibration c = sensor::load_calibration(sensor::default_calibration_path());

@@ -6,6 +6,7 @@
 #include <map>
 #include <unistd.h>
 
+#include "bench/clock.h"
 #include "bench/flops.h"
 #include "bench/stages.h"
 #include "base/error.h"
@@ -243,10 +244,6 @@ json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOpt
 // not a terminal (scripts and the smoke test see no stray lines).
 void progress(const std::string& what) {
     if (isatty(2)) std::fprintf(stderr, "vtloc-bench: %s...\n", what.c_str());
-}
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 }  // namespace

@@ -11,6 +11,7 @@
 #include <cstdio>
 #include <random>
 
+#include "bench/clock.h"
 #include "bench/flops.h"
 #include "bench/probe.h"
 #include "bench/random_weights.h"
@@ -53,13 +54,10 @@ WeightStore random_weights(const nlohmann::json& json) {
     return w;
 }
 
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
-
 }  // namespace
 
 int main(int argc, char** argv) {
+    using vtloc::bench::ms_since;
     try {
         rt::Context ctx;
         const WeightStore file = argc > 1 ? WeightStore::load(argv[1]) : random_weights(nlohmann::json::parse(bench::kR18Config));

@@ -4,6 +4,7 @@
 #include <chrono>
 
 #include "base/error.h"
+#include "bench/clock.h"
 #include "bench/model_bench.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/object.h"
@@ -13,10 +14,6 @@
 namespace vtloc::bench {
 
 namespace {
-
-double ms_since(std::chrono::steady_clock::time_point t0) {
-    return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 }  // namespace
 

@@ -1,5 +1,5 @@
 #pragma once
-// Shared by the renderer tests (test_sim_renderer.cpp, test_sim_calibration.cpp).
+// Shared by the renderer and sensor tests.
 #include "engine/sensor/calibration.h"
 #include "engine/sim/touch_renderer.h"
 

@@ -11,16 +11,14 @@
 #include "engine/sensor/ball_press.h"
 #include "engine/sensor/calibrate.h"
 #include "engine/sensor/gel_shading.h"
+#include "tests/sim_fixtures.h"
 
 using namespace vtloc;
 using namespace vtloc::sensor;
 
 namespace {
 
-const Calibration& shipped() {
-    static const Calibration c = load_calibration(default_calibration_path());
-    return c;
-}
+const Calibration& shipped() { return vtloc::test::calib(); }
 
 double mean_inside(const Calibration& c, const std::vector<BallPress>& presses, const CalibrateOptions& o = {}) {
     double s = 0;

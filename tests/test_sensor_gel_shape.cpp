@@ -10,16 +10,14 @@
 #include "engine/sensor/calibration.h"
 #include "engine/sensor/gel_shading.h"
 #include "engine/sensor/gel_shape.h"
+#include "tests/sim_fixtures.h"
 
 using namespace vtloc;
 using namespace vtloc::sensor;
 
 namespace {
 
-const Calibration& calib() {
-    static const Calibration c = load_calibration(default_calibration_path());
-    return c;
-}
+using vtloc::test::calib;
 const GradientLut& lut() {
     static const GradientLut l = build_gradient_lut(calib());
     return l;

@@ -10,6 +10,7 @@
 #include "engine/sensor/gel_shape.h"
 #include "engine/sim/shapes.h"
 #include "engine/sim/touch_renderer.h"
+#include "tests/sim_fixtures.h"
 
 using namespace vtloc;
 using namespace vtloc::sensor;
@@ -30,7 +31,7 @@ struct Errors {
 // random spins. The contact is the undeformed intersection (the renderer without its drape); the
 // error is over it, against the draped indentation, with and without the best constant offset.
 Errors read_back(const std::vector<const char*>& shapes, int per_shape, uint64_t seed, const ShapeOptions& o) {
-    static const Calibration c = load_calibration(default_calibration_path());
+    const Calibration& c = vtloc::test::calib();
     static const GradientLut lut = build_gradient_lut(c);
     Errors out;
     uint64_t state = seed;
