@@ -4,11 +4,14 @@
 #include <filesystem>
 #include <fstream>
 #include <opencv2/imgcodecs.hpp>
+#include <set>
 #include <sstream>
+#include <string>
 
 #include "base/error.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/dataset_builder.h"
+#include "engine/sim/everyday_shapes.h"
 #include "tests/harness.h"
 #include "tests/io_test_util.h"
 
@@ -282,6 +285,24 @@ TEST_CASE("dataset builder: object list errors", "[sim]") {
     require_error([&] { read_object_list((d / "list6.txt").string()); }, {"list6.txt:2", "[seen|unseen]"});
     std::ofstream(d / "list7.txt") << "shape:sphere 50 60\n";
     require_error([&] { read_object_list((d / "list7.txt").string()); }, {"list7.txt:1", "expected"});
+}
+
+TEST_CASE("dataset builder: the default object list pins the first benchmark's split and adds the everyday objects", "[sim]") {
+    const auto l = read_object_list(std::string(VTLOC_SOURCE_DIR) + "/data/synth/objects.txt", "/meshes");
+    REQUIRE(l.size() == 68);
+    int unseen = 0;
+    for (size_t i = 0; i < 43; ++i) {
+        INFO(l[i].source);
+        CHECK(!l[i].split.empty());  // moving one would put a trained-on object among the unknown
+        unseen += l[i].split == "unseen";
+    }
+    CHECK(unseen == 13);
+    std::set<std::string> listed;
+    for (size_t i = 43; i < l.size(); ++i) {
+        CHECK(l[i].split.empty());
+        listed.insert(l[i].source);
+    }
+    for (const sim::EverydayShape& e : sim::everyday_shapes()) CHECK(listed.count(std::string("shape:") + e.name) == 1);
 }
 
 TEST_CASE("dataset builder: --indentation writes each touch's ground-truth indentation", "[sim]") {
