@@ -3,12 +3,21 @@
 // says what; engine/ops/pose_evidence.h is the CPU mirror, operation for operation).
 // The pose arithmetic is `precise` (no fused multiply-adds) so that a pose lands in the
 // same grid cell and spin as on the CPU reference; only exp/log/acos may differ.
+//
+// Speed on a CPU driver (lavapipe, docs/multitouch.md "Speed"): it runs lanes in SIMD
+// with masks, so (1) a storage-buffer read at an offset not known to be uniform is a
+// loop over the lanes, one per read whatever its width: the cells, dense points and
+// spins are read as vectors (one loop where there were two or six); and (2) the code of
+// an `if` runs (masked) even when no lane takes it, so the terms go in segments (below)
+// and a term without a field never runs the field's code. NS is a specialization
+// constant (h / NS by a constant). The arithmetic and the order of the sum are as before.
 layout(local_size_x_id = 0) in;
+layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
 layout(std430, binding = 0) readonly buffer Samples_ { float smp[]; };  // [S, 9]
-layout(std430, binding = 1) readonly buffer Dense_ { float dense[]; };  // [D, 6]
-layout(std430, binding = 2) readonly buffer Cells_ { int cells[]; };    // [V, 2]
-layout(std430, binding = 3) readonly buffer Spins_ { float spins[]; };  // [NS, 2]
+layout(std430, binding = 1) readonly buffer Dense_ { vec2 dense2[]; };  // [D, 6] as [D, 3] pairs
+layout(std430, binding = 2) readonly buffer Cells_ { ivec2 cells[]; };  // [V, 2]
+layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
 layout(std430, binding = 4) readonly buffer Terms_ { float terms[]; };  // [K, 16]
 layout(std430, binding = 5) readonly buffer Fields_ { float fields[]; }; // [F, H]
 layout(std430, binding = 6) writeonly buffer Out_ { float outv[]; };    // [H]
@@ -24,11 +33,9 @@ vec3 cross3(vec3 a, vec3 b) {
     precise vec3 r = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
     return r;
 }
-vec3 load3(uint base, uint which) {  // which 0: samples, 1: dense
-    return which == 0u ? vec3(smp[base], smp[base + 1u], smp[base + 2u])
-                       : vec3(dense[base], dense[base + 1u], dense[base + 2u]);
-}
+vec3 load_smp(uint base) { return vec3(smp[base], smp[base + 1u], smp[base + 2u]); }
 
+// The grid cell holding q (-1 outside the grid).
 int cell_of(vec3 q) {
     precise vec3 u = (q - p.origin) * p.inv_voxel;
     vec3 f = floor(u);
@@ -37,59 +44,82 @@ int cell_of(vec3 q) {
     return (int(f.z) * p.ny + int(f.y)) * p.nx + int(f.x);
 }
 
-int nearest_hypothesis(int cell, vec3 x) {
-    if (cell < 0) return -1;
-    int s = cells[2 * cell + 1];
+// The hypothesis nearest a pose with x axis x at sample s (-1: none).
+int nearest_hypothesis(int s, vec3 x) {
     if (s < 0) return -1;
-    vec3 t1 = load3(uint(s) * 9u + 6u, 0u);
-    precise vec3 z = load3(uint(s) * 9u + 3u, 0u) * -1.0;
+    vec3 t1 = load_smp(uint(s) * 9u + 6u);
+    precise vec3 z = load_smp(uint(s) * 9u + 3u) * -1.0;
     vec3 t2 = cross3(z, t1);
     precise float a = dot3(x, t1), b = dot3(x, t2);
     int best = 0;
     float best_v = -3.0;
-    for (int j = 0; j < p.n_spin; ++j) {
-        precise float v = spins[2 * j] * a + spins[2 * j + 1] * b;
+    for (int j = 0; j < NS; ++j) {
+        const vec2 cs = spins[j];
+        precise float v = cs.x * a + cs.y * b;
         if (v > best_v) { best_v = v; best = j; }
     }
-    return s * p.n_spin + best;
+    return s * NS + best;
 }
 
-float geometry_log(int cell, vec3 t, vec3 z, float sd, float sa) {
-    int i = cell < 0 ? -1 : cells[2 * cell];
+// Geometry at dense point i (-1: none near).
+float geometry_log(int i, vec3 t, vec3 z, float sd, float sa) {
     if (i < 0) return p.log_floor;
-    vec3 q = load3(uint(i) * 6u, 1u), n = load3(uint(i) * 6u + 3u, 1u);
+    const vec2 a = dense2[uint(i) * 3u], b = dense2[uint(i) * 3u + 1u], c = dense2[uint(i) * 3u + 2u];
+    vec3 q = vec3(a, b.x), n = vec3(b.y, c);
     precise float e_d = dot3(t - q, n) + p.press;
-    precise float c = -dot3(z, n);
-    float e_a = acos(min(1.0, max(-1.0, c)));
+    precise float cz = -dot3(z, n);
+    float e_a = acos(min(1.0, max(-1.0, cz)));
     float r = (e_d / sd) * (e_d / sd) + (e_a / sa) * (e_a / sa);
     return log(exp(-0.5 * r) + exp(p.log_floor));
 }
 
 void main() {
     const uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    for (uint h = gl_GlobalInvocationID.x; h < p.H; h += stride) {
-        const uint s = h / uint(p.n_spin), j = h % uint(p.n_spin);
-        precise vec3 z = load3(s * 9u + 3u, 0u) * -1.0;
-        vec3 t1 = load3(s * 9u + 6u, 0u);
+    uint h = gl_GlobalInvocationID.x;
+    if (h < p.H) do {
+        const uint s = h / uint(NS), j = h % uint(NS);
+        precise vec3 z = load_smp(s * 9u + 3u) * -1.0;
+        vec3 t1 = load_smp(s * 9u + 6u);
         precise vec3 t2 = cross3(z, t1);
-        precise vec3 x = t1 * spins[2u * j] + t2 * spins[2u * j + 1u];
+        const vec2 cs = spins[j];
+        precise vec3 x = t1 * cs.x + t2 * cs.y;
         precise vec3 y = cross3(z, x);
-        precise vec3 t = load3(s * 9u, 0u) + z * p.press;
+        precise vec3 t = load_smp(s * 9u) + z * p.press;
         float acc = p.own_field >= 0 ? p.own_weight * fields[uint(p.own_field) * p.H + h] : 0.0;
-        for (uint k = 0u; k < p.K; ++k) {
-            const uint b = k * 16u;
-            precise vec3 zk = x * terms[b + 2u] + y * terms[b + 5u] + z * terms[b + 8u];
-            precise vec3 xk = x * terms[b] + y * terms[b + 3u] + z * terms[b + 6u];
-            precise vec3 tk = t + x * terms[b + 9u] + y * terms[b + 10u] + z * terms[b + 11u];
-            const int cell = cell_of(tk);
-            const float sd = terms[b + 12u], sa = terms[b + 13u];
-            if (sd > 0.0) acc += geometry_log(cell, tk, zk, sd, sa);
-            const int field = int(round(terms[b + 14u]));
-            if (field >= 0) {
-                const int hk = nearest_hypothesis(cell, xk);
-                acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
-            }
+        // The terms in order, in segments: the terms up to the next one that reads a field,
+        // then that field. A mask-executing driver (lavapipe) runs the code of an `if` even
+        // when no lane takes it, so the field's code only runs where a term has one (and
+        // once more, masked, when the last term reads none).
+        if (p.K > 0u) {
+            uint k = 0u;
+            do {
+                uint kf = k;  // the segment's last term: the next one with a field, or the last
+                while (kf + 1u < p.K && int(round(terms[kf * 16u + 14u])) < 0) ++kf;
+                vec3 xf = vec3(0.0);
+                int sf = -1;  // the segment's last term: its x axis and its cell's nearest sample
+                do {
+                    const uint b = k * 16u;
+                    precise vec3 zk = x * terms[b + 2u] + y * terms[b + 5u] + z * terms[b + 8u];
+                    precise vec3 xk = x * terms[b] + y * terms[b + 3u] + z * terms[b + 6u];
+                    precise vec3 tk = t + x * terms[b + 9u] + y * terms[b + 10u] + z * terms[b + 11u];
+                    const int cell = cell_of(tk);
+                    ivec2 near = ivec2(-1);  // the cell's nearest dense point and sample
+                    if (cell >= 0) near = cells[cell];
+                    const float sd = terms[b + 12u], sa = terms[b + 13u];
+                    if (sd > 0.0) acc += geometry_log(near.x, tk, zk, sd, sa);
+                    xf = xk;
+                    sf = near.y;
+                    ++k;
+                } while (k <= kf);
+                const uint b = kf * 16u;
+                const int field = int(round(terms[b + 14u]));
+                if (field >= 0) {
+                    const int hk = nearest_hypothesis(sf, xf);
+                    acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
+                }
+            } while (k < p.K);
         }
         outv[h] = acc;
-    }
+        h += stride;
+    } while (h < p.H);
 }

@@ -118,7 +118,8 @@ void gpu(const GpuOpArgs& a) {
     // Empty terms or fields: any read-only buffer fills the unused binding.
     const rt::BufferView& terms = K ? a.in[4].view : a.in[0].view;
     const rt::BufferView& fields = F ? a.in[5].view : a.in[0].view;
-    a.seq.dispatch(pipeline(a.ctx, "pose_evidence", 7, sizeof(push), {local}),
+    // NS specialises the shader (shaders/pose_evidence.comp).
+    a.seq.dispatch(pipeline(a.ctx, "pose_evidence", 7, sizeof(push), {local, NS}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
                     {a.in[3].view, rt::Access::Read}, {terms, rt::Access::Read}, {fields, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
