@@ -1,6 +1,9 @@
 #include "bench/gel_bench.h"
 
 #include <chrono>
+#include <map>
+#include <string>
+#include <vector>
 
 #include "bench/clock.h"
 #include "bench/model_bench.h"
@@ -29,6 +32,16 @@ nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
     }
     j["shape_cpu_ms"] = stats_json(cpu);
     if (!ctx) return j;
+    {  // where the GPU's time goes: node timestamps of a profiled twin, medians over the reps
+        sensor::GelShapeGpu prof(*ctx, c, lut, {}, true);
+        prof.run(frame, c.press_f0);
+        std::map<std::string, std::vector<double>> nodes;
+        for (int r = 0; r < o.reps; ++r) {
+            prof.run(frame, c.press_f0);
+            for (const auto& [label, ms] : prof.node_times()) nodes[label].push_back(ms);
+        }
+        for (auto& [label, v] : nodes) j["shape_nodes_ms"][label] = stats_json(v);
+    }
     sensor::GelShapeGpu gpu(*ctx, c, std::move(lut));
     gpu.run(frame, c.press_f0);  // pipelines compiled, arena made
     std::vector<double> ms;

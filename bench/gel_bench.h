@@ -16,7 +16,8 @@ struct GelBenchOptions {
     int reps = 5;
 };
 
-// JSON: frame, size [W, H], shape_ms (GPU) and shape_cpu_ms (stats), codebook {object,
+// JSON: frame, size [W, H], shape_ms (GPU) and shape_cpu_ms (stats), shape_nodes_ms {node: stats}
+// (GPU timestamps of a profiled run), codebook {object,
 // hypotheses, render_ms (once), score_ms (stats)}. ctx null: the CPU reference only.
 nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o);
 

@@ -127,6 +127,8 @@ void gel(std::FILE* f, const json& g) {
     std::fprintf(f, "\n== the gel's shape and render-and-compare (%s, %dx%d) ==\n", g["frame"].get<std::string>().c_str(),
                  g["size"][0].get<int>(), g["size"][1].get<int>());
     if (g.contains("shape_ms")) std::fprintf(f, "  shape of one frame, GPU      %10.2f ms\n", med(g["shape_ms"]));
+    if (g.contains("shape_nodes_ms"))
+        for (auto& [label, v] : g["shape_nodes_ms"].items()) std::fprintf(f, "    node %-22s %10.2f ms (GPU timestamps)\n", label.c_str(), med(v));
     std::fprintf(f, "  shape of one frame, CPU ref  %10.2f ms\n", med(g["shape_cpu_ms"]));
     if (g.contains("codebook")) {
         const json& c = g["codebook"];

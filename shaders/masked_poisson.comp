@@ -1,15 +1,25 @@
 #version 450
 // lap(z) = div(grad) inside the mask, z = 0 outside it in the image, the image's border free (a
 // ghost neighbour continues the gradient): red-black SOR (engine/ops/gel_shape.cpp; CPU mirror
-// engine/ops/gel_ops.h). One workgroup, a barrier between colours: within a colour the
-// updates read only the other colour, so the result is the reference's in any lane order.
+// engine/ops/gel_ops.h), one dispatch a stage: kClear empties the two colours' lists of the
+// pixels to update, kList zeroes z and appends each pixel inside the mask (and pinned by a
+// neighbour) to its colour's list with its divergence, then one kHalfSweep per colour and sweep,
+// a lane per pixel of the colour's list. Within a colour the updates read only the other colour,
+// so the result is the reference's in any lane, workgroup or list order; the dispatches'
+// barriers order the colours. The stage is a specialization constant: a CPU driver runs every
+// branch of a run-time switch under lane masks.
 layout(local_size_x_id = 0) in;
-layout(std430, binding = 0) readonly buffer Grad_ { float grad[]; };  // [H, W, 2]
+layout(constant_id = 1) const int kStage = 0;
+layout(std430, binding = 0) readonly buffer Grad_ { vec2 grad[]; };  // [H, W, 2]
 layout(std430, binding = 1) readonly buffer Mask_ { float mask[]; };  // [H, W]
 layout(std430, binding = 2) buffer Z_ { float z[]; };                 // [H, W]
-layout(push_constant) uniform Push { int H; int W; int iterations; float omega; } p;
+// Per colour: its list's length, then the lists (colour k from k * cap): pixel, divergence bits.
+layout(std430, binding = 3) buffer Ws_ { uint count[2]; uvec2 list[]; };
+layout(push_constant) uniform Push { int H; int W; int colour; uint cap; float omega; } p;
 
-float g(int r, int c, int k) { return grad[(uint(r) * uint(p.W) + uint(c)) * 2u + uint(k)]; }
+const int kClear = 0, kList = 1, kHalfSweep = 2;
+
+float g(int r, int c, int k) { return grad[uint(r) * uint(p.W) + uint(c)][k]; }
 
 float divergence(int r, int c) {
     precise float dr = p.H == 1 ? 0.0 : r == 0 ? g(1, c, 0) - g(0, c, 0)
@@ -21,24 +31,32 @@ float divergence(int r, int c) {
 }
 
 void main() {
-    const uint HW = uint(p.H) * uint(p.W), L = gl_WorkGroupSize.x;
-    for (uint q = gl_LocalInvocationID.x; q < HW; q += L) z[q] = 0.0;
-    memoryBarrierBuffer();
-    barrier();
-    for (int half_sweep = 0; half_sweep < 2 * p.iterations; ++half_sweep) {
-        const int colour = half_sweep & 1;
-        for (uint q = gl_LocalInvocationID.x; q < HW; q += L) {
+    const uint HW = uint(p.H) * uint(p.W), lanes = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    if (kStage == kClear) {
+        if (gl_GlobalInvocationID.x < 2u) count[gl_GlobalInvocationID.x] = 0u;
+        return;
+    }
+    if (kStage == kList) {
+        for (uint q = gl_GlobalInvocationID.x; q < HW; q += lanes) {
+            z[q] = 0.0;
             const int r = int(q / uint(p.W)), c = int(q % uint(p.W));
-            if (((r + c) & 1) != colour || !(mask[q] > 0.5)) continue;
             const int inside = int(r > 0) + int(r + 1 < p.H) + int(c > 0) + int(c + 1 < p.W);
-            if (inside == 0) continue;
-            const float gr = grad[2u * q], gc = grad[2u * q + 1u];
-            precise float nb = ((r > 0 ? z[q - uint(p.W)] : -gr) + (r + 1 < p.H ? z[q + uint(p.W)] : gr)) +
-                               ((c > 0 ? z[q - 1u] : -gc) + (c + 1 < p.W ? z[q + 1u] : gc));
-            precise float v = (1.0 - p.omega) * z[q] + p.omega * ((nb - divergence(r, c)) / float(inside));
-            z[q] = v;
+            if (!(mask[q] > 0.5) || inside == 0) continue;  // inside == 0: a 1 x 1 image, nothing pins it
+            const uint colour = uint((r + c) & 1), k = atomicAdd(count[colour], 1u);
+            list[colour * p.cap + k] = uvec2(q, floatBitsToUint(divergence(r, c)));
         }
-        memoryBarrierBuffer();
-        barrier();
+        return;
+    }
+    const uint n = count[p.colour], base = uint(p.colour) * p.cap;
+    for (uint i = gl_GlobalInvocationID.x; i < n; i += lanes) {
+        const uvec2 e = list[base + i];
+        const uint q = e.x;
+        const int r = int(q / uint(p.W)), c = int(q % uint(p.W));
+        const int inside = int(r > 0) + int(r + 1 < p.H) + int(c > 0) + int(c + 1 < p.W);
+        const vec2 gq = grad[q];
+        precise float nb = ((r > 0 ? z[q - uint(p.W)] : -gq.x) + (r + 1 < p.H ? z[q + uint(p.W)] : gq.x)) +
+                           ((c > 0 ? z[q - 1u] : -gq.y) + (c + 1 < p.W ? z[q + 1u] : gq.y));
+        precise float v = (1.0 - p.omega) * z[q] + p.omega * ((nb - uintBitsToFloat(e.y)) / float(inside));
+        z[q] = v;
     }
 }

@@ -149,7 +149,8 @@ int gel_gradient(Graph& g, int frame, int empty, int tables, int linear, int64_t
 }
 
 int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name) {
-    return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}}, name);
+    return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}},
+                  name);  // output 1, the workspace, stays internal
 }
 
 int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius, const std::string& name) {

@@ -2,12 +2,18 @@
 // gel_gradient: frame [H, W, 3], empty [H, W, 3] (grey levels), tables [T, n^3, 2], linear
 //   [H, W, 6] -> the indentation's gradient [H, W, 2] (params n, tiles_y, tiles_x, gentle; T =
 //   tiles_y * tiles_x): the tables' answer, or the linearised inverse where it is gentle;
-// masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact) -> the height [H, W]
-//   (params iterations, omega): red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside
-//   it, the image's border free.
+// masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact) -> the height [H, W] and a
+//   workspace (i32, unspecified: the pixels each half-sweep updates) (params iterations, omega):
+//   red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside it, the image's border free.
 // CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
-// shaders/masked_poisson.comp (one workgroup: the sweeps need a barrier between colours).
+// shaders/masked_poisson.comp: two set-up dispatches (z zeroed, per colour a list of the pixels
+// to update with their divergence), then one dispatch per half-sweep over that colour's list, in
+// all workgroups (the sequence's barrier between dependent dispatches orders the colours; one
+// workgroup with a barrier between colours, as before, ran serially on a CPU device, which gives
+// a workgroup one thread: 76 of lavapipe's 79 ms for a 120 x 160 frame; docs/gel_shape.md).
+#include <algorithm>
 #include <cmath>
+#include <thread>
 
 #include "base/error.h"
 #include "engine/ops/common.h"
@@ -68,6 +74,14 @@ void gradient_gpu(const GpuOpArgs& a) {
                    &push, sizeof(push), groups);
 }
 
+// The workspace's room for one colour's list (its pixels, at most ceil(H W / 2)), in entries of
+// two words; the lists start after the two lengths.
+int64_t poisson_list_cap(int64_t H, int64_t W) {
+    const int64_t cap = (H * W + 1) / 2;
+    to_u32(2 + 4 * cap, "masked_poisson workspace size");
+    return cap;
+}
+
 std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 2, 2);
     expect_f32(in);
@@ -78,29 +92,44 @@ std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const P
     if (g.size() != 3 || g[2] != 2 || g[0] < 1 || g[1] < 1) throw Error("masked_poisson: the gradient must be [H, W, 2], got " + shape_str(g));
     if (in[1].shape != Shape{g[0], g[1]}) throw Error("masked_poisson: the mask must be " + shape_str({g[0], g[1]}) + ", got " + shape_str(in[1].shape));
     to_u32(g[0] * g[1] * 2, "gradient size");
-    return {TensorDesc{{g[0], g[1]}}};
+    return {TensorDesc{{g[0], g[1]}}, TensorDesc{{2 + 4 * poisson_list_cap(g[0], g[1])}, ElemType::I32}};
 }
 
 void poisson_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
     gel::masked_poisson(in[0]->data.data(), in[1]->data.data(), int(in[0]->shape[0]), int(in[0]->shape[1]),
                         int(p.get("iterations", 0)), float(p.get("omega", 1)), out[0]->data.data());
+    std::fill(out[1]->data.begin(), out[1]->data.end(), 0.0f);
 }
 
 void poisson_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    struct { int32_t H, W, iterations; float omega; } push{int32_t(a.in[0].shape[0]), int32_t(a.in[0].shape[1]),
-                                                          int32_t(a.params.get("iterations", 0)), float(a.params.get("omega", 1))};
+    const int32_t H = int32_t(a.in[0].shape[0]), W = int32_t(a.in[0].shape[1]), iterations = int32_t(a.params.get("iterations", 0));
+    const uint64_t HW = uint64_t(H) * uint64_t(W), cap = uint64_t(poisson_list_cap(H, W));
+    // A CPU device starts each workgroup at a cost (lavapipe: a 120 x 160 half-sweep's 38 groups
+    // of 256 took ~80 us a dispatch, 2 groups ~20): there, one group per host thread.
     const uint32_t local = elementwise_local_size(d);
-    const uint64_t per = (uint64_t(push.H) * uint64_t(push.W) + local - 1) / local;
-    check_loop_budget(d, per * (2 * uint64_t(push.iterations) + 1), "masked_poisson");
-    a.seq.dispatch(pipeline(a.ctx, "masked_poisson", 3, sizeof(push), {local}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+    const uint32_t most = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? std::max(1u, std::thread::hardware_concurrency()) : 0xffffffffu;
+    const uint32_t groups = std::min(most, grid_groups(HW, local, d)), sweep_groups = std::min(most, grid_groups(cap, local, d));
+    const uint64_t lanes = uint64_t(groups) * local, sweep_lanes = uint64_t(sweep_groups) * local;
+    check_loop_budget(d, std::max((HW + lanes - 1) / lanes, (cap + sweep_lanes - 1) / sweep_lanes), "masked_poisson");
+    struct { int32_t H, W, colour; uint32_t cap; float omega; } push{H, W, 0, uint32_t(cap), float(a.params.get("omega", 1))};
+    const rt::BufferView grad = a.in[0].view, mask = a.in[1].view, z = a.out[0].view, ws = a.out[1].view;
+    auto stage = [&](uint32_t s) -> const rt::Pipeline& { return pipeline(a.ctx, "masked_poisson", 4, sizeof(push), {local, s}); };
+    a.seq.dispatch(stage(0), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::Write}},
                    &push, sizeof(push), 1);
+    a.seq.dispatch(stage(1), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::ReadWrite}},
+                   &push, sizeof(push), groups);
+    const rt::Pipeline& sweep = stage(2);
+    for (int32_t h = 0; h < 2 * iterations; ++h) {
+        push.colour = h & 1;
+        a.seq.dispatch(sweep, {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::ReadWrite}, {ws, rt::Access::Read}},
+                       &push, sizeof(push), sweep_groups);
+    }
 }
 
 }  // namespace
 
 const OpDef op_gel_gradient{"gel_gradient", gradient_infer, gradient_cpu, gradient_gpu, 0, {"n", "tiles_y", "tiles_x", "gentle"}};
-const OpDef op_masked_poisson{"masked_poisson", poisson_infer, poisson_cpu, poisson_gpu, 0, {"iterations", "omega"}};
+const OpDef op_masked_poisson{"masked_poisson", poisson_infer, poisson_cpu, poisson_gpu, 1u << 1, {"iterations", "omega"}};
 
 }  // namespace vtloc::ops

@@ -11,7 +11,7 @@ struct GelShapeGpu::Impl {
     std::unique_ptr<GpuExecutor> exec;
 };
 
-GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options)
+GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options, bool profile)
     : calib_(std::move(calib)), opt_(options), impl_(std::make_unique<Impl>()) {
     const int64_t H = calib_.height, W = calib_.width, n = lut.n, T = int64_t(lut.tiles_y) * lut.tiles_x;
     if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
@@ -26,10 +26,16 @@ GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, S
     g.output(grad, "gradient");
     g.output(mask, "mask");
     g.output(ops::masked_poisson(g, grad, mask, opt_.sor_iterations, opt_.sor_omega, "gel.height"), "height");
-    impl_->exec = std::make_unique<GpuExecutor>(ctx, g, impl_->weights);
+    impl_->exec = std::make_unique<GpuExecutor>(ctx, g, impl_->weights, profile);
 }
 
 GelShapeGpu::~GelShapeGpu() = default;
+
+std::vector<std::pair<std::string, double>> GelShapeGpu::node_times() const {
+    std::vector<std::pair<std::string, double>> t;
+    for (const rt::Sequence::NodeTime& n : impl_->exec->node_times()) t.emplace_back(n.label, n.ms);
+    return t;
+}
 
 GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) {
     const int H = calib_.height, W = calib_.width;

@@ -4,6 +4,8 @@
 // the calibration's tables as resident weights.
 #include <cstdint>
 #include <memory>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/sensor/calibration.h"
@@ -17,7 +19,8 @@ namespace sensor {
 
 class GelShapeGpu {
 public:
-    GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options = {});
+    // profile: GPU timestamps per node (node_times() after run(); the benchmark's breakdown).
+    GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options = {}, bool profile = false);
     ~GelShapeGpu();
     GelShapeGpu(const GelShapeGpu&) = delete;
     GelShapeGpu& operator=(const GelShapeGpu&) = delete;
@@ -25,6 +28,8 @@ public:
     // frame, empty: the calibration's size, its stored channel order.
     GelShape run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty);
     const Calibration& calibration() const { return calib_; }
+    // GPU ms per node of the last run (label, ms); empty unless profiling.
+    std::vector<std::pair<std::string, double>> node_times() const;
 
 private:
     struct Impl;
