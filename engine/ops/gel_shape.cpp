@@ -6,8 +6,8 @@
 //   workspace (i32, unspecified: the pixels each half-sweep updates) (params iterations, omega):
 //   red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside it, the image's border free.
 // CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
-// shaders/masked_poisson.comp: two set-up dispatches (z zeroed, per colour a list of the pixels
-// to update with their divergence), then one dispatch per half-sweep over that colour's list, in
+// shaders/masked_poisson.comp: two set-up dispatches (the lists' lengths cleared; then z zeroed
+// and per colour a list of the pixels to update with their divergence), then one dispatch per half-sweep over that colour's list, in
 // all workgroups (the sequence's barrier between dependent dispatches orders the colours; one
 // workgroup with a barrier between colours, as before, ran serially on a CPU device, which gives
 // a workgroup one thread: 76 of lavapipe's 79 ms for a 120 x 160 frame; docs/gel_shape.md).
@@ -85,7 +85,7 @@ int64_t poisson_list_cap(int64_t H, int64_t W) {
 std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 2, 2);
     expect_f32(in);
-    int_param(p, "iterations", 0, 100000);
+    int_param(p, "iterations", 0, 10000);  // two dispatches a sweep on the GPU
     const double w = p.get("omega", -1);
     if (!(w > 0 && w < 2)) throw Error("masked_poisson: omega must be in (0, 2)");
     const Shape& g = in[0].shape;

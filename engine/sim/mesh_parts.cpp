@@ -69,6 +69,7 @@ bool same(P2 a, P2 b) { return a.x == b.x && a.y == b.y; }
 // straight edge): only strictly convex corners are clipped, so no triangle
 // comes out flat. Counter-clockwise input; indices into it.
 std::vector<uint32_t> ear_clip(const std::vector<P2>& p) {
+    if (p.size() < 3) throw Error("triangulate_with_holes: a loop of " + std::to_string(p.size()) + " points");
     std::vector<uint32_t> idx(p.size()), out;
     for (size_t i = 0; i < p.size(); ++i) idx[i] = uint32_t(i);
     auto convex = [&](P2 a, P2 b, P2 c) {
@@ -250,7 +251,9 @@ std::vector<std::vector<P2>> trace(const Grid& g, const std::vector<double>& shi
             next.erase(it);
             if (e == start) break;
         }
-        if (loop.size() >= 3) loops.push_back(simplify_loop(loop, tolerance));
+        if (loop.size() < 3) continue;
+        loop = simplify_loop(loop, tolerance);
+        if (loop.size() >= 3) loops.push_back(std::move(loop));  // a touch of zero at a node can leave a sliver
     }
     return loops;
 }
