@@ -194,5 +194,10 @@ def test_shipped_trained_models():
         prov = json.loads(meta["vtloc.provenance"])
         assert cfg == config.named(prov["config"]) and prov["config"] in ("vtloc-lite", "vtloc-lite-xyz", "mcr-lite")
         assert prov["steps"] > 0 and prov["data_format"] == "vtloc-synth/1" and prov["data_seed"] == 1
-        assert sum(o["object_split"] == "seen" for o in prov["objects"]) == 30
+        # The default benchmark's seen objects: 30 of its first 43, 48 of its 68 since the
+        # everyday objects came (data/synth/objects.txt pins the first 43's split).
+        seen = [o["name"] for o in prov["objects"] if o["object_split"] == "seen"]
+        assert len(seen) in (30, 48), (f, len(seen))
+        if len(seen) == 48:
+            assert "spoon" in seen and "table_knife" not in seen, f
         model.load(path)  # loads into the reference
