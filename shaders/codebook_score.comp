@@ -12,6 +12,7 @@ layout(std430, binding = 3) writeonly buffer Out_ { float outv[]; };   // [S * N
 layout(push_constant) uniform Push {
     int H; int NS; int G; int R; int C;
     float inv_cell; float win; float cap; float weight;
+    float inv_n; float inv_rr; float inv_cc;  // 1 / (R C), 1 / sum (r - hr)^2, 1 / sum (c - hc)^2 (0: one row/column)
 } p;
 
 float at(uint base, int i, int j) { return i < 0 || j < 0 || i >= p.G || j >= p.G ? p.cap : book[base + uint(j * p.G + i)]; }
@@ -47,11 +48,23 @@ void main() {
                 seen[r * p.C + c] = w;
                 wmin = min(wmin, w);
             }
+        // The error's best plane (tilt and offset) goes: its coefficients, then the rest.
+        precise float s0 = 0.0, sr = 0.0, sc = 0.0;
+        for (int r = 0; r < p.R; ++r)
+            for (int c = 0; c < p.C; ++c) {
+                precise float e = m[r * p.C + c] - max(0.0, wmin + depth - seen[r * p.C + c]);
+                s0 += e;
+                sr += e * (float(r) - hr);
+                sc += e * (float(c) - hc);
+            }
+        precise float k0 = s0 * p.inv_n, kr = sr * p.inv_rr, kc = sc * p.inv_cc;
         precise float err = 0.0;
-        for (int k = 0; k < RC; ++k) {
-            precise float e = m[k] - max(0.0, wmin + depth - seen[k]);
-            err += e * e;
-        }
+        for (int r = 0; r < p.R; ++r)
+            for (int c = 0; c < p.C; ++c) {
+                precise float e = m[r * p.C + c] - max(0.0, wmin + depth - seen[r * p.C + c]);
+                precise float f = e - (k0 + kr * (float(r) - hr) + kc * (float(c) - hc));
+                err += f * f;
+            }
         outv[h] = -p.weight * err / (float(RC) * depth * depth);
     }
 }

@@ -136,6 +136,32 @@ TEST_CASE("codebook_score: a map scored against itself is best, and no press is 
     CHECK(ops::book::ordered(-0.5f) < ops::book::ordered(0.25f));
 }
 
+TEST_CASE("codebook_score: the sensor's tilt costs nothing, a bump does", "[op][codebook]") {
+    // A press deep enough that the whole 3 x 5 window touches: a tilted sensor (up to 10
+    // degrees in our data) adds a plane to the measured map, which is not where the touch was.
+    const int G = 9, R = 3, C = 5;
+    ops::book::ScoreParams s{G, R, C, 1.0f, 1.0f, 6.0f, 1.0f};
+    std::vector<float> map(size_t(G * G));
+    for (int j = 0; j < G; ++j)
+        for (int i = 0; i < G; ++i) map[size_t(j * G + i)] = 0.1f * float((i - 4) * (i - 4)) + 0.05f * float(j);
+    auto window = [&](int r, int c) { return map[size_t((r + 3) * G + c + 2)]; };
+    float wmin = 6;
+    for (int r = 0; r < R; ++r)
+        for (int c = 0; c < C; ++c) wmin = std::min(wmin, window(r, c));
+    std::vector<float> tilted(size_t(R * C)), bumped(size_t(R * C));
+    for (int r = 0; r < R; ++r)
+        for (int c = 0; c < C; ++c) {
+            const float own = wmin + 1.0f - window(r, c);
+            REQUIRE(own > 0.3f);
+            tilted[size_t(r * C + c)] = own + 0.08f * float(r - 1) - 0.06f * float(c - 2);  // tan(3.4 deg) per 1 mm cell
+            bumped[size_t(r * C + c)] = own + ((r == 1 && c == 2) ? 0.2f : 0.0f);
+        }
+    const float tilt_score = ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, tilted.data());
+    CHECK(tilt_score > -1e-6f);  // only rounding: the plane goes entirely
+    CHECK(ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, bumped.data()) < -1e-3f);
+    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, tilted.data()) < tilt_score - 1e-3f);  // a quarter turn
+}
+
 TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[codebook]") {
     // Points on the plane z = 0 (normal +z) over x in [-30, 5]: a sample at the origin
     // looks down -z; cells beyond x = 5 see nothing (the cap).

@@ -6,7 +6,8 @@
 //   workgroup's loop; a sample reads the 27 bins around its own).
 // codebook_score: heights [S, G*G], spins [NS, 2] (cos, sin), measured [R, C] (mm)
 //   -> log term [S * NS] (params cell, win, cap, weight): each hypothesis' height map
-//   seen at its spin, pressed to the measured depth, against the measured map.
+//   seen at its spin, pressed to the measured depth, against the measured map (the
+//   error less its best plane: tilt and offset are nuisances).
 // CPU references: engine/ops/codebook_math.h. -> shaders/codebook_render.comp (a
 // workgroup per sample, atomic minimum over its cells), shaders/codebook_score.comp.
 #include <cmath>
@@ -138,7 +139,7 @@ std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Par
     if (G < 1 || G * G != b[1]) throw Error("codebook_score: a height map must be square (G*G values), got " + std::to_string(b[1]));
     if (sp.size() != 2 || sp[1] != 2 || sp[0] < 1) throw Error("codebook_score: spins must be [NS > 0, 2], got " + shape_str(sp));
     if (m.size() != 2 || m[0] < 1 || m[1] < 1) throw Error("codebook_score: the measured map must be [R, C], got " + shape_str(m));
-    if (m[0] * m[1] > 4096) throw Error("codebook_score: a window of at most 4096 cells, got " + shape_str(m));
+    if (m[0] * m[1] > book::kMaxWindowCells) throw Error("codebook_score: a window of at most " + std::to_string(book::kMaxWindowCells) + " cells, got " + shape_str(m));
     score_params(p, G, m[0], m[1]);
     to_u32(b[0] * b[1], "codebook size");
     to_u32(b[0] * sp[0], "hypothesis count");
@@ -160,11 +161,12 @@ void score_gpu(const GpuOpArgs& a) {
     const book::ScoreParams s = score_params(a.params, int64_t(std::llround(std::sqrt(double(GG)))), a.in[2].shape[0], a.in[2].shape[1]);
     struct {
         int32_t H, NS, G, R, C;
-        float inv_cell, win, cap, weight;
-    } push{int32_t(S * NS), int32_t(NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap, s.weight};
+        float inv_cell, win, cap, weight, inv_n, inv_rr, inv_cc;
+    } push{int32_t(S * NS), int32_t(NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap, s.weight,
+           book::inv_count(s.R, s.C), book::inv_row_moment(s.R, s.C), book::inv_row_moment(s.C, s.R)};
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.H), local, d);
     const uint64_t strides = (uint64_t(push.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
-    check_loop_budget(d, strides * (3 * uint64_t(s.R) * uint64_t(s.C) + 2 * uint64_t(s.R) + 2), "codebook_score");
+    check_loop_budget(d, strides * (5 * uint64_t(s.R) * uint64_t(s.C) + 3 * uint64_t(s.R) + 2), "codebook_score");
     // Each invocation keeps the window's R * C depths (private memory): one bilinear read per cell, not two.
     a.seq.dispatch(pipeline(a.ctx, "codebook_score", 4, sizeof(push), {local, uint32_t(s.R * s.C)}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},

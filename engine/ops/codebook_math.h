@@ -86,31 +86,57 @@ inline float book_at(const float* map, int32_t G, float cap, float fa, float fb)
 // `win` mm, row-major; row r at v = (r - (R-1)/2) win along the sensor's y,
 // column c at u along x) against the sample's map seen at spin (cs, sn),
 // pressed until its deepest cell matches m's deepest: predicted
-// max(0, w_min + depth - w). Returns -weight * sum (m - predicted)^2 / (R C depth^2)
-// (0 when m holds no press).
+// max(0, w_min + depth - w). The error e = m - predicted loses its best plane
+// over the window (least squares in 1, r, c: the sensor's tilt, up to 10 degrees
+// in our data, and the press's offset are not where the touch was; without this
+// a tilted touch scored its own place below half the surface). Returns
+// -weight * sum (e - plane)^2 / (R C depth^2) (0 when m holds no press).
 struct ScoreParams {
     int32_t G, R, C;
     float inv_cell, win, cap, weight;  // inv_cell: float(1 / the maps' cell)
 };
+
+// 1 / sum over the window of (r - hr)^2, and of (c - hc)^2 (0 for one row or column),
+// and 1 / (R C): the plane's basis 1, r - hr, c - hc is orthogonal on a full grid, so
+// each coefficient is its own projection. Computed on the host (shaders may not divide
+// exactly) and pushed to the shader.
+inline float inv_row_moment(int32_t R, int32_t C) {
+    return R > 1 ? float(12.0 / (double(C) * double(R) * (double(R) * double(R) - 1.0))) : 0.0f;
+}
+inline float inv_count(int32_t R, int32_t C) { return float(1.0 / (double(R) * double(C))); }
+
+constexpr int32_t kMaxWindowCells = 4096;
 
 inline float score_hypothesis(const ScoreParams& s, const float* map, float cs, float sn, const float* m) {
     const float half = float(s.G - 1) * 0.5f, hr = float(s.R - 1) * 0.5f, hc = float(s.C - 1) * 0.5f;
     float depth = 0.0f;
     for (int32_t k = 0; k < s.R * s.C; ++k) depth = std::max(depth, m[k]);
     if (!(depth > 1e-6f)) return 0.0f;
-    auto seen = [&](int32_t r, int32_t c) {
-        const float u = (float(c) - hc) * s.win, v = (float(r) - hr) * s.win;
-        const float a = u * cs - v * sn, b = u * sn + v * cs;
-        return book_at(map, s.G, s.cap, a * s.inv_cell + half, b * s.inv_cell + half);
-    };
+    float seen[kMaxWindowCells];
     float wmin = s.cap;
     for (int32_t r = 0; r < s.R; ++r)
-        for (int32_t c = 0; c < s.C; ++c) wmin = std::min(wmin, seen(r, c));
+        for (int32_t c = 0; c < s.C; ++c) {
+            const float u = (float(c) - hc) * s.win, v = (float(r) - hr) * s.win;
+            const float a = u * cs - v * sn, b = u * sn + v * cs;
+            const float w = book_at(map, s.G, s.cap, a * s.inv_cell + half, b * s.inv_cell + half);
+            seen[r * s.C + c] = w;
+            wmin = std::min(wmin, w);
+        }
+    float s0 = 0.0f, sr = 0.0f, sc = 0.0f;
+    for (int32_t r = 0; r < s.R; ++r)
+        for (int32_t c = 0; c < s.C; ++c) {
+            const float e = m[r * s.C + c] - std::max(0.0f, wmin + depth - seen[r * s.C + c]);
+            s0 += e;
+            sr += e * (float(r) - hr);
+            sc += e * (float(c) - hc);
+        }
+    const float k0 = s0 * inv_count(s.R, s.C), kr = sr * inv_row_moment(s.R, s.C), kc = sc * inv_row_moment(s.C, s.R);
     float err = 0.0f;
     for (int32_t r = 0; r < s.R; ++r)
         for (int32_t c = 0; c < s.C; ++c) {
-            const float e = m[r * s.C + c] - std::max(0.0f, wmin + depth - seen(r, c));
-            err += e * e;
+            const float e = m[r * s.C + c] - std::max(0.0f, wmin + depth - seen[r * s.C + c]);
+            const float f = e - (k0 + kr * (float(r) - hr) + kc * (float(c) - hc));
+            err += f * f;
         }
     return -s.weight * err / (float(s.R * s.C) * depth * depth);
 }
