@@ -113,7 +113,7 @@ void main() {
                 } while (k <= kf);
                 const uint b = kf * 16u;
                 const int field = int(round(terms[b + 14u]));
-                if (field >= 0) {
+                if (field >= 0 && uint(field) < p.F) {  // a field past F (refused on the CPU) reads nothing
                     const int hk = nearest_hypothesis(sf, xf);
                     acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
                 }

@@ -12,6 +12,7 @@
 #include <random>
 
 #include "engine/check/op_selftest.h"
+#include "engine/executor.h"
 #include "engine/ops/build.h"
 #include "tests/harness.h"
 
@@ -150,6 +151,22 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
         if (k == 0) CHECK(v > -0.01f);
         else CHECK(v < -11.0f);
     }
+}
+
+TEST_CASE("pose_evidence: a term naming a field past F is refused on the CPU, read as none on the GPU", "[op][pose]") {
+    // Terms are device data, so the GPU cannot refuse them; it must not read out of bounds.
+    Scene sc = scene(13, 29, 7, 3, 2, 11);
+    sc.p.own_field = -1;
+    HostTensor bad = sc.in.at("terms"), none = sc.in.at("terms");
+    bad.data[16 + 14] = 2.0f;  // term 1 names field 2 of 2
+    none.data[16 + 14] = -1.0f;
+    sc.in["terms"] = bad;
+    const Graph g = evidence_graph(sc);
+    CHECK_THROWS_WITH(run_cpu(g, WeightStore{}, sc.in), Catch::Contains("term 1 names field 2 of 2"));
+    const TensorMap got = GpuExecutor(test::gpu(), g, WeightStore{}).run(sc.in);
+    sc.in["terms"] = none;
+    const TensorMap want = GpuExecutor(test::gpu(), g, WeightStore{}).run(sc.in);
+    CHECK(got.at("score").data == want.at("score").data);
 }
 
 TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU reference", "[op][pose][log_softmax][spin_marginal][expected_distance]") {

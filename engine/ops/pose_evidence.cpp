@@ -8,6 +8,9 @@
 // [V, 2] I32 (nearest dense point, nearest sample), spins [NS, 2] (cos, sin),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
 // [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
+// Terms are data on the device, so only the CPU reference can refuse a term naming a
+// field past F; the shader reads nothing for one (no read out of bounds). The
+// tracker never builds one.
 #include <cmath>
 
 #include "base/error.h"
