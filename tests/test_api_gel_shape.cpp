@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/sensor/gel_shape.h"
+#include "engine/sensor/lighting.h"
 #include "tests/harness.h"
 #include "vtloc/vtloc.h"
 
@@ -33,7 +34,8 @@ TEST_CASE("gel shape reader: the GPU pipeline equals the CPU one on real presses
         INFO("press " << i);
         const size_t n = size_t(c.height) * size_t(c.width);
         const std::vector<uint8_t> bgr(c.press_imgs.begin() + long(size_t(i) * n * 3), c.press_imgs.begin() + long(size_t(i + 1) * n * 3));
-        const sensor::GelShape cpu = sensor::gel_shape(c, lut, bgr, c.press_f0);
+        // The reader matches the frame's lighting to the empty frame first (engine/sensor/lighting.h).
+        const sensor::GelShape cpu = sensor::gel_shape(c, lut, sensor::match_lighting(bgr, c.press_f0), c.press_f0);
         const api::GelShape gpu = reader.read(press(c, i));
         REQUIRE(gpu.depth_mm.size() == n);
         size_t differ = 0;

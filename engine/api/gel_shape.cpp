@@ -12,13 +12,15 @@
 #include "engine/api/api_internal.h"
 #include "engine/io/image.h"
 #include "engine/sensor/gel_shape_gpu.h"
+#include "engine/sensor/lighting.h"
 
 namespace vtloc::api {
 
 struct GelShapeReader::Impl {
     sensor::GelShapeGpu gpu;
-    Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o)
-        : gpu(ctx, std::move(c), std::move(lut), o) {}
+    bool match_lighting;
+    Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o, bool match)
+        : gpu(ctx, std::move(c), std::move(lut), o), match_lighting(match) {}
 };
 
 namespace {
@@ -50,7 +52,7 @@ GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
         static_assert(sensor::kRenderedMaskThreshold == 0.05, "GelShapeOptions::rendered_frames() repeats it");
         sensor::ShapeOptions so;
         so.mask_threshold = o.mask_threshold, so.sor_iterations = o.iterations;
-        impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so);
+        impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so, o.match_lighting);
     });
 }
 
@@ -64,9 +66,10 @@ int GelShapeReader::width() const { return impl_->gpu.calibration().width; }
 GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* empty) {
     return guarded([&] {
         const sensor::Calibration& c = impl_->gpu.calibration();
-        const std::vector<uint8_t> f = to_calibration(frame, c, "frame");
+        std::vector<uint8_t> f = to_calibration(frame, c, "frame");
         std::vector<uint8_t> e = empty ? to_calibration(*empty, c, "empty frame") : c.press_f0;
         if (e.empty()) throw Error("gel shape: this calibration has no empty frame; give the sensor's own");
+        if (impl_->match_lighting) f = sensor::match_lighting(f, e);
         const sensor::GelShape s = impl_->gpu.run(f, e);
         GelShape out;
         out.height = s.height, out.width = s.width, out.mm_per_px = c.mm_per_px;

@@ -449,6 +449,9 @@ struct GelShapeOptions {
     std::string calibration;       // a Taxim-style calibration file; empty: the shipped GelSight one
     double mask_threshold = 0.7;   // the contact: 3x3 mean slope above this (fitted on the real presses)
     int iterations = 50;           // red-black SOR sweeps of the height
+    // Undo a gain and offset per channel between the frame and the empty frame (LED drift,
+    // exposure; our renderer's training frames vary both) before the calibration reads shading.
+    bool match_lighting = true;
     // For frames rendered by `vtloc synth` (gentle presses of large objects, no optical halo): a
     // mask threshold of 0.05, chosen on renders of the procedural solids (docs/gel_shape.md).
     static GelShapeOptions rendered_frames() {
