@@ -7,9 +7,12 @@ engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 
 With --render, the knob is render-and-compare's inverse temperature (render_weight, SPEC 9):
 the "MidasTouch-style" row alone (--rows render --render-compare), each frame's gel shape
-read from the frame as a robot would.
+read from the frame as a robot would. With --oracle, the same knob for the oracle row (the
+renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
+beside the shipped weight, never shipped.
 
-    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--render] [--out fit.json]
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--render | --oracle]
+        [--sequence 4,8] [--out fit.json]
 """
 import argparse
 import itertools
@@ -25,15 +28,16 @@ GRID = {
 }
 
 
-GRID_RENDER = {"render_weight": [0.25, 1, 4]}
+GRID_RENDER = {"render_weight": [0.25, 4, 8, 16]}
+GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
 
-def run(vtloc, data, objects, knobs, render=False):
+def run(vtloc, data, objects, knobs, row=None, sequence="4,8"):
     with tempfile.TemporaryDirectory() as tmp:
         out = os.path.join(tmp, "fit.json")
         arg = ",".join(f"{k}={v}" for k, v in knobs.items())
-        extra = ["--render-compare", "--rows", "render"] if render else []
-        subprocess.run([vtloc, "eval", "--data", data, "--objects", objects, "--sequence", "4,8", "--geometry-only",
+        extra = ["--render-compare", "--rows", row] if row else []
+        subprocess.run([vtloc, "eval", "--data", data, "--objects", objects, "--sequence", sequence, "--geometry-only",
                         "--end-split", "train", "--filter", arg, "--json", out] + extra, check=True, stdout=subprocess.DEVNULL)
         with open(out) as f:
             rows = [r for r in json.load(f)["rows"] if r["subset"] == "all" and not r["odometry_noise"]]
@@ -46,13 +50,16 @@ def main():
     ap.add_argument("--data", required=True)
     ap.add_argument("--objects", default="known", help="known (the seen objects) or all")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
+    ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
+    ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_RENDER if a.render else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID
+    row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):
         knobs = dict(zip(grid, values))
-        r = run(a.vtloc, a.data, a.objects, knobs, a.render)
+        r = run(a.vtloc, a.data, a.objects, knobs, row, a.sequence)
         score = sum(v["nd_symmetry"] for v in r.values()) / len(r)
         results.append({"knobs": knobs, "score": score, "rows": r})
         print(json.dumps(knobs), f"mean ND up to symmetry {score:.2f}",
