@@ -28,7 +28,7 @@ GRID = {
 }
 
 
-GRID_RENDER = {"render_weight": [0.25, 4, 8, 16]}
+GRID_RENDER = {"render_weight": [0.25, 4, 16, 64]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
 
