@@ -2,8 +2,8 @@
 # Sanitizer runs of the C++ test suite (clang; docs/testing.md):
 #   asan: every target built with ASan + UBSan (build-asan/), the whole
 #         vtloc_tests suite in one process, leaks checked (LSan) at exit;
-#   tsan: every target built with TSan (build-tsan/), the tests that use
-#         threads ([threads]).
+#   tsan: the libraries and vtloc_thread_tests (test_api.cpp alone) built with
+#         TSan (build-tsan/), the tests that use threads ([threads]).
 # Vulkan runs on lavapipe; Mesa, the loader and the validation layer are
 # Debian's, not instrumented: the suppression files next to this script name
 # what is theirs and why. Any report in our code fails the run.
@@ -21,23 +21,23 @@ if [ ! -d "$goldens" ]; then
   exit 1
 fi
 
-configure() {  # build-dir sanitizers
+configure() {  # build-dir sanitizers target
   if [ ! -f "$1/CMakeCache.txt" ]; then
     CC=clang CXX=clang++ cmake -S "$root" -B "$1" -DVTLOC_SANITIZE="$2" -DVTLOC_BUILD_PYTHON=OFF \
       -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVTLOC_GOLDENS_DIR="$goldens" > /dev/null
   fi
-  cmake --build "$1" -j"$(nproc)" --target vtloc_tests > /dev/null
+  cmake --build "$1" -j"$(nproc)" --target "$3" > /dev/null
 }
 
-# run BUILD-DIR SANITIZERS REPORT-PATTERN TEST-FILTER [ENV=VALUE ...]: builds the
-# test binary, runs it, fails on its exit status or any report in its log
+# run BUILD-DIR SANITIZERS TARGET REPORT-PATTERN TEST-FILTER [ENV=VALUE ...]: builds the
+# test binary TARGET, runs it, fails on its exit status or any report in its log
 # (reports do not halt the run, so one run shows them all).
 status=0
 run() {
-  local build="$root/$1" sanitizers="$2" pattern="$3" filter="$4"
-  shift 4
-  configure "$build" "$sanitizers"
-  if ! (cd "$build" && env VTLOC_VALIDATION=1 "$@" tests/vtloc_tests $filter > "$build/sanitize.log" 2>&1); then
+  local build="$root/$1" sanitizers="$2" target="$3" pattern="$4" filter="$5"
+  shift 5
+  configure "$build" "$sanitizers" "$target"
+  if ! (cd "$build" && env VTLOC_VALIDATION=1 "$@" "tests/$target" $filter > "$build/sanitize.log" 2>&1); then
     status=1
   fi
   if grep -q "$pattern" "$build/sanitize.log"; then
@@ -53,14 +53,14 @@ for kind in "${kinds[@]}"; do
       echo "sanitize: ASan + UBSan, the whole vtloc_tests suite but the long sweeps"
       # ~[long]: the full-size sweeps (the suite's quick versions cover the same paths);
       # ~[picture]: the hidden case that rewrites a picture in docs/ (exclusions alone match hidden cases).
-      run build-asan "address,undefined" "runtime error:" "--order decl ~[long]~[picture]" \
+      run build-asan "address,undefined" vtloc_tests "runtime error:" "--order decl ~[long]~[picture]" \
         ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1" \
         LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
         UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=0"
       ;;
     tsan)
-      echo "sanitize: TSan, the [threads] tests"
-      run build-tsan "thread" "WARNING: ThreadSanitizer" "[threads]" \
+      echo "sanitize: TSan, the [threads] tests (their own binary: test_api.cpp alone)"
+      run build-tsan "thread" vtloc_thread_tests "WARNING: ThreadSanitizer" "[threads]" \
         TSAN_OPTIONS="suppressions=$here/tsan.supp:halt_on_error=0:second_deadlock_stack=1"
       ;;
     *) echo "sanitize: unknown kind $kind (asan, tsan)" >&2; exit 2 ;;
