@@ -94,6 +94,42 @@ TEST_CASE("codebook_render matches the CPU reference", "[op][codebook][codebook_
     }
 }
 
+// Random maps [S, G*G] as the scorer reads them: bilinear quads [S, 4 (G+1)^2].
+HostTensor random_quads(int64_t S, int64_t G, float cap, uint32_t seed) {
+    const HostTensor maps = test::random_tensor({S, G * G}, seed, -1.0f, 3.0f);
+    HostTensor q({S, 4 * (G + 1) * (G + 1)});
+    for (int64_t i = 0; i < S; ++i) ops::book::make_quads(&maps.data[size_t(i * G * G)], int32_t(G), cap, &q.data[size_t(i * 4 * (G + 1) * (G + 1))]);
+    return q;
+}
+
+std::vector<float> quads_of(const std::vector<float>& map, int G, float cap) {
+    std::vector<float> q(size_t(4 * (G + 1) * (G + 1)));
+    ops::book::make_quads(map.data(), G, cap, q.data());
+    return q;
+}
+
+HostTensor spin_table(int64_t NS) {
+    HostTensor spins({NS, 2});
+    for (int64_t j = 0; j < NS; ++j)
+        spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * j / NS)), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * j / NS));
+    return spins;
+}
+
+TEST_CASE("codebook_window_min matches the CPU reference", "[op][codebook][codebook_window_min]") {
+    struct Case {
+        int64_t S, G, NS, R, C;
+    };
+    // Windows inside the map, past its edge (the cap), one cell, one row.
+    for (const Case& k : {Case{1, 1, 1, 1, 1}, Case{3, 5, 7, 3, 4}, Case{17, 27, 36, 15, 20}, Case{9, 9, 5, 1, 13}, Case{4, 7, 3, 11, 11}}) {
+        INFO(k.S << " samples, G " << k.G << ", " << k.NS << " spins, window " << k.R << "x" << k.C);
+        Graph g;
+        const int64_t Q = k.G + 1;
+        g.output(ops::codebook_window_min(g, g.input("quads", {k.S, 4 * Q * Q}), g.input("spins", {k.NS, 2}), k.R, k.C, 0.9, 1.1, 6.0), "wmin");
+        TensorMap in{{"quads", random_quads(k.S, k.G, 6.0f, uint32_t(k.S * k.G + 5))}, {"spins", spin_table(k.NS)}};
+        test::run_gpu_and_compare(g, WeightStore{}, in);
+    }
+}
+
 TEST_CASE("codebook_score matches the CPU reference", "[op][codebook][codebook_score]") {
     struct Case {
         int64_t S, G, NS, R, C;
@@ -101,16 +137,89 @@ TEST_CASE("codebook_score matches the CPU reference", "[op][codebook][codebook_s
     for (const Case& k : {Case{1, 1, 1, 1, 1}, Case{3, 5, 7, 3, 4}, Case{17, 27, 36, 15, 20}, Case{9, 9, 5, 1, 13}}) {
         INFO(k.S << " samples, G " << k.G << ", " << k.NS << " spins, window " << k.R << "x" << k.C);
         Graph g;
-        g.output(ops::codebook_score(g, g.input("heights", {k.S, k.G * k.G}), g.input("spins", {k.NS, 2}), g.input("measured", {k.R, k.C}),
-                                     0.9, 1.1, 6.0, 2.5),
-                 "term");
-        HostTensor spins({k.NS, 2});
-        for (int64_t j = 0; j < k.NS; ++j)
-            spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * j / k.NS)), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * j / k.NS));
+        const int64_t Q = k.G + 1;
+        const int quads = g.input("quads", {k.S, 4 * Q * Q}), spins = g.input("spins", {k.NS, 2});
+        const int wmin = ops::codebook_window_min(g, quads, spins, k.R, k.C, 0.9, 1.1, 6.0);
+        g.output(ops::codebook_score(g, quads, spins, g.input("measured", {k.R, k.C}), wmin, 0.9, 1.1, 6.0, 2.5), "term");
         HostTensor meas = test::random_tensor({k.R, k.C}, uint32_t(k.S + k.R), -0.2f, 1.2f);
         for (float& v : meas.data) v = std::max(0.0f, v);
-        TensorMap in{{"heights", test::random_tensor({k.S, k.G * k.G}, uint32_t(k.S * k.G), -1.0f, 3.0f)}, {"spins", spins}, {"measured", meas}};
+        TensorMap in{{"quads", random_quads(k.S, k.G, 6.0f, uint32_t(k.S * k.G))}, {"spins", spin_table(k.NS)}, {"measured", meas}};
         test::run_gpu_and_compare(g, WeightStore{}, in);
+    }
+}
+
+TEST_CASE("codebook_score's one pass equals the plane fitted in double", "[op][codebook]") {
+    // The score takes the plane out by orthogonality (sum e^2 less the projections); here
+    // the definition: the least-squares plane solved from its normal equations in double,
+    // the residual summed. Random maps, spins, tilted and offset presses; windows of one
+    // row, one column and the sensor's 15 x 20.
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<float> u(-1.0f, 1.0f);
+    const int G = 27;
+    for (const auto& [R, C] : std::vector<std::pair<int, int>>{{15, 20}, {1, 9}, {7, 1}, {4, 6}}) {
+        ops::book::ScoreParams s{G, R, C, 1.0f, 0.996f, 8.0f, 1.0f};
+        for (int trial = 0; trial < 20; ++trial) {
+            std::vector<float> map(size_t(G * G)), m(size_t(R * C));
+            const float bx = 0.1f * u(rng), by = 0.1f * u(rng), curv = 0.02f * (u(rng) + 1.2f);
+            for (int j = 0; j < G; ++j)
+                for (int i = 0; i < G; ++i)
+                    map[size_t(j * G + i)] = curv * float((i - 13) * (i - 13) + (j - 13) * (j - 13)) + bx * float(i) + by * float(j) + 0.05f * u(rng);
+            for (float& v : m) v = std::max(0.0f, 0.8f + 0.5f * u(rng));
+            const float cs = std::cos(float(trial)), sn = std::sin(float(trial));
+            const std::vector<float> q = quads_of(map, G, s.cap);
+            const float wmin = ops::book::window_min(s, q.data(), cs, sn);
+            double depth = 0;
+            for (float v : m) depth = std::max(depth, double(v));
+            // e at each cell, then the plane in 1, r, c by the 3 x 3 normal equations.
+            std::vector<double> e(size_t(R * C));
+            double A[3][3] = {}, y[3] = {};
+            for (int r = 0; r < R; ++r)
+                for (int c = 0; c < C; ++c) {
+                    const double w = ops::book::window_depth(s, q.data(), cs, sn, r, c);
+                    // The quads' read against plain bilinear interpolation of the map (cap off the grid).
+                    const double xx = ((c - (C - 1) / 2.0) * s.win * cs - (r - (R - 1) / 2.0) * s.win * sn) + (G - 1) / 2.0;
+                    const double yy = ((c - (C - 1) / 2.0) * s.win * sn + (r - (R - 1) / 2.0) * s.win * cs) + (G - 1) / 2.0;
+                    const int ix = int(std::floor(xx)), iy = int(std::floor(yy));
+                    auto at = [&](int i, int j) { return i < 0 || j < 0 || i >= G || j >= G ? double(s.cap) : double(map[size_t(j * G + i)]); };
+                    const double fx = xx - ix, fy = yy - iy;
+                    const double bl = (at(ix, iy) * (1 - fx) + at(ix + 1, iy) * fx) * (1 - fy) + (at(ix, iy + 1) * (1 - fx) + at(ix + 1, iy + 1) * fx) * fy;
+                    REQUIRE(std::fabs(w - bl) <= 1e-4 + 1e-4 * std::fabs(bl));
+                    const double ek = double(m[size_t(r * C + c)]) - std::max(0.0, double(wmin) + depth - w);
+                    e[size_t(r * C + c)] = ek;
+                    const double x[3] = {1.0, double(r), double(c)};
+                    for (int a = 0; a < 3; ++a) {
+                        y[a] += x[a] * ek;
+                        for (int b = 0; b < 3; ++b) A[a][b] += x[a] * x[b];
+                    }
+                }
+            // One row or column: that direction's coefficient is 0 (a zero row of A).
+            for (int a = 0; a < 3; ++a)
+                if (A[a][a] - (a ? A[a][0] * A[a][0] / A[0][0] : 0) < 1e-9) A[a][a] = 1, y[a] = 0, A[a][0] = A[0][a] = 0;
+            // Gaussian elimination (A is symmetric positive definite now).
+            for (int a = 0; a < 3; ++a)
+                for (int b = a + 1; b < 3; ++b) {
+                    const double f = A[b][a] / A[a][a];
+                    for (int k = a; k < 3; ++k) A[b][k] -= f * A[a][k];
+                    y[b] -= f * y[a];
+                }
+            double coef[3];
+            for (int a = 2; a >= 0; --a) {
+                double v = y[a];
+                for (int k = a + 1; k < 3; ++k) v -= A[a][k] * coef[k];
+                coef[a] = v / A[a][a];
+            }
+            double err = 0;
+            for (int r = 0; r < R; ++r)
+                for (int c = 0; c < C; ++c) {
+                    const double f = e[size_t(r * C + c)] - (coef[0] + coef[1] * r + coef[2] * c);
+                    err += f * f;
+                }
+            const double want = -err / (double(R * C) * depth * depth);
+            const float got = ops::book::score_hypothesis(s, q.data(), cs, sn, m.data(), wmin);
+            INFO(R << "x" << C << " trial " << trial << ": " << got << " vs " << want);
+            // fp32 sums over <= 300 cells, less the plane's share: ~1e-6 of sum e^2 / (R C depth^2).
+            CHECK(std::fabs(double(got) - want) <= 1e-5 + 1e-4 * std::fabs(want));
+        }
     }
 }
 
@@ -127,10 +236,11 @@ TEST_CASE("codebook_score: a map scored against itself is best, and no press is 
         for (int c = 0; c < C; ++c) wmin = std::min(wmin, map[size_t((r + 3) * G + c + 2)]);
     for (int r = 0; r < R; ++r)
         for (int c = 0; c < C; ++c) m[size_t(r * C + c)] = std::max(0.0f, wmin + 0.6f - map[size_t((r + 3) * G + c + 2)]);
-    CHECK(ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, m.data()) == 0.0f);
-    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, m.data()) < -0.01f);  // a quarter turn
+    const std::vector<float> q = quads_of(map, G, s.cap);
+    CHECK(ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, m.data()) == 0.0f);
+    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, m.data()) < -0.01f);  // a quarter turn
     std::vector<float> none(size_t(R * C), 0.0f);
-    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, none.data()) == 0.0f);
+    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, none.data()) == 0.0f);
     CHECK(ops::book::unordered(ops::book::ordered(-2.5f)) == -2.5f);
     CHECK(ops::book::ordered(-1.0f) < ops::book::ordered(-0.5f));
     CHECK(ops::book::ordered(-0.5f) < ops::book::ordered(0.25f));
@@ -156,10 +266,11 @@ TEST_CASE("codebook_score: the sensor's tilt costs nothing, a bump does", "[op][
             tilted[size_t(r * C + c)] = own + 0.08f * float(r - 1) - 0.06f * float(c - 2);  // tan(3.4 deg) per 1 mm cell
             bumped[size_t(r * C + c)] = own + ((r == 1 && c == 2) ? 0.2f : 0.0f);
         }
-    const float tilt_score = ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, tilted.data());
+    const std::vector<float> q = quads_of(map, G, s.cap);
+    const float tilt_score = ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, tilted.data());
     CHECK(tilt_score > -1e-6f);  // only rounding: the plane goes entirely
-    CHECK(ops::book::score_hypothesis(s, map.data(), 1.0f, 0.0f, bumped.data()) < -1e-3f);
-    CHECK(ops::book::score_hypothesis(s, map.data(), 0.0f, 1.0f, tilted.data()) < tilt_score - 1e-3f);  // a quarter turn
+    CHECK(ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, bumped.data()) < -1e-3f);
+    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, tilted.data()) < tilt_score - 1e-3f);  // a quarter turn
 }
 
 TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[codebook]") {

@@ -1,4 +1,5 @@
-// Self-test cases of render-and-compare's ops (codebook_render, codebook_score):
+// Self-test cases of render-and-compare's ops (codebook_render, codebook_window_min
+// and codebook_score, the score's case running both):
 // random surface points binned as the codebook bins them, random height maps and
 // a non-negative measured map.
 #include <cmath>
@@ -7,6 +8,7 @@
 #include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
 #include "engine/ops/codebook_bins.h"
+#include "engine/ops/codebook_math.h"
 
 namespace vtloc::check {
 
@@ -38,24 +40,48 @@ OpCase render_case(int64_t S, int64_t D, int64_t G, uint32_t seed) {
     return c;
 }
 
-OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32_t seed) {
-    OpCase c("codebook_score", std::to_string(S) + " maps of " + std::to_string(G) + "^2, " + std::to_string(NS) + " spins, " +
-                                   std::to_string(R) + "x" + std::to_string(C) + " window");
+// Random maps as the scorer reads them: their bilinear quads [S, 4 (G+1)^2].
+HostTensor random_quads(int64_t S, int64_t G, uint32_t seed) {
+    const HostTensor maps = random_tensor({S, G * G}, seed, -1.0f, 3.0f);
+    HostTensor q({S, 4 * (G + 1) * (G + 1)});
+    for (int64_t i = 0; i < S; ++i) ops::book::make_quads(&maps.data[size_t(i * G * G)], int32_t(G), 8.0f, &q.data[size_t(i * 4 * (G + 1) * (G + 1))]);
+    return q;
+}
+
+HostTensor spin_table(int64_t NS) {
     HostTensor spins({NS, 2});
     for (int64_t j = 0; j < NS; ++j)
         spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * double(j) / double(NS))), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
+    return spins;
+}
+
+std::string book_label(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C) {
+    return std::to_string(S) + " maps of " + std::to_string(G) + "^2, " + std::to_string(NS) + " spins, " + std::to_string(R) + "x" +
+           std::to_string(C) + " window";
+}
+
+OpCase window_min_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32_t seed) {
+    OpCase c("codebook_window_min", book_label(S, G, NS, R, C));
+    c.output(ops::codebook_window_min(c.g, c.input("quads", random_quads(S, G, seed)), c.input("spins", spin_table(NS)), R, C, 1.0, 0.996, 8.0),
+             "wmin");
+    return c;
+}
+
+OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32_t seed) {
+    OpCase c("codebook_score", book_label(S, G, NS, R, C));
     HostTensor meas = random_tensor({R, C}, seed + 1, -0.3f, 1.2f);
     for (float& v : meas.data) v = std::max(0.0f, v);
-    c.output(ops::codebook_score(c.g, c.input("heights", random_tensor({S, G * G}, seed, -1.0f, 3.0f)), c.input("spins", spins),
-                                 c.input("measured", meas), 1.0, 0.996, 8.0, 1.5),
-             "term");
+    const int quads = c.input("quads", random_quads(S, G, seed)), sp = c.input("spins", spin_table(NS));
+    const int wmin = ops::codebook_window_min(c.g, quads, sp, R, C, 1.0, 0.996, 8.0);
+    c.output(ops::codebook_score(c.g, quads, sp, c.input("measured", meas), wmin, 1.0, 0.996, 8.0, 1.5), "term");
     return c;
 }
 
 }  // namespace
 
 std::vector<OpCase> codebook_cases(const rt::DeviceInfo&) {
-    return {render_case(7, 4001, 13, 21), render_case(33, 12000, 27, 22), score_case(11, 27, 36, 15, 20, 23), score_case(3, 5, 7, 1, 3, 24)};
+    return {render_case(7, 4001, 13, 21), render_case(33, 12000, 27, 22), window_min_case(5, 27, 36, 15, 20, 25),
+            score_case(11, 27, 36, 15, 20, 23), score_case(3, 5, 7, 1, 3, 24)};
 }
 
 }  // namespace vtloc::check

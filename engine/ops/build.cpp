@@ -166,9 +166,16 @@ int codebook_render(Graph& g, int samples, int points, int bins, const CodebookR
                   name);
 }
 
-int codebook_score(Graph& g, int heights, int spins, int measured, double cell, double win, double cap, double weight,
+int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, double cell, double win, double cap,
+                        const std::string& name) {
+    return g.add1("codebook_window_min", {quads, spins}, {{"rows", d(R)}, {"cols", d(C)}, {"cell", cell}, {"win", win}, {"cap", cap}},
+                  name);
+}
+
+int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, double cell, double win, double cap, double weight,
                    const std::string& name) {
-    return g.add1("codebook_score", {heights, spins, measured}, {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}}, name);
+    return g.add1("codebook_score", {quads, spins, measured, wmin}, {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}},
+                  name);
 }
 
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }

@@ -129,8 +129,14 @@ struct CodebookRender {
 };
 // samples [S, 9], points [D, 6] (binned), bins [nx*ny*nz, 2] I32 -> heights [S, G*G].
 int codebook_render(Graph& g, int samples, int points, int bins, const CodebookRender& p, const std::string& name = "");
-// heights [S, G*G], spins [NS, 2], measured [R, C] (cells of `win` mm) -> log term [S*NS].
-int codebook_score(Graph& g, int heights, int spins, int measured, double cell, double win, double cap, double weight,
+// quads [S, 4 (G+1)^2] (each map's bilinear quads, book::make_quads), spins [NS, 2] -> [S*NS]:
+// each hypothesis' shallowest depth under a window of R x C cells of `win` mm (once per
+// window size; codebook_score reads it).
+int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, double cell, double win, double cap,
+                        const std::string& name = "");
+// quads [S, 4 (G+1)^2], spins [NS, 2], measured [R, C] (cells of `win` mm), wmin [S*NS]
+// (codebook_window_min of the same window) -> log term [S*NS].
+int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, double cell, double win, double cap, double weight,
                    const std::string& name = "");
 
 // Point cloud.

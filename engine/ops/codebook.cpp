@@ -4,12 +4,17 @@
 //   -> heights [S, G*G]: each sample's height map (params G, cell, splat, cap, facing,
 //   origin_x/y/z, coarse, nx, ny, nz, max_bin: the largest bin's count, which bounds a
 //   workgroup's loop; a sample reads the 27 bins around its own).
-// codebook_score: heights [S, G*G], spins [NS, 2] (cos, sin), measured [R, C] (mm)
-//   -> log term [S * NS] (params cell, win, cap, weight): each hypothesis' height map
-//   seen at its spin, pressed to the measured depth, against the measured map (the
-//   error less its best plane: tilt and offset are nuisances).
+// codebook_window_min: quads [S, 4 (G+1)^2] (each map's bilinear quads, book::make_quads),
+//   spins -> [S * NS] (params rows, cols, cell, win, cap): each
+//   hypothesis' shallowest depth under the window, the depth its press counts from (it
+//   depends on the map, the spin and the window's size only: computed once per size).
+// codebook_score: quads [S, 4 (G+1)^2], spins [NS, 2] (cos, sin), measured [R, C] (mm), the
+//   window minima [S * NS] -> log term [S * NS] (params cell, win, cap, weight): each
+//   hypothesis' height map seen at its spin, pressed to the measured depth, against the
+//   measured map (the error less its best plane: tilt and offset are nuisances).
 // CPU references: engine/ops/codebook_math.h. -> shaders/codebook_render.comp (a
-// workgroup per sample, atomic minimum over its cells), shaders/codebook_score.comp.
+// workgroup per sample, atomic minimum over its cells), shaders/codebook_window_min.comp,
+// shaders/codebook_score.comp (one pass over the window per hypothesis).
 #include <cmath>
 
 #include "base/error.h"
@@ -130,47 +135,111 @@ book::ScoreParams score_params(const Params& p, int64_t G, int64_t R, int64_t C)
     return s;
 }
 
-std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Params& p) {
-    expect_input_count(in, 3, 3);
-    expect_f32(in);
-    const Shape &b = in[0].shape, &sp = in[1].shape, &m = in[2].shape;
-    if (b.size() != 2 || b[0] < 1) throw Error("codebook_score: heights must be [S > 0, G*G], got " + shape_str(b));
-    const int64_t G = int64_t(std::llround(std::sqrt(double(b[1]))));
-    if (G < 1 || G * G != b[1]) throw Error("codebook_score: a height map must be square (G*G values), got " + std::to_string(b[1]));
-    if (sp.size() != 2 || sp[1] != 2 || sp[0] < 1) throw Error("codebook_score: spins must be [NS > 0, 2], got " + shape_str(sp));
-    if (m.size() != 2 || m[0] < 1 || m[1] < 1) throw Error("codebook_score: the measured map must be [R, C], got " + shape_str(m));
-    if (m[0] * m[1] > book::kMaxWindowCells) throw Error("codebook_score: a window of at most " + std::to_string(book::kMaxWindowCells) + " cells, got " + shape_str(m));
-    score_params(p, G, m[0], m[1]);
+// quads [S, 4 (G+1)^2] (book::make_quads of each map) and spins [NS, 2]: returns G.
+int64_t quads_side(const Shape& b) { return b.size() == 2 && b[1] % 4 == 0 ? int64_t(std::llround(std::sqrt(double(b[1] / 4)))) : 0; }
+
+int64_t check_book(const char* op, const Shape& b, const Shape& sp) {
+    if (b.size() != 2 || b[0] < 1) throw Error(std::string(op) + ": quads must be [S > 0, 4 (G+1)^2], got " + shape_str(b));
+    const int64_t Q = quads_side(b);
+    if (Q < 2 || 4 * Q * Q != b[1])
+        throw Error(std::string(op) + ": a map's quads must be 4 (G+1)^2 values for G >= 1, got " + std::to_string(b[1]));
+    if (sp.size() != 2 || sp[1] != 2 || sp[0] < 1) throw Error(std::string(op) + ": spins must be [NS > 0, 2], got " + shape_str(sp));
     to_u32(b[0] * b[1], "codebook size");
     to_u32(b[0] * sp[0], "hypothesis count");
-    return {TensorDesc{{b[0] * sp[0]}}};
+    return Q - 1;
+}
+
+void check_window(const char* op, int64_t R, int64_t C) {
+    if (R < 1 || C < 1 || R * C > book::kMaxWindowCells)
+        throw Error(std::string(op) + ": a window of 1 to " + std::to_string(book::kMaxWindowCells) + " cells, got " + std::to_string(R) +
+                    " x " + std::to_string(C));
+}
+
+struct Book {
+    int64_t S, GG, NS;
+    book::ScoreParams s;
+};
+
+Book book_of(const Shape& quads, const Shape& spins, const Params& p, int64_t R, int64_t C) {
+    return {quads[0], quads[1], spins[0], score_params(p, quads_side(quads) - 1, R, C)};
+}
+
+// Push constants both shaders start with (shaders/codebook_window.glsl reads G..cap).
+struct WindowPush {
+    int32_t H, NS, G, R, C;
+    float inv_cell, win, cap;
+};
+
+std::vector<TensorDesc> window_min_infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 2, 2);
+    expect_f32(in);
+    const int64_t G = check_book("codebook_window_min", in[0].shape, in[1].shape);
+    const int64_t R = count_param(p, "rows", book::kMaxWindowCells), C = count_param(p, "cols", book::kMaxWindowCells);
+    check_window("codebook_window_min", R, C);
+    score_params(p, G, R, C);
+    return {TensorDesc{{in[0].shape[0] * in[1].shape[0]}}};
+}
+
+void window_min_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
+    const Book b = book_of(in[0]->shape, in[1]->shape, p, count_param(p, "rows", book::kMaxWindowCells), count_param(p, "cols", book::kMaxWindowCells));
+    for (int64_t i = 0; i < b.S; ++i)
+        for (int64_t j = 0; j < b.NS; ++j)
+            out[0]->data[size_t(i * b.NS + j)] =
+                book::window_min(b.s, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)], in[1]->data[size_t(2 * j + 1)]);
+}
+
+void window_min_gpu(const GpuOpArgs& a) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const Book b = book_of(a.in[0].shape, a.in[1].shape, a.params, count_param(a.params, "rows", book::kMaxWindowCells),
+                           count_param(a.params, "cols", book::kMaxWindowCells));
+    const WindowPush push{int32_t(b.S * b.NS), int32_t(b.NS), b.s.G, b.s.R, b.s.C, b.s.inv_cell, b.s.win, b.s.cap};
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.H), local, d);
+    const uint64_t strides = (uint64_t(push.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
+    check_loop_budget(d, strides * (uint64_t(b.s.R) * uint64_t(b.s.C) + uint64_t(b.s.R) + 1), "codebook_window_min");
+    a.seq.dispatch(pipeline(a.ctx, "codebook_window_min", 3, sizeof(push), {local}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push,
+                   sizeof(push), groups);
+}
+
+std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Params& p) {
+    expect_input_count(in, 4, 4);
+    expect_f32(in);
+    const int64_t G = check_book("codebook_score", in[0].shape, in[1].shape);
+    const Shape& m = in[2].shape;
+    if (m.size() != 2 || m[0] < 1 || m[1] < 1) throw Error("codebook_score: the measured map must be [R, C], got " + shape_str(m));
+    check_window("codebook_score", m[0], m[1]);
+    const Shape want{in[0].shape[0] * in[1].shape[0]};
+    if (in[3].shape != want)
+        throw Error("codebook_score: the window minima must be " + shape_str(want) + " (one per hypothesis), got " + shape_str(in[3].shape));
+    score_params(p, G, m[0], m[1]);
+    return {TensorDesc{want}};
 }
 
 void score_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
-    const int64_t S = in[0]->shape[0], GG = in[0]->shape[1], NS = in[1]->shape[0];
-    const book::ScoreParams s = score_params(p, int64_t(std::llround(std::sqrt(double(GG)))), in[2]->shape[0], in[2]->shape[1]);
-    for (int64_t i = 0; i < S; ++i)
-        for (int64_t j = 0; j < NS; ++j)
-            out[0]->data[size_t(i * NS + j)] = book::score_hypothesis(s, &in[0]->data[size_t(i * GG)], in[1]->data[size_t(2 * j)],
-                                                                      in[1]->data[size_t(2 * j + 1)], in[2]->data.data());
+    const Book b = book_of(in[0]->shape, in[1]->shape, p, in[2]->shape[0], in[2]->shape[1]);
+    for (int64_t i = 0; i < b.S; ++i)
+        for (int64_t j = 0; j < b.NS; ++j) {
+            const size_t h = size_t(i * b.NS + j);
+            out[0]->data[h] = book::score_hypothesis(b.s, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)],
+                                                     in[1]->data[size_t(2 * j + 1)], in[2]->data.data(), in[3]->data[h]);
+        }
 }
 
 void score_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    const int64_t S = a.in[0].shape[0], GG = a.in[0].shape[1], NS = a.in[1].shape[0];
-    const book::ScoreParams s = score_params(a.params, int64_t(std::llround(std::sqrt(double(GG)))), a.in[2].shape[0], a.in[2].shape[1]);
+    const Book b = book_of(a.in[0].shape, a.in[1].shape, a.params, a.in[2].shape[0], a.in[2].shape[1]);
+    const book::ScoreParams& s = b.s;
     struct {
-        int32_t H, NS, G, R, C;
-        float inv_cell, win, cap, weight, inv_n, inv_rr, inv_cc;
-    } push{int32_t(S * NS), int32_t(NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap, s.weight,
-           book::inv_count(s.R, s.C), book::inv_row_moment(s.R, s.C), book::inv_row_moment(s.C, s.R)};
-    const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.H), local, d);
-    const uint64_t strides = (uint64_t(push.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
-    check_loop_budget(d, strides * (5 * uint64_t(s.R) * uint64_t(s.C) + 3 * uint64_t(s.R) + 2), "codebook_score");
-    // Each invocation keeps the window's R * C depths (private memory): one bilinear read per cell, not two.
-    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 4, sizeof(push), {local, uint32_t(s.R * s.C)}),
+        WindowPush w;
+        float weight, inv_n, inv_rr, inv_cc;
+    } push{{int32_t(b.S * b.NS), int32_t(b.NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap},
+           s.weight, book::inv_count(s.R, s.C), book::inv_moment(s.R, s.C), book::inv_moment(s.C, s.R)};
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.w.H), local, d);
+    const uint64_t strides = (uint64_t(push.w.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
+    check_loop_budget(d, strides * (2 * uint64_t(s.R) * uint64_t(s.C) + uint64_t(s.R) + 2), "codebook_score");
+    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 5, sizeof(push), {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.out[0].view, rt::Access::Write}},
+                    {a.in[3].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
 
@@ -178,6 +247,7 @@ void score_gpu(const GpuOpArgs& a) {
 
 const OpDef op_codebook_render{"codebook_render", render_infer, render_cpu, render_gpu, 0,
                                {"G", "cell", "splat", "cap", "facing", "origin_x", "origin_y", "origin_z", "coarse", "nx", "ny", "nz", "max_bin"}};
+const OpDef op_codebook_window_min{"codebook_window_min", window_min_infer, window_min_cpu, window_min_gpu, 0, {"rows", "cols", "cell", "win", "cap"}};
 const OpDef op_codebook_score{"codebook_score", score_infer, score_cpu, score_gpu, 0, {"cell", "win", "cap", "weight"}};
 
 }  // namespace vtloc::ops

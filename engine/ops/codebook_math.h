@@ -71,14 +71,33 @@ inline void splat_point(const RenderParams& r, const float* smp, const float* q,
         }
 }
 
-// A sample's map at fractional cell (fa, fb): bilinear, cap outside the grid.
-inline float book_at(const float* map, int32_t G, float cap, float fa, float fb) {
+// A map's bilinear quads, what the scorer reads: entry (i, j), for i and j in
+// [-1, G-1], holds the map at (i, j), (i+1, j), (i, j+1), (i+1, j+1), cap off the
+// grid; (G+1)^2 entries of 4 floats, row-major in j. One vector read per sample
+// instead of four gathers (lavapipe loops over the lanes for each gather: the
+// score took 192 ms a touch with four, ~110 with one; docs/render_compare.md).
+inline int32_t quad_side(int32_t G) { return G + 1; }
+
+inline void make_quads(const float* map, int32_t G, float cap, float* q) {
+    auto at = [&](int32_t i, int32_t j) { return i < 0 || j < 0 || i >= G || j >= G ? cap : map[j * G + i]; };
+    const int32_t Q = quad_side(G);
+    for (int32_t j = -1; j < G; ++j)
+        for (int32_t i = -1; i < G; ++i) {
+            float* t = q + 4 * ((j + 1) * Q + (i + 1));
+            t[0] = at(i, j), t[1] = at(i + 1, j), t[2] = at(i, j + 1), t[3] = at(i + 1, j + 1);
+        }
+}
+
+// A sample's map at fractional cell (fa, fb) from its quads: bilinear, cap outside the grid.
+inline float quad_at(const float* q, int32_t G, float cap, float fa, float fb) {
     const float a0 = std::floor(fa), b0 = std::floor(fb);
     const float wa = fa - a0, wb = fb - b0;
     const int32_t i = int32_t(a0), j = int32_t(b0);
-    auto at = [&](int32_t ii, int32_t jj) { return ii < 0 || jj < 0 || ii >= G || jj >= G ? cap : map[jj * G + ii]; };
-    const float top = at(i, j) * (1.0f - wa) + at(i + 1, j) * wa;
-    const float bot = at(i, j + 1) * (1.0f - wa) + at(i + 1, j + 1) * wa;
+    const bool inside = i >= -1 && j >= -1 && i < G && j < G;
+    const float* t = q + 4 * (inside ? (j + 1) * quad_side(G) + (i + 1) : 0);
+    const float t0 = inside ? t[0] : cap, t1 = inside ? t[1] : cap, t2 = inside ? t[2] : cap, t3 = inside ? t[3] : cap;
+    const float top = t0 * (1.0f - wa) + t1 * wa;
+    const float bot = t2 * (1.0f - wa) + t3 * wa;
     return top * (1.0f - wb) + bot * wb;
 }
 
@@ -86,11 +105,14 @@ inline float book_at(const float* map, int32_t G, float cap, float fa, float fb)
 // `win` mm, row-major; row r at v = (r - (R-1)/2) win along the sensor's y,
 // column c at u along x) against the sample's map seen at spin (cs, sn),
 // pressed until its deepest cell matches m's deepest: predicted
-// max(0, w_min + depth - w). The error e = m - predicted loses its best plane
-// over the window (least squares in 1, r, c: the sensor's tilt, up to 10 degrees
-// in our data, and the press's offset are not where the touch was; without this
-// a tilted touch scored its own place below half the surface). Returns
-// -weight * sum (e - plane)^2 / (R C depth^2) (0 when m holds no press).
+// max(0, w_min + depth - w), w_min the map's shallowest depth in the window at
+// that spin (window_min: it depends on the map, the spin and the window only, so
+// the scorer computes it once per window size and every touch reads it). The
+// error e = m - predicted loses its best plane over the window (least squares in
+// 1, r, c: the sensor's tilt, up to 10 degrees in our data, and the press's
+// offset are not where the touch was; without this a tilted touch scored its own
+// place below half the surface). Returns -weight * sum (e - plane)^2 / (R C depth^2)
+// (0 when m holds no press).
 struct ScoreParams {
     int32_t G, R, C;
     float inv_cell, win, cap, weight;  // inv_cell: float(1 / the maps' cell)
@@ -99,46 +121,59 @@ struct ScoreParams {
 // 1 / sum over the window of (r - hr)^2, and of (c - hc)^2 (0 for one row or column),
 // and 1 / (R C): the plane's basis 1, r - hr, c - hc is orthogonal on a full grid, so
 // each coefficient is its own projection. Computed on the host (shaders may not divide
-// exactly) and pushed to the shader.
-inline float inv_row_moment(int32_t R, int32_t C) {
-    return R > 1 ? float(12.0 / (double(C) * double(R) * (double(R) * double(R) - 1.0))) : 0.0f;
+// exactly) and pushed to the shader. inv_moment(n, m): 1 / sum over an n x m grid of
+// (its first index - its centre)^2 (rows: (R, C); columns: (C, R)).
+inline float inv_moment(int32_t n, int32_t m) {
+    return n > 1 ? float(12.0 / (double(m) * double(n) * (double(n) * double(n) - 1.0))) : 0.0f;
 }
 inline float inv_count(int32_t R, int32_t C) { return float(1.0 / (double(R) * double(C))); }
 
 constexpr int32_t kMaxWindowCells = 4096;
 
-inline float score_hypothesis(const ScoreParams& s, const float* map, float cs, float sn, const float* m) {
+// The map's depth under window cell (r, c) at spin (cs, sn), from its quads (make_quads).
+inline float window_depth(const ScoreParams& s, const float* quads, float cs, float sn, int32_t r, int32_t c) {
     const float half = float(s.G - 1) * 0.5f, hr = float(s.R - 1) * 0.5f, hc = float(s.C - 1) * 0.5f;
-    float depth = 0.0f;
-    for (int32_t k = 0; k < s.R * s.C; ++k) depth = std::max(depth, m[k]);
-    if (!(depth > 1e-6f)) return 0.0f;
-    float seen[kMaxWindowCells];
+    const float u = (float(c) - hc) * s.win, v = (float(r) - hr) * s.win;
+    const float a = u * cs - v * sn, b = u * sn + v * cs;
+    return quad_at(quads, s.G, s.cap, a * s.inv_cell + half, b * s.inv_cell + half);
+}
+
+inline float window_min(const ScoreParams& s, const float* quads, float cs, float sn) {
     float wmin = s.cap;
     for (int32_t r = 0; r < s.R; ++r)
-        for (int32_t c = 0; c < s.C; ++c) {
-            const float u = (float(c) - hc) * s.win, v = (float(r) - hr) * s.win;
-            const float a = u * cs - v * sn, b = u * sn + v * cs;
-            const float w = book_at(map, s.G, s.cap, a * s.inv_cell + half, b * s.inv_cell + half);
-            seen[r * s.C + c] = w;
-            wmin = std::min(wmin, w);
-        }
-    float s0 = 0.0f, sr = 0.0f, sc = 0.0f;
+        for (int32_t c = 0; c < s.C; ++c) wmin = std::min(wmin, window_depth(s, quads, cs, sn, r, c));
+    return wmin;
+}
+
+inline float measured_depth(const ScoreParams& s, const float* m) {
+    float depth = 0.0f;
+    for (int32_t k = 0; k < s.R * s.C; ++k) depth = std::max(depth, m[k]);
+    return depth;
+}
+
+// One pass: the error's sums (1, r, c, e^2), then its plane's share taken out by
+// orthogonality, sum (e - plane)^2 = sum e^2 - k0 s0 - kr sr - kc sc (the fp32
+// cancellation is ~1e-7 of sum e^2; clamped at 0).
+inline float score_hypothesis(const ScoreParams& s, const float* quads, float cs, float sn, const float* m, float wmin) {
+    const float hr = float(s.R - 1) * 0.5f, hc = float(s.C - 1) * 0.5f;
+    const float depth = measured_depth(s, m);
+    if (!(depth > 1e-6f)) return 0.0f;
+    const float press = wmin + depth;
+    float s0 = 0.0f, sr = 0.0f, sc = 0.0f, s2 = 0.0f;
     for (int32_t r = 0; r < s.R; ++r)
         for (int32_t c = 0; c < s.C; ++c) {
-            const float e = m[r * s.C + c] - std::max(0.0f, wmin + depth - seen[r * s.C + c]);
+            const float e = m[r * s.C + c] - std::max(0.0f, press - window_depth(s, quads, cs, sn, r, c));
             s0 += e;
             sr += e * (float(r) - hr);
             sc += e * (float(c) - hc);
+            s2 += e * e;
         }
-    const float k0 = s0 * inv_count(s.R, s.C), kr = sr * inv_row_moment(s.R, s.C), kc = sc * inv_row_moment(s.C, s.R);
-    float err = 0.0f;
-    for (int32_t r = 0; r < s.R; ++r)
-        for (int32_t c = 0; c < s.C; ++c) {
-            const float e = m[r * s.C + c] - std::max(0.0f, wmin + depth - seen[r * s.C + c]);
-            const float f = e - (k0 + kr * (float(r) - hr) + kc * (float(c) - hc));
-            err += f * f;
-        }
+    const float k0 = s0 * inv_count(s.R, s.C), kr = sr * inv_moment(s.R, s.C), kc = sc * inv_moment(s.C, s.R);
+    const float err = std::max(0.0f, s2 - (k0 * s0 + kr * sr + kc * sc));
     return -s.weight * err / (float(s.R * s.C) * depth * depth);
+}
+inline float score_hypothesis(const ScoreParams& s, const float* quads, float cs, float sn, const float* m) {
+    return score_hypothesis(s, quads, cs, sn, m, window_min(s, quads, cs, sn));
 }
 
 }  // namespace vtloc::ops::book

@@ -46,6 +46,7 @@ extern const OpDef op_gel_gradient;      // gel_shape.cpp (the gel's shape from 
 extern const OpDef op_masked_poisson;    // gel_shape.cpp
 extern const OpDef op_gel_contact_mask;  // gel_contact_mask.cpp
 extern const OpDef op_codebook_render;   // codebook.cpp (render-and-compare)
+extern const OpDef op_codebook_window_min;  // codebook.cpp
 extern const OpDef op_codebook_score;    // codebook.cpp
 extern const OpDef op_spin_marginal;     // pose_reduce.cpp
 extern const OpDef op_expected_distance; // pose_reduce.cpp

@@ -38,6 +38,7 @@ const OpDef* const kOps[] = {
     &ops::op_masked_poisson,
     &ops::op_gel_contact_mask,
     &ops::op_codebook_render,
+    &ops::op_codebook_window_min,
     &ops::op_codebook_score,
     &ops::op_fps,
     &ops::op_ball_query,

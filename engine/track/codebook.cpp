@@ -10,6 +10,7 @@
 #include "engine/executor.h"
 #include "engine/ops/build.h"
 #include "engine/ops/codebook_bins.h"
+#include "engine/ops/codebook_math.h"
 #include "engine/resident_weights.h"
 #include "engine/safetensors.h"
 #include "engine/weights.h"
@@ -175,15 +176,32 @@ struct CodebookScorer::Impl {
     WeightStore weights;
     std::shared_ptr<ResidentWeights> resident;
     CodebookOptions options;
-    int64_t S, G, NS;
+    int64_t S, G, Q, NS;  // Q = G + 1: a map's quads per side
     double weight;
     using Key = std::tuple<int64_t, int64_t, double>;  // the window: R, C, cell size
     std::map<Key, std::unique_ptr<GpuExecutor>> exec;
     std::map<Key, Graph> graphs;
-    Graph graph(int64_t R, int64_t C, double win) const {
+    uint64_t wmin_bytes = 0;
+    static std::string wmin_name(const Key& k) {
+        return "codebook.wmin." + std::to_string(std::get<0>(k)) + "x" + std::to_string(std::get<1>(k)) + "@" + num(std::get<2>(k));
+    }
+    // Each hypothesis' shallowest depth under this window: the maps, the spins and the
+    // window's size fix it, so it is computed once per size and read by every touch.
+    void add_window_min(const Key& k) {
         Graph g;
-        g.output(ops::codebook_score(g, g.weight("codebook.heights", {S, G * G}), g.weight("codebook.spins", {NS, 2}),
-                                     g.input("measured", {R, C}), options.cell_mm, win, options.cap_mm, weight, "codebook.score"),
+        g.output(ops::codebook_window_min(g, g.weight("codebook.quads", {S, 4 * Q * Q}), g.weight("codebook.spins", {NS, 2}), std::get<0>(k),
+                                          std::get<1>(k), options.cell_mm, std::get<2>(k), options.cap_mm, "codebook.window_min"),
+                 "wmin");
+        TensorMap out = ctx ? GpuExecutor(*ctx, g, weights, resident).run({}) : run_cpu(g, weights, {});
+        weights.add(wmin_name(k), std::move(out.at("wmin")));
+        if (ctx) wmin_bytes += 4 * uint64_t(S) * uint64_t(NS);
+    }
+    Graph graph(const Key& k) const {
+        Graph g;
+        const auto [R, C, win] = k;
+        g.output(ops::codebook_score(g, g.weight("codebook.quads", {S, 4 * Q * Q}), g.weight("codebook.spins", {NS, 2}),
+                                     g.input("measured", {R, C}), g.weight(wmin_name(k), {S * NS}), options.cell_mm, win, options.cap_mm,
+                                     weight, "codebook.score"),
                  "term");
         return g;
     }
@@ -196,8 +214,12 @@ CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Sur
     Impl& m = *impl_;
     m.ctx = ctx;
     m.options = book.options;
-    m.S = s.n_samples(), m.G = book.G, m.NS = s.n_spin(), m.weight = weight;
-    m.weights.add("codebook.heights", HostTensor({m.S, m.G * m.G}, book.heights));
+    m.S = s.n_samples(), m.G = book.G, m.Q = book.G + 1, m.NS = s.n_spin(), m.weight = weight;
+    // The maps as bilinear quads (4.4x their size: one vector read per sample, the score's cost).
+    HostTensor quads({m.S, 4 * m.Q * m.Q});
+    for (int64_t i = 0; i < m.S; ++i)
+        ops::book::make_quads(&book.heights[size_t(i * m.G * m.G)], int32_t(m.G), float(m.options.cap_mm), &quads.data[size_t(i * 4 * m.Q * m.Q)]);
+    m.weights.add("codebook.quads", std::move(quads));
     m.weights.add("codebook.spins", HostTensor({m.NS, 2}, s.spins));
     if (ctx) m.resident = std::make_shared<ResidentWeights>(*ctx);
 }
@@ -209,8 +231,9 @@ std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int 
     double win = 0;
     HostTensor meas = window_map(depth_mm, H, W, mm_per_px, m.options.cell_mm, &win);
     const Impl::Key key{meas.shape[0], meas.shape[1], win};  // one executor serves every touch of a sensor
-    if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(meas.shape[0], meas.shape[1], win), m.weights, m.resident);
-    if (!m.ctx && !m.graphs.count(key)) m.graphs.emplace(key, m.graph(meas.shape[0], meas.shape[1], win));
+    if (!m.weights.has(Impl::wmin_name(key))) m.add_window_min(key);
+    if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(key), m.weights, m.resident);
+    if (!m.ctx && !m.graphs.count(key)) m.graphs.emplace(key, m.graph(key));
     const TensorMap in{{"measured", meas}};
     TensorMap out = m.ctx ? m.exec.at(key)->run(in) : run_cpu(m.graphs.at(key), m.weights, in);
     return std::move(out.at("term").data);
@@ -219,7 +242,7 @@ std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int 
 uint64_t CodebookScorer::device_bytes() const {
     uint64_t arenas = 0;
     for (const auto& [k, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;
-    return 4 * uint64_t(impl_->S) * uint64_t(impl_->G * impl_->G + 2 * impl_->NS) + arenas;
+    return 4 * (uint64_t(impl_->S) * uint64_t(4 * impl_->Q * impl_->Q) + 2 * uint64_t(impl_->NS)) + impl_->wmin_bytes + arenas;
 }
 
 }  // namespace vtloc::track
