@@ -57,7 +57,7 @@ nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
     const auto t0 = std::chrono::steady_clock::now();
     const track::Codebook book = track::render_codebook(ctx, surface);
     const double render_ms = ms_since(t0);
-    track::CodebookScorer scorer(ctx, book, surface, 1.0);
+    track::CodebookScorer scorer(ctx, book, surface, track::ScoreOptions{});
     scorer.term(shape.depth_mm, shape.height, shape.width, c.mm_per_px);  // warm
     std::vector<double> score;
     for (int r = 0; r < o.reps; ++r) {

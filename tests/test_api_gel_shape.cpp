@@ -107,3 +107,40 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0], std::vector<float>(7)}), Catch::Contains("7"));
     CHECK(ctx.take_validation_messages().empty());
 }
+
+TEST_CASE("tracker: the shape term's press percentile and quadratic fit are options, checked by name", "[api][tracker]") {
+    // A tilted cap with a noise spike at its deepest cell: the maximum follows the spike, a
+    // percentile of the pressed cells does not; the quadratic fit also drops a bowl.
+    api::Context ctx;
+    api::TrackerOptions o;
+    o.hypotheses = 20000;
+    const std::string potato = std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply";
+    api::GelShape g;
+    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
+    for (int r = 0; r < g.height; ++r)
+        for (int c = 0; c < g.width; ++c) {
+            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
+            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
+        }
+    for (int r = 58; r < 62; ++r)
+        for (int c = 78; c < 82; ++c) g.depth_mm[size_t(r * g.width + c)] += 1.5f;  // a 0.5 mm spike, 1.5 mm high
+    std::vector<float> terms[3];
+    for (int k = 0; k < 3; ++k) {
+        api::TrackerOptions ok = o;
+        ok.render_press_percentile = k == 0 ? 100 : 95;
+        ok.render_quadratic = k == 2;
+        api::Tracker t(ctx, potato, ok);
+        terms[k] = t.shape_term(g);
+        REQUIRE(terms[k].size() >= 10000);
+    }
+    CHECK(terms[0] != terms[1]);
+    CHECK(terms[1] != terms[2]);
+    for (const auto& f : terms)
+        for (float v : f) REQUIRE((std::isfinite(v) && v <= 0.0f));
+    for (double bad : {0.0, -5.0, 101.0}) {
+        api::TrackerOptions ob = o;
+        ob.render_press_percentile = bad;
+        CHECK_THROWS_WITH(api::Tracker(ctx, potato, ob), Catch::Contains("render_press_percentile"));
+    }
+    CHECK(ctx.take_validation_messages().empty());
+}

@@ -108,6 +108,12 @@ std::vector<float> quads_of(const std::vector<float>& map, int G, float cap) {
     return q;
 }
 
+// A hypothesis scored as the scorer did before percentiles: the plane, pressed to the map's deepest cell.
+float score_plane(const ops::book::ScoreParams& s, const float* q, float cs, float sn, const float* m) {
+    return ops::book::score_hypothesis(s, ops::book::error_basis(s.R, s.C, false), q, cs, sn, m, ops::book::window_min(s, q, cs, sn),
+                                       ops::book::measured_press(m, s.R * s.C, 100));
+}
+
 HostTensor spin_table(int64_t NS) {
     HostTensor spins({NS, 2});
     for (int64_t j = 0; j < NS; ++j)
@@ -134,93 +140,117 @@ TEST_CASE("codebook_score matches the CPU reference", "[op][codebook][codebook_s
     struct Case {
         int64_t S, G, NS, R, C;
     };
-    for (const Case& k : {Case{1, 1, 1, 1, 1}, Case{3, 5, 7, 3, 4}, Case{17, 27, 36, 15, 20}, Case{9, 9, 5, 1, 13}}) {
-        INFO(k.S << " samples, G " << k.G << ", " << k.NS << " spins, window " << k.R << "x" << k.C);
-        Graph g;
-        const int64_t Q = k.G + 1;
-        const int quads = g.input("quads", {k.S, 4 * Q * Q}), spins = g.input("spins", {k.NS, 2});
-        const int wmin = ops::codebook_window_min(g, quads, spins, k.R, k.C, 0.9, 1.1, 6.0);
-        g.output(ops::codebook_score(g, quads, spins, g.input("measured", {k.R, k.C}), wmin, 0.9, 1.1, 6.0, 2.5), "term");
-        HostTensor meas = test::random_tensor({k.R, k.C}, uint32_t(k.S + k.R), -0.2f, 1.2f);
-        for (float& v : meas.data) v = std::max(0.0f, v);
-        TensorMap in{{"quads", random_quads(k.S, k.G, 6.0f, uint32_t(k.S * k.G))}, {"spins", spin_table(k.NS)}, {"measured", meas}};
-        test::run_gpu_and_compare(g, WeightStore{}, in);
-    }
+    for (const Case& k : {Case{1, 1, 1, 1, 1}, Case{3, 5, 7, 3, 4}, Case{17, 27, 36, 15, 20}, Case{9, 9, 5, 1, 13}, Case{2, 6, 4, 2, 2}})
+        for (const bool quadratic : {false, true}) {
+            INFO(k.S << " samples, G " << k.G << ", " << k.NS << " spins, window " << k.R << "x" << k.C << (quadratic ? ", quadratic" : ", plane"));
+            Graph g;
+            const int64_t Q = k.G + 1;
+            const int quads = g.input("quads", {k.S, 4 * Q * Q}), spins = g.input("spins", {k.NS, 2});
+            const int wmin = ops::codebook_window_min(g, quads, spins, k.R, k.C, 0.9, 1.1, 6.0);
+            g.output(ops::codebook_score(g, quads, spins, g.input("measured", {k.R, k.C}), wmin, g.input("press", {1}), 0.9, 1.1, 6.0, 2.5,
+                                         quadratic),
+                     "term");
+            HostTensor meas = test::random_tensor({k.R, k.C}, uint32_t(k.S + k.R), -0.2f, 1.2f);
+            for (float& v : meas.data) v = std::max(0.0f, v);
+            const float press = ops::book::measured_press(meas.data.data(), int32_t(k.R * k.C), 95);
+            TensorMap in{{"quads", random_quads(k.S, k.G, 6.0f, uint32_t(k.S * k.G))}, {"spins", spin_table(k.NS)}, {"measured", meas},
+                         {"press", HostTensor({1}, {press})}};
+            test::run_gpu_and_compare(g, WeightStore{}, in);
+        }
 }
 
-TEST_CASE("codebook_score's one pass equals the plane fitted in double", "[op][codebook]") {
-    // The score takes the plane out by orthogonality (sum e^2 less the projections); here
-    // the definition: the least-squares plane solved from its normal equations in double,
-    // the residual summed. Random maps, spins, tilted and offset presses; windows of one
-    // row, one column and the sensor's 15 x 20.
+// Sum of squares of e less its least-squares fit on the monomials (1, r, c[, r^2, c^2, r c])
+// of the window's raw indices, in double by Gram-Schmidt (a monomial that the others
+// span, as r^2 on two rows, adds nothing): the definition the one-pass score computes.
+double residual_in_double(const std::vector<double>& e, int R, int C, bool quadratic) {
+    std::vector<std::vector<double>> basis;
+    std::vector<double> res = e;
+    for (int k = 0; k < (quadratic ? 6 : 3); ++k) {
+        std::vector<double> v(e.size());
+        for (int r = 0; r < R; ++r)
+            for (int c = 0; c < C; ++c) {
+                const double x[6] = {1.0, double(r), double(c), double(r) * r, double(c) * c, double(r) * c};
+                v[size_t(r * C + c)] = x[k];
+            }
+        for (const auto& b : basis) {
+            double d = 0;
+            for (size_t i = 0; i < v.size(); ++i) d += v[i] * b[i];
+            for (size_t i = 0; i < v.size(); ++i) v[i] -= d * b[i];
+        }
+        double n = 0;
+        for (double x : v) n += x * x;
+        if (n < 1e-9) continue;
+        for (double& x : v) x /= std::sqrt(n);
+        double d = 0;
+        for (size_t i = 0; i < v.size(); ++i) d += res[i] * v[i];
+        for (size_t i = 0; i < v.size(); ++i) res[i] -= d * v[i];
+        basis.push_back(v);
+    }
+    double err = 0;
+    for (double x : res) err += x * x;
+    return err;
+}
+
+TEST_CASE("codebook_score's one pass equals the fit solved in double", "[op][codebook]") {
+    // The score takes its fit (the plane, or the plane and r^2, c^2, r c) out by
+    // orthogonality: sum e^2 less the projections on a centred basis. Here the definition:
+    // the residual after a least-squares fit on the raw monomials, in double. Random maps,
+    // spins, tilted and offset presses; windows of one row, one column, two by two and the
+    // sensor's 15 x 20.
     std::mt19937 rng(43);
     std::uniform_real_distribution<float> u(-1.0f, 1.0f);
     const int G = 27;
-    for (const auto& [R, C] : std::vector<std::pair<int, int>>{{15, 20}, {1, 9}, {7, 1}, {4, 6}}) {
-        ops::book::ScoreParams s{G, R, C, 1.0f, 0.996f, 8.0f, 1.0f};
-        for (int trial = 0; trial < 20; ++trial) {
-            std::vector<float> map(size_t(G * G)), m(size_t(R * C));
-            const float bx = 0.1f * u(rng), by = 0.1f * u(rng), curv = 0.02f * (u(rng) + 1.2f);
-            for (int j = 0; j < G; ++j)
-                for (int i = 0; i < G; ++i)
-                    map[size_t(j * G + i)] = curv * float((i - 13) * (i - 13) + (j - 13) * (j - 13)) + bx * float(i) + by * float(j) + 0.05f * u(rng);
-            for (float& v : m) v = std::max(0.0f, 0.8f + 0.5f * u(rng));
-            const float cs = std::cos(float(trial)), sn = std::sin(float(trial));
-            const std::vector<float> q = quads_of(map, G, s.cap);
-            const float wmin = ops::book::window_min(s, q.data(), cs, sn);
-            double depth = 0;
-            for (float v : m) depth = std::max(depth, double(v));
-            // e at each cell, then the plane in 1, r, c by the 3 x 3 normal equations.
-            std::vector<double> e(size_t(R * C));
-            double A[3][3] = {}, y[3] = {};
-            for (int r = 0; r < R; ++r)
-                for (int c = 0; c < C; ++c) {
-                    const double w = ops::book::window_depth(s, q.data(), cs, sn, r, c);
-                    // The quads' read against plain bilinear interpolation of the map (cap off the grid).
-                    const double xx = ((c - (C - 1) / 2.0) * s.win * cs - (r - (R - 1) / 2.0) * s.win * sn) + (G - 1) / 2.0;
-                    const double yy = ((c - (C - 1) / 2.0) * s.win * sn + (r - (R - 1) / 2.0) * s.win * cs) + (G - 1) / 2.0;
-                    const int ix = int(std::floor(xx)), iy = int(std::floor(yy));
-                    auto at = [&](int i, int j) { return i < 0 || j < 0 || i >= G || j >= G ? double(s.cap) : double(map[size_t(j * G + i)]); };
-                    const double fx = xx - ix, fy = yy - iy;
-                    const double bl = (at(ix, iy) * (1 - fx) + at(ix + 1, iy) * fx) * (1 - fy) + (at(ix, iy + 1) * (1 - fx) + at(ix + 1, iy + 1) * fx) * fy;
-                    REQUIRE(std::fabs(w - bl) <= 1e-4 + 1e-4 * std::fabs(bl));
-                    const double ek = double(m[size_t(r * C + c)]) - std::max(0.0, double(wmin) + depth - w);
-                    e[size_t(r * C + c)] = ek;
-                    const double x[3] = {1.0, double(r), double(c)};
-                    for (int a = 0; a < 3; ++a) {
-                        y[a] += x[a] * ek;
-                        for (int b = 0; b < 3; ++b) A[a][b] += x[a] * x[b];
+    for (const auto& [R, C] : std::vector<std::pair<int, int>>{{15, 20}, {1, 9}, {7, 1}, {4, 6}, {2, 2}})
+        for (const bool quadratic : {false, true}) {
+            ops::book::ScoreParams s{G, R, C, 1.0f, 0.996f, 8.0f, 1.0f};
+            const ops::book::Basis B = ops::book::error_basis(R, C, quadratic);
+            for (int trial = 0; trial < 20; ++trial) {
+                std::vector<float> map(size_t(G * G)), m(size_t(R * C));
+                const float bx = 0.1f * u(rng), by = 0.1f * u(rng), curv = 0.02f * (u(rng) + 1.2f);
+                for (int j = 0; j < G; ++j)
+                    for (int i = 0; i < G; ++i)
+                        map[size_t(j * G + i)] =
+                            curv * float((i - 13) * (i - 13) + (j - 13) * (j - 13)) + bx * float(i) + by * float(j) + 0.05f * u(rng);
+                for (float& v : m) v = std::max(0.0f, 0.8f + 0.5f * u(rng));
+                const float cs = std::cos(float(trial)), sn = std::sin(float(trial));
+                const std::vector<float> q = quads_of(map, G, s.cap);
+                const float wmin = ops::book::window_min(s, q.data(), cs, sn);
+                const float press = ops::book::measured_press(m.data(), R * C, 95);
+                std::vector<double> e(size_t(R * C));
+                for (int r = 0; r < R; ++r)
+                    for (int c = 0; c < C; ++c) {
+                        const double w = ops::book::window_depth(s, q.data(), cs, sn, r, c);
+                        // The quads' read against plain bilinear interpolation of the map (cap off the grid).
+                        const double xx = ((c - (C - 1) / 2.0) * s.win * cs - (r - (R - 1) / 2.0) * s.win * sn) + (G - 1) / 2.0;
+                        const double yy = ((c - (C - 1) / 2.0) * s.win * sn + (r - (R - 1) / 2.0) * s.win * cs) + (G - 1) / 2.0;
+                        const int ix = int(std::floor(xx)), iy = int(std::floor(yy));
+                        auto at = [&](int i, int j) { return i < 0 || j < 0 || i >= G || j >= G ? double(s.cap) : double(map[size_t(j * G + i)]); };
+                        const double fx = xx - ix, fy = yy - iy;
+                        const double bl =
+                            (at(ix, iy) * (1 - fx) + at(ix + 1, iy) * fx) * (1 - fy) + (at(ix, iy + 1) * (1 - fx) + at(ix + 1, iy + 1) * fx) * fy;
+                        REQUIRE(std::fabs(w - bl) <= 1e-4 + 1e-4 * std::fabs(bl));
+                        e[size_t(r * C + c)] = double(m[size_t(r * C + c)]) - std::max(0.0, double(wmin) + double(press) - w);
                     }
-                }
-            // One row or column: that direction's coefficient is 0 (a zero row of A).
-            for (int a = 0; a < 3; ++a)
-                if (A[a][a] - (a ? A[a][0] * A[a][0] / A[0][0] : 0) < 1e-9) A[a][a] = 1, y[a] = 0, A[a][0] = A[0][a] = 0;
-            // Gaussian elimination (A is symmetric positive definite now).
-            for (int a = 0; a < 3; ++a)
-                for (int b = a + 1; b < 3; ++b) {
-                    const double f = A[b][a] / A[a][a];
-                    for (int k = a; k < 3; ++k) A[b][k] -= f * A[a][k];
-                    y[b] -= f * y[a];
-                }
-            double coef[3];
-            for (int a = 2; a >= 0; --a) {
-                double v = y[a];
-                for (int k = a + 1; k < 3; ++k) v -= A[a][k] * coef[k];
-                coef[a] = v / A[a][a];
+                const double want = -residual_in_double(e, R, C, quadratic) / (double(R * C) * double(press) * press);
+                const float got = ops::book::score_hypothesis(s, B, q.data(), cs, sn, m.data(), wmin, press);
+                INFO(R << "x" << C << (quadratic ? " quadratic" : " plane") << " trial " << trial << ": " << got << " vs " << want);
+                // fp32 sums over <= 300 cells, less the fit's share: ~1e-6 of sum e^2 / (R C press^2).
+                CHECK(std::fabs(double(got) - want) <= 1e-5 + 1e-4 * std::fabs(want));
             }
-            double err = 0;
-            for (int r = 0; r < R; ++r)
-                for (int c = 0; c < C; ++c) {
-                    const double f = e[size_t(r * C + c)] - (coef[0] + coef[1] * r + coef[2] * c);
-                    err += f * f;
-                }
-            const double want = -err / (double(R * C) * depth * depth);
-            const float got = ops::book::score_hypothesis(s, q.data(), cs, sn, m.data(), wmin);
-            INFO(R << "x" << C << " trial " << trial << ": " << got << " vs " << want);
-            // fp32 sums over <= 300 cells, less the plane's share: ~1e-6 of sum e^2 / (R C depth^2).
-            CHECK(std::fabs(double(got) - want) <= 1e-5 + 1e-4 * std::fabs(want));
         }
-    }
+}
+
+TEST_CASE("the measured press is a high percentile of the pressed cells", "[codebook]") {
+    // 100 cells: 60 unpressed, 40 pressed at 0.01 .. 0.40 mm, one spike at 2 mm.
+    std::vector<float> m(100, 0.0f);
+    for (int k = 0; k < 40; ++k) m[size_t(k)] = 0.01f * float(k + 1);
+    m[99] = 2.0f;
+    // Pressed: deeper than 2 % of 2 mm (0.04): 0.05 .. 0.40 (36 cells) and the spike, 37.
+    CHECK(ops::book::measured_press(m.data(), 100, 100) == 2.0f);
+    CHECK(ops::book::measured_press(m.data(), 100, 95) == m[size_t(39)]);  // rank ceil(0.95 * 37) = 36 of 37: 0.40
+    CHECK(ops::book::measured_press(m.data(), 100, 50) == m[size_t(22)]);  // rank 19 of 37: 0.23
+    std::vector<float> none(10, 0.0f);
+    CHECK(ops::book::measured_press(none.data(), 10, 95) == 0.0f);
 }
 
 TEST_CASE("codebook_score: a map scored against itself is best, and no press is no evidence", "[op][codebook]") {
@@ -237,10 +267,10 @@ TEST_CASE("codebook_score: a map scored against itself is best, and no press is 
     for (int r = 0; r < R; ++r)
         for (int c = 0; c < C; ++c) m[size_t(r * C + c)] = std::max(0.0f, wmin + 0.6f - map[size_t((r + 3) * G + c + 2)]);
     const std::vector<float> q = quads_of(map, G, s.cap);
-    CHECK(ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, m.data()) == 0.0f);
-    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, m.data()) < -0.01f);  // a quarter turn
+    CHECK(score_plane(s, q.data(), 1.0f, 0.0f, m.data()) == 0.0f);
+    CHECK(score_plane(s, q.data(), 0.0f, 1.0f, m.data()) < -0.01f);  // a quarter turn
     std::vector<float> none(size_t(R * C), 0.0f);
-    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, none.data()) == 0.0f);
+    CHECK(score_plane(s, q.data(), 0.0f, 1.0f, none.data()) == 0.0f);
     CHECK(ops::book::unordered(ops::book::ordered(-2.5f)) == -2.5f);
     CHECK(ops::book::ordered(-1.0f) < ops::book::ordered(-0.5f));
     CHECK(ops::book::ordered(-0.5f) < ops::book::ordered(0.25f));
@@ -267,10 +297,10 @@ TEST_CASE("codebook_score: the sensor's tilt costs nothing, a bump does", "[op][
             bumped[size_t(r * C + c)] = own + ((r == 1 && c == 2) ? 0.2f : 0.0f);
         }
     const std::vector<float> q = quads_of(map, G, s.cap);
-    const float tilt_score = ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, tilted.data());
+    const float tilt_score = score_plane(s, q.data(), 1.0f, 0.0f, tilted.data());
     CHECK(tilt_score > -1e-6f);  // only rounding: the plane goes entirely
-    CHECK(ops::book::score_hypothesis(s, q.data(), 1.0f, 0.0f, bumped.data()) < -1e-3f);
-    CHECK(ops::book::score_hypothesis(s, q.data(), 0.0f, 1.0f, tilted.data()) < tilt_score - 1e-3f);  // a quarter turn
+    CHECK(score_plane(s, q.data(), 1.0f, 0.0f, bumped.data()) < -1e-3f);
+    CHECK(score_plane(s, q.data(), 0.0f, 1.0f, tilted.data()) < tilt_score - 1e-3f);  // a quarter turn
 }
 
 TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[codebook]") {
@@ -301,7 +331,9 @@ TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[code
 TEST_CASE("a rendered touch scores its own pose near the top", "[codebook]") {
     const track::Surface s = prism_surface(20000);
     const track::Codebook b = track::render_codebook(&test::gpu(), s, {});
-    track::CodebookScorer scorer(&test::gpu(), b, s, 1.0);
+    track::ScoreOptions so;
+    so.weight = 1.0;
+    track::CodebookScorer scorer(&test::gpu(), b, s, so);
     sim::TouchRenderer ren(sim::load_calibration(sim::default_calibration_path()), prism());
     const int64_t S = s.n_samples(), NS = s.n_spin();
     int tested = 0, near_top = 0;
@@ -326,7 +358,7 @@ TEST_CASE("a rendered touch scores its own pose near the top", "[codebook]") {
     REQUIRE(tested >= 5);
     CHECK(near_top >= tested - 1);
     // The CPU reference gives the same term.
-    track::CodebookScorer cpu(nullptr, b, s, 1.0);
+    track::CodebookScorer cpu(nullptr, b, s, so);
     const float* p = &s.samples[0];
     const sim::Touch t = ren.render({p[0], p[1], p[2]}, {p[3], p[4], p[5]}, sim::TouchParams{}, sim::Appearance{}, 1);
     if (t.ok) {

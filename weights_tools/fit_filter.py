@@ -5,7 +5,9 @@ ending at the seen objects' train touches; --objects all on a dataset of trainin
 and the belief's calibration; the best by mean ND up to symmetry is the default in
 engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 
-With --render, the knob is render-and-compare's inverse temperature (render_weight, SPEC 9):
+With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
+and whether its error also drops a quadratic bowl (render_quadratic; the press percentile
+render_press_percentile was chosen before, on train touches: docs/render_compare.md):
 the "MidasTouch-style" row alone (--rows render --render-compare), each frame's gel shape
 read from the frame as a robot would. With --oracle, the same knob for the oracle row (the
 renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
@@ -28,7 +30,7 @@ GRID = {
 }
 
 
-GRID_RENDER = {"render_weight": [0.25, 4, 16, 64]}
+GRID_RENDER = {"render_quadratic": [1, 0], "render_weight": [4, 16, 0.25]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
 

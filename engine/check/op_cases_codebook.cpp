@@ -67,13 +67,14 @@ OpCase window_min_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, u
     return c;
 }
 
-OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32_t seed) {
-    OpCase c("codebook_score", book_label(S, G, NS, R, C));
+OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, bool quadratic, uint32_t seed) {
+    OpCase c("codebook_score", book_label(S, G, NS, R, C) + (quadratic ? ", quadratic" : ""));
     HostTensor meas = random_tensor({R, C}, seed + 1, -0.3f, 1.2f);
     for (float& v : meas.data) v = std::max(0.0f, v);
     const int quads = c.input("quads", random_quads(S, G, seed)), sp = c.input("spins", spin_table(NS));
     const int wmin = ops::codebook_window_min(c.g, quads, sp, R, C, 1.0, 0.996, 8.0);
-    c.output(ops::codebook_score(c.g, quads, sp, c.input("measured", meas), wmin, 1.0, 0.996, 8.0, 1.5), "term");
+    const int press = c.input("press", HostTensor({1}, {ops::book::measured_press(meas.data.data(), int32_t(R * C), 95)}));
+    c.output(ops::codebook_score(c.g, quads, sp, c.input("measured", meas), wmin, press, 1.0, 0.996, 8.0, 1.5, quadratic), "term");
     return c;
 }
 
@@ -81,7 +82,8 @@ OpCase score_case(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C, uint32
 
 std::vector<OpCase> codebook_cases(const rt::DeviceInfo&) {
     return {render_case(7, 4001, 13, 21), render_case(33, 12000, 27, 22), window_min_case(5, 27, 36, 15, 20, 25),
-            score_case(11, 27, 36, 15, 20, 23), score_case(3, 5, 7, 1, 3, 24)};
+            score_case(11, 27, 36, 15, 20, false, 23), score_case(7, 27, 36, 15, 20, true, 26),
+            score_case(3, 5, 7, 1, 3, false, 24)};
 }
 
 }  // namespace vtloc::check

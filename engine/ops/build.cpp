@@ -172,10 +172,10 @@ int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, do
                   name);
 }
 
-int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, double cell, double win, double cap, double weight,
-                   const std::string& name) {
-    return g.add1("codebook_score", {quads, spins, measured, wmin}, {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}},
-                  name);
+int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int press, double cell, double win, double cap, double weight,
+                   bool quadratic, const std::string& name) {
+    return g.add1("codebook_score", {quads, spins, measured, wmin, press},
+                  {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}, {"quadratic", quadratic ? 1.0 : 0.0}}, name);
 }
 
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }

@@ -135,9 +135,10 @@ int codebook_render(Graph& g, int samples, int points, int bins, const CodebookR
 int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, double cell, double win, double cap,
                         const std::string& name = "");
 // quads [S, 4 (G+1)^2], spins [NS, 2], measured [R, C] (cells of `win` mm), wmin [S*NS]
-// (codebook_window_min of the same window) -> log term [S*NS].
-int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, double cell, double win, double cap, double weight,
-                   const std::string& name = "");
+// (codebook_window_min of the same window), press [1] (book::measured_press of the map)
+// -> log term [S*NS]; quadratic: the error also loses its r^2, c^2, r c fit.
+int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int press, double cell, double win, double cap, double weight,
+                   bool quadratic = false, const std::string& name = "");
 
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers

@@ -9,9 +9,10 @@
 //   hypothesis' shallowest depth under the window, the depth its press counts from (it
 //   depends on the map, the spin and the window's size only: computed once per size).
 // codebook_score: quads [S, 4 (G+1)^2], spins [NS, 2] (cos, sin), measured [R, C] (mm), the
-//   window minima [S * NS] -> log term [S * NS] (params cell, win, cap, weight): each
-//   hypothesis' height map seen at its spin, pressed to the measured depth, against the
-//   measured map (the error less its best plane: tilt and offset are nuisances).
+//   window minima [S * NS], the measured press [1] (mm) -> log term [S * NS] (params cell,
+//   win, cap, weight, quadratic): each hypothesis' height map seen at its spin, pressed as
+//   deep as the measured map, against the measured map (the error less its best plane, or
+//   plane and quadratic: tilt, offset and the reader's bowl are nuisances).
 // CPU references: engine/ops/codebook_math.h. -> shaders/codebook_render.comp (a
 // workgroup per sample, atomic minimum over its cells), shaders/codebook_window_min.comp,
 // shaders/codebook_score.comp (one pass over the window per hypothesis).
@@ -201,8 +202,14 @@ void window_min_gpu(const GpuOpArgs& a) {
                    sizeof(push), groups);
 }
 
+bool quadratic_of(const Params& p) {
+    const double q = p.get("quadratic", 0);
+    if (q != 0 && q != 1) throw Error("codebook_score: quadratic must be 0 (the plane) or 1 (the plane and r^2, c^2, r c)");
+    return q == 1;
+}
+
 std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Params& p) {
-    expect_input_count(in, 4, 4);
+    expect_input_count(in, 5, 5);
     expect_f32(in);
     const int64_t G = check_book("codebook_score", in[0].shape, in[1].shape);
     const Shape& m = in[2].shape;
@@ -211,17 +218,21 @@ std::vector<TensorDesc> score_infer(const std::vector<TensorDesc>& in, const Par
     const Shape want{in[0].shape[0] * in[1].shape[0]};
     if (in[3].shape != want)
         throw Error("codebook_score: the window minima must be " + shape_str(want) + " (one per hypothesis), got " + shape_str(in[3].shape));
+    if (in[4].shape != Shape{1}) throw Error("codebook_score: the press must be [1], got " + shape_str(in[4].shape));
     score_params(p, G, m[0], m[1]);
+    quadratic_of(p);
     return {TensorDesc{want}};
 }
 
 void score_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
     const Book b = book_of(in[0]->shape, in[1]->shape, p, in[2]->shape[0], in[2]->shape[1]);
+    const book::Basis basis = book::error_basis(b.s.R, b.s.C, quadratic_of(p));
+    const float press = in[4]->data[0];
     for (int64_t i = 0; i < b.S; ++i)
         for (int64_t j = 0; j < b.NS; ++j) {
             const size_t h = size_t(i * b.NS + j);
-            out[0]->data[h] = book::score_hypothesis(b.s, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)],
-                                                     in[1]->data[size_t(2 * j + 1)], in[2]->data.data(), in[3]->data[h]);
+            out[0]->data[h] = book::score_hypothesis(b.s, basis, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)],
+                                                     in[1]->data[size_t(2 * j + 1)], in[2]->data.data(), in[3]->data[h], press);
         }
 }
 
@@ -231,15 +242,17 @@ void score_gpu(const GpuOpArgs& a) {
     const book::ScoreParams& s = b.s;
     struct {
         WindowPush w;
-        float weight, inv_n, inv_rr, inv_cc;
-    } push{{int32_t(b.S * b.NS), int32_t(b.NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap},
-           s.weight, book::inv_count(s.R, s.C), book::inv_moment(s.R, s.C), book::inv_moment(s.C, s.R)};
+        float weight;
+        book::Basis basis;
+    } push{{int32_t(b.S * b.NS), int32_t(b.NS), s.G, s.R, s.C, s.inv_cell, s.win, s.cap}, s.weight,
+           book::error_basis(s.R, s.C, quadratic_of(a.params))};
+    static_assert(sizeof(push) == 17 * 4, "the shader's push constants");
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.w.H), local, d);
     const uint64_t strides = (uint64_t(push.w.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
-    check_loop_budget(d, strides * (2 * uint64_t(s.R) * uint64_t(s.C) + uint64_t(s.R) + 2), "codebook_score");
-    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 5, sizeof(push), {local}),
+    check_loop_budget(d, strides * (uint64_t(s.R) * uint64_t(s.C) + uint64_t(s.R) + 2), "codebook_score");
+    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 6, sizeof(push), {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.in[3].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+                    {a.in[3].view, rt::Access::Read}, {a.in[4].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
 
@@ -248,6 +261,6 @@ void score_gpu(const GpuOpArgs& a) {
 const OpDef op_codebook_render{"codebook_render", render_infer, render_cpu, render_gpu, 0,
                                {"G", "cell", "splat", "cap", "facing", "origin_x", "origin_y", "origin_z", "coarse", "nx", "ny", "nz", "max_bin"}};
 const OpDef op_codebook_window_min{"codebook_window_min", window_min_infer, window_min_cpu, window_min_gpu, 0, {"rows", "cols", "cell", "win", "cap"}};
-const OpDef op_codebook_score{"codebook_score", score_infer, score_cpu, score_gpu, 0, {"cell", "win", "cap", "weight"}};
+const OpDef op_codebook_score{"codebook_score", score_infer, score_cpu, score_gpu, 0, {"cell", "win", "cap", "weight", "quadratic"}};
 
 }  // namespace vtloc::ops

@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <vector>
 
 #include "engine/ops/pose_evidence.h"
 
@@ -104,29 +105,48 @@ inline float quad_at(const float* q, int32_t G, float cap, float fa, float fb) {
 // The scoring of one hypothesis: the measured indentation m [R, C] (cells of
 // `win` mm, row-major; row r at v = (r - (R-1)/2) win along the sensor's y,
 // column c at u along x) against the sample's map seen at spin (cs, sn),
-// pressed until its deepest cell matches m's deepest: predicted
-// max(0, w_min + depth - w), w_min the map's shallowest depth in the window at
-// that spin (window_min: it depends on the map, the spin and the window only, so
-// the scorer computes it once per window size and every touch reads it). The
-// error e = m - predicted loses its best plane over the window (least squares in
-// 1, r, c: the sensor's tilt, up to 10 degrees in our data, and the press's
-// offset are not where the touch was; without this a tilted touch scored its own
-// place below half the surface). Returns -weight * sum (e - plane)^2 / (R C depth^2)
-// (0 when m holds no press).
+// pressed `press` mm past its shallowest point in the window: predicted
+// max(0, w_min + press - w), w_min from window_min (it depends on the map, the
+// spin and the window only, so the scorer computes it once per window size and
+// every touch reads it). `press` is the measured map's press (measured_press: a
+// high percentile of its pressed cells, not its maximum, which the reader's
+// noise and integration error inflate). The error e = m - predicted loses its
+// best fit in the basis (least squares): the plane 1, r, c (the sensor's tilt,
+// up to 10 degrees in our data, and the press's offset are not where the touch
+// was; without it a tilted touch scored its own place below half the surface),
+// and with `quadratic` also r^2, c^2, r c (the bowl that integrating a frame's
+// noisy slopes leaves; it also hides the contact's own curvature). Returns
+// -weight * sum (e - fit)^2 / (R C press^2) (0 when press is 0: no evidence).
 struct ScoreParams {
     int32_t G, R, C;
     float inv_cell, win, cap, weight;  // inv_cell: float(1 / the maps' cell)
 };
 
-// 1 / sum over the window of (r - hr)^2, and of (c - hc)^2 (0 for one row or column),
-// and 1 / (R C): the plane's basis 1, r - hr, c - hc is orthogonal on a full grid, so
-// each coefficient is its own projection. Computed on the host (shaders may not divide
-// exactly) and pushed to the shader. inv_moment(n, m): 1 / sum over an n x m grid of
-// (its first index - its centre)^2 (rows: (R, C); columns: (C, R)).
-inline float inv_moment(int32_t n, int32_t m) {
-    return n > 1 ? float(12.0 / (double(m) * double(n) * (double(n) * double(n) - 1.0))) : 0.0f;
+// The fit's basis over the window, centred so that it is orthogonal on a full grid
+// (1; r' = r - hr; c' = c - hc; r'^2 - mr; c'^2 - mc; r' c', mr and mc the means of
+// r'^2 and c'^2): each coefficient is its own projection, the inverse of its basis
+// vector's squared norm times its sum with e. Computed on the host in double (shaders
+// may not divide exactly) and pushed to the shader; 0 for a vector that vanishes (one
+// row or column, two for a square) and for the quadratic ones without `quadratic`.
+struct Basis {
+    float inv_n, inv_r, inv_c, inv_rr, inv_cc, inv_rc, mr, mc;
+};
+
+inline Basis error_basis(int32_t R, int32_t C, bool quadratic) {
+    const double hr = (R - 1) * 0.5, hc = (C - 1) * 0.5;
+    double mr = 0, mc = 0;
+    for (int32_t r = 0; r < R; ++r) mr += (r - hr) * (r - hr) / R;
+    for (int32_t c = 0; c < C; ++c) mc += (c - hc) * (c - hc) / C;
+    double n[6] = {};
+    for (int32_t r = 0; r < R; ++r)
+        for (int32_t c = 0; c < C; ++c) {
+            const double a = r - hr, b = c - hc, v[6] = {1, a, b, a * a - mr, b * b - mc, a * b};
+            for (int k = 0; k < 6; ++k) n[k] += v[k] * v[k];
+        }
+    auto inv = [](double x, bool on) { return on && x > 1e-9 ? float(1.0 / x) : 0.0f; };
+    return {inv(n[0], true), inv(n[1], true), inv(n[2], true), inv(n[3], quadratic), inv(n[4], quadratic), inv(n[5], quadratic),
+            float(mr), float(mc)};
 }
-inline float inv_count(int32_t R, int32_t C) { return float(1.0 / (double(R) * double(C))); }
 
 constexpr int32_t kMaxWindowCells = 4096;
 
@@ -145,35 +165,45 @@ inline float window_min(const ScoreParams& s, const float* quads, float cs, floa
     return wmin;
 }
 
-inline float measured_depth(const ScoreParams& s, const float* m) {
-    float depth = 0.0f;
-    for (int32_t k = 0; k < s.R * s.C; ++k) depth = std::max(depth, m[k]);
-    return depth;
-}
-
-// One pass: the error's sums (1, r, c, e^2), then its plane's share taken out by
-// orthogonality, sum (e - plane)^2 = sum e^2 - k0 s0 - kr sr - kc sc (the fp32
-// cancellation is ~1e-7 of sum e^2; clamped at 0).
-inline float score_hypothesis(const ScoreParams& s, const float* quads, float cs, float sn, const float* m, float wmin) {
+// One pass: the error's sums against each basis vector and its square, then the fit's
+// share taken out by orthogonality, sum (e - fit)^2 = sum e^2 - sum_k (sum_k e)^2 / |b_k|^2
+// (the fp32 cancellation is ~1e-7 of sum e^2; clamped at 0).
+inline float score_hypothesis(const ScoreParams& s, const Basis& B, const float* quads, float cs, float sn, const float* m, float wmin,
+                              float press) {
+    if (!(press > 1e-6f)) return 0.0f;
     const float hr = float(s.R - 1) * 0.5f, hc = float(s.C - 1) * 0.5f;
-    const float depth = measured_depth(s, m);
-    if (!(depth > 1e-6f)) return 0.0f;
-    const float press = wmin + depth;
-    float s0 = 0.0f, sr = 0.0f, sc = 0.0f, s2 = 0.0f;
+    const float top = wmin + press;
+    float s0 = 0.0f, sr = 0.0f, sc = 0.0f, srr = 0.0f, scc = 0.0f, src = 0.0f, s2 = 0.0f;
     for (int32_t r = 0; r < s.R; ++r)
         for (int32_t c = 0; c < s.C; ++c) {
-            const float e = m[r * s.C + c] - std::max(0.0f, press - window_depth(s, quads, cs, sn, r, c));
+            const float a = float(r) - hr, b = float(c) - hc;
+            const float e = m[r * s.C + c] - std::max(0.0f, top - window_depth(s, quads, cs, sn, r, c));
             s0 += e;
-            sr += e * (float(r) - hr);
-            sc += e * (float(c) - hc);
+            sr += e * a;
+            sc += e * b;
+            srr += e * (a * a - B.mr);
+            scc += e * (b * b - B.mc);
+            src += e * (a * b);
             s2 += e * e;
         }
-    const float k0 = s0 * inv_count(s.R, s.C), kr = sr * inv_moment(s.R, s.C), kc = sc * inv_moment(s.C, s.R);
-    const float err = std::max(0.0f, s2 - (k0 * s0 + kr * sr + kc * sc));
-    return -s.weight * err / (float(s.R * s.C) * depth * depth);
+    const float k0 = s0 * B.inv_n, kr = sr * B.inv_r, kc = sc * B.inv_c, krr = srr * B.inv_rr, kcc = scc * B.inv_cc, krc = src * B.inv_rc;
+    const float err = std::max(0.0f, s2 - (k0 * s0 + kr * sr + kc * sc + krr * srr + kcc * scc + krc * src));
+    return -s.weight * err / (float(s.R * s.C) * press * press);
 }
-inline float score_hypothesis(const ScoreParams& s, const float* quads, float cs, float sn, const float* m) {
-    return score_hypothesis(s, quads, cs, sn, m, window_min(s, quads, cs, sn));
+
+// A measured map's press [mm]: the `pct` percentile (nearest rank) of its cells pressed
+// deeper than 2 % of its deepest (0 for a map with no press). The maximum itself is the
+// cell the reader's noise and integration error inflate most.
+inline float measured_press(const float* m, int32_t n, double pct) {
+    float deepest = 0.0f;
+    for (int32_t k = 0; k < n; ++k) deepest = std::max(deepest, m[k]);
+    if (!(deepest > 1e-6f)) return 0.0f;
+    std::vector<float> v;
+    for (int32_t i = 0; i < n; ++i)
+        if (m[i] > 0.02f * deepest) v.push_back(m[i]);
+    const int32_t k = int32_t(v.size()), rank = std::clamp(int32_t(std::ceil(pct / 100.0 * k)) - 1, 0, k - 1);
+    std::nth_element(v.begin(), v.begin() + rank, v.end());
+    return v[size_t(rank)];
 }
 
 }  // namespace vtloc::ops::book

@@ -177,7 +177,7 @@ struct CodebookScorer::Impl {
     std::shared_ptr<ResidentWeights> resident;
     CodebookOptions options;
     int64_t S, G, Q, NS;  // Q = G + 1: a map's quads per side
-    double weight;
+    ScoreOptions score;
     using Key = std::tuple<int64_t, int64_t, double>;  // the window: R, C, cell size
     std::map<Key, std::unique_ptr<GpuExecutor>> exec;
     std::map<Key, Graph> graphs;
@@ -200,21 +200,22 @@ struct CodebookScorer::Impl {
         Graph g;
         const auto [R, C, win] = k;
         g.output(ops::codebook_score(g, g.weight("codebook.quads", {S, 4 * Q * Q}), g.weight("codebook.spins", {NS, 2}),
-                                     g.input("measured", {R, C}), g.weight(wmin_name(k), {S * NS}), options.cell_mm, win, options.cap_mm,
-                                     weight, "codebook.score"),
+                                     g.input("measured", {R, C}), g.weight(wmin_name(k), {S * NS}), g.input("press", {1}), options.cell_mm,
+                                     win, options.cap_mm, score.weight, score.quadratic, "codebook.score"),
                  "term");
         return g;
     }
 };
 
-CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, double weight)
+CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, const ScoreOptions& o)
     : impl_(std::make_unique<Impl>()) {
     if (book.samples != s.samples) throw Error("render-and-compare: the codebook was rendered for another surface");
-    if (!(weight >= 0) || !std::isfinite(weight)) throw Error("render-and-compare: the term's weight must be >= 0");
+    if (!(o.weight >= 0) || !std::isfinite(o.weight)) throw Error("render-and-compare: the term's weight must be >= 0");
+    if (!(o.press_percentile > 0 && o.press_percentile <= 100)) throw Error("render-and-compare: the press percentile must be in (0, 100]");
     Impl& m = *impl_;
     m.ctx = ctx;
     m.options = book.options;
-    m.S = s.n_samples(), m.G = book.G, m.Q = book.G + 1, m.NS = s.n_spin(), m.weight = weight;
+    m.S = s.n_samples(), m.G = book.G, m.Q = book.G + 1, m.NS = s.n_spin(), m.score = o;
     // The maps as bilinear quads (4.4x their size: one vector read per sample, the score's cost).
     HostTensor quads({m.S, 4 * m.Q * m.Q});
     for (int64_t i = 0; i < m.S; ++i)
@@ -234,7 +235,8 @@ std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int 
     if (!m.weights.has(Impl::wmin_name(key))) m.add_window_min(key);
     if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(key), m.weights, m.resident);
     if (!m.ctx && !m.graphs.count(key)) m.graphs.emplace(key, m.graph(key));
-    const TensorMap in{{"measured", meas}};
+    const float press = ops::book::measured_press(meas.data.data(), int32_t(meas.data.size()), m.score.press_percentile);
+    const TensorMap in{{"measured", meas}, {"press", HostTensor({1}, {press})}};
     TensorMap out = m.ctx ? m.exec.at(key)->run(in) : run_cpu(m.graphs.at(key), m.weights, in);
     return std::move(out.at("term").data);
 }

@@ -62,11 +62,17 @@ Codebook cached_codebook(rt::Context* ctx, const Surface& s, const CodebookOptio
 // cells of about `cell_mm`: [R, C] and the exact cell size (R = round(H mm_per_px / cell)).
 HostTensor window_map(const std::vector<float>& depth_mm, int H, int W, double mm_per_px, double cell_mm, double* win_mm);
 
+// How a touch is scored (docs/render_compare.md; fitted on training touches and windows).
+struct ScoreOptions {
+    double weight = 0.25;           // the term's inverse temperature
+    bool quadratic = true;          // the error also loses its r^2, c^2, r c fit (the reader's bowl)
+    double press_percentile = 70;   // the measured press: this percentile of the pressed cells
+};
+
 // Scores touches against a codebook on the GPU (ctx null: the CPU reference).
 class CodebookScorer {
 public:
-    // weight: the term's inverse temperature (fitted on training windows).
-    CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, double weight);
+    CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, const ScoreOptions& o);
     ~CodebookScorer();
     // The log term over the hypotheses [S * NS] for one touch's indentation.
     std::vector<float> term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px);

@@ -209,6 +209,11 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     # A second tracker reads the cache and scores the same.
     t2 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
     assert np.array_equal(t2.shape_term(shape), term)
+    # The score's knobs: the plane alone and the deepest cell as the press score otherwise; a bad percentile is named.
+    t3 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache, render_quadratic=False, render_press_percentile=100.0)
+    assert not np.array_equal(t3.shape_term(shape), term)
+    with pytest.raises(vtloc.Error, match="render_press_percentile"):
+        vtloc.Tracker(ctx, obj, hypotheses=20000, render_press_percentile=0.0)
     # The windowed form over precomputed terms: the same as the geometry alone when none, and the term
     # counts when given.
     step = np.eye(4)

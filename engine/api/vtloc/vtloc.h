@@ -359,6 +359,12 @@ struct TrackerOptions {
     // Render-and-compare (SPEC 9): the inverse temperature of a touch's measured gel shape
     // against what each hypothesis would press (add_touch with a GelShape; fitted on train windows).
     double render_weight = 0.25;
+    // Whether the comparison also ignores a bowl (r^2, c^2, r c) in the error besides the
+    // plane: the shape a frame's integrated slopes bend into (fitted on train windows).
+    bool render_quadratic = true;
+    // The measured press: this percentile of the cells the gel shape shows pressed (its
+    // deepest cell is where the reader's noise and integration error add most; fitted).
+    double render_press_percentile = 70;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
