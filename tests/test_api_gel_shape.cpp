@@ -108,7 +108,7 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     CHECK(ctx.take_validation_messages().empty());
 }
 
-TEST_CASE("tracker: the shape term's press percentile and quadratic fit are options, checked by name", "[api][tracker]") {
+TEST_CASE("tracker: the shape term's press percentile, quadratic fit and cell are options, checked by name", "[api][tracker]") {
     // A tilted cap with a noise spike at its deepest cell: the maximum follows the spike, a
     // percentile of the pressed cells does not; the quadratic fit also drops a bowl.
     api::Context ctx;
@@ -124,23 +124,30 @@ TEST_CASE("tracker: the shape term's press percentile and quadratic fit are opti
         }
     for (int r = 58; r < 62; ++r)
         for (int c = 78; c < 82; ++c) g.depth_mm[size_t(r * g.width + c)] += 1.5f;  // a 0.5 mm spike, 1.5 mm high
-    std::vector<float> terms[3];
-    for (int k = 0; k < 3; ++k) {
+    std::vector<float> terms[4];
+    for (int k = 0; k < 4; ++k) {
         api::TrackerOptions ok = o;
         ok.render_press_percentile = k == 0 ? 100 : 95;
-        ok.render_quadratic = k == 2;
+        ok.render_quadratic = k >= 2;
+        ok.render_cell_mm = k == 3 ? 3.0 : 1.0;
         api::Tracker t(ctx, potato, ok);
         terms[k] = t.shape_term(g);
         REQUIRE(terms[k].size() >= 10000);
     }
     CHECK(terms[0] != terms[1]);
     CHECK(terms[1] != terms[2]);
+    CHECK(terms[2] != terms[3]);
     for (const auto& f : terms)
         for (float v : f) REQUIRE((std::isfinite(v) && v <= 0.0f));
     for (double bad : {0.0, -5.0, 101.0}) {
         api::TrackerOptions ob = o;
         ob.render_press_percentile = bad;
         CHECK_THROWS_WITH(api::Tracker(ctx, potato, ob), Catch::Contains("render_press_percentile"));
+    }
+    for (double bad : {0.05, 11.0, std::nan("")}) {
+        api::TrackerOptions ob = o;
+        ob.render_cell_mm = bad;
+        CHECK_THROWS_WITH(api::Tracker(ctx, potato, ob), Catch::Contains("render_cell_mm"));
     }
     CHECK(ctx.take_validation_messages().empty());
 }

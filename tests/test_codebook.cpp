@@ -97,16 +97,10 @@ TEST_CASE("codebook_render matches the CPU reference", "[op][codebook][codebook_
 // Random maps [S, G*G] as the scorer reads them: bilinear quads [S, 4 (G+1)^2].
 HostTensor random_quads(int64_t S, int64_t G, float cap, uint32_t seed) {
     const HostTensor maps = test::random_tensor({S, G * G}, seed, -1.0f, 3.0f);
-    HostTensor q({S, 4 * (G + 1) * (G + 1)});
-    for (int64_t i = 0; i < S; ++i) ops::book::make_quads(&maps.data[size_t(i * G * G)], int32_t(G), cap, &q.data[size_t(i * 4 * (G + 1) * (G + 1))]);
-    return q;
+    return HostTensor({S, 4 * (G + 1) * (G + 1)}, ops::book::quads_of_maps(maps.data.data(), S, int32_t(G), cap));
 }
 
-std::vector<float> quads_of(const std::vector<float>& map, int G, float cap) {
-    std::vector<float> q(size_t(4 * (G + 1) * (G + 1)));
-    ops::book::make_quads(map.data(), G, cap, q.data());
-    return q;
-}
+std::vector<float> quads_of(const std::vector<float>& map, int G, float cap) { return ops::book::quads_of_maps(map.data(), 1, G, cap); }
 
 // A hypothesis scored as the scorer did before percentiles: the plane, pressed to the map's deepest cell.
 float score_plane(const ops::book::ScoreParams& s, const float* q, float cs, float sn, const float* m) {
@@ -114,12 +108,7 @@ float score_plane(const ops::book::ScoreParams& s, const float* q, float cs, flo
                                        ops::book::measured_press(m, s.R * s.C, 100));
 }
 
-HostTensor spin_table(int64_t NS) {
-    HostTensor spins({NS, 2});
-    for (int64_t j = 0; j < NS; ++j)
-        spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * j / NS)), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * j / NS));
-    return spins;
-}
+HostTensor spin_table(int64_t NS) { return HostTensor({NS, 2}, ops::book::spin_table(int32_t(NS))); }
 
 TEST_CASE("codebook_window_min matches the CPU reference", "[op][codebook][codebook_window_min]") {
     struct Case {
@@ -331,8 +320,11 @@ TEST_CASE("a flat face's codebook map is flat and empty beyond its edge", "[code
 TEST_CASE("a rendered touch scores its own pose near the top", "[codebook]") {
     const track::Surface s = prism_surface(20000);
     const track::Codebook b = track::render_codebook(&test::gpu(), s, {});
+    // The comparison at the maps' 1 mm cells and at 3 mm ones (a ninth of the reads).
+    const double cell = GENERATE(1.0, 3.0);
+    INFO("comparison cells of " << cell << " mm");
     track::ScoreOptions so;
-    so.weight = 1.0;
+    so.weight = 1.0, so.cell_mm = cell;
     track::CodebookScorer scorer(&test::gpu(), b, s, so);
     sim::TouchRenderer ren(sim::load_calibration(sim::default_calibration_path()), prism());
     const int64_t S = s.n_samples(), NS = s.n_spin();

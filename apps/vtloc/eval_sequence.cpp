@@ -165,13 +165,14 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "network_weight") to.network_weight = v;
             else if (k == "render_weight") to.render_weight = v;
             else if (k == "render_press_percentile") to.render_press_percentile = v;
+            else if (k == "render_cell_mm") to.render_cell_mm = v;
             else if (k == "render_quadratic") {
                 if (v != 0 && v != 1) throw UsageError("--filter: render_quadratic is 0 or 1");
                 to.render_quadratic = v == 1;
             }
             else if (k == "hypotheses") to.hypotheses = int64_t(v);
             else if (k == "n_spin") to.n_spin = int(v);
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, render_weight, render_quadratic, render_press_percentile, hypotheses, n_spin)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, hypotheses, n_spin)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");

@@ -60,17 +60,18 @@ struct Tracker::Impl {
     HostTensor display_tensor;
     double network_weight, object_units, render_weight;
     bool render_quadratic;
-    double render_press_percentile;
+    double render_press_percentile, render_cell_mm;
     std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
           object_units(o.object_units), render_weight(o.render_weight), render_quadratic(o.render_quadratic),
-          render_press_percentile(o.render_press_percentile),
+          render_press_percentile(o.render_press_percentile), render_cell_mm(o.render_cell_mm),
           codebook_cache(o.codebook_cache) {
         if (!(render_weight >= 0) || !std::isfinite(render_weight)) throw Error("tracker: render_weight must be >= 0");
         if (!(render_press_percentile > 0 && render_press_percentile <= 100))
             throw Error("tracker: render_press_percentile must be in (0, 100]");
+        if (!(render_cell_mm >= 0.1 && render_cell_mm <= 10)) throw Error("tracker: render_cell_mm must be in [0.1, 10] mm");
         display_tensor = HostTensor({int64_t(display.size()), 3}, display.xyz);
     }
 
@@ -84,6 +85,7 @@ struct Tracker::Impl {
             const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, codebook_cache);
             track::ScoreOptions so;
             so.weight = render_weight, so.quadratic = render_quadratic, so.press_percentile = render_press_percentile;
+            so.cell_mm = render_cell_mm;
             scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), so);
         }
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).

@@ -43,17 +43,10 @@ OpCase render_case(int64_t S, int64_t D, int64_t G, uint32_t seed) {
 // Random maps as the scorer reads them: their bilinear quads [S, 4 (G+1)^2].
 HostTensor random_quads(int64_t S, int64_t G, uint32_t seed) {
     const HostTensor maps = random_tensor({S, G * G}, seed, -1.0f, 3.0f);
-    HostTensor q({S, 4 * (G + 1) * (G + 1)});
-    for (int64_t i = 0; i < S; ++i) ops::book::make_quads(&maps.data[size_t(i * G * G)], int32_t(G), 8.0f, &q.data[size_t(i * 4 * (G + 1) * (G + 1))]);
-    return q;
+    return HostTensor({S, 4 * (G + 1) * (G + 1)}, ops::book::quads_of_maps(maps.data.data(), S, int32_t(G), 8.0f));
 }
 
-HostTensor spin_table(int64_t NS) {
-    HostTensor spins({NS, 2});
-    for (int64_t j = 0; j < NS; ++j)
-        spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * double(j) / double(NS))), spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
-    return spins;
-}
+HostTensor spin_table(int64_t NS) { return HostTensor({NS, 2}, ops::book::spin_table(int32_t(NS))); }
 
 std::string book_label(int64_t S, int64_t G, int64_t NS, int64_t R, int64_t C) {
     return std::to_string(S) + " maps of " + std::to_string(G) + "^2, " + std::to_string(NS) + " spins, " + std::to_string(R) + "x" +

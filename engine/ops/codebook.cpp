@@ -157,7 +157,7 @@ void check_window(const char* op, int64_t R, int64_t C) {
 }
 
 struct Book {
-    int64_t S, GG, NS;
+    int64_t S, stride, NS;  // stride: floats per sample, 4 (G+1)^2
     book::ScoreParams s;
 };
 
@@ -186,7 +186,7 @@ void window_min_cpu(const std::vector<const HostTensor*>& in, const std::vector<
     for (int64_t i = 0; i < b.S; ++i)
         for (int64_t j = 0; j < b.NS; ++j)
             out[0]->data[size_t(i * b.NS + j)] =
-                book::window_min(b.s, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)], in[1]->data[size_t(2 * j + 1)]);
+                book::window_min(b.s, &in[0]->data[size_t(i * b.stride)], in[1]->data[size_t(2 * j)], in[1]->data[size_t(2 * j + 1)]);
 }
 
 void window_min_gpu(const GpuOpArgs& a) {
@@ -231,7 +231,7 @@ void score_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
     for (int64_t i = 0; i < b.S; ++i)
         for (int64_t j = 0; j < b.NS; ++j) {
             const size_t h = size_t(i * b.NS + j);
-            out[0]->data[h] = book::score_hypothesis(b.s, basis, &in[0]->data[size_t(i * b.GG)], in[1]->data[size_t(2 * j)],
+            out[0]->data[h] = book::score_hypothesis(b.s, basis, &in[0]->data[size_t(i * b.stride)], in[1]->data[size_t(2 * j)],
                                                      in[1]->data[size_t(2 * j + 1)], in[2]->data.data(), in[3]->data[h], press);
         }
 }

@@ -89,6 +89,25 @@ inline void make_quads(const float* map, int32_t G, float cap, float* q) {
         }
 }
 
+// Every map's quads: maps [S, G*G] -> [S, 4 (G+1)^2].
+inline std::vector<float> quads_of_maps(const float* maps, int64_t S, int32_t G, float cap) {
+    const size_t per = size_t(4 * quad_side(G) * quad_side(G));
+    std::vector<float> q(size_t(S) * per);
+    for (int64_t i = 0; i < S; ++i) make_quads(maps + size_t(i) * size_t(G) * size_t(G), G, cap, &q[size_t(i) * per]);
+    return q;
+}
+
+// The spins [NS, 2]: cos and sin of 2 pi j / NS (the filter's hypotheses, SPEC 6).
+inline std::vector<float> spin_table(int32_t NS) {
+    std::vector<float> t;
+    for (int32_t j = 0; j < NS; ++j) {
+        const double a = 2 * M_PI * j / NS;
+        t.push_back(float(std::cos(a)));
+        t.push_back(float(std::sin(a)));
+    }
+    return t;
+}
+
 // A sample's map at fractional cell (fa, fb) from its quads: bilinear, cap outside the grid.
 inline float quad_at(const float* q, int32_t G, float cap, float fa, float fb) {
     const float a0 = std::floor(fa), b0 = std::floor(fb);

@@ -212,15 +212,13 @@ CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Sur
     if (book.samples != s.samples) throw Error("render-and-compare: the codebook was rendered for another surface");
     if (!(o.weight >= 0) || !std::isfinite(o.weight)) throw Error("render-and-compare: the term's weight must be >= 0");
     if (!(o.press_percentile > 0 && o.press_percentile <= 100)) throw Error("render-and-compare: the press percentile must be in (0, 100]");
+    if (!(o.cell_mm >= 0.1 && o.cell_mm <= 10)) throw Error("render-and-compare: the comparison cell must be 0.1-10 mm");
     Impl& m = *impl_;
     m.ctx = ctx;
     m.options = book.options;
     m.S = s.n_samples(), m.G = book.G, m.Q = book.G + 1, m.NS = s.n_spin(), m.score = o;
     // The maps as bilinear quads (4.4x their size: one vector read per sample, the score's cost).
-    HostTensor quads({m.S, 4 * m.Q * m.Q});
-    for (int64_t i = 0; i < m.S; ++i)
-        ops::book::make_quads(&book.heights[size_t(i * m.G * m.G)], int32_t(m.G), float(m.options.cap_mm), &quads.data[size_t(i * 4 * m.Q * m.Q)]);
-    m.weights.add("codebook.quads", std::move(quads));
+    m.weights.add("codebook.quads", HostTensor({m.S, 4 * m.Q * m.Q}, ops::book::quads_of_maps(book.heights.data(), m.S, int32_t(m.G), float(m.options.cap_mm))));
     m.weights.add("codebook.spins", HostTensor({m.NS, 2}, s.spins));
     if (ctx) m.resident = std::make_shared<ResidentWeights>(*ctx);
 }
@@ -230,7 +228,7 @@ CodebookScorer::~CodebookScorer() = default;
 std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px) {
     Impl& m = *impl_;
     double win = 0;
-    HostTensor meas = window_map(depth_mm, H, W, mm_per_px, m.options.cell_mm, &win);
+    HostTensor meas = window_map(depth_mm, H, W, mm_per_px, m.score.cell_mm, &win);
     const Impl::Key key{meas.shape[0], meas.shape[1], win};  // one executor serves every touch of a sensor
     if (!m.weights.has(Impl::wmin_name(key))) m.add_window_min(key);
     if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(key), m.weights, m.resident);

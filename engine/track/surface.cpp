@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "base/error.h"
+#include "engine/ops/codebook_math.h"
 
 namespace vtloc::track {
 
@@ -172,11 +173,7 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
         s.samples.insert(s.samples.end(), p, p + 6);
         for (double v : t1) s.samples.push_back(float(v));
     }
-    for (int j = 0; j < o.n_spin; ++j) {
-        const double a = 2 * M_PI * j / o.n_spin;
-        s.spins.push_back(float(std::cos(a)));
-        s.spins.push_back(float(std::sin(a)));
-    }
+    s.spins = ops::book::spin_table(o.n_spin);
 
     // Grid: the box grown by the band, in cells no smaller than min_voxel, at most max_cells.
     const double margin = o.band_mm + 1.0;
