@@ -162,6 +162,7 @@ void bind_tracker(py::module_& m) {
             py::arg("motions"), py::arg("terms") = py::none(),
             "The windowed form: a list of the W - 1 motions between W touches; terms: one log term per touch "
             "(shape_term's, or None), computed once and reused across windows.")
+        .def("reset", &api::Tracker::reset, "Forgets every touch (a new grasp); the object's tables stay.")
         .def_property_readonly("touches", &api::Tracker::touches)
         .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })
         .def_property_readonly("sample_points", [](const api::Tracker& t) {

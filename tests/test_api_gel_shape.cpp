@@ -105,6 +105,18 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     CHECK(t.evaluate_window_terms({m}, {{}, {}}).sample_belief == t.evaluate_window({m}).sample_belief);
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0]}), Catch::Contains("1 touch terms for 2 touches"));
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0], std::vector<float>(7)}), Catch::Contains("7"));
+    // Online with the same terms: add_touch_term is add_touch with the shape, and reset starts over.
+    t.add_touch(std::nullopt, nullptr, nullptr, &a);
+    t.add_touch(m, nullptr, nullptr, &b);
+    const std::vector<float> online = t.belief();
+    t.reset();
+    CHECK(t.touches() == 0);
+    t.add_touch_term(std::nullopt, terms[0]);
+    t.add_touch_term(m, terms[1]);
+    CHECK(t.touches() == 2);
+    CHECK(t.belief() == online);
+    CHECK(t.estimate().sample_belief == direct.sample_belief);  // two touches: the online form is the windowed one
+    CHECK_THROWS_WITH(t.add_touch_term(m, std::vector<float>(7)), Catch::Contains("7"));
     CHECK(ctx.take_validation_messages().empty());
 }
 

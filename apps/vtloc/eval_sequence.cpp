@@ -149,6 +149,9 @@ int run_sequence(Session& s, const Args& a) {
         }
     }();
     api::TrackerOptions to;
+    // online_window=W: each window's touches go through add_touch one by one (the online form,
+    // the last W scored exactly, older ones through the prior) instead of evaluate_window.
+    int online_window = 0;
     // --filter k=v,...: the filter's knobs, for fitting them on windows that end at train touches.
     if (auto f = a.get("--filter")) {
         std::stringstream ss(*f);
@@ -172,7 +175,11 @@ int run_sequence(Session& s, const Args& a) {
             }
             else if (k == "hypotheses") to.hypotheses = int64_t(v);
             else if (k == "n_spin") to.n_spin = int(v);
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, hypotheses, n_spin)");
+            else if (k == "online_window") {
+                if (!(v >= 1 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: online_window is an integer in [1, 64]");
+                online_window = int(v), to.window = int(v);
+            }
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, hypotheses, n_spin, online_window)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");
@@ -317,7 +324,15 @@ int run_sequence(Session& s, const Args& a) {
                             }
                             return terms;
                         };
-                        const api::TrackerEstimate e = tracker.evaluate_window_terms(motions, window_terms(clean, 0));
+                        // The windowed form, or the online one touch by touch.
+                        auto run = [&](api::Tracker& t, const std::vector<std::vector<float>>& terms) {
+                            if (!online_window) return t.evaluate_window_terms(motions, terms);
+                            t.reset();
+                            for (size_t i = 0; i < terms.size(); ++i)
+                                t.add_touch_term(i ? std::optional<api::Motion>(motions[i - 1]) : std::nullopt, terms[i]);
+                            return t.estimate();
+                        };
+                        const api::TrackerEstimate e = run(tracker, window_terms(clean, 0));
                         Score sc;
                         sc.n = 1;
                         sc.mm = dist(e.contact, truth.contact);
@@ -350,7 +365,7 @@ int run_sequence(Session& s, const Args& a) {
                         sc.mass5 = e.mass_within_5mm;
                         // Candidates protocol: the belief over the candidates' poses alone; the answer is the
                         // candidate of least expected distance under it.
-                        const api::TrackerEstimate ec = cand_tracker.evaluate_window_terms(motions, window_terms(cand_clean, 1));
+                        const api::TrackerEstimate ec = run(cand_tracker, window_terms(cand_clean, 1));
                         double best = INFINITY;
                         P3 pick{};
                         for (size_t c = 0; c < cand_points.size(); ++c) {

@@ -209,7 +209,13 @@ void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* 
     });
 }
 
+void Tracker::add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term) {
+    guarded([&] { impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, term); });
+}
+
 int Tracker::touches() const { return impl_->tracker.touches(); }
+
+void Tracker::reset() { impl_->tracker.reset(); }
 
 TrackerEstimate Tracker::estimate() const {
     return guarded([&] { return impl_->convert(impl_->tracker.estimate(), impl_->tracker.touches()); });

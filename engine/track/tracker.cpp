@@ -239,6 +239,15 @@ void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<fl
     ++touches_;
 }
 
+void Tracker::reset() {
+    touches_ = 0;
+    last_ = Step{};
+    motions_.clear();
+    terms_.clear();
+    beliefs_.clear();
+    prior_log_.clear();
+}
+
 uint64_t Tracker::device_bytes() const {
     uint64_t arenas = 0;  // the tables go up with the first step graph; count them from the start
     for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;

@@ -70,6 +70,8 @@ public:
     // Online: the first touch takes no motion; each later one the motion from
     // the previous touch. term: a log field over the hypotheses [S * NS], or empty.
     void add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term = {});
+    // Forgets every touch (the object moved, a new grasp); the surface and the step graphs stay.
+    void reset();
     int touches() const { return touches_; }
     const std::vector<float>& belief() const { return last_.prob; }  // [S * NS], sums to 1
     Estimate estimate() const;

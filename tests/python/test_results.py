@@ -206,6 +206,12 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     t.add_touch(shape=shape)
     e = t.estimate()
     assert e["touches"] == 1 and abs(float(t.belief.sum()) - 1) < 1e-3
+    t.reset()  # forgets the touch, keeps the object
+    assert t.touches == 0
+    with pytest.raises(vtloc.Error, match="no touch"):
+        t.estimate()
+    t.add_touch(shape=shape)
+    assert np.array_equal(t.estimate()["contact"], e["contact"])
     # A second tracker reads the cache and scores the same.
     t2 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
     assert np.array_equal(t2.shape_term(shape), term)

@@ -418,7 +418,11 @@ public:
     // or load_indentation), scored by render-and-compare; null = geometry only.
     void add_touch(const std::optional<Motion>& motion, const TouchResult* network = nullptr,
                    const Object* object = nullptr, const GelShape* shape = nullptr);
+    // add_touch with a precomputed touch_term() (empty: geometry only).
+    void add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term);
     int touches() const;
+    // Forgets every touch (a new grasp, the object moved); the object's tables stay.
+    void reset();
     TrackerEstimate estimate() const;
     // The windowed form: motions between W touches (W - 1), optional results and shapes per touch.
     TrackerEstimate evaluate_window(const std::vector<Motion>& motions,
