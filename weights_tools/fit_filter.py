@@ -6,8 +6,9 @@ and the belief's calibration; the best by mean ND up to symmetry is the default 
 engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
-and whether its error also drops a quadratic bowl (render_quadratic; the press percentile
-render_press_percentile was chosen before, on train touches: docs/render_compare.md):
+and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
+render_quadratic, was fitted before on the same windows, and the press percentile
+render_press_percentile on train touches: docs/render_compare.md):
 the "MidasTouch-style" row alone (--rows render --render-compare), each frame's gel shape
 read from the frame as a robot would. With --oracle, the same knob for the oracle row (the
 renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
@@ -30,7 +31,8 @@ GRID = {
 }
 
 
-GRID_RENDER = {"render_quadratic": [1, 0], "render_weight": [4, 16, 0.25]}
+# render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
+GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
 

@@ -220,7 +220,7 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     assert not np.array_equal(t3.shape_term(shape), term)
     with pytest.raises(vtloc.Error, match="render_press_percentile"):
         vtloc.Tracker(ctx, obj, hypotheses=20000, render_press_percentile=0.0)
-    t4 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache, render_cell_mm=3.0)
+    t4 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache, render_cell_mm=1.0)
     assert not np.array_equal(t4.shape_term(shape), term)
     with pytest.raises(vtloc.Error, match="render_cell_mm"):
         vtloc.Tracker(ctx, obj, hypotheses=20000, render_cell_mm=0.0)

@@ -366,8 +366,9 @@ struct TrackerOptions {
     // deepest cell is where the reader's noise and integration error add most; fitted).
     double render_press_percentile = 70;
     // The comparison's cells (mm): the measured map is averaged onto them and each
-    // hypothesis' map read at their centres; larger cells, fewer reads (fitted).
-    double render_cell_mm = 1.0;
+    // hypothesis' map read at their centres; larger cells, fewer reads (fitted on train
+    // windows: 3 mm scored as well as 1 mm, with a ninth of the reads).
+    double render_cell_mm = 3.0;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
