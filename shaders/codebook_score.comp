@@ -5,6 +5,10 @@
 // (engine/ops/codebook.cpp says what; engine/ops/codebook_math.h is the CPU mirror,
 // operation for operation).
 layout(local_size_x_id = 0) in;
+// The window's rows and columns when the host fixes them (0: read p.R, p.C): a small window's
+// loops then unroll and the measured map's reads have constant offsets.
+layout(constant_id = 1) const int KR = 0;
+layout(constant_id = 2) const int KC = 0;
 
 layout(std430, binding = 0) readonly buffer Quads_ { vec4 quads[]; }; // [S, (G+1)^2] (make_quads)
 layout(std430, binding = 1) readonly buffer Spins_ { float spins[]; }; // [NS, 2]
@@ -32,10 +36,11 @@ void main() {
         precise float top = wmins[h] + press;
         // The error's sums against the basis; its fit then goes by orthogonality.
         precise float s0 = 0.0, sr = 0.0, sc = 0.0, srr = 0.0, scc = 0.0, src = 0.0, s2 = 0.0;
-        for (int r = 0; r < p.R; ++r)
-            for (int c = 0; c < p.C; ++c) {
+        const int R = KR > 0 ? KR : p.R, C = KC > 0 ? KC : p.C;
+        for (int r = 0; r < R; ++r)
+            for (int c = 0; c < C; ++c) {
                 precise float a = float(r) - hr, b = float(c) - hc;
-                precise float e = m[r * p.C + c] - max(0.0, top - window_depth(base, cs, sn, r, c));
+                precise float e = m[r * C + c] - max(0.0, top - window_depth(base, cs, sn, r, c));
                 s0 += e;
                 sr += e * a;
                 sc += e * b;

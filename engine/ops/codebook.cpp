@@ -236,6 +236,8 @@ void score_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
         }
 }
 
+constexpr int64_t kUnrolledCells = 64;
+
 void score_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     const Book b = book_of(a.in[0].shape, a.in[1].shape, a.params, a.in[2].shape[0], a.in[2].shape[1]);
@@ -250,7 +252,12 @@ void score_gpu(const GpuOpArgs& a) {
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(uint64_t(push.w.H), local, d);
     const uint64_t strides = (uint64_t(push.w.H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
     check_loop_budget(d, strides * (uint64_t(s.R) * uint64_t(s.C) + uint64_t(s.R) + 2), "codebook_score");
-    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 6, sizeof(push), {local}),
+    // A small window's rows and columns as specialization constants (a pipeline per window
+    // size): its loops unroll and the measured map's reads get constant offsets. The shipped
+    // 3 mm cells (5 x 7) score a touch in 19.5-20 ms instead of 23 (docs/render_compare.md);
+    // a 15 x 20 window stays a loop (code size).
+    const bool fixed = int64_t(s.R) * s.C <= kUnrolledCells;
+    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 6, sizeof(push), {local, uint32_t(fixed ? s.R : 0), uint32_t(fixed ? s.C : 0)}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
                     {a.in[3].view, rt::Access::Read}, {a.in[4].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
