@@ -35,7 +35,9 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     uint64_t bytes = 0;
     int window = 0;
     for (int r = 0; r < o.reps; ++r) {
-        track::Tracker tr(ctx, surface);
+        track::FilterOptions fo;
+        fo.online_window = o.window;
+        track::Tracker tr(ctx, surface, fo);
         window = tr.options().online_window;
         for (int i = 0; i < o.touches; ++i) {
             std::optional<Rigid> m;

@@ -17,6 +17,7 @@ struct TrackerBenchOptions {
     std::string tour;   // a touches file with "object" (default: examples/potato_tour.json)
     int touches = 12;   // the tour's motions repeated up to this many touches
     int reps = 5;       // trackers run from the first touch
+    int window = 8;     // the online window (touches scored exactly; its cost is the evidence's)
 };
 
 // JSON: object, hypotheses, samples, spins, spacing_mm, window, touches, reps,

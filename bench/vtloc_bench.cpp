@@ -61,7 +61,9 @@ const char* kUsage = R"(usage: vtloc-bench [options]
                        examples/potato_tour.json), geometry only, on the GPU (--reps trackers) and
                        on the CPU reference (--cpu-reps)
   --tracker-touches N  touches per tracker run, the tour's motions repeated (default 12; the
-                       steady state past the window of 8 is what is timed)
+                       steady state past the window is what is timed)
+  --tracker-window W   the tracker's online window, 1-8 (default 8, the shipped one): the
+                       touches scored exactly, older ones through the prior
   --no-tracker         skip the tracker stage
   --no-gel             skip the gel stage (SPEC 9): the gel's shape from one real frame, on the GPU
                        and the CPU reference, and render-and-compare on the tracker stage's object
@@ -78,7 +80,7 @@ The GPU is the default Vulkan device (VTLOC_DEVICE picks another: index or name)
 struct Args {
     std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
     bench::ModelBenchOptions opt;
-    int cpu_reps = 2, tracker_touches = 12;
+    int cpu_reps = 2, tracker_touches = 12, tracker_window = 8;
     bool probe = true, vs_pytorch = false, tracker = true, gel = true;
     std::string tracker_tour;
 };
@@ -138,7 +140,8 @@ Args parse(int argc, char** argv) {
         else if (f == "--profile-reps") a.opt.profile_reps = one_int(f, v, 1);
         else if (f == "--cpu-reps") a.cpu_reps = one_int(f, v, 1);
         else if (f == "--tracker") a.tracker_tour = v;
-        else if (f == "--tracker-touches") a.tracker_touches = one_int(f, v, 9);
+        else if (f == "--tracker-touches") a.tracker_touches = one_int(f, v, 2);
+        else if (f == "--tracker-window") a.tracker_window = one_int(f, v, 1);
         else if (f == "--stepped") a.opt.stepped_iters = one_int(f, v, 0);
         else if (f == "--json") a.json_path = v;
         else if (f == "--plot") a.plot_path = v;
@@ -155,6 +158,10 @@ Args parse(int argc, char** argv) {
     for (int n : a.opt.iters)
         if (n > 64) throw Error("--iters: N must be in 0..64, got " + std::to_string(n));
     if (a.opt.stepped_iters > 64) throw Error("--stepped: N must be in 0..64");
+    if (a.tracker_window > 8) throw Error("--tracker-window: 1 to 8 touches, got " + std::to_string(a.tracker_window));
+    if (a.tracker_touches <= a.tracker_window)
+        throw Error("--tracker-touches (" + std::to_string(a.tracker_touches) + ") must exceed the tracker's window (" +
+                    std::to_string(a.tracker_window) + "): the steady state past it is timed");
     return a;
 }
 
@@ -343,7 +350,7 @@ int run(int argc, char** argv) {
     if (a.tracker) {
         bench::TrackerBenchOptions t;
         t.tour = !a.tracker_tour.empty() ? a.tracker_tour : (data_dir() / "examples" / "potato_tour.json").string();
-        t.touches = a.tracker_touches;
+        t.touches = a.tracker_touches, t.window = a.tracker_window;
         json& tr = report["tracker"];
         if (ctx) {
             t.reps = a.opt.reps;

@@ -1,6 +1,6 @@
 """Checks a vtloc-bench JSON report's schema (bench/README.md) and plot.
 
-  python3 check_bench_json.py REPORT.json PLOT.png REPS ITERS BATCHES POINTS
+  python3 check_bench_json.py REPORT.json PLOT.png REPS ITERS BATCHES POINTS TRACKER_WINDOW
 
 Asserts structure, types and internal consistency (counts, which N / batch /
 point sizes were measured, positive times and sizes), never speed.
@@ -77,7 +77,7 @@ def backend(b, name, reps, profile_reps, iters, batches, points, ilu):
         need(r["fps_ms"] + r["ball_query_ms"] <= r["node_sum_ms"] * 1.0001, f"{name}: point shares {r}")
 
 
-def main(path, plot, reps, iters, batches, points):
+def main(path, plot, reps, iters, batches, points, window):
     r = json.load(open(path))
     need(r["schema"] == "vtloc-bench/1", f"schema {r.get('schema')}")
     need(len(r["date"]) == 10, "date")
@@ -126,7 +126,7 @@ def main(path, plot, reps, iters, batches, points):
     t = r["tracker"]
     for b, runs in (("gpu", reps), ("cpu", s["cpu_reps"])):
         x = t[b]
-        need(x["reps"] == runs and x["touches"] > x["window"] > 0, f"tracker.{b} runs {x}")
+        need(x["reps"] == runs and x["touches"] > x["window"] == window, f"tracker.{b} runs {x} (window {window} asked)")
         steady = runs * (x["touches"] - x["window"])  # touches past the window, every run
         for k in ("add_touch_ms", "estimate_ms", "touch_ms"):
             stats(x[k], f"tracker.{b}.{k}", steady)
@@ -153,10 +153,10 @@ def main(path, plot, reps, iters, batches, points):
 
 if __name__ == "__main__":
     a = sys.argv[1:]
-    if len(a) != 6:
+    if len(a) != 7:
         fail(__doc__)
     ints = lambda s: [int(x) for x in s.split(",")] if s else []
     try:
-        main(a[0], a[1], int(a[2]), ints(a[3]), ints(a[4]), ints(a[5]))
+        main(a[0], a[1], int(a[2]), ints(a[3]), ints(a[4]), ints(a[5]), int(a[6]))
     except (KeyError, TypeError, IndexError) as e:
         fail(f"the report lacks or mistypes a field: {type(e).__name__} {e}")
