@@ -142,6 +142,10 @@ TEST_CASE("declared symmetry groups hold: each shape maps onto itself within 0.2
     tilted.order = 0;
     tilted.axis = {0, 0.2, 1};
     CHECK(sim::symmetry_residual_mm(tilted, sim::make_shape("cone"), 400) > 1);
+    sim::Symmetry round;  // every rotation: the sphere's group, not the box's
+    round.all = true;
+    CHECK(sim::shape_symmetry("sphere").all);
+    CHECK(sim::symmetry_residual_mm(round, sim::make_shape("box"), 400) > 5);
 }
 
 TEST_CASE("distance up to symmetry, and the symmetry's JSON", "[sim][symmetry]") {
@@ -163,6 +167,20 @@ TEST_CASE("distance up to symmetry, and the symmetry's JSON", "[sim][symmetry]")
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 1}}, {"order", 2}, {"flip", {0, 0.5, 1}}}, "o.json"),
                       Catch::Contains("o.json: symmetry flip axis must be perpendicular"));
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"axis", {0, 0, 1}}}, "o.json"), Catch::Contains("o.json: symmetry must be"));
+    // Every rotation about a point: only the distances to it count.
+    sim::Symmetry round;
+    round.all = true;
+    round.point = {1, 0, 0};
+    CHECK(!round.none());
+    CHECK(sim::distance_up_to_symmetry(round, {4, 4, 0}, {1, 0, 5}) == Approx(0).margin(1e-9));
+    CHECK(sim::distance_up_to_symmetry(round, {1, 0, 6}, {-4, 0, 0}) == Approx(1));
+    const sim::Symmetry rb = sim::symmetry_from_json(sim::symmetry_json(round), "x");
+    CHECK(rb.all);
+    CHECK(rb.point == round.point);
+    CHECK(sim::symmetry_json(round) == nlohmann::json{{"point", {1, 0, 0}}, {"all", true}});
+    for (const nlohmann::json& bad : {nlohmann::json{{"point", {0, 0, 0}}, {"all", false}}, nlohmann::json{{"all", true}},
+                                      nlohmann::json{{"point", {0, 0, 0}}, {"all", true}, {"order", 2}}})
+        CHECK_THROWS_WITH(sim::symmetry_from_json(bad, "o.json"), Catch::Contains("o.json: a spherical symmetry is"));
 }
 
 TEST_CASE("distance up to symmetry: the closed form equals the nearest of every group element", "[sim][symmetry]") {

@@ -70,6 +70,12 @@ double point_triangle_sq(const Vec3d& p, const Vec3d& a, const Vec3d& b, const V
 }  // namespace
 
 std::vector<Mat3d> Symmetry::rotations() const {
+    if (all) {
+        std::vector<Mat3d> out;
+        for (const Vec3d& a : {Vec3d{1, 0, 0}, Vec3d{0, 1, 0}, Vec3d{0, 0, 1}, Vec3d{1, 1, 1}})
+            for (int i = 0; i < 24; ++i) out.push_back(rotation(unit(a), 2 * M_PI * i / 24));
+        return out;
+    }
     const Vec3d k = unit(axis);
     const int n = order == 0 ? 360 : order;
     std::vector<Mat3d> out;
@@ -91,6 +97,7 @@ Vec3d Symmetry::apply(const Mat3d& R, const Vec3d& p) const {
 
 nlohmann::json symmetry_json(const Symmetry& s) {
     if (s.none()) return nullptr;
+    if (s.all) return nlohmann::json{{"point", s.point}, {"all", true}};
     nlohmann::json j{{"point", s.point}, {"axis", s.axis}, {"order", s.order}};
     j["flip"] = s.flip ? nlohmann::json(*s.flip) : nlohmann::json(nullptr);
     return j;
@@ -107,8 +114,15 @@ Symmetry symmetry_from_json(const nlohmann::json& j, const std::string& where) {
             if (!std::isfinite(x)) throw Error(where + ": symmetry \"" + what + "\" is not finite");
         return o;
     };
+    if (j.is_object() && j.contains("all")) {  // every rotation about a point
+        if (!j["all"].is_boolean() || !j["all"].get<bool>() || !j.contains("point") || j.size() != 2)
+            throw Error(where + ": a spherical symmetry is {\"point\": [x, y, z], \"all\": true}");
+        s.point = vec(j["point"], "point");
+        s.all = true;
+        return s;
+    }
     if (!j.is_object() || !j.contains("point") || !j.contains("axis") || !j.contains("order"))
-        throw Error(where + ": symmetry must be null or {\"point\", \"axis\", \"order\", \"flip\"}");
+        throw Error(where + ": symmetry must be null, {\"point\", \"axis\", \"order\", \"flip\"} or {\"point\", \"all\": true}");
     s.point = vec(j["point"], "point");
     s.axis = vec(j["axis"], "axis");
     if (sq(s.axis, {0, 0, 0}) < 1e-12) throw Error(where + ": symmetry axis is zero");
@@ -133,7 +147,8 @@ Symmetry shape_symmetry(const std::string& name) {
     Symmetry s;  // every revolved shape turns about z through the origin
     const Vec3d x{1, 0, 0};
     if (name == "box") s.order = 2, s.flip = x;
-    else if (name == "cylinder" || name == "sphere" || name == "torus" || name == "capsule") s.order = 0, s.flip = x;
+    else if (name == "sphere") s.all = true;
+    else if (name == "cylinder" || name == "torus" || name == "capsule") s.order = 0, s.flip = x;
     else if (name == "cone" || name == "bolt") s.order = 0;
     else if (name == "ridged_cylinder") s.order = 80, s.flip = x;
     else if (name == "knurled_cylinder") s.order = 63, s.flip = x;
@@ -147,6 +162,7 @@ Symmetry scaled_symmetry(const Symmetry& s, double f, const Vec3d& centre) {
 }
 
 double distance_up_to_symmetry(const Symmetry& s, const Vec3d& pred, const Vec3d& truth) {
+    if (s.all) return std::abs(std::sqrt(sq(pred, s.point)) - std::sqrt(sq(truth, s.point)));  // the spheres they lie on
     if (s.order == 0) {  // every angle: compare the circles the two points sweep (height h, radius r)
         const Vec3d k = unit(s.axis);
         auto hr = [&](const Vec3d& p) {

@@ -2,7 +2,8 @@
 // Rigid symmetries of an object (SPEC 6's metrics: ND up to symmetry): a group
 // of proper rotations about an axis through `point`, cyclic of `order` (0: every
 // angle), and with `flip` a 2-fold axis perpendicular to it through the same
-// point (the dihedral group). Declared by the procedural shapes (in their own
+// point (the dihedral group); or, with `all`, every rotation about `point` (a
+// sphere: no touch can tell two of its points apart). Declared by the procedural shapes (in their own
 // frame, moved with the builder's scaling) and stored in object.json
 // ("symmetry", docs/dataset.md). A declaration is accepted only where the mesh
 // maps onto itself within 0.2 mm (symmetry_residual_mm).
@@ -24,9 +25,11 @@ struct Symmetry {
     Vec3d point{}, axis{0, 0, 1};
     int order = 1;                 // 1: no rotation about the axis; 0: every angle
     std::optional<Vec3d> flip;     // a 2-fold axis perpendicular to `axis`
-    bool none() const { return order == 1 && !flip; }
+    bool all = false;              // every rotation about `point` (axis, order and flip unused)
+    bool none() const { return !all && order == 1 && !flip; }
     // Every element (the identity first); an order of 0 is taken as 360 steps of
-    // 1 degree (a point at radius r is then within r * 0.0088 of its nearest copy).
+    // 1 degree (a point at radius r is then within r * 0.0088 of its nearest copy);
+    // `all` as 24 steps about each of x, y, z and (1, 1, 1) (a sample, for the check).
     std::vector<Mat3d> rotations() const;
     Vec3d apply(const Mat3d& R, const Vec3d& p) const;  // rotation about `point`
 };
