@@ -25,6 +25,7 @@ struct Profile {
     std::vector<NodeRun> runs;
     std::map<std::string, std::string> op;  // label -> op
     std::map<std::string, double> flops;    // label -> FLOPs
+    std::map<std::string, std::vector<uint64_t>> workgroups;  // label -> each dispatch's workgroups
 };
 
 // `reps` profiled runs of f after one to build the profiled recording.
@@ -42,6 +43,8 @@ Profile profile(VtlocRunner& r, int reps, F&& f, const std::map<std::string, Hos
                 run[label] += ms;
             }
             p.runs.push_back(std::move(run));
+            if (i == 0)
+                for (const auto& [label, n] : r.last_dispatch_workgroups()) p.workgroups[label].push_back(n);
         }
     } catch (...) {
         r.set_profiling(false);
@@ -121,6 +124,7 @@ json nodes_json(const Profile& p) {
         const double med = median_of(ms);
         json n{{"name", label}, {"op", p.op.count(label) ? p.op.at(label) : ""}, {"stage", stage(p, label)}, {"ms", med}};
         if (p.flops.count(label) && med > 0) n["gflops"] = p.flops.at(label) / (med * 1e-3) * 1e-9;
+        if (p.workgroups.count(label)) n["workgroups"] = p.workgroups.at(label);  // per dispatch, in order
         out.push_back(n);
     }
     return out;

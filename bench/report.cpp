@@ -1,5 +1,8 @@
 #include "bench/report.h"
 
+#include <algorithm>
+#include <map>
+
 #include "bench/stages.h"
 
 namespace vtloc::bench {
@@ -57,6 +60,18 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
         std::fprintf(f, "; fastest nodes %.2f ms = %.1f GFLOP/s", e["fastest_ms"].get<double>(), e["gflops_fastest"].get<double>());
         if (!e["fraction_of_peak_fastest"].is_null()) std::fprintf(f, " = %.0f%%", 100 * e["fraction_of_peak_fastest"].get<double>());
         std::fprintf(f, "\n");
+    }
+    // How many workgroups each stage's dispatches offer (a GPU needs several per compute unit).
+    std::map<std::string, std::vector<uint64_t>> wg;
+    if (b.contains("nodes"))
+        for (const json& n : b["nodes"])
+            if (n.contains("workgroups"))
+                for (const json& w : n["workgroups"]) wg[n["stage"].get<std::string>()].push_back(w.get<uint64_t>());
+    if (!wg.empty()) std::fprintf(f, "  workgroups per dispatch (fewest / median / most)\n");
+    for (auto& [s, v] : wg) {
+        std::sort(v.begin(), v.end());
+        std::fprintf(f, "    %-12s %4zu dispatches  %llu / %llu / %llu\n", s.c_str(), v.size(), (unsigned long long)v.front(),
+                     (unsigned long long)v[v.size() / 2], (unsigned long long)v.back());
     }
 
     std::fprintf(f, "\n  batch    median ms   touches/s\n");

@@ -78,6 +78,14 @@ std::vector<std::pair<std::string, double>> VtlocRunner::last_node_times() const
     return out;
 }
 
+std::vector<std::pair<std::string, uint64_t>> VtlocRunner::last_dispatch_workgroups() const {
+    std::vector<std::pair<std::string, uint64_t>> out;
+    if (last_ && last_->gpu)
+        for (const auto& d : last_->gpu->sequence().dispatch_log())
+            out.push_back({d.node, uint64_t(d.groups[0]) * d.groups[1] * d.groups[2]});
+    return out;
+}
+
 const Graph* VtlocRunner::last_graph() const { return last_ ? &last_->graph : nullptr; }
 
 std::vector<std::string> VtlocRunner::last_dispatch_shaders() const {

@@ -118,6 +118,9 @@ public:
     MemoryUse last_memory() const;
     // The shaders the last run's recording dispatches, in order (empty on the CPU).
     std::vector<std::string> last_dispatch_shaders() const;
+    // The workgroups of each of the last run's dispatches (gx * gy * gz), by node label, in order
+    // (how well a dispatch can fill a GPU's compute units; empty on the CPU).
+    std::vector<std::pair<std::string, uint64_t>> last_dispatch_workgroups() const;
     // Every graph shape this runner has built on the GPU so far.
     struct AllMemory {
         size_t graphs = 0;

@@ -49,6 +49,11 @@ def backend(b, name, reps, profile_reps, iters, batches, points, ilu):
     for n in b["nodes"]:
         need(n["stage"] in STAGES and n["name"] and n["op"], f"{name}: bad node {n}")
         need(n["ms"] >= 0, f"{name}: negative node time {n}")
+        if "workgroups" in n:  # the GPU's dispatches of the node, each's workgroup count
+            need(name == "gpu" and n["workgroups"] and all(isinstance(w, int) and w >= 1 for w in n["workgroups"]),
+                 f"{name}: bad workgroups {n}")
+    if name == "gpu":  # nearly every node dispatches (a few are views or copies)
+        need(sum("workgroups" in n for n in b["nodes"]) >= 0.8 * len(b["nodes"]), f"{name}: workgroups missing on most nodes")
     for k in ("conv", "mlp"):
         e = b["efficiency"][k]
         for f in ("gflop", "ms", "gflops", "fastest_ms", "gflops_fastest"):
