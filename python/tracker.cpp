@@ -130,6 +130,21 @@ void bind_tracker(py::module_& m) {
             },
             py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr, py::arg("shape") = py::none())
         .def(
+            "add_touch_term",
+            [](api::Tracker& t, const py::object& motion, const py::object& term) {
+                std::optional<api::Motion> mo;
+                if (!motion.is_none()) mo = to_motion(motion, "motion");
+                std::vector<float> v;
+                if (!term.is_none()) {
+                    const auto a = term.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
+                    v.assign(a.data(), a.data() + a.size());
+                }
+                py::gil_scoped_release release;
+                t.add_touch_term(mo, v);
+            },
+            py::arg("motion") = py::none(), py::arg("term") = py::none(),
+            "add_touch with a precomputed log term (shape_term's, or None: geometry only).")
+        .def(
             "shape_term",
             [](api::Tracker& t, const py::object& shape) {
                 const api::GelShape g = to_shape(shape);

@@ -212,6 +212,12 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
         t.estimate()
     t.add_touch(shape=shape)
     assert np.array_equal(t.estimate()["contact"], e["contact"])
+    belief = t.belief
+    t.reset()
+    t.add_touch_term(term=term)  # the same touch through its precomputed term
+    assert np.array_equal(t.belief, belief)
+    with pytest.raises(vtloc.Error, match="7 values"):
+        t.add_touch_term(np.eye(4), np.zeros(7, np.float32))
     # A second tracker reads the cache and scores the same.
     t2 = vtloc.Tracker(ctx, obj, hypotheses=20000, codebook_cache=cache)
     assert np.array_equal(t2.shape_term(shape), term)
