@@ -5,6 +5,7 @@
 
 #include "engine/sensor/gel_shape.h"
 #include "engine/sensor/lighting.h"
+#include "engine/track/codebook.h"
 #include "tests/harness.h"
 #include "vtloc/vtloc.h"
 
@@ -161,5 +162,15 @@ TEST_CASE("tracker: the shape term's press percentile, quadratic fit and cell ar
         ob.render_cell_mm = bad;
         CHECK_THROWS_WITH(api::Tracker(ctx, potato, ob), Catch::Contains("render_cell_mm"));
     }
+    api::TrackerOptions neg = o;
+    neg.render_weight = -1;
+    CHECK_THROWS_WITH(api::Tracker(ctx, potato, neg), Catch::Contains("render_weight"));
+    // The public defaults are the scorer's (the header cannot include the engine's, so both are written).
+    const track::ScoreOptions so;
+    const api::TrackerOptions to;
+    CHECK(to.render_weight == so.weight);
+    CHECK(to.render_quadratic == so.quadratic);
+    CHECK(to.render_press_percentile == so.press_percentile);
+    CHECK(to.render_cell_mm == so.cell_mm);
     CHECK(ctx.take_validation_messages().empty());
 }

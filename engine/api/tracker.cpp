@@ -58,20 +58,15 @@ struct Tracker::Impl {
     track::Tracker tracker;
     PointCloud display;
     HostTensor display_tensor;
-    double network_weight, object_units, render_weight;
-    bool render_quadratic;
-    double render_press_percentile, render_cell_mm;
+    double network_weight, object_units;
+    track::ScoreOptions score;  // render-and-compare's, checked here: the scorer is made at the first gel shape
     std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
-          object_units(o.object_units), render_weight(o.render_weight), render_quadratic(o.render_quadratic),
-          render_press_percentile(o.render_press_percentile), render_cell_mm(o.render_cell_mm),
+          object_units(o.object_units), score{o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm},
           codebook_cache(o.codebook_cache) {
-        if (!(render_weight >= 0) || !std::isfinite(render_weight)) throw Error("tracker: render_weight must be >= 0");
-        if (!(render_press_percentile > 0 && render_press_percentile <= 100))
-            throw Error("tracker: render_press_percentile must be in (0, 100]");
-        if (!(render_cell_mm >= 0.1 && render_cell_mm <= 10)) throw Error("tracker: render_cell_mm must be in [0.1, 10] mm");
+        track::check_score_options(score);
         display_tensor = HostTensor({int64_t(display.size()), 3}, display.xyz);
     }
 
@@ -83,10 +78,7 @@ struct Tracker::Impl {
                         std::to_string(g->height) + " x " + std::to_string(g->width) + " pixels");
         if (!scorer) {
             const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, codebook_cache);
-            track::ScoreOptions so;
-            so.weight = render_weight, so.quadratic = render_quadratic, so.press_percentile = render_press_percentile;
-            so.cell_mm = render_cell_mm;
-            scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), so);
+            scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), score);
         }
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
         return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px);

@@ -207,12 +207,17 @@ struct CodebookScorer::Impl {
     }
 };
 
+void check_score_options(const ScoreOptions& o) {
+    if (!(o.weight >= 0) || !std::isfinite(o.weight)) throw Error("render-and-compare: render_weight must be >= 0");
+    if (!(o.press_percentile > 0 && o.press_percentile <= 100))
+        throw Error("render-and-compare: render_press_percentile must be in (0, 100]");
+    if (!(o.cell_mm >= 0.1 && o.cell_mm <= 10)) throw Error("render-and-compare: render_cell_mm must be in [0.1, 10] mm");
+}
+
 CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, const ScoreOptions& o)
     : impl_(std::make_unique<Impl>()) {
     if (book.samples != s.samples) throw Error("render-and-compare: the codebook was rendered for another surface");
-    if (!(o.weight >= 0) || !std::isfinite(o.weight)) throw Error("render-and-compare: the term's weight must be >= 0");
-    if (!(o.press_percentile > 0 && o.press_percentile <= 100)) throw Error("render-and-compare: the press percentile must be in (0, 100]");
-    if (!(o.cell_mm >= 0.1 && o.cell_mm <= 10)) throw Error("render-and-compare: the comparison cell must be 0.1-10 mm");
+    check_score_options(o);
     Impl& m = *impl_;
     m.ctx = ctx;
     m.options = book.options;

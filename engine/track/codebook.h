@@ -70,6 +70,10 @@ struct ScoreOptions {
     double cell_mm = 3.0;           // the comparison window's cells (the maps keep their 1 mm; fitted: 3 mm as good as 1, 9x fewer reads)
 };
 
+// Throws vtloc::Error naming the bad option by its api::TrackerOptions name (render_weight,
+// render_press_percentile, render_cell_mm): the tracker checks at construction, the scorer when made.
+void check_score_options(const ScoreOptions& o);
+
 // Scores touches against a codebook on the GPU (ctx null: the CPU reference).
 class CodebookScorer {
 public:
