@@ -16,7 +16,7 @@ layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
 layout(std430, binding = 0) readonly buffer Samples_ { float smp[]; };  // [S, 9]
 layout(std430, binding = 1) readonly buffer Dense_ { vec2 dense2[]; };  // [D, 6] as [D, 3] pairs
-layout(std430, binding = 2) readonly buffer Cells_ { ivec2 cells[]; };  // [V, 2]
+layout(std430, binding = 2) readonly buffer Cells_ { ivec4 cells[]; };  // [V, 4]
 layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
 layout(std430, binding = 4) readonly buffer Terms_ { float terms[]; };  // [K, 16]
 layout(std430, binding = 5) readonly buffer Fields_ { float fields[]; }; // [F, H]
@@ -44,9 +44,11 @@ int cell_of(vec3 q) {
     return (int(f.z) * p.ny + int(f.y)) * p.nx + int(f.x);
 }
 
-// The hypothesis nearest a pose with x axis x at sample s (-1: none).
-int nearest_hypothesis(int s, vec3 x) {
-    if (s < 0) return -1;
+// The hypothesis nearest a pose with axes x, z at the cell's sample s0 or, where z runs
+// along s0's outward normal, its far-face counterpart s1 (-1: none).
+int nearest_hypothesis(int s0, int s1, vec3 x, vec3 z_pose) {
+    if (s0 < 0) return -1;
+    const int s = s1 >= 0 && dot3(z_pose, load_smp(uint(s0) * 9u + 3u)) > 0.0 ? s1 : s0;
     vec3 t1 = load_smp(uint(s) * 9u + 6u);
     precise vec3 z = load_smp(uint(s) * 9u + 3u) * -1.0;
     vec3 t2 = cross3(z, t1);
@@ -61,14 +63,19 @@ int nearest_hypothesis(int s, vec3 x) {
     return s * NS + best;
 }
 
-// Geometry at dense point i (-1: none near).
-float geometry_log(int i, vec3 t, vec3 z, float sd, float sa) {
-    if (i < 0) return p.log_floor;
-    const vec2 a = dense2[uint(i) * 3u], b = dense2[uint(i) * 3u + 1u], c = dense2[uint(i) * 3u + 2u];
+// Geometry at the cell's dense point i0 or, where the axis z runs along i0's outward
+// normal, its far-face counterpart i1 (a thin part's other side; -1: none near).
+float geometry_log(int i0, int i1, vec3 t, vec3 z, float sd, float sa) {
+    if (i0 < 0) return p.log_floor;
+    vec2 a = dense2[uint(i0) * 3u], b = dense2[uint(i0) * 3u + 1u], c = dense2[uint(i0) * 3u + 2u];
+    if (i1 >= 0 && dot3(z, vec3(b.y, c)) > 0.0) {
+        a = dense2[uint(i1) * 3u], b = dense2[uint(i1) * 3u + 1u], c = dense2[uint(i1) * 3u + 2u];
+    }
     vec3 q = vec3(a, b.x), n = vec3(b.y, c);
     precise float e_d = dot3(t - q, n) + p.press;
-    precise float cz = -dot3(z, n);
-    float e_a = acos(min(1.0, max(-1.0, cz)));
+    // atan2(|z x n|, -z.n), as the CPU mirror: lavapipe's acos is off by up to ~1e-3 rad.
+    vec3 w = cross3(z, n);
+    float e_a = atan(sqrt(dot3(w, w)), -dot3(z, n));
     float r = (e_d / sd) * (e_d / sd) + (e_a / sa) * (e_a / sa);
     return log(exp(-0.5 * r) + exp(p.log_floor));
 }
@@ -95,26 +102,27 @@ void main() {
             do {
                 uint kf = k;  // the segment's last term: the next one with a field, or the last
                 while (kf + 1u < p.K && int(round(terms[kf * 16u + 14u])) < 0) ++kf;
-                vec3 xf = vec3(0.0);
-                int sf = -1;  // the segment's last term: its x axis and its cell's nearest sample
+                vec3 xf = vec3(0.0), zf = vec3(0.0);
+                ivec2 sf = ivec2(-1);  // the segment's last term: its axes and its cell's samples
                 do {
                     const uint b = k * 16u;
                     precise vec3 zk = x * terms[b + 2u] + y * terms[b + 5u] + z * terms[b + 8u];
                     precise vec3 xk = x * terms[b] + y * terms[b + 3u] + z * terms[b + 6u];
                     precise vec3 tk = t + x * terms[b + 9u] + y * terms[b + 10u] + z * terms[b + 11u];
                     const int cell = cell_of(tk);
-                    ivec2 near = ivec2(-1);  // the cell's nearest dense point and sample
+                    ivec4 near = ivec4(-1);  // the cell's dense point, sample and their far-face ones
                     if (cell >= 0) near = cells[cell];
                     const float sd = terms[b + 12u], sa = terms[b + 13u];
-                    if (sd > 0.0) acc += geometry_log(near.x, tk, zk, sd, sa);
+                    if (sd > 0.0) acc += geometry_log(near.x, near.z, tk, zk, sd, sa);
                     xf = xk;
-                    sf = near.y;
+                    zf = zk;
+                    sf = near.yw;
                     ++k;
                 } while (k <= kf);
                 const uint b = kf * 16u;
                 const int field = int(round(terms[b + 14u]));
                 if (field >= 0 && uint(field) < p.F) {  // a field past F (refused on the CPU) reads nothing
-                    const int hk = nearest_hypothesis(sf, xf);
+                    const int hk = nearest_hypothesis(sf.x, sf.y, xf, zf);
                     acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
                 }
             } while (k < p.K);

@@ -64,9 +64,10 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
         check::random_unit_pair(rng, nt);
         for (int k = 0; k < 3; ++k) r[3 + k] = nt[k];
     }
-    std::vector<int32_t> cells(size_t(V * 2));
+    std::vector<int32_t> cells(size_t(V * 4));  // dense, sample, and their far-face counterparts
     std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1), si(-1, int32_t(S) - 1);
-    for (int64_t c = 0; c < V; ++c) cells[size_t(2 * c)] = di(rng), cells[size_t(2 * c + 1)] = si(rng);
+    for (int64_t c = 0; c < V; ++c)
+        for (int k = 0; k < 4; ++k) cells[size_t(4 * c + k)] = k % 2 ? si(rng) : di(rng);
     for (int64_t j = 0; j < NS; ++j) {
         double a = 2 * M_PI * double(j) / double(NS);
         spins.data[size_t(2 * j)] = float(std::cos(a)), spins.data[size_t(2 * j + 1)] = float(std::sin(a));
@@ -84,7 +85,7 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
     std::uniform_real_distribution<float> lf(-20.0f, 0.0f);
     for (float& v : fields.data) v = lf(rng);
     sc.p.own_field = F ? F - 1 : -1;
-    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 2}, cells)},
+    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 4}, cells)},
              {"spins", spins}, {"terms", terms}, {"fields", fields}};
     return sc;
 }
@@ -93,7 +94,7 @@ Graph evidence_graph(const Scene& sc) {
     Graph g;
     const int64_t V = sc.dims[0] * sc.dims[1] * sc.dims[2];
     int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 6}),
-                                 g.input("cells", {V, 2}, ElemType::I32), g.input("spins", {sc.NS, 2}),
+                                 g.input("cells", {V, 4}, ElemType::I32), g.input("spins", {sc.NS, 2}),
                                  g.input("terms", {sc.K, 16}), g.input("fields", {sc.F, sc.S * sc.NS}), sc.p);
     g.output(out, "score");
     return g;
@@ -123,15 +124,15 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
     sc.in["dense"] = HostTensor({sc.D, 6}, dense);
     sc.in["samples"] = HostTensor({1, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0});
     const int64_t V = 7 * 5 * 6;
-    std::vector<int32_t> cells(size_t(2 * V));
+    std::vector<int32_t> cells(size_t(4 * V), -1);
     for (int64_t c = 0; c < V; ++c) {
         int64_t ix = c % 7, iy = (c / 7) % 5;
         float cx = float(sc.p.origin[0] + (double(ix) + 0.5) * sc.p.voxel), cy = float(sc.p.origin[1] + (double(iy) + 0.5) * sc.p.voxel);
         int32_t gx = int32_t(std::lround(std::clamp(cx, -3.0f, 3.0f))) + 3, gy = int32_t(std::lround(std::clamp(cy, -3.0f, 3.0f))) + 3;
-        cells[size_t(2 * c)] = gy * 7 + gx;
-        cells[size_t(2 * c + 1)] = 0;
+        cells[size_t(4 * c)] = gy * 7 + gx;
+        cells[size_t(4 * c + 1)] = 0;
     }
-    sc.in["cells"] = HostTensor::from_ints({V, 2}, cells);
+    sc.in["cells"] = HostTensor::from_ints({V, 4}, cells);
     HostTensor terms({2, 16});
     for (int k = 0; k < 2; ++k) {
         float* r = &terms.data[size_t(16 * k)];
@@ -150,6 +151,62 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
         const float v = got.at("score").data[0];
         if (k == 0) CHECK(v > -0.01f);
         else CHECK(v < -11.0f);
+    }
+}
+
+TEST_CASE("pose_evidence: a pose pressing a thin part's far face is scored on that face", "[op][pose]") {
+    // A 2 mm plate: face A at z = 0 (normal +z), face B at z = -2 (normal -z), one sample
+    // on each. The hypothesis on B (axis +z, gel centre 0.7 mm inside at z = -1.3) lies in
+    // a cell whose nearest point is on A; the cell's far-face slots name B's point and
+    // sample. Without them the pose scores the floor (its axis opposes A's normal).
+    Scene sc = scene(2, 1, 4, 1, 1, 5);
+    std::vector<float> dense;
+    for (float z : {0.0f, -2.0f})
+        for (int y = -3; y <= 3; ++y)
+            for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, 0, 0, z == 0 ? 1.0f : -1.0f});
+    sc.D = int64_t(dense.size() / 6);
+    sc.in["dense"] = HostTensor({sc.D, 6}, dense);
+    sc.in["samples"] = HostTensor({2, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, -2, 0, 0, -1, 1, 0, 0});
+    const int64_t V = 7 * 5 * 6;
+    auto cells_of = [&](bool far_slots) {
+        std::vector<int32_t> cells(size_t(4 * V), -1);
+        for (int64_t c = 0; c < V; ++c) {
+            const int64_t ix = c % 7, iy = (c / 7) % 5, iz = c / 35;
+            const float cx = float(sc.p.origin[0] + (double(ix) + 0.5) * sc.p.voxel),
+                        cy = float(sc.p.origin[1] + (double(iy) + 0.5) * sc.p.voxel),
+                        cz = float(sc.p.origin[2] + (double(iz) + 0.5) * sc.p.voxel);
+            const int32_t g = (int32_t(std::lround(std::clamp(cy, -3.0f, 3.0f))) + 3) * 7 +
+                              int32_t(std::lround(std::clamp(cx, -3.0f, 3.0f))) + 3;
+            const bool near_a = std::abs(cz) < std::abs(cz + 2);
+            cells[size_t(4 * c)] = near_a ? g : g + 49, cells[size_t(4 * c + 1)] = near_a ? 0 : 1;
+            if (far_slots) cells[size_t(4 * c + 2)] = near_a ? g + 49 : g, cells[size_t(4 * c + 3)] = near_a ? 1 : 0;
+        }
+        return HostTensor::from_ints({V, 4}, cells);
+    };
+    sc.p.press = 0.7;
+    sc.p.own_field = -1;
+    const int64_t H = 2 * sc.NS, h_b = sc.NS;  // sample 1, spin 0
+    HostTensor field({1, H});
+    for (int64_t h = 0; h < H; ++h) field.data[size_t(h)] = -1.0f - float(h);
+    sc.in["fields"] = field;
+    // Term 0: the pose itself, geometry; term 1: the pose itself, the field.
+    HostTensor terms({2, 16});
+    for (int k = 0; k < 2; ++k) {
+        float* r = &terms.data[size_t(16 * k)];
+        r[0] = r[4] = r[8] = 1;
+        r[12] = k == 0 ? 0.5f : 0.0f, r[13] = 0.2f, r[14] = k == 0 ? -1.0f : 0.0f, r[15] = 1;
+    }
+    sc.K = 2;
+    sc.in["terms"] = terms;
+    for (bool far_slots : {true, false}) {
+        INFO("far-face slots " << far_slots);
+        sc.in["cells"] = cells_of(far_slots);
+        const TensorMap got = test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in);
+        const float v = got.at("score").data[size_t(h_b)];
+        // With the slots: geometry ~0 and the field at the pose's own hypothesis (-1 - h_b).
+        // Without: the geometry floor (-12) and the field read at sample 0's spin 0 (-1).
+        if (far_slots) CHECK(std::abs(v - (-1.0f - float(h_b))) < 0.01f);
+        else CHECK(v < -12.0f);
     }
 }
 
@@ -205,7 +262,7 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w4", {4}), g.input("a", {2, 2})), Catch::Contains("answers must be [A > 0, 3]"));
     Scene sc = scene(5, 5, 3, 1, 1, 1);
     Graph h;
-    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 6}), h.input("c", {7, 2}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 6}), h.input("c", {7, 4}, ElemType::I32),
                                          h.input("sp", {3, 2}), h.input("t", {1, 16}), h.input("f", {1, 15}), sc.p),
-                      Catch::Contains("cells must be [nx*ny*nz, 2]"));
+                      Catch::Contains("cells must be [nx*ny*nz, 4]"));
 }

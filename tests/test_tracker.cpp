@@ -10,6 +10,7 @@
 
 #include "base/error.h"
 #include "engine/io/mesh.h"
+#include "engine/ops/pose_evidence.h"
 #include "engine/sim/mesh_builder.h"
 #include "engine/track/tracker.h"
 #include "tests/harness.h"
@@ -229,4 +230,36 @@ TEST_CASE("the candidates protocol: hypotheses only at the candidates, the true 
     test::require_error([&] { track::build_surface(dense, true, o, "prism"); }, {"prism", "candidate 13 is not finite"});
     o.candidates.pop_back();
     test::require_error([&] { track::build_surface(dense, true, o, "prism"); }, {"prism", "x, y, z triples"});
+}
+
+TEST_CASE("on a thin plate the grid names the face a pose presses, not the nearer far face", "[track]") {
+    // A 1.6 mm plate: a pose pressing 0.8 mm into either face has its gel centre on the
+    // mid-plane, so the cell's nearest point is on the far face about half the time
+    // (docs/multitouch.md, "Thin parts"); the cell's far-face slot must rescue every one.
+    io::TriangleMesh m = sim::mesh::extrude({{0, 0}, {30, 0}, {30, 20}, {0, 20}}, 0, 1.6);
+    const HostTensor dense = io::sample_surface(m, 20000, 3, "plate");
+    track::SurfaceOptions o;
+    o.target_hypotheses = 20000;
+    const track::Surface s = track::build_surface(dense, true, o, "plate");
+    const ops::pose::Grid g{s.dense.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
+                            {s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
+    int64_t poses = 0, far_nearest = 0, wrong = 0, wrong_sample = 0;
+    for (int64_t i = 0; i < dense.shape[0]; ++i) {
+        const float* p = &dense.data[size_t(i * 6)];
+        if (std::abs(p[5]) < 0.9f || p[0] < 3 || p[0] > 27 || p[1] < 3 || p[1] > 17) continue;  // faces, off the rim
+        const ops::pose::V3 z{-p[3], -p[4], -p[5]}, t{p[0] + 0.8f * z.x, p[1] + 0.8f * z.y, p[2] + 0.8f * z.z};
+        const int64_t cell = ops::pose::cell_of(g, t);
+        REQUIRE(cell >= 0);
+        ++poses;
+        far_nearest += s.dense[size_t(6 * s.cells[size_t(4 * cell)] + 5)] * p[5] < 0;
+        const int32_t q = ops::pose::pressed_point(g, cell, z);
+        wrong += q < 0 || s.dense[size_t(6 * q + 5)] * p[5] < 0;
+        const int64_t h = ops::pose::nearest_hypothesis(g, cell, ops::pose::V3{1, 0, 0}, z);
+        wrong_sample += h < 0 || s.samples[size_t(9 * (h / s.n_spin()) + 5)] * p[5] < 0;
+    }
+    INFO(poses << " poses, " << far_nearest << " whose cell's nearest point is on the far face");
+    CHECK(poses > 5000);
+    CHECK(far_nearest > poses / 10);  // the case arises
+    CHECK(wrong == 0);
+    CHECK(wrong_sample == 0);
 }

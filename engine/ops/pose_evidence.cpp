@@ -5,7 +5,8 @@
 // and/or a log field (a touch term, or the online filter's previous belief)
 // read at the nearest hypothesis. own_field adds a field at h itself.
 // Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 6], cells
-// [V, 2] I32 (nearest dense point, nearest sample), spins [NS, 2] (cos, sin),
+// [V, 4] I32 (nearest dense point, nearest sample, and each's counterpart on a face
+// turned the other way: pose_evidence.h), spins [NS, 2] (cos, sin),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
 // [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
 // Terms are data on the device, so only the CPU reference can refuse a term naming a
@@ -56,7 +57,7 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     if (s.size() != 2 || s[1] != 9 || s[0] == 0) throw Error("samples must be [S > 0, 9], got " + shape_str(s));
     if (d.size() != 2 || d[1] != 6 || d[0] == 0) throw Error("dense surface must be [D > 0, 6], got " + shape_str(d));
     const int64_t V = int64_t(st.nx) * st.ny * st.nz;
-    if (c != Shape{V, 2}) throw Error("cells must be [nx*ny*nz, 2] = " + shape_str({V, 2}) + ", got " + shape_str(c));
+    if (c != Shape{V, 4}) throw Error("cells must be [nx*ny*nz, 4] = " + shape_str({V, 4}) + ", got " + shape_str(c));
     if (sp.size() != 2 || sp[1] != 2 || sp[0] == 0) throw Error("spins must be [NS > 0, 2], got " + shape_str(sp));
     if (k.size() != 2 || k[1] != 16) throw Error("terms must be [K, 16], got " + shape_str(k));
     const int64_t H = s[0] * sp[0];
@@ -64,7 +65,7 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
         throw Error("fields must be [F, S * NS] = [F, " + std::to_string(H) + "], got " + shape_str(f));
     if (st.own_field >= f[0]) throw Error("own_field " + std::to_string(st.own_field) + " names no field");
     to_u32(H * f[0], "field array size");
-    to_u32(2 * V, "grid size");
+    to_u32(4 * V, "grid size");
     return {TensorDesc{{H}}};
 }
 
@@ -94,7 +95,7 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
             const int64_t cell = pose::cell_of(g, m.t);
             if (t.sigma_d > 0) acc += pose::geometry_log(g, cell, m, st.press, t.sigma_d, t.sigma_a, st.log_floor);
             if (t.field >= 0) {
-                const int64_t hk = pose::nearest_hypothesis(g, cell, m.x);
+                const int64_t hk = pose::nearest_hypothesis(g, cell, m.x, m.z);
                 acc += t.weight * (hk < 0 ? st.field_floor : fields[int64_t(t.field) * H + hk]);
             }
         }

@@ -25,11 +25,12 @@ struct Frame {
 };
 
 // The lookup grid over the object (engine/track/surface.h builds it): per cell,
-// the nearest dense surface point and the nearest hypothesis sample (-1: none
-// within the grid's band).
+// the nearest dense surface point, the nearest hypothesis sample, and each's nearest
+// counterpart whose normal turns the other way (a thin part's far face); -1: none
+// within the grid's band.
 struct Grid {
     const float* dense;      // [D, 6] point, outward unit normal
-    const int32_t* cells;    // [nx * ny * nz, 2]
+    const int32_t* cells;    // [nx * ny * nz, 4]
     const float* samples;    // [S, 9] point, normal, tangent t1
     const float* spins;      // [NS, 2] cos, sin
     int32_t n_spin;
@@ -88,12 +89,21 @@ inline int64_t cell_of(const Grid& g, V3 q) {
     return (int64_t(fz) * g.ny + int64_t(fy)) * g.nx + int64_t(fx);
 }
 
-// The hypothesis nearest a pose: the cell's sample and the spin whose x axis is
-// closest to the pose's (lowest spin on a tie); -1 when no sample is near.
-inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x) {
+// Of a cell's nearest point (slot a, normal at n_first) and its far-face counterpart
+// (slot a + 2), the one a pose with axis z presses: the counterpart where there is one
+// and z runs along the first's outward normal (the gel then presses the other face).
+inline int32_t pressed(const int32_t* c, int a, const float* n_first, V3 z) {
+    return c[a + 2] >= 0 && dot(z, load3(n_first)) > 0.0f ? c[a + 2] : c[a];
+}
+
+// The hypothesis nearest a pose (axes x, z): the cell's sample on the face the pose
+// presses and the spin whose x axis is closest to the pose's (lowest spin on a tie);
+// -1 when no sample is near.
+inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
     if (cell < 0) return -1;
-    const int32_t s = g.cells[cell * 2 + 1];
-    if (s < 0) return -1;
+    const int32_t* c = g.cells + cell * 4;
+    if (c[1] < 0) return -1;
+    const int32_t s = pressed(c, 1, g.samples + int64_t(c[1]) * 9 + 3, z);
     const float* smp = g.samples + int64_t(s) * 9;
     V3 t1 = load3(smp + 6), t2 = cross(mul(load3(smp + 3), -1.0f), t1);
     float a = dot(x, t1), b = dot(x, t2);
@@ -106,17 +116,26 @@ inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x) {
     return int64_t(s) * g.n_spin + best;
 }
 
+// The dense point a pose with axis z presses in a cell (-1: none near).
+inline int32_t pressed_point(const Grid& g, int64_t cell, V3 z) {
+    if (cell < 0) return -1;
+    const int32_t* c = g.cells + cell * 4;
+    return c[0] < 0 ? -1 : pressed(c, 0, g.dense + int64_t(c[0]) * 6 + 3, z);
+}
+
 // Geometry: the pose's gel centre should sit `press` inside the surface and its
 // axis along the inward normal; a robust Gaussian (floor exp(log_floor)).
-// The distance is to the nearest dense point's tangent plane.
+// The distance is to the tangent plane of the dense point the pose presses.
 inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float press, float sigma_d, float sigma_a,
                           float log_floor) {
-    const int32_t i = cell < 0 ? -1 : g.cells[cell * 2];
+    const int32_t i = pressed_point(g, cell, f.z);
     if (i < 0) return log_floor;
     V3 p = load3(g.dense + int64_t(i) * 6), n = load3(g.dense + int64_t(i) * 6 + 3);
     float e_d = dot(sub(f.t, p), n) + press;
-    float c = -dot(f.z, n);
-    float e_a = std::acos(std::fmin(1.0f, std::fmax(-1.0f, c)));
+    // The axis' angle to the inward normal as atan2(|z x n|, -z.n): the GPU's acos is
+    // off by up to ~1e-3 rad, which a narrow sigma_a magnifies past the tolerance.
+    V3 w = cross(f.z, n);
+    float e_a = std::atan2(std::sqrt(dot(w, w)), -dot(f.z, n));
     float q = (e_d / sigma_d) * (e_d / sigma_d) + (e_a / sigma_a) * (e_a / sigma_a);
     return std::log(std::exp(-0.5f * q) + std::exp(log_floor));
 }

@@ -31,22 +31,27 @@ uint64_t morton(const float* p, const D3& lo, double h) {
 }
 
 // One sample per occupied cube of side h: the dense point nearest the cube's
-// centre (lowest index on a tie), in z-order of the cubes, so that samples near
-// in index are near in space (the evidence shader's lanes then read nearby cells).
+// centre (lowest index on a tie), and a second where the cube also holds points
+// whose normals oppose the first's (a thin part's far face, which would otherwise
+// have no hypothesis there); in z-order of the cubes, so that samples near in index
+// are near in space (the evidence shader's lanes then read nearby cells).
 std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo, double h) {
     const int64_t D = int64_t(dense.size() / 6);
     std::unordered_map<int64_t, size_t> slot;
-    std::vector<int64_t> best;
-    std::vector<double> best_d;
-    for (int64_t i = 0; i < D; ++i) {
-        const float* p = &dense[size_t(i * 6)];
-        const int64_t key = key_of(p, lo, h);
+    std::vector<int64_t> best, far;
+    std::vector<double> best_d, far_d;
+    auto centre_distance = [&](const float* p) {
         double d = 0;
         for (int k = 0; k < 3; ++k) {
             double c = lo[k] + (std::floor((double(p[k]) - lo[k]) / h) + 0.5) * h, e = double(p[k]) - c;
             d += e * e;
         }
-        auto [it, fresh] = slot.emplace(key, best.size());
+        return d;
+    };
+    for (int64_t i = 0; i < D; ++i) {
+        const float* p = &dense[size_t(i * 6)];
+        const double d = centre_distance(p);
+        auto [it, fresh] = slot.emplace(key_of(p, lo, h), best.size());
         if (fresh) {
             best.push_back(i);
             best_d.push_back(d);
@@ -55,6 +60,18 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
             best_d[it->second] = d;
         }
     }
+    far.assign(best.size(), -1);
+    far_d.assign(best.size(), INFINITY);
+    for (int64_t i = 0; i < D; ++i) {
+        const float* p = &dense[size_t(i * 6)];
+        const size_t c = slot.at(key_of(p, lo, h));
+        const float* m = &dense[size_t(best[c] * 6)];
+        if (!(p[3] * m[3] + p[4] * m[4] + p[5] * m[5] < 0)) continue;
+        const double d = centre_distance(p);
+        if (d < far_d[c]) far[c] = i, far_d[c] = d;
+    }
+    for (int64_t i : far)
+        if (i >= 0) best.push_back(i);
     std::vector<std::pair<uint64_t, int64_t>> order;
     for (int64_t i : best) order.push_back({morton(&dense[size_t(i * 6)], lo, h), i});
     std::sort(order.begin(), order.end());
@@ -63,9 +80,11 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
 }
 
 // For every cell within `band` of a point, the nearest point (lowest index on a tie).
+// With `opposes` >= 0, only points whose normal (at 3..5 of the point) turns away from
+// the normal of the point already named in slot `opposes`: a thin part's other face.
 void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, int64_t stride, const Surface& s,
-           double band) {
-    std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
+           double band, int opposes = -1) {
+    std::vector<float> best(cells.size() / 4, std::numeric_limits<float>::infinity());
     const int r = int(std::ceil(band / s.voxel));
     for (int64_t i = 0; i < n; ++i) {
         const float* p = pts + i * stride;
@@ -81,7 +100,13 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
                                     (q[2] - p[2]) * (q[2] - p[2]);
                     if (d > float(band * band)) continue;
                     const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
-                    if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
+                    if (opposes >= 0) {
+                        const int32_t o = cells[4 * cell + size_t(opposes)];
+                        if (o < 0) continue;
+                        const float* m = pts + int64_t(o) * stride + 3;
+                        if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) continue;
+                    }
+                    if (d < best[cell]) best[cell] = d, cells[4 * cell + size_t(slot)] = int32_t(i);
                 }
     }
 }
@@ -190,10 +215,12 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
         if (cells <= o.max_cells) break;
     }
     if (cells > o.max_cells) throw Error(source + ": the lookup grid would need " + std::to_string(cells) + " cells");
-    s.cells.assign(size_t(2 * cells), -1);
-    const double band = std::max(o.band_mm, double(s.voxel));
+    s.cells.assign(size_t(4 * cells), -1);
+    const double band = std::max(o.band_mm, double(s.voxel)), sample_band = std::max(band, 1.5 * s.spacing_mm);
     splat(s.cells, 0, s.dense.data(), D, 6, s, band);
-    splat(s.cells, 1, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm));
+    splat(s.cells, 1, s.samples.data(), s.n_samples(), 9, s, sample_band);
+    splat(s.cells, 2, s.dense.data(), D, 6, s, band, 0);
+    splat(s.cells, 3, s.samples.data(), s.n_samples(), 9, s, sample_band, 1);
     return s;
 }
 

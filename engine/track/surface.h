@@ -4,7 +4,8 @@
 // the user's cloud as it is), the hypothesis samples (a subset about `spacing`
 // apart; each with the renderer's tangent t1 of its axis z = -n), the spins, and
 // a lookup grid whose cells name the nearest dense point and the nearest sample
-// within a band around the surface.
+// within a band around the surface, and each's nearest counterpart on a face turned
+// the other way (a thin part's far side: docs/multitouch.md, "Thin parts").
 #include <array>
 #include <cstdint>
 #include <string>
@@ -17,7 +18,7 @@ namespace vtloc::track {
 struct SurfaceOptions {
     int64_t target_hypotheses = 120000;  // samples x spins, about
     int n_spin = 36;                     // 10 degrees apart
-    int64_t max_cells = 2000000;         // lookup grid cells at most (8 bytes each)
+    int64_t max_cells = 2000000;         // lookup grid cells at most (16 bytes each)
     double band_mm = 4.0;                // cells farther from the surface hold no point
     double min_voxel_mm = 0.5;
     // The candidates protocol (SPEC 6; the paper's S^c): hypotheses only at these points
@@ -29,7 +30,10 @@ struct Surface {
     std::vector<float> dense;     // [D, 6] point, outward unit normal (object units)
     std::vector<float> samples;   // [S, 9] point, normal, t1
     std::vector<float> spins;     // [NS, 2] cos, sin of 2 pi j / NS
-    std::vector<int32_t> cells;   // [nx*ny*nz, 2] nearest dense point, nearest sample (-1 none)
+    // [nx*ny*nz, 4]: nearest dense point, nearest sample, then the nearest dense point whose
+    // normal opposes the first's and the nearest sample whose normal opposes the second's
+    // (-1: none within the band).
+    std::vector<int32_t> cells;
     std::array<float, 3> origin{};
     float voxel = 1;
     std::array<int32_t, 3> dims{};

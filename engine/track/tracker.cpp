@@ -44,7 +44,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 9}, s.samples));
     w.add("surface.dense", HostTensor({s.n_dense(), 6}, s.dense));
-    w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 2}, s.cells));
+    w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 4}, s.cells));
     w.add("surface.spins", HostTensor({int64_t(s.n_spin()), 2}, s.spins));
     std::vector<float> pts;
     for (int64_t i = 0; i < s.n_samples(); ++i) pts.insert(pts.end(), &s.samples[size_t(i * 9)], &s.samples[size_t(i * 9 + 3)]);
@@ -74,7 +74,7 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
     p.own_field = own;
     p.own_weight = 1;
     int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 9}), g.weight("surface.dense", {s.n_dense(), 6}),
-                                   g.weight("surface.cells", {s.n_cells(), 2}, ElemType::I32),
+                                   g.weight("surface.cells", {s.n_cells(), 4}, ElemType::I32),
                                    g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}),
                                    g.input("fields", {F, H}), p, "track.evidence");
     std::vector<int> lp = ops::log_softmax(g, score, "track.belief");
@@ -137,14 +137,14 @@ Rigid perturb(const Rigid& x, const double d[6]) {
     return compose(x, m);
 }
 
-// Where a pose's axis meets the surface: the nearest dense point's tangent plane
-// (the pose's own press back along its axis where no point is near).
+// Where a pose's axis meets the surface: the tangent plane of the dense point it
+// presses (the pose's own press back along its axis where no point is near).
 std::array<double, 3> axis_contact(const Surface& s, const ops::pose::Grid& grid, const Rigid& x, double press) {
     const ops::pose::Frame f = frame_of(x);
     std::array<double, 3> c{f.t.x - press * f.z.x, f.t.y - press * f.z.y, f.t.z - press * f.z.z};
-    const int64_t cell = ops::pose::cell_of(grid, f.t);
-    if (cell >= 0 && s.cells[size_t(2 * cell)] >= 0) {
-        const float* q = &s.dense[size_t(6 * s.cells[size_t(2 * cell)])];
+    const int32_t i = ops::pose::pressed_point(grid, ops::pose::cell_of(grid, f.t), f.z);
+    if (i >= 0) {
+        const float* q = &s.dense[size_t(6 * i)];
         const P n{q[3], q[4], q[5]};
         const float dz = ops::pose::dot(f.z, n);
         if (std::abs(dz) > 1e-3f) {
@@ -421,7 +421,7 @@ std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) 
     std::vector<float> h(static_cast<size_t>(N), 0.0f);
     for (int64_t i = 0; i < N; ++i) {
         const int64_t cell = surface_.cell_of(&cloud.data[size_t(i * C)]);
-        const int32_t smp = cell < 0 ? -1 : surface_.cells[size_t(2 * cell + 1)];
+        const int32_t smp = cell < 0 ? -1 : surface_.cells[size_t(4 * cell + 1)];
         if (smp >= 0) h[size_t(i)] = e.sample_belief[size_t(smp)];
     }
     if (h.empty()) return h;
