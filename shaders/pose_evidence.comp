@@ -15,7 +15,7 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
 layout(std430, binding = 0) readonly buffer Samples_ { float smp[]; };  // [S, 9]
-layout(std430, binding = 1) readonly buffer Dense_ { vec2 dense2[]; };  // [D, 6] as [D, 3] pairs
+layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, 0, normal, 0
 layout(std430, binding = 2) readonly buffer Cells_ { ivec4 cells[]; };  // [V, 4]
 layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
 layout(std430, binding = 4) readonly buffer Terms_ { float terms[]; };  // [K, 16]
@@ -67,11 +67,10 @@ int nearest_hypothesis(int s0, int s1, vec3 x, vec3 z_pose) {
 // normal, its far-face counterpart i1 (a thin part's other side; -1: none near).
 float geometry_log(int i0, int i1, vec3 t, vec3 z, float sd, float sa) {
     if (i0 < 0) return p.log_floor;
-    vec2 a = dense2[uint(i0) * 3u], b = dense2[uint(i0) * 3u + 1u], c = dense2[uint(i0) * 3u + 2u];
-    if (i1 >= 0 && dot3(z, vec3(b.y, c)) > 0.0) {
-        a = dense2[uint(i1) * 3u], b = dense2[uint(i1) * 3u + 1u], c = dense2[uint(i1) * 3u + 2u];
-    }
-    vec3 q = vec3(a, b.x), n = vec3(b.y, c);
+    // i0's normal decides; then one point and one normal are read (three reads, as one
+    // point read as vec2s was before the far face).
+    const int i = i1 >= 0 && dot3(z, dense4[uint(i0) * 2u + 1u].xyz) > 0.0 ? i1 : i0;
+    vec3 q = dense4[uint(i) * 2u].xyz, n = dense4[uint(i) * 2u + 1u].xyz;
     precise float e_d = dot3(t - q, n) + p.press;
     // atan2(|z x n|, -z.n), as the CPU mirror: lavapipe's acos is off by up to ~1e-3 rad.
     vec3 w = cross3(z, n);

@@ -51,18 +51,19 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
     sc.p.press = 0.7;
     const int64_t V = 7 * 5 * 6;
     std::uniform_real_distribution<float> u(-4.0f, 4.0f);
-    HostTensor samples({S, 9}), dense({D, 6}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
+    HostTensor samples({S, 9}), dense({D, 8}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
     for (int64_t s = 0; s < S; ++s) {
         float* r = &samples.data[size_t(s * 9)];
         for (int i = 0; i < 3; ++i) r[i] = u(rng);
         check::random_unit_pair(rng, r + 3);  // normal, then its tangent t1
     }
     for (int64_t i = 0; i < D; ++i) {
-        float* r = &dense.data[size_t(i * 6)];
+        float* r = &dense.data[size_t(i * 8)];
         float nt[6];
         for (int k = 0; k < 3; ++k) r[k] = u(rng);
         check::random_unit_pair(rng, nt);
-        for (int k = 0; k < 3; ++k) r[3 + k] = nt[k];
+        for (int k = 0; k < 3; ++k) r[4 + k] = nt[k];
+        r[3] = r[7] = 1e30f;  // padding: never read
     }
     std::vector<int32_t> cells(size_t(V * 4));  // dense, sample, and their far-face counterparts
     std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1), si(-1, int32_t(S) - 1);
@@ -93,7 +94,7 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
 Graph evidence_graph(const Scene& sc) {
     Graph g;
     const int64_t V = sc.dims[0] * sc.dims[1] * sc.dims[2];
-    int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 6}),
+    int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 8}),
                                  g.input("cells", {V, 4}, ElemType::I32), g.input("spins", {sc.NS, 2}),
                                  g.input("terms", {sc.K, 16}), g.input("fields", {sc.F, sc.S * sc.NS}), sc.p);
     g.output(out, "score");
@@ -119,9 +120,9 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
     Scene sc = scene(1, 1, 4, 2, 0, 3);
     std::vector<float> dense;
     for (int y = -3; y <= 3; ++y)
-        for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), 0, 0, 0, 1});
-    sc.D = int64_t(dense.size() / 6);
-    sc.in["dense"] = HostTensor({sc.D, 6}, dense);
+        for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), 0, 0, 0, 0, 1, 0});
+    sc.D = int64_t(dense.size() / 8);
+    sc.in["dense"] = HostTensor({sc.D, 8}, dense);
     sc.in["samples"] = HostTensor({1, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0});
     const int64_t V = 7 * 5 * 6;
     std::vector<int32_t> cells(size_t(4 * V), -1);
@@ -163,9 +164,9 @@ TEST_CASE("pose_evidence: a pose pressing a thin part's far face is scored on th
     std::vector<float> dense;
     for (float z : {0.0f, -2.0f})
         for (int y = -3; y <= 3; ++y)
-            for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, 0, 0, z == 0 ? 1.0f : -1.0f});
-    sc.D = int64_t(dense.size() / 6);
-    sc.in["dense"] = HostTensor({sc.D, 6}, dense);
+            for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, 0, 0, 0, z == 0 ? 1.0f : -1.0f, 0});
+    sc.D = int64_t(dense.size() / 8);
+    sc.in["dense"] = HostTensor({sc.D, 8}, dense);
     sc.in["samples"] = HostTensor({2, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, -2, 0, 0, -1, 1, 0, 0});
     const int64_t V = 7 * 5 * 6;
     auto cells_of = [&](bool far_slots) {
@@ -262,7 +263,11 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w4", {4}), g.input("a", {2, 2})), Catch::Contains("answers must be [A > 0, 3]"));
     Scene sc = scene(5, 5, 3, 1, 1, 1);
     Graph h;
-    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 6}), h.input("c", {7, 4}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 8}), h.input("c", {7, 4}, ElemType::I32),
                                          h.input("sp", {3, 2}), h.input("t", {1, 16}), h.input("f", {1, 15}), sc.p),
                       Catch::Contains("cells must be [nx*ny*nz, 4]"));
+    Graph k;  // the unpadded [D, 6] surface
+    CHECK_THROWS_WITH(ops::pose_evidence(k, k.input("s", {5, 9}), k.input("d", {5, 6}), k.input("c", {7 * 5 * 6, 4}, ElemType::I32),
+                                         k.input("sp", {3, 2}), k.input("t", {1, 16}), k.input("f", {1, 15}), sc.p),
+                      Catch::Contains("dense surface must be [D > 0, 8]"));
 }

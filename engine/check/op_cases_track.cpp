@@ -17,16 +17,17 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(-4.0f, 4.0f);
     const int64_t D = 2 * S + 3, V = 6 * 5 * 7, F = 2;
-    HostTensor samples({S, 9}), dense({D, 6}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
+    HostTensor samples({S, 9}), dense({D, 8}), spins({NS, 2}), terms({K, 16}), fields({F, S * NS});
     for (int64_t s = 0; s < S; ++s) {
         float* r = &samples.data[size_t(s * 9)];
         for (int i = 0; i < 3; ++i) r[i] = u(rng);
         random_unit_pair(rng, r + 3);
     }
     for (int64_t i = 0; i < D; ++i) {
-        float* r = &dense.data[size_t(i * 6)], t[6];
+        float* r = &dense.data[size_t(i * 8)], t[6];
         random_unit_pair(rng, t);
-        for (int k = 0; k < 3; ++k) r[k] = u(rng), r[3 + k] = t[k];
+        for (int k = 0; k < 3; ++k) r[k] = u(rng), r[4 + k] = t[k];
+        r[3] = r[7] = 1e30f;  // padding: never read
     }
     std::vector<int32_t> cells(size_t(4 * V));  // dense, sample, and their far-face counterparts
     for (int64_t i = 0; i < 4 * V; ++i) cells[size_t(i)] = int32_t(rng() % uint32_t((i % 2 ? S : D) + 1)) - 1;

@@ -4,7 +4,8 @@
 // that pose's geometry evidence (on the surface, axis along the inward normal)
 // and/or a log field (a touch term, or the online filter's previous belief)
 // read at the nearest hypothesis. own_field adds a field at h itself.
-// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 6], cells
+// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 8] (point, 0,
+// outward normal, 0: two vec4 reads a point on the GPU, not three vec2), cells
 // [V, 4] I32 (nearest dense point, nearest sample, and each's counterpart on a face
 // turned the other way: pose_evidence.h), spins [NS, 2] (cos, sin),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
@@ -55,7 +56,8 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     const Shape &s = in[0].shape, &d = in[1].shape, &c = in[2].shape, &sp = in[3].shape, &k = in[4].shape,
                 &f = in[5].shape;
     if (s.size() != 2 || s[1] != 9 || s[0] == 0) throw Error("samples must be [S > 0, 9], got " + shape_str(s));
-    if (d.size() != 2 || d[1] != 6 || d[0] == 0) throw Error("dense surface must be [D > 0, 6], got " + shape_str(d));
+    if (d.size() != 2 || d[1] != 8 || d[0] == 0)
+        throw Error("dense surface must be [D > 0, 8] (point, 0, normal, 0), got " + shape_str(d));
     const int64_t V = int64_t(st.nx) * st.ny * st.nz;
     if (c != Shape{V, 4}) throw Error("cells must be [nx*ny*nz, 4] = " + shape_str({V, 4}) + ", got " + shape_str(c));
     if (sp.size() != 2 || sp[1] != 2 || sp[0] == 0) throw Error("spins must be [NS > 0, 2], got " + shape_str(sp));
@@ -72,7 +74,7 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
 pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, std::vector<int32_t>& cells) {
     cells = in[2]->ints();
     return {in[1]->data.data(), cells.data(), in[0]->data.data(), in[3]->data.data(), int32_t(in[3]->shape[0]),
-            st.origin, st.voxel, st.nx, st.ny, st.nz};
+            st.origin, st.voxel, st.nx, st.ny, st.nz, 8};
 }
 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {

@@ -29,7 +29,7 @@ struct Frame {
 // counterpart whose normal turns the other way (a thin part's far face); -1: none
 // within the grid's band.
 struct Grid {
-    const float* dense;      // [D, 6] point, outward unit normal
+    const float* dense;      // [D, dense_stride]: point at 0, outward unit normal at dense_stride / 2
     const int32_t* cells;    // [nx * ny * nz, 4]
     const float* samples;    // [S, 9] point, normal, tangent t1
     const float* spins;      // [NS, 2] cos, sin
@@ -37,6 +37,7 @@ struct Grid {
     V3 origin;
     float voxel;
     int32_t nx, ny, nz;
+    int32_t dense_stride = 6;  // 6, or 8 for the op's input (point, 0, normal, 0: two vec4 reads on the GPU)
 };
 
 // One touch of the window seen from the hypothesis' touch: its pose is
@@ -120,7 +121,7 @@ inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
 inline int32_t pressed_point(const Grid& g, int64_t cell, V3 z) {
     if (cell < 0) return -1;
     const int32_t* c = g.cells + cell * 4;
-    return c[0] < 0 ? -1 : pressed(c, 0, g.dense + int64_t(c[0]) * 6 + 3, z);
+    return c[0] < 0 ? -1 : pressed(c, 0, g.dense + int64_t(c[0]) * g.dense_stride + g.dense_stride / 2, z);
 }
 
 // Geometry: the pose's gel centre should sit `press` inside the surface and its
@@ -130,7 +131,8 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
                           float log_floor) {
     const int32_t i = pressed_point(g, cell, f.z);
     if (i < 0) return log_floor;
-    V3 p = load3(g.dense + int64_t(i) * 6), n = load3(g.dense + int64_t(i) * 6 + 3);
+    const float* d = g.dense + int64_t(i) * g.dense_stride;
+    V3 p = load3(d), n = load3(d + g.dense_stride / 2);
     float e_d = dot(sub(f.t, p), n) + press;
     // The axis' angle to the inward normal as atan2(|z x n|, -z.n): the GPU's acos is
     // off by up to ~1e-3 rad, which a narrow sigma_a magnifies past the tolerance.
