@@ -15,8 +15,8 @@ layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
 layout(std430, binding = 0) readonly buffer Samples_ { float smp[]; };  // [S, 9]
-layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, 0, normal, 0
-layout(std430, binding = 2) readonly buffer Cells_ { ivec4 cells[]; };  // [V, 4]
+layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, sample, normal, 0
+layout(std430, binding = 2) readonly buffer Cells_ { ivec2 cells[]; };  // [V, 2]
 layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
 layout(std430, binding = 4) readonly buffer Terms_ { float terms[]; };  // [K, 16]
 layout(std430, binding = 5) readonly buffer Fields_ { float fields[]; }; // [F, H]
@@ -44,11 +44,9 @@ int cell_of(vec3 q) {
     return (int(f.z) * p.ny + int(f.y)) * p.nx + int(f.x);
 }
 
-// The hypothesis nearest a pose with axes x, z at the cell's sample s0 or, where z runs
-// along s0's outward normal, its far-face counterpart s1 (-1: none).
-int nearest_hypothesis(int s0, int s1, vec3 x, vec3 z_pose) {
-    if (s0 < 0) return -1;
-    const int s = s1 >= 0 && dot3(z_pose, load_smp(uint(s0) * 9u + 3u)) > 0.0 ? s1 : s0;
+// The hypothesis nearest a pose with x axis x at sample s (-1: none).
+int nearest_hypothesis(int s, vec3 x) {
+    if (s < 0) return -1;
     vec3 t1 = load_smp(uint(s) * 9u + 6u);
     precise vec3 z = load_smp(uint(s) * 9u + 3u) * -1.0;
     vec3 t2 = cross3(z, t1);
@@ -63,14 +61,8 @@ int nearest_hypothesis(int s0, int s1, vec3 x, vec3 z_pose) {
     return s * NS + best;
 }
 
-// Geometry at the cell's dense point i0 or, where the axis z runs along i0's outward
-// normal, its far-face counterpart i1 (a thin part's other side; -1: none near).
-float geometry_log(int i0, int i1, vec3 t, vec3 z, float sd, float sa) {
-    if (i0 < 0) return p.log_floor;
-    // i0's normal decides; then one point and one normal are read (three reads, as one
-    // point read as vec2s was before the far face).
-    const int i = i1 >= 0 && dot3(z, dense4[uint(i0) * 2u + 1u].xyz) > 0.0 ? i1 : i0;
-    vec3 q = dense4[uint(i) * 2u].xyz, n = dense4[uint(i) * 2u + 1u].xyz;
+// Geometry at dense point q (normal n).
+float geometry_log(vec3 q, vec3 n, vec3 t, vec3 z, float sd, float sa) {
     precise float e_d = dot3(t - q, n) + p.press;
     // atan2(|z x n|, -z.n), as the CPU mirror: lavapipe's acos is off by up to ~1e-3 rad.
     vec3 w = cross3(z, n);
@@ -101,27 +93,32 @@ void main() {
             do {
                 uint kf = k;  // the segment's last term: the next one with a field, or the last
                 while (kf + 1u < p.K && int(round(terms[kf * 16u + 14u])) < 0) ++kf;
-                vec3 xf = vec3(0.0), zf = vec3(0.0);
-                ivec2 sf = ivec2(-1);  // the segment's last term: its axes and its cell's samples
+                vec3 xf = vec3(0.0);
+                int sf = -1;  // the segment's last term: its x axis and the sample it reads
                 do {
                     const uint b = k * 16u;
                     precise vec3 zk = x * terms[b + 2u] + y * terms[b + 5u] + z * terms[b + 8u];
                     precise vec3 xk = x * terms[b] + y * terms[b + 3u] + z * terms[b + 6u];
                     precise vec3 tk = t + x * terms[b + 9u] + y * terms[b + 10u] + z * terms[b + 11u];
                     const int cell = cell_of(tk);
-                    ivec4 near = ivec4(-1);  // the cell's dense point, sample and their far-face ones
+                    ivec2 near = ivec2(-1);  // the cell's dense point and its far-face counterpart
                     if (cell >= 0) near = cells[cell];
+                    // The point the pose presses: the far one where the axis runs along the
+                    // nearest's outward normal (pose_evidence.h). Four reads a term: the
+                    // cell, that normal, the point (with its sample) and its normal.
+                    const int i = near.x >= 0 && near.y >= 0 && dot3(zk, dense4[uint(max(near.x, 0)) * 2u + 1u].xyz) > 0.0 ? near.y : near.x;
+                    const vec4 q = dense4[uint(max(i, 0)) * 2u];
+                    const vec3 n = dense4[uint(max(i, 0)) * 2u + 1u].xyz;
                     const float sd = terms[b + 12u], sa = terms[b + 13u];
-                    if (sd > 0.0) acc += geometry_log(near.x, near.z, tk, zk, sd, sa);
+                    if (sd > 0.0) acc += i < 0 ? p.log_floor : geometry_log(q.xyz, n, tk, zk, sd, sa);
                     xf = xk;
-                    zf = zk;
-                    sf = near.yw;
+                    sf = i < 0 ? -1 : int(q.w);
                     ++k;
                 } while (k <= kf);
                 const uint b = kf * 16u;
                 const int field = int(round(terms[b + 14u]));
                 if (field >= 0 && uint(field) < p.F) {  // a field past F (refused on the CPU) reads nothing
-                    const int hk = nearest_hypothesis(sf.x, sf.y, xf, zf);
+                    const int hk = nearest_hypothesis(sf, xf);
                     acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
                 }
             } while (k < p.K);

@@ -63,12 +63,12 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
         for (int k = 0; k < 3; ++k) r[k] = u(rng);
         check::random_unit_pair(rng, nt);
         for (int k = 0; k < 3; ++k) r[4 + k] = nt[k];
-        r[3] = r[7] = 1e30f;  // padding: never read
+        r[3] = float(std::uniform_int_distribution<int32_t>(-1, int32_t(S) - 1)(rng));  // its sample (-1: none)
+        r[7] = 1e30f;  // padding: never read
     }
-    std::vector<int32_t> cells(size_t(V * 4));  // dense, sample, and their far-face counterparts
-    std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1), si(-1, int32_t(S) - 1);
-    for (int64_t c = 0; c < V; ++c)
-        for (int k = 0; k < 4; ++k) cells[size_t(4 * c + k)] = k % 2 ? si(rng) : di(rng);
+    std::vector<int32_t> cells(size_t(V * 2));  // the nearest dense point and its far-face counterpart
+    std::uniform_int_distribution<int32_t> di(-1, int32_t(D) - 1);
+    for (int32_t& c : cells) c = di(rng);
     for (int64_t j = 0; j < NS; ++j) {
         double a = 2 * M_PI * double(j) / double(NS);
         spins.data[size_t(2 * j)] = float(std::cos(a)), spins.data[size_t(2 * j + 1)] = float(std::sin(a));
@@ -86,7 +86,7 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
     std::uniform_real_distribution<float> lf(-20.0f, 0.0f);
     for (float& v : fields.data) v = lf(rng);
     sc.p.own_field = F ? F - 1 : -1;
-    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 4}, cells)},
+    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 2}, cells)},
              {"spins", spins}, {"terms", terms}, {"fields", fields}};
     return sc;
 }
@@ -95,7 +95,7 @@ Graph evidence_graph(const Scene& sc) {
     Graph g;
     const int64_t V = sc.dims[0] * sc.dims[1] * sc.dims[2];
     int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 8}),
-                                 g.input("cells", {V, 4}, ElemType::I32), g.input("spins", {sc.NS, 2}),
+                                 g.input("cells", {V, 2}, ElemType::I32), g.input("spins", {sc.NS, 2}),
                                  g.input("terms", {sc.K, 16}), g.input("fields", {sc.F, sc.S * sc.NS}), sc.p);
     g.output(out, "score");
     return g;
@@ -125,15 +125,14 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
     sc.in["dense"] = HostTensor({sc.D, 8}, dense);
     sc.in["samples"] = HostTensor({1, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0});
     const int64_t V = 7 * 5 * 6;
-    std::vector<int32_t> cells(size_t(4 * V), -1);
+    std::vector<int32_t> cells(size_t(2 * V), -1);
     for (int64_t c = 0; c < V; ++c) {
         int64_t ix = c % 7, iy = (c / 7) % 5;
         float cx = float(sc.p.origin[0] + (double(ix) + 0.5) * sc.p.voxel), cy = float(sc.p.origin[1] + (double(iy) + 0.5) * sc.p.voxel);
         int32_t gx = int32_t(std::lround(std::clamp(cx, -3.0f, 3.0f))) + 3, gy = int32_t(std::lround(std::clamp(cy, -3.0f, 3.0f))) + 3;
-        cells[size_t(4 * c)] = gy * 7 + gx;
-        cells[size_t(4 * c + 1)] = 0;
+        cells[size_t(2 * c)] = gy * 7 + gx;
     }
-    sc.in["cells"] = HostTensor::from_ints({V, 4}, cells);
+    sc.in["cells"] = HostTensor::from_ints({V, 2}, cells);
     HostTensor terms({2, 16});
     for (int k = 0; k < 2; ++k) {
         float* r = &terms.data[size_t(16 * k)];
@@ -158,19 +157,20 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
 TEST_CASE("pose_evidence: a pose pressing a thin part's far face is scored on that face", "[op][pose]") {
     // A 2 mm plate: face A at z = 0 (normal +z), face B at z = -2 (normal -z), one sample
     // on each. The hypothesis on B (axis +z, gel centre 0.7 mm inside at z = -1.3) lies in
-    // a cell whose nearest point is on A; the cell's far-face slots name B's point and
-    // sample. Without them the pose scores the floor (its axis opposes A's normal).
+    // a cell whose nearest point is on A; the cell's far-face slot names B's point, whose
+    // sample is on B. Without it the pose scores the floor (its axis opposes A's normal)
+    // and reads the field at A's sample.
     Scene sc = scene(2, 1, 4, 1, 1, 5);
     std::vector<float> dense;
     for (float z : {0.0f, -2.0f})
         for (int y = -3; y <= 3; ++y)
-            for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, 0, 0, 0, z == 0 ? 1.0f : -1.0f, 0});
+            for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, z == 0 ? 0.0f : 1.0f, 0, 0, z == 0 ? 1.0f : -1.0f, 0});
     sc.D = int64_t(dense.size() / 8);
     sc.in["dense"] = HostTensor({sc.D, 8}, dense);
     sc.in["samples"] = HostTensor({2, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, -2, 0, 0, -1, 1, 0, 0});
     const int64_t V = 7 * 5 * 6;
     auto cells_of = [&](bool far_slots) {
-        std::vector<int32_t> cells(size_t(4 * V), -1);
+        std::vector<int32_t> cells(size_t(2 * V), -1);
         for (int64_t c = 0; c < V; ++c) {
             const int64_t ix = c % 7, iy = (c / 7) % 5, iz = c / 35;
             const float cx = float(sc.p.origin[0] + (double(ix) + 0.5) * sc.p.voxel),
@@ -179,10 +179,10 @@ TEST_CASE("pose_evidence: a pose pressing a thin part's far face is scored on th
             const int32_t g = (int32_t(std::lround(std::clamp(cy, -3.0f, 3.0f))) + 3) * 7 +
                               int32_t(std::lround(std::clamp(cx, -3.0f, 3.0f))) + 3;
             const bool near_a = std::abs(cz) < std::abs(cz + 2);
-            cells[size_t(4 * c)] = near_a ? g : g + 49, cells[size_t(4 * c + 1)] = near_a ? 0 : 1;
-            if (far_slots) cells[size_t(4 * c + 2)] = near_a ? g + 49 : g, cells[size_t(4 * c + 3)] = near_a ? 1 : 0;
+            cells[size_t(2 * c)] = near_a ? g : g + 49;
+            if (far_slots) cells[size_t(2 * c + 1)] = near_a ? g + 49 : g;
         }
-        return HostTensor::from_ints({V, 4}, cells);
+        return HostTensor::from_ints({V, 2}, cells);
     };
     sc.p.press = 0.7;
     sc.p.own_field = -1;
@@ -263,11 +263,20 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w4", {4}), g.input("a", {2, 2})), Catch::Contains("answers must be [A > 0, 3]"));
     Scene sc = scene(5, 5, 3, 1, 1, 1);
     Graph h;
-    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 8}), h.input("c", {7, 4}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 8}), h.input("c", {7, 2}, ElemType::I32),
                                          h.input("sp", {3, 2}), h.input("t", {1, 16}), h.input("f", {1, 15}), sc.p),
-                      Catch::Contains("cells must be [nx*ny*nz, 4]"));
+                      Catch::Contains("cells must be [nx*ny*nz, 2]"));
     Graph k;  // the unpadded [D, 6] surface
-    CHECK_THROWS_WITH(ops::pose_evidence(k, k.input("s", {5, 9}), k.input("d", {5, 6}), k.input("c", {7 * 5 * 6, 4}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(k, k.input("s", {5, 9}), k.input("d", {5, 6}), k.input("c", {7 * 5 * 6, 2}, ElemType::I32),
                                          k.input("sp", {3, 2}), k.input("t", {1, 16}), k.input("f", {1, 15}), sc.p),
                       Catch::Contains("dense surface must be [D > 0, 8]"));
+    // Indices past the tables: the CPU reference names them (the GPU trusts the tracker's).
+    Scene bad = scene(13, 29, 7, 3, 2, 11);
+    bad.in["dense"].data[8 * 4 + 3] = 13.0f;  // point 4 names sample 13 of 13
+    CHECK_THROWS_WITH(run_cpu(evidence_graph(bad), WeightStore{}, bad.in), Catch::Contains("dense point 4 names sample 13"));
+    bad = scene(13, 29, 7, 3, 2, 11);
+    std::vector<int32_t> cells = bad.in["cells"].ints();
+    cells[2 * 5 + 1] = 29;  // cell 5's far point: 29 of 29
+    bad.in["cells"] = HostTensor::from_ints({int64_t(cells.size() / 2), 2}, cells);
+    CHECK_THROWS_WITH(run_cpu(evidence_graph(bad), WeightStore{}, bad.in), Catch::Contains("cell 5 names dense point 29"));
 }

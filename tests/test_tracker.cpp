@@ -241,7 +241,7 @@ TEST_CASE("on a thin plate the grid names the face a pose presses, not the neare
     track::SurfaceOptions o;
     o.target_hypotheses = 20000;
     const track::Surface s = track::build_surface(dense, true, o, "plate");
-    const ops::pose::Grid g{s.dense.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
+    const ops::pose::Grid g{s.dense.data(), s.dense_sample.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
                             {s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
     int64_t poses = 0, far_nearest = 0, wrong = 0, wrong_sample = 0;
     for (int64_t i = 0; i < dense.shape[0]; ++i) {
@@ -251,7 +251,7 @@ TEST_CASE("on a thin plate the grid names the face a pose presses, not the neare
         const int64_t cell = ops::pose::cell_of(g, t);
         REQUIRE(cell >= 0);
         ++poses;
-        far_nearest += s.dense[size_t(6 * s.cells[size_t(4 * cell)] + 5)] * p[5] < 0;
+        far_nearest += s.dense[size_t(6 * s.cells[size_t(2 * cell)] + 5)] * p[5] < 0;
         const int32_t q = ops::pose::pressed_point(g, cell, z);
         wrong += q < 0 || s.dense[size_t(6 * q + 5)] * p[5] < 0;
         const int64_t h = ops::pose::nearest_hypothesis(g, cell, ops::pose::V3{1, 0, 0}, z);

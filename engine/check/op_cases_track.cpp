@@ -27,10 +27,11 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
         float* r = &dense.data[size_t(i * 8)], t[6];
         random_unit_pair(rng, t);
         for (int k = 0; k < 3; ++k) r[k] = u(rng), r[4 + k] = t[k];
-        r[3] = r[7] = 1e30f;  // padding: never read
+        r[3] = float(int64_t(rng() % uint32_t(S + 1)) - 1);  // the point's sample (-1: none)
+        r[7] = 1e30f;                                      // padding: never read
     }
-    std::vector<int32_t> cells(size_t(4 * V));  // dense, sample, and their far-face counterparts
-    for (int64_t i = 0; i < 4 * V; ++i) cells[size_t(i)] = int32_t(rng() % uint32_t((i % 2 ? S : D) + 1)) - 1;
+    std::vector<int32_t> cells(size_t(2 * V));  // the nearest dense point and its far-face counterpart
+    for (int32_t& c : cells) c = int32_t(rng() % uint32_t(D + 1)) - 1;
     for (int64_t j = 0; j < NS; ++j)
         spins.data[size_t(2 * j)] = float(std::cos(2 * M_PI * double(j) / double(NS))),
         spins.data[size_t(2 * j + 1)] = float(std::sin(2 * M_PI * double(j) / double(NS)));
@@ -53,7 +54,7 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     p.dims[0] = 6, p.dims[1] = 5, p.dims[2] = 7;
     p.own_field = 1;
     int score = ops::pose_evidence(c.g, c.input("samples", samples), c.input("dense", dense),
-                                   c.input("cells", HostTensor::from_ints({V, 4}, cells)), c.input("spins", spins),
+                                   c.input("cells", HostTensor::from_ints({V, 2}, cells)), c.input("spins", spins),
                                    c.input("terms", terms), c.input("fields", fields), p);
     c.output(score, "score");
     return c;

@@ -4,10 +4,10 @@
 // that pose's geometry evidence (on the surface, axis along the inward normal)
 // and/or a log field (a touch term, or the online filter's previous belief)
 // read at the nearest hypothesis. own_field adds a field at h itself.
-// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 8] (point, 0,
-// outward normal, 0: two vec4 reads a point on the GPU, not three vec2), cells
-// [V, 4] I32 (nearest dense point, nearest sample, and each's counterpart on a face
-// turned the other way: pose_evidence.h), spins [NS, 2] (cos, sin),
+// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 8] (point, the
+// point's sample as a float (-1: none), outward normal, 0: two vec4 reads on the GPU),
+// cells [V, 2] I32 (nearest dense point and its counterpart on a face turned the other
+// way: pose_evidence.h), spins [NS, 2] (cos, sin),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
 // [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
 // Terms are data on the device, so only the CPU reference can refuse a term naming a
@@ -57,9 +57,10 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
                 &f = in[5].shape;
     if (s.size() != 2 || s[1] != 9 || s[0] == 0) throw Error("samples must be [S > 0, 9], got " + shape_str(s));
     if (d.size() != 2 || d[1] != 8 || d[0] == 0)
-        throw Error("dense surface must be [D > 0, 8] (point, 0, normal, 0), got " + shape_str(d));
+        throw Error("dense surface must be [D > 0, 8] (point, sample, normal, 0), got " + shape_str(d));
+    if (s[0] >= (int64_t(1) << 24)) throw Error("at most 2^24 samples (their indices are floats), got " + std::to_string(s[0]));
     const int64_t V = int64_t(st.nx) * st.ny * st.nz;
-    if (c != Shape{V, 4}) throw Error("cells must be [nx*ny*nz, 4] = " + shape_str({V, 4}) + ", got " + shape_str(c));
+    if (c != Shape{V, 2}) throw Error("cells must be [nx*ny*nz, 2] = " + shape_str({V, 2}) + ", got " + shape_str(c));
     if (sp.size() != 2 || sp[1] != 2 || sp[0] == 0) throw Error("spins must be [NS > 0, 2], got " + shape_str(sp));
     if (k.size() != 2 || k[1] != 16) throw Error("terms must be [K, 16], got " + shape_str(k));
     const int64_t H = s[0] * sp[0];
@@ -67,20 +68,38 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
         throw Error("fields must be [F, S * NS] = [F, " + std::to_string(H) + "], got " + shape_str(f));
     if (st.own_field >= f[0]) throw Error("own_field " + std::to_string(st.own_field) + " names no field");
     to_u32(H * f[0], "field array size");
-    to_u32(4 * V, "grid size");
+    to_u32(2 * V, "grid size");
     return {TensorDesc{{H}}};
 }
 
-pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, std::vector<int32_t>& cells) {
-    cells = in[2]->ints();
-    return {in[1]->data.data(), cells.data(), in[0]->data.data(), in[3]->data.data(), int32_t(in[3]->shape[0]),
-            st.origin, st.voxel, st.nx, st.ny, st.nz, 8};
+// The [D, 8] input as the mirror's [D, 6] points and [D] samples; indices are checked
+// here (the GPU trusts them: the tracker builds them).
+struct Tables {
+    std::vector<float> dense;
+    std::vector<int32_t> dense_sample, cells;
+};
+pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, Tables& t) {
+    const int64_t D = in[1]->shape[0], S = in[0]->shape[0];
+    const float* d8 = in[1]->data.data();
+    for (int64_t i = 0; i < D; ++i) {
+        const float* r = d8 + i * 8;
+        t.dense.insert(t.dense.end(), {r[0], r[1], r[2], r[4], r[5], r[6]});
+        if (!(r[3] == std::floor(r[3]) && r[3] >= -1 && r[3] < float(S)))
+            throw Error("dense point " + std::to_string(i) + " names sample " + std::to_string(r[3]) + " of " + std::to_string(S));
+        t.dense_sample.push_back(int32_t(r[3]));
+    }
+    t.cells = in[2]->ints();
+    for (size_t c = 0; c < t.cells.size(); ++c)
+        if (t.cells[c] < -1 || t.cells[c] >= D)
+            throw Error("cell " + std::to_string(c / 2) + " names dense point " + std::to_string(t.cells[c]) + " of " + std::to_string(D));
+    return {t.dense.data(), t.dense_sample.data(), t.cells.data(), in[0]->data.data(), in[3]->data.data(),
+            int32_t(in[3]->shape[0]), st.origin, st.voxel, st.nx, st.ny, st.nz};
 }
 
 void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
     const Setup st = setup(p);
-    std::vector<int32_t> cells;
-    const pose::Grid g = grid_of(in, st, cells);
+    Tables tables;
+    const pose::Grid g = grid_of(in, st, tables);
     const int64_t H = out[0]->shape[0], K = in[4]->shape[0], F = in[5]->shape[0];
     std::vector<pose::Term> terms;
     for (int64_t k = 0; k < K; ++k) {

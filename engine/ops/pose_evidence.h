@@ -24,20 +24,20 @@ struct Frame {
     V3 x, y, z, t;
 };
 
-// The lookup grid over the object (engine/track/surface.h builds it): per cell,
-// the nearest dense surface point, the nearest hypothesis sample, and each's nearest
-// counterpart whose normal turns the other way (a thin part's far face); -1: none
-// within the grid's band.
+// The lookup grid over the object (engine/track/surface.h builds it): per cell, the
+// nearest dense surface point and its nearest counterpart whose normal turns the other
+// way (a thin part's far face; -1: none within the grid's band); per dense point, the
+// hypothesis sample a pose pressing it reads a field at (-1: none near).
 struct Grid {
-    const float* dense;      // [D, dense_stride]: point at 0, outward unit normal at dense_stride / 2
-    const int32_t* cells;    // [nx * ny * nz, 4]
-    const float* samples;    // [S, 9] point, normal, tangent t1
-    const float* spins;      // [NS, 2] cos, sin
+    const float* dense;           // [D, 6] point, outward unit normal
+    const int32_t* dense_sample;  // [D]
+    const int32_t* cells;         // [nx * ny * nz, 2]
+    const float* samples;         // [S, 9] point, normal, tangent t1
+    const float* spins;           // [NS, 2] cos, sin
     int32_t n_spin;
     V3 origin;
     float voxel;
     int32_t nx, ny, nz;
-    int32_t dense_stride = 6;  // 6, or 8 for the op's input (point, 0, normal, 0: two vec4 reads on the GPU)
 };
 
 // One touch of the window seen from the hypothesis' touch: its pose is
@@ -90,21 +90,23 @@ inline int64_t cell_of(const Grid& g, V3 q) {
     return (int64_t(fz) * g.ny + int64_t(fy)) * g.nx + int64_t(fx);
 }
 
-// Of a cell's nearest point (slot a, normal at n_first) and its far-face counterpart
-// (slot a + 2), the one a pose with axis z presses: the counterpart where there is one
-// and z runs along the first's outward normal (the gel then presses the other face).
-inline int32_t pressed(const int32_t* c, int a, const float* n_first, V3 z) {
-    return c[a + 2] >= 0 && dot(z, load3(n_first)) > 0.0f ? c[a + 2] : c[a];
+// The dense point a pose with axis z presses in a cell: the cell's nearest point or,
+// where z runs along that point's outward normal (the gel then presses the other
+// face), its far-face counterpart if it has one; -1: none near.
+inline int32_t pressed_point(const Grid& g, int64_t cell, V3 z) {
+    if (cell < 0) return -1;
+    const int32_t* c = g.cells + cell * 2;
+    if (c[0] < 0) return -1;
+    return c[1] >= 0 && dot(z, load3(g.dense + int64_t(c[0]) * 6 + 3)) > 0.0f ? c[1] : c[0];
 }
 
-// The hypothesis nearest a pose (axes x, z): the cell's sample on the face the pose
-// presses and the spin whose x axis is closest to the pose's (lowest spin on a tie);
-// -1 when no sample is near.
+// The hypothesis nearest a pose (axes x, z): the sample of the dense point it presses
+// and the spin whose x axis is closest to the pose's (lowest spin on a tie); -1 when
+// no sample is near.
 inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
-    if (cell < 0) return -1;
-    const int32_t* c = g.cells + cell * 4;
-    if (c[1] < 0) return -1;
-    const int32_t s = pressed(c, 1, g.samples + int64_t(c[1]) * 9 + 3, z);
+    const int32_t i = pressed_point(g, cell, z);
+    const int32_t s = i < 0 ? -1 : g.dense_sample[i];
+    if (s < 0) return -1;
     const float* smp = g.samples + int64_t(s) * 9;
     V3 t1 = load3(smp + 6), t2 = cross(mul(load3(smp + 3), -1.0f), t1);
     float a = dot(x, t1), b = dot(x, t2);
@@ -117,13 +119,6 @@ inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
     return int64_t(s) * g.n_spin + best;
 }
 
-// The dense point a pose with axis z presses in a cell (-1: none near).
-inline int32_t pressed_point(const Grid& g, int64_t cell, V3 z) {
-    if (cell < 0) return -1;
-    const int32_t* c = g.cells + cell * 4;
-    return c[0] < 0 ? -1 : pressed(c, 0, g.dense + int64_t(c[0]) * g.dense_stride + g.dense_stride / 2, z);
-}
-
 // Geometry: the pose's gel centre should sit `press` inside the surface and its
 // axis along the inward normal; a robust Gaussian (floor exp(log_floor)).
 // The distance is to the tangent plane of the dense point the pose presses.
@@ -131,8 +126,7 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
                           float log_floor) {
     const int32_t i = pressed_point(g, cell, f.z);
     if (i < 0) return log_floor;
-    const float* d = g.dense + int64_t(i) * g.dense_stride;
-    V3 p = load3(d), n = load3(d + g.dense_stride / 2);
+    V3 p = load3(g.dense + int64_t(i) * 6), n = load3(g.dense + int64_t(i) * 6 + 3);
     float e_d = dot(sub(f.t, p), n) + press;
     // The axis' angle to the inward normal as atan2(|z x n|, -z.n): the GPU's acos is
     // off by up to ~1e-3 rad, which a narrow sigma_a magnifies past the tolerance.

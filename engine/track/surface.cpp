@@ -79,12 +79,12 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
     return best;
 }
 
-// For every cell within `band` of a point, the nearest point (lowest index on a tie).
-// With `opposes` >= 0, only points whose normal (at 3..5 of the point) turns away from
-// the normal of the point already named in slot `opposes`: a thin part's other face.
+// For every cell within `band` of a point, the nearest point (lowest index on a tie),
+// into slot `slot` of `cells` ([V, 2]). With `opposes`, only points whose normal (at
+// 3..5 of the point) turns away from that of the point in slot 0: a thin part's far face.
 void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, int64_t stride, const Surface& s,
-           double band, int opposes = -1) {
-    std::vector<float> best(cells.size() / 4, std::numeric_limits<float>::infinity());
+           double band, bool opposes = false) {
+    std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
     const int r = int(std::ceil(band / s.voxel));
     for (int64_t i = 0; i < n; ++i) {
         const float* p = pts + i * stride;
@@ -100,13 +100,13 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
                                     (q[2] - p[2]) * (q[2] - p[2]);
                     if (d > float(band * band)) continue;
                     const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
-                    if (opposes >= 0) {
-                        const int32_t o = cells[4 * cell + size_t(opposes)];
+                    if (opposes) {
+                        const int32_t o = cells[2 * cell];
                         if (o < 0) continue;
                         const float* m = pts + int64_t(o) * stride + 3;
                         if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) continue;
                     }
-                    if (d < best[cell]) best[cell] = d, cells[4 * cell + size_t(slot)] = int32_t(i);
+                    if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
                 }
     }
 }
@@ -198,6 +198,8 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
         s.samples.insert(s.samples.end(), p, p + 6);
         for (double v : t1) s.samples.push_back(float(v));
     }
+    if (s.n_samples() >= (int64_t(1) << 24))  // pose_evidence holds sample indices as floats
+        throw Error(source + ": " + std::to_string(s.n_samples()) + " hypothesis samples, at most 2^24");
     s.spins = ops::book::spin_table(o.n_spin);
 
     // Grid: the box grown by the band, in cells no smaller than min_voxel, at most max_cells.
@@ -215,12 +217,24 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
         if (cells <= o.max_cells) break;
     }
     if (cells > o.max_cells) throw Error(source + ": the lookup grid would need " + std::to_string(cells) + " cells");
-    s.cells.assign(size_t(4 * cells), -1);
-    const double band = std::max(o.band_mm, double(s.voxel)), sample_band = std::max(band, 1.5 * s.spacing_mm);
+    s.cells.assign(size_t(2 * cells), -1);
+    const double band = std::max(o.band_mm, double(s.voxel));
     splat(s.cells, 0, s.dense.data(), D, 6, s, band);
-    splat(s.cells, 1, s.samples.data(), s.n_samples(), 9, s, sample_band);
-    splat(s.cells, 2, s.dense.data(), D, 6, s, band, 0);
-    splat(s.cells, 3, s.samples.data(), s.n_samples(), 9, s, sample_band, 1);
+    splat(s.cells, 1, s.dense.data(), D, 6, s, band, true);
+    // Each dense point's sample: of the samples nearest its cell's centre (and their
+    // far-face counterparts), the one on the point's own face.
+    std::vector<int32_t> near(size_t(2 * cells), -1);
+    splat(near, 0, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm));
+    splat(near, 1, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm), true);
+    s.dense_sample.assign(size_t(D), -1);
+    for (int64_t i = 0; i < D; ++i) {
+        const float* p = &s.dense[size_t(6 * i)];
+        const int64_t c = s.cell_of(p);
+        if (c < 0 || near[size_t(2 * c)] < 0) continue;
+        const int32_t a = near[size_t(2 * c)], b = near[size_t(2 * c + 1)];
+        const float* n = &s.samples[size_t(9 * a + 3)];
+        s.dense_sample[size_t(i)] = b >= 0 && p[3] * n[0] + p[4] * n[1] + p[5] * n[2] < 0 ? b : a;
+    }
     return s;
 }
 

@@ -3,9 +3,9 @@
 // a dense set of surface points with outward normals (a mesh sampled densely, or
 // the user's cloud as it is), the hypothesis samples (a subset about `spacing`
 // apart; each with the renderer's tangent t1 of its axis z = -n), the spins, and
-// a lookup grid whose cells name the nearest dense point and the nearest sample
-// within a band around the surface, and each's nearest counterpart on a face turned
-// the other way (a thin part's far side: docs/multitouch.md, "Thin parts").
+// a lookup grid whose cells name the nearest dense point within a band around the
+// surface and its nearest counterpart on a face turned the other way (a thin part's
+// far side: docs/multitouch.md, "Thin parts"), and each dense point's sample.
 #include <array>
 #include <cstdint>
 #include <string>
@@ -18,7 +18,7 @@ namespace vtloc::track {
 struct SurfaceOptions {
     int64_t target_hypotheses = 120000;  // samples x spins, about
     int n_spin = 36;                     // 10 degrees apart
-    int64_t max_cells = 2000000;         // lookup grid cells at most (16 bytes each)
+    int64_t max_cells = 2000000;         // lookup grid cells at most (8 bytes each)
     double band_mm = 4.0;                // cells farther from the surface hold no point
     double min_voxel_mm = 0.5;
     // The candidates protocol (SPEC 6; the paper's S^c): hypotheses only at these points
@@ -30,10 +30,12 @@ struct Surface {
     std::vector<float> dense;     // [D, 6] point, outward unit normal (object units)
     std::vector<float> samples;   // [S, 9] point, normal, t1
     std::vector<float> spins;     // [NS, 2] cos, sin of 2 pi j / NS
-    // [nx*ny*nz, 4]: nearest dense point, nearest sample, then the nearest dense point whose
-    // normal opposes the first's and the nearest sample whose normal opposes the second's
-    // (-1: none within the band).
+    // [nx*ny*nz, 2]: the nearest dense point, and the nearest whose normal opposes the
+    // first's (-1: none within the band).
     std::vector<int32_t> cells;
+    // [D]: per dense point, the sample nearest its cell's centre on the point's own face
+    // (-1: none within the band), where a pose there reads a field.
+    std::vector<int32_t> dense_sample;
     std::array<float, 3> origin{};
     float voxel = 1;
     std::array<int32_t, 3> dims{};
@@ -46,8 +48,9 @@ struct Surface {
     int n_spin() const { return int(spins.size() / 2); }
     int64_t n_hypotheses() const { return n_samples() * n_spin(); }
     int64_t n_cells() const { return int64_t(dims[0]) * dims[1] * dims[2]; }
-    uint64_t device_bytes() const { return 4 * (dense.size() + samples.size() + spins.size() + cells.size()); }
-    // The grid cell holding q (-1 outside), the dense point and sample it names.
+    // The GPU holds the dense points as [D, 8] (pose_evidence's layout, their samples in it).
+    uint64_t device_bytes() const { return 4 * (8 * dense.size() / 6 + samples.size() + spins.size() + cells.size()); }
+    // The grid cell holding q (-1 outside).
     int64_t cell_of(const float* q) const;
 };
 

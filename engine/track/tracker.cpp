@@ -43,12 +43,14 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     const Surface& s = surface_;
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 9}, s.samples));
-    std::vector<float> dense8(size_t(8 * s.n_dense()), 0.0f);  // pose_evidence's layout: point, 0, normal, 0
-    for (int64_t i = 0; i < s.n_dense(); ++i)
+    std::vector<float> dense8(size_t(8 * s.n_dense()), 0.0f);  // pose_evidence's layout: point, sample, normal, 0
+    for (int64_t i = 0; i < s.n_dense(); ++i) {
         for (int k = 0; k < 3; ++k)
             dense8[size_t(8 * i + k)] = s.dense[size_t(6 * i + k)], dense8[size_t(8 * i + 4 + k)] = s.dense[size_t(6 * i + 3 + k)];
+        dense8[size_t(8 * i + 3)] = float(s.dense_sample[size_t(i)]);
+    }
     w.add("surface.dense", HostTensor({s.n_dense(), 8}, std::move(dense8)));
-    w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 4}, s.cells));
+    w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 2}, s.cells));
     w.add("surface.spins", HostTensor({int64_t(s.n_spin()), 2}, s.spins));
     std::vector<float> pts;
     for (int64_t i = 0; i < s.n_samples(); ++i) pts.insert(pts.end(), &s.samples[size_t(i * 9)], &s.samples[size_t(i * 9 + 3)]);
@@ -78,7 +80,7 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
     p.own_field = own;
     p.own_weight = 1;
     int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 9}), g.weight("surface.dense", {s.n_dense(), 8}),
-                                   g.weight("surface.cells", {s.n_cells(), 4}, ElemType::I32),
+                                   g.weight("surface.cells", {s.n_cells(), 2}, ElemType::I32),
                                    g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}),
                                    g.input("fields", {F, H}), p, "track.evidence");
     std::vector<int> lp = ops::log_softmax(g, score, "track.belief");
@@ -110,7 +112,7 @@ void term_row(float* r, const Rigid& rel, int steps, const FilterOptions& o, int
 }
 
 ops::pose::Grid grid_of(const Surface& s) {
-    return {s.dense.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
+    return {s.dense.data(), s.dense_sample.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
             P{s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
 }
 
@@ -425,7 +427,8 @@ std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) 
     std::vector<float> h(static_cast<size_t>(N), 0.0f);
     for (int64_t i = 0; i < N; ++i) {
         const int64_t cell = surface_.cell_of(&cloud.data[size_t(i * C)]);
-        const int32_t smp = cell < 0 ? -1 : surface_.cells[size_t(4 * cell + 1)];
+        const int32_t near = cell < 0 ? -1 : surface_.cells[size_t(2 * cell)];
+        const int32_t smp = near < 0 ? -1 : surface_.dense_sample[size_t(near)];
         if (smp >= 0) h[size_t(i)] = e.sample_belief[size_t(smp)];
     }
     if (h.empty()) return h;
