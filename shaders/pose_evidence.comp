@@ -14,7 +14,7 @@
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
-layout(std430, binding = 0) readonly buffer Samples_ { float smp[]; };  // [S, 9]
+layout(std430, binding = 0) readonly buffer Samples_ { vec4 smp4[]; };  // [S, 12]: point, 0, normal, 0, t1, 0
 layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, sample, normal, 0
 layout(std430, binding = 2) readonly buffer Cells_ { ivec2 cells[]; };  // [V, 2]
 layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
@@ -33,7 +33,8 @@ vec3 cross3(vec3 a, vec3 b) {
     precise vec3 r = vec3(a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x);
     return r;
 }
-vec3 load_smp(uint base) { return vec3(smp[base], smp[base + 1u], smp[base + 2u]); }
+// Row k (0 point, 1 normal, 2 t1) of sample s: one read, not three.
+vec3 load_smp(uint s, uint k) { return smp4[s * 3u + k].xyz; }
 
 // The grid cell holding q (-1 outside the grid).
 int cell_of(vec3 q) {
@@ -47,8 +48,8 @@ int cell_of(vec3 q) {
 // The hypothesis nearest a pose with x axis x at sample s (-1: none).
 int nearest_hypothesis(int s, vec3 x) {
     if (s < 0) return -1;
-    vec3 t1 = load_smp(uint(s) * 9u + 6u);
-    precise vec3 z = load_smp(uint(s) * 9u + 3u) * -1.0;
+    vec3 t1 = load_smp(uint(s), 2u);
+    precise vec3 z = load_smp(uint(s), 1u) * -1.0;
     vec3 t2 = cross3(z, t1);
     precise float a = dot3(x, t1), b = dot3(x, t2);
     int best = 0;
@@ -76,13 +77,13 @@ void main() {
     uint h = gl_GlobalInvocationID.x;
     if (h < p.H) do {
         const uint s = h / uint(NS), j = h % uint(NS);
-        precise vec3 z = load_smp(s * 9u + 3u) * -1.0;
-        vec3 t1 = load_smp(s * 9u + 6u);
+        precise vec3 z = load_smp(s, 1u) * -1.0;
+        vec3 t1 = load_smp(s, 2u);
         precise vec3 t2 = cross3(z, t1);
         const vec2 cs = spins[j];
         precise vec3 x = t1 * cs.x + t2 * cs.y;
         precise vec3 y = cross3(z, x);
-        precise vec3 t = load_smp(s * 9u) + z * p.press;
+        precise vec3 t = load_smp(s, 0u) + z * p.press;
         float acc = p.own_field >= 0 ? p.own_weight * fields[uint(p.own_field) * p.H + h] : 0.0;
         // The terms in order, in segments: the terms up to the next one that reads a field,
         // then that field. A mask-executing driver (lavapipe) runs the code of an `if` even

@@ -14,6 +14,7 @@
 #include "engine/check/op_selftest.h"
 #include "engine/executor.h"
 #include "engine/ops/build.h"
+#include "engine/ops/pose_evidence.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -86,7 +87,7 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
     std::uniform_real_distribution<float> lf(-20.0f, 0.0f);
     for (float& v : fields.data) v = lf(rng);
     sc.p.own_field = F ? F - 1 : -1;
-    sc.in = {{"samples", samples}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 2}, cells)},
+    sc.in = {{"samples", HostTensor({S, 12}, ops::pose::evidence_samples(samples.data))}, {"dense", dense}, {"cells", HostTensor::from_ints({V, 2}, cells)},
              {"spins", spins}, {"terms", terms}, {"fields", fields}};
     return sc;
 }
@@ -94,7 +95,7 @@ Scene scene(int64_t S, int64_t D, int64_t NS, int64_t K, int64_t F, uint32_t see
 Graph evidence_graph(const Scene& sc) {
     Graph g;
     const int64_t V = sc.dims[0] * sc.dims[1] * sc.dims[2];
-    int out = ops::pose_evidence(g, g.input("samples", {sc.S, 9}), g.input("dense", {sc.D, 8}),
+    int out = ops::pose_evidence(g, g.input("samples", {sc.S, 12}), g.input("dense", {sc.D, 8}),
                                  g.input("cells", {V, 2}, ElemType::I32), g.input("spins", {sc.NS, 2}),
                                  g.input("terms", {sc.K, 16}), g.input("fields", {sc.F, sc.S * sc.NS}), sc.p);
     g.output(out, "score");
@@ -123,7 +124,7 @@ TEST_CASE("pose_evidence scores a pose on the surface above one off it", "[op][p
         for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), 0, 0, 0, 0, 1, 0});
     sc.D = int64_t(dense.size() / 8);
     sc.in["dense"] = HostTensor({sc.D, 8}, dense);
-    sc.in["samples"] = HostTensor({1, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0});
+    sc.in["samples"] = HostTensor({1, 12}, ops::pose::evidence_samples({0, 0, 0, 0, 0, 1, 1, 0, 0}));
     const int64_t V = 7 * 5 * 6;
     std::vector<int32_t> cells(size_t(2 * V), -1);
     for (int64_t c = 0; c < V; ++c) {
@@ -167,7 +168,7 @@ TEST_CASE("pose_evidence: a pose pressing a thin part's far face is scored on th
             for (int x = -3; x <= 3; ++x) dense.insert(dense.end(), {float(x), float(y), z, z == 0 ? 0.0f : 1.0f, 0, 0, z == 0 ? 1.0f : -1.0f, 0});
     sc.D = int64_t(dense.size() / 8);
     sc.in["dense"] = HostTensor({sc.D, 8}, dense);
-    sc.in["samples"] = HostTensor({2, 9}, {0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, -2, 0, 0, -1, 1, 0, 0});
+    sc.in["samples"] = HostTensor({2, 12}, ops::pose::evidence_samples({0, 0, 0, 0, 0, 1, 1, 0, 0, 0, 0, -2, 0, 0, -1, 1, 0, 0}));
     const int64_t V = 7 * 5 * 6;
     auto cells_of = [&](bool far_slots) {
         std::vector<int32_t> cells(size_t(2 * V), -1);
@@ -263,13 +264,17 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     CHECK_THROWS_WITH(ops::expected_distance(g, p4, g.input("w4", {4}), g.input("a", {2, 2})), Catch::Contains("answers must be [A > 0, 3]"));
     Scene sc = scene(5, 5, 3, 1, 1, 1);
     Graph h;
-    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 9}), h.input("d", {5, 8}), h.input("c", {7, 2}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(h, h.input("s", {5, 12}), h.input("d", {5, 8}), h.input("c", {7, 2}, ElemType::I32),
                                          h.input("sp", {3, 2}), h.input("t", {1, 16}), h.input("f", {1, 15}), sc.p),
                       Catch::Contains("cells must be [nx*ny*nz, 2]"));
     Graph k;  // the unpadded [D, 6] surface
-    CHECK_THROWS_WITH(ops::pose_evidence(k, k.input("s", {5, 9}), k.input("d", {5, 6}), k.input("c", {7 * 5 * 6, 2}, ElemType::I32),
+    CHECK_THROWS_WITH(ops::pose_evidence(k, k.input("s", {5, 12}), k.input("d", {5, 6}), k.input("c", {7 * 5 * 6, 2}, ElemType::I32),
                                          k.input("sp", {3, 2}), k.input("t", {1, 16}), k.input("f", {1, 15}), sc.p),
                       Catch::Contains("dense surface must be [D > 0, 8]"));
+    Graph u;  // the unpadded [S, 9] samples
+    CHECK_THROWS_WITH(ops::pose_evidence(u, u.input("s", {5, 9}), u.input("d", {5, 8}), u.input("c", {7 * 5 * 6, 2}, ElemType::I32),
+                                         u.input("sp", {3, 2}), u.input("t", {1, 16}), u.input("f", {1, 15}), sc.p),
+                      Catch::Contains("samples must be [S > 0, 12]"));
     // Indices past the tables: the CPU reference names them (the GPU trusts the tracker's).
     Scene bad = scene(13, 29, 7, 3, 2, 11);
     bad.in["dense"].data[8 * 4 + 3] = 13.0f;  // point 4 names sample 13 of 13

@@ -7,6 +7,7 @@
 
 #include "engine/check/op_selftest.h"
 #include "engine/ops/build.h"
+#include "engine/ops/pose_evidence.h"
 
 namespace vtloc::check {
 
@@ -53,6 +54,7 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     p.origin[0] = -4.5, p.origin[1] = -3.75, p.origin[2] = -5.25;
     p.dims[0] = 6, p.dims[1] = 5, p.dims[2] = 7;
     p.own_field = 1;
+    samples = HostTensor({S, 12}, ops::pose::evidence_samples(samples.data));
     int score = ops::pose_evidence(c.g, c.input("samples", samples), c.input("dense", dense),
                                    c.input("cells", HostTensor::from_ints({V, 2}, cells)), c.input("spins", spins),
                                    c.input("terms", terms), c.input("fields", fields), p);

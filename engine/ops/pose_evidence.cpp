@@ -4,7 +4,7 @@
 // that pose's geometry evidence (on the surface, axis along the inward normal)
 // and/or a log field (a touch term, or the online filter's previous belief)
 // read at the nearest hypothesis. own_field adds a field at h itself.
-// Inputs: samples [S, 9] (point, normal, t1), dense surface [D, 8] (point, the
+// Inputs: samples [S, 12] (point, 0, normal, 0, t1, 0), dense surface [D, 8] (point, the
 // point's sample as a float (-1: none), outward normal, 0: two vec4 reads on the GPU),
 // cells [V, 2] I32 (nearest dense point and its counterpart on a face turned the other
 // way: pose_evidence.h), spins [NS, 2] (cos, sin),
@@ -55,7 +55,8 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
     const Setup st = setup(p);
     const Shape &s = in[0].shape, &d = in[1].shape, &c = in[2].shape, &sp = in[3].shape, &k = in[4].shape,
                 &f = in[5].shape;
-    if (s.size() != 2 || s[1] != 9 || s[0] == 0) throw Error("samples must be [S > 0, 9], got " + shape_str(s));
+    if (s.size() != 2 || s[1] != 12 || s[0] == 0)
+        throw Error("samples must be [S > 0, 12] (point, 0, normal, 0, t1, 0), got " + shape_str(s));
     if (d.size() != 2 || d[1] != 8 || d[0] == 0)
         throw Error("dense surface must be [D > 0, 8] (point, sample, normal, 0), got " + shape_str(d));
     if (s[0] >= (int64_t(1) << 24)) throw Error("at most 2^24 samples (their indices are floats), got " + std::to_string(s[0]));
@@ -75,7 +76,7 @@ std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p
 // The [D, 8] input as the mirror's [D, 6] points and [D] samples; indices are checked
 // here (the GPU trusts them: the tracker builds them).
 struct Tables {
-    std::vector<float> dense;
+    std::vector<float> samples, dense;
     std::vector<int32_t> dense_sample, cells;
 };
 pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, Tables& t) {
@@ -88,11 +89,13 @@ pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, Ta
             throw Error("dense point " + std::to_string(i) + " names sample " + std::to_string(r[3]) + " of " + std::to_string(S));
         t.dense_sample.push_back(int32_t(r[3]));
     }
+    for (int64_t s = 0; s < S; ++s)
+        for (int k = 0; k < 9; ++k) t.samples.push_back(in[0]->data[size_t(12 * s + k / 3 * 4 + k % 3)]);
     t.cells = in[2]->ints();
     for (size_t c = 0; c < t.cells.size(); ++c)
         if (t.cells[c] < -1 || t.cells[c] >= D)
             throw Error("cell " + std::to_string(c / 2) + " names dense point " + std::to_string(t.cells[c]) + " of " + std::to_string(D));
-    return {t.dense.data(), t.dense_sample.data(), t.cells.data(), in[0]->data.data(), in[3]->data.data(),
+    return {t.dense.data(), t.dense_sample.data(), t.cells.data(), t.samples.data(), in[3]->data.data(),
             int32_t(in[3]->shape[0]), st.origin, st.voxel, st.nx, st.ny, st.nz};
 }
 

@@ -6,6 +6,7 @@
 // grid cell and spin on both, so only exp/log/acos differ (within tolerance).
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 namespace vtloc::ops::pose {
 
@@ -134,6 +135,25 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
     float e_a = std::atan2(std::sqrt(dot(w, w)), -dot(f.z, n));
     float q = (e_d / sigma_d) * (e_d / sigma_d) + (e_a / sigma_a) * (e_a / sigma_a);
     return std::log(std::exp(-0.5f * q) + std::exp(log_floor));
+}
+
+// pose_evidence's input rows, padded to vec4s (on a CPU driver every read at a varying
+// offset is a loop over the lanes, whatever its width): samples [S, 9] -> [S, 12]
+// (point, 0, normal, 0, t1, 0); dense [D, 6] and each point's sample -> [D, 8] (point,
+// sample as a float, normal, 0).
+inline std::vector<float> evidence_samples(const std::vector<float>& s9) {
+    std::vector<float> r(s9.size() / 9 * 12, 0.0f);
+    for (size_t i = 0; i < s9.size() / 9; ++i)
+        for (size_t k = 0; k < 9; ++k) r[12 * i + k / 3 * 4 + k % 3] = s9[9 * i + k];
+    return r;
+}
+inline std::vector<float> evidence_dense(const std::vector<float>& d6, const std::vector<int32_t>& sample) {
+    std::vector<float> r(d6.size() / 6 * 8, 0.0f);
+    for (size_t i = 0; i < d6.size() / 6; ++i) {
+        for (size_t k = 0; k < 3; ++k) r[8 * i + k] = d6[6 * i + k], r[8 * i + 4 + k] = d6[6 * i + 3 + k];
+        r[8 * i + 3] = float(sample[i]);
+    }
+    return r;
 }
 
 }  // namespace vtloc::ops::pose

@@ -42,14 +42,8 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
         throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
     const Surface& s = surface_;
     WeightStore& w = impl_->weights;
-    w.add("surface.samples", HostTensor({s.n_samples(), 9}, s.samples));
-    std::vector<float> dense8(size_t(8 * s.n_dense()), 0.0f);  // pose_evidence's layout: point, sample, normal, 0
-    for (int64_t i = 0; i < s.n_dense(); ++i) {
-        for (int k = 0; k < 3; ++k)
-            dense8[size_t(8 * i + k)] = s.dense[size_t(6 * i + k)], dense8[size_t(8 * i + 4 + k)] = s.dense[size_t(6 * i + 3 + k)];
-        dense8[size_t(8 * i + 3)] = float(s.dense_sample[size_t(i)]);
-    }
-    w.add("surface.dense", HostTensor({s.n_dense(), 8}, std::move(dense8)));
+    w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
+    w.add("surface.dense", HostTensor({s.n_dense(), 8}, ops::pose::evidence_dense(s.dense, s.dense_sample)));
     w.add("surface.cells", HostTensor::from_ints({s.n_cells(), 2}, s.cells));
     w.add("surface.spins", HostTensor({int64_t(s.n_spin()), 2}, s.spins));
     std::vector<float> pts;
@@ -79,7 +73,7 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
     p.voxel = s.voxel;
     p.own_field = own;
     p.own_weight = 1;
-    int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 9}), g.weight("surface.dense", {s.n_dense(), 8}),
+    int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 12}), g.weight("surface.dense", {s.n_dense(), 8}),
                                    g.weight("surface.cells", {s.n_cells(), 2}, ElemType::I32),
                                    g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}),
                                    g.input("fields", {F, H}), p, "track.evidence");
