@@ -262,4 +262,26 @@ TEST_CASE("on a thin plate the grid names the face a pose presses, not the neare
     CHECK(far_nearest > poses / 10);  // the case arises
     CHECK(wrong == 0);
     CHECK(wrong_sample == 0);
+
+    // The heat-map over a cloud with normals shows each face's own belief: all of it on the
+    // bottom face's samples lights every interior bottom point and no top one.
+    track::Estimate e;
+    for (int64_t k = 0; k < s.n_samples(); ++k) e.sample_belief.push_back(s.samples[size_t(9 * k + 5)] < -0.9f ? 1.0f : 0.0f);
+    std::vector<float> rows, xyz;
+    for (int64_t i = 0; i < dense.shape[0]; ++i) {
+        const float* p = &dense.data[size_t(i * 6)];
+        if (std::abs(p[5]) < 0.9f || p[0] < 3 || p[0] > 27 || p[1] < 3 || p[1] > 17) continue;
+        rows.insert(rows.end(), p, p + 6);
+        xyz.insert(xyz.end(), p, p + 3);
+    }
+    const int64_t N = int64_t(xyz.size() / 3);
+    const track::Tracker tr(nullptr, s);
+    // (Without normals the cell's nearest point names the face too, as long as the cells are
+    // finer than half the part: 0.5 mm here.)
+    for (const HostTensor& cloud : {HostTensor({N, 6}, rows), HostTensor({N, 3}, xyz)}) {
+        const std::vector<float> heat = tr.heatmap(e, cloud);
+        int64_t wrong_heat = 0;
+        for (int64_t i = 0; i < N; ++i) wrong_heat += heat[size_t(i)] != (rows[size_t(6 * i + 5)] < 0 ? 1.0f : 0.0f);
+        CHECK(wrong_heat == 0);
+    }
 }

@@ -67,7 +67,14 @@ struct Tracker::Impl {
           object_units(o.object_units), score{o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm},
           codebook_cache(o.codebook_cache) {
         track::check_score_options(score);
-        display_tensor = HostTensor({int64_t(display.size()), 3}, display.xyz);
+        // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
+        const bool n = display.normals.size() == display.xyz.size();
+        std::vector<float> rows;
+        for (size_t i = 0; i < display.size(); ++i) {
+            rows.insert(rows.end(), &display.xyz[3 * i], &display.xyz[3 * i + 3]);
+            if (n) rows.insert(rows.end(), &display.normals[3 * i], &display.normals[3 * i + 3]);
+        }
+        display_tensor = HostTensor({int64_t(display.size()), n ? 6 : 3}, std::move(rows));
     }
 
     // Render-and-compare's term for one touch's gel shape (SPEC 9), or none.

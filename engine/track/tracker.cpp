@@ -419,9 +419,12 @@ std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) 
     if (cloud.shape.size() != 2 || cloud.shape[1] < 3) throw Error("heat-map: the cloud must be [N, >= 3]");
     const int64_t N = cloud.shape[0], C = cloud.shape[1];
     std::vector<float> h(static_cast<size_t>(N), 0.0f);
+    const ops::pose::Grid grid = grid_of(surface_);
     for (int64_t i = 0; i < N; ++i) {
-        const int64_t cell = surface_.cell_of(&cloud.data[size_t(i * C)]);
-        const int32_t near = cell < 0 ? -1 : surface_.cells[size_t(2 * cell)];
+        const float* q = &cloud.data[size_t(i * C)];
+        const int64_t cell = surface_.cell_of(q);
+        const int32_t near = C >= 6 ? ops::pose::pressed_point(grid, cell, P{-q[3], -q[4], -q[5]})
+                             : cell < 0 ? -1 : surface_.cells[size_t(2 * cell)];
         const int32_t smp = near < 0 ? -1 : surface_.dense_sample[size_t(near)];
         if (smp >= 0) h[size_t(i)] = e.sample_belief[size_t(smp)];
     }

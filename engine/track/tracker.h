@@ -86,7 +86,9 @@ public:
     // CPU reference counts the same bytes, as what the GPU would hold.
     uint64_t device_bytes() const;
     const FilterOptions& options() const { return opt_; }
-    // A heat-map over `cloud` [N, >= 3]: each point's cell's sample belief, min-max normalised.
+    // A heat-map over `cloud` [N, 3] or [N, >= 6] (point, outward normal): the belief of the
+    // sample of each point's cell's nearest dense point (with normals: of the point on the
+    // cloud point's own face, as a pose pressing it would read), min-max normalised.
     std::vector<float> heatmap(const Estimate& e, const HostTensor& cloud) const;
 
 private:
