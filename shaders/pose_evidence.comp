@@ -2,7 +2,7 @@
 // Multi-touch filter: the log score of every pose hypothesis (engine/ops/pose_evidence.cpp
 // says what; engine/ops/pose_evidence.h is the CPU mirror, operation for operation).
 // The pose arithmetic is `precise` (no fused multiply-adds) so that a pose lands in the
-// same grid cell and spin as on the CPU reference; only exp/log/acos may differ.
+// same grid cell, face and spin as on the CPU reference; only exp/log/atan/sqrt may differ.
 //
 // Speed on a CPU driver (lavapipe, docs/multitouch.md "Speed"): it runs lanes in SIMD
 // with masks, so (1) a storage-buffer read at an offset not known to be uniform is a

@@ -3,7 +3,7 @@
 // pose_evidence's CPU reference and the tracker's continuous refinement, and
 // mirrored line for line by shaders/pose_evidence.comp. fp32 in the same order
 // as the shader, which marks the lookups `precise`: a pose lands in the same
-// grid cell and spin on both, so only exp/log/acos differ (within tolerance).
+// grid cell, face and spin on both, so only exp/log/atan/sqrt differ (within tolerance).
 #include <cmath>
 #include <cstdint>
 #include <vector>
