@@ -65,7 +65,7 @@ int nearest_hypothesis(int s, vec3 x) {
 // Geometry at dense point q (normal n).
 float geometry_log(vec3 q, vec3 n, vec3 t, vec3 z, float sd, float sa) {
     precise float e_d = dot3(t - q, n) + p.press;
-    // atan2(|z x n|, -z.n), as the CPU mirror: lavapipe's acos is off by up to ~1e-3 rad.
+    // atan2(|z x n|, -z.n), as the CPU mirror: lavapipe's acos is a coarse polynomial.
     vec3 w = cross3(z, n);
     float e_a = atan(sqrt(dot3(w, w)), -dot3(z, n));
     float r = (e_d / sd) * (e_d / sd) + (e_a / sa) * (e_a / sa);

@@ -5,9 +5,10 @@
 // `precise` in the same fp32 order on both sides (the face a pose presses too), so they
 // agree exactly and only exp/log/atan/sqrt differ: 1e-4 + 1e-4*|ref| on scores that sum
 // up to 8 terms. The axis angle is atan2(|z x n|, -z.n), not acos(-z.n): lavapipe's
-// acos is off by up to ~1e-3 rad, which enters as e_a/sigma_a^2 per radian (up to
-// ~0.01 a term at sigma_a = 0.1 near the floor) and failed a scene by 3.5e-3; its atan
-// keeps these scenes inside the default. The rest: the default.
+// acos is a polynomial (errors of order 1e-4 to 1e-3 rad), which enters as
+// e_a/sigma_a^2 per radian (up to ~0.01 a term at sigma_a = 0.1 near the floor) and
+// failed a scene by 3.5e-3; its atan keeps these scenes inside the default. The rest:
+// the default.
 #include <catch2/catch.hpp>
 
 #include <cmath>

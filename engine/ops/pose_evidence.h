@@ -129,8 +129,8 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
     if (i < 0) return log_floor;
     V3 p = load3(g.dense + int64_t(i) * 6), n = load3(g.dense + int64_t(i) * 6 + 3);
     float e_d = dot(sub(f.t, p), n) + press;
-    // The axis' angle to the inward normal as atan2(|z x n|, -z.n): the GPU's acos is
-    // off by up to ~1e-3 rad, which a narrow sigma_a magnifies past the tolerance.
+    // The axis' angle to the inward normal as atan2(|z x n|, -z.n): lavapipe's acos is a
+    // polynomial (errors of order 1e-4 to 1e-3 rad) that a narrow sigma_a magnifies.
     V3 w = cross(f.z, n);
     float e_a = std::atan2(std::sqrt(dot(w, w)), -dot(f.z, n));
     float q = (e_d / sigma_d) * (e_d / sigma_d) + (e_a / sigma_a) * (e_a / sigma_a);
