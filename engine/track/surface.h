@@ -48,8 +48,10 @@ struct Surface {
     int n_spin() const { return int(spins.size() / 2); }
     int64_t n_hypotheses() const { return n_samples() * n_spin(); }
     int64_t n_cells() const { return int64_t(dims[0]) * dims[1] * dims[2]; }
-    // The GPU holds the dense points as [D, 8] (pose_evidence's layout, their samples in it).
-    uint64_t device_bytes() const { return 4 * (8 * dense.size() / 6 + samples.size() + spins.size() + cells.size()); }
+    // The GPU holds the dense points as [D, 8] and the samples as [S, 12] (pose_evidence's rows).
+    uint64_t device_bytes() const {
+        return 4 * (8 * dense.size() / 6 + 12 * samples.size() / 9 + spins.size() + cells.size());
+    }
     // The grid cell holding q (-1 outside).
     int64_t cell_of(const float* q) const;
 };
