@@ -13,7 +13,7 @@
 
 namespace vtloc {
 
-inline constexpr const char* kDefaultModel = "models/vtloc-lite.safetensors";
+inline constexpr const char* kDefaultModel = "models/vtloc-lite-everyday.safetensors";
 // The untrained export kept as a fixture (tests, the mug examples): the CLI says
 // RANDOM WEIGHTS whenever it runs it.
 inline constexpr const char* kRandomModel = "models/vtloc-r18-half-random.safetensors";

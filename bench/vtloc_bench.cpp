@@ -42,7 +42,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const char* kUsage = R"(usage: vtloc-bench [options]
-  --weights FILE       weight file (default: the shipped default model, models/vtloc-lite.safetensors)
+  --weights FILE       weight file (default: the shipped default model, models/vtloc-lite-everyday.safetensors)
   --config NAME        instead: random weights of a named config (vtloc-r18, vtloc-mcr, vtloc-tiny,
                        vtloc-mcr-tiny), exported once by weights_tools (python3 + torch; VTLOC_PYTHON picks the interpreter) into
                        <bench dir>/bench-weights/NAME.safetensors

@@ -28,7 +28,7 @@ api::Validation validation_of(const py::object& v) {
 PYBIND11_MODULE(vtloc, m) {
     m.doc() = "VTLoc: visual-tactile contact localisation on the GPU (Vulkan compute).\n\n"
               "    ctx = vtloc.Context()\n"
-              "    model = vtloc.Model(ctx, 'models/vtloc-lite.safetensors')\n"
+              "    model = vtloc.Model(ctx, 'models/vtloc-lite-everyday.safetensors')\n"
               "    obj = model.encode_object('object.ply')\n"
               "    r = model.localize(obj, 'touch.png')   # or an H x W x 3 uint8 array\n"
               "    r.contact, r.topk_point, r.heatmap       # numpy arrays\n";

@@ -20,7 +20,7 @@ const char* kHelp =
     "shipped model's heat-map of each touch (SPEC section 6). It prints the error of the contact\n"
     "estimate after each touch and writes the belief after each touch side by side (belief.png).\n"
     "\n"
-    "--example picks a single touch instead: the shipped model (models/vtloc-lite.safetensors,\n"
+    "--example picks a single touch instead: the shipped model (models/vtloc-lite-everyday.safetensors,\n"
     "trained on the synthetic benchmark; docs/results.md) on one touch it never trained on\n"
     "(cone_test0) or one of the mug touches (real GelSight frames, not taken on the mug),\n"
     "printing the predicted and the true contact and writing a heat-map picture (PNG) and cloud\n"

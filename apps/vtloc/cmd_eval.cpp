@@ -25,7 +25,7 @@ const char* kHelp =
     "Each object is encoded once with its candidates (its test contacts); its touches run in\n"
     "batches.\n"
     "\n"
-    "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
+    "  --model M                 weight file (default: the shipped models/vtloc-lite-everyday)\n"
     "  --data DIR                dataset folder (dataset.json, objects/...)\n"
     "  --split test|train|all    which touches (default test)\n"
     "  --objects all|known|unknown\n"

@@ -16,7 +16,7 @@ const char* kHelp =
     "\n"
     "  --method network|codebook the model (default), or render-and-compare alone (SPEC 9; see\n"
     "                            vtloc localize --method codebook --help)\n"
-    "  --model M                 weight file (default: the shipped models/vtloc-lite)\n"
+    "  --model M                 weight file (default: the shipped models/vtloc-lite-everyday)\n"
     "  --tactile IMG             tactile image (PNG, JPEG, ...; RGB, at least 8x8)\n"
     "%s"
     "  --candidates F            candidate contact points (.ply, or x,y,z text rows);\n"
