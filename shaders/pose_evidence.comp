@@ -52,12 +52,21 @@ int nearest_hypothesis(int s, vec3 x) {
     precise vec3 z = load_smp(uint(s), 1u) * -1.0;
     vec3 t2 = cross3(z, t1);
     precise float a = dot3(x, t1), b = dot3(x, t2);
+    // The mirror takes the first spin of largest cs.x * a + cs.y * b over all NS. The spins
+    // are evenly spaced (2 pi j / NS: the CPU reference checks), so that spin is within one
+    // step of atan2(b, a)'s: three candidates, plus spin 0 (the answer when a = b = 0, where
+    // atan2 is undefined), with ties to the lowest spin, give the same spin for a ninth of
+    // NS = 36's work.
+    const float fj = atan(b, a) * (float(NS) / 6.2831853) + 0.5;
+    const int j0 = clamp(int(fj - float(NS) * floor(fj / float(NS))), 0, NS - 1);
+    const int cand[4] = int[4](0, (j0 + NS - 1) % NS, j0, (j0 + 1) % NS);
     int best = 0;
     float best_v = -3.0;
-    for (int j = 0; j < NS; ++j) {
+    for (int c = 0; c < 4; ++c) {
+        const int j = cand[c];
         const vec2 cs = spins[j];
         precise float v = cs.x * a + cs.y * b;
-        if (v > best_v) { best_v = v; best = j; }
+        if (v > best_v || (v == best_v && j < best)) { best_v = v; best = j; }
     }
     return s * NS + best;
 }

@@ -287,4 +287,8 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     cells[2 * 5 + 1] = 29;  // cell 5's far point: 29 of 29
     bad.in["cells"] = HostTensor::from_ints({int64_t(cells.size() / 2), 2}, cells);
     CHECK_THROWS_WITH(run_cpu(evidence_graph(bad), WeightStore{}, bad.in), Catch::Contains("cell 5 names dense point 29"));
+    // Spins not evenly spaced: the shader's nearest-spin search would not hold.
+    bad = scene(13, 29, 7, 3, 2, 11);
+    std::swap(bad.in["spins"].data[2], bad.in["spins"].data[4]);
+    CHECK_THROWS_WITH(run_cpu(evidence_graph(bad), WeightStore{}, bad.in), Catch::Contains("spin 1 is not (cos, sin) of 2 pi * 1 / 7"));
 }

@@ -98,7 +98,7 @@ struct PoseEvidence {
     int64_t own_field = -1;  // a field added at the hypothesis itself, -1 none
     double own_weight = 1;
 };
-// samples [S, 9], dense [D, 6], cells [V, 2] I32, spins [NS, 2], terms [K, 16], fields [F, S*NS] -> score [S*NS].
+// samples [S, 12], dense [D, 8], cells [V, 2] I32, spins [NS, 2], terms [K, 16], fields [F, S*NS] -> score [S*NS].
 int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,
                   const PoseEvidence& p, const std::string& name = "");
 // score [M] -> {log probabilities, probabilities}.

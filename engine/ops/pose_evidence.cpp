@@ -7,7 +7,7 @@
 // Inputs: samples [S, 12] (point, 0, normal, 0, t1, 0), dense surface [D, 8] (point, the
 // point's sample as a float (-1: none), outward normal, 0: two vec4 reads on the GPU),
 // cells [V, 2] I32 (nearest dense point and its counterpart on a face turned the other
-// way: pose_evidence.h), spins [NS, 2] (cos, sin),
+// way: pose_evidence.h), spins [NS, 2] (cos, sin of 2 pi j / NS, evenly spaced),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
 // [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
 // Terms are data on the device, so only the CPU reference can refuse a term naming a
@@ -109,6 +109,14 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
         terms.push_back(pose::term_from_row(&in[4]->data[size_t(k * 16)]));
         if (terms.back().field >= F) throw Error("term " + std::to_string(k) + " names field " +
                                                  std::to_string(terms.back().field) + " of " + std::to_string(F));
+    }
+    // The shader finds a pose's nearest spin from atan2 (shaders/pose_evidence.comp), which
+    // holds only for evenly spaced spins.
+    const int64_t NS = in[3]->shape[0];
+    for (int64_t j = 0; j < NS; ++j) {
+        const double a = 2 * M_PI * double(j) / double(NS);
+        if (!(std::abs(in[3]->data[size_t(2 * j)] - std::cos(a)) <= 1e-6 && std::abs(in[3]->data[size_t(2 * j + 1)] - std::sin(a)) <= 1e-6))
+            throw Error("spin " + std::to_string(j) + " is not (cos, sin) of 2 pi * " + std::to_string(j) + " / " + std::to_string(NS));
     }
     const float* fields = in[5]->data.data();
     for (int64_t h = 0; h < H; ++h) {
