@@ -126,7 +126,7 @@ api::PointCloud box_cloud(int per_face, double a, double b, double c) {
 // The shipped touches, and resized/cropped copies of them (other sensors' sizes).
 std::vector<api::TactileImage> image_set(const std::string& dir) {
     std::vector<api::TactileImage> out;
-    for (const char* f : {"cone_test0_touch.png", "touch_01.png", "touch_02.png", "touch_03.png"})
+    for (const char* f : {"plate_test0_touch.png", "touch_01.png", "touch_02.png", "touch_03.png"})
         out.push_back(api::load_tactile_image(dir + "/" + f));
     out.push_back(api::rescale_tactile_image(out[0], 0.1245, 0.0622));  // 2x: a finer sensor
     out.push_back(api::rescale_tactile_image(out[1], 0.1, 0.13));       // smaller frame
@@ -258,7 +258,7 @@ int main(int argc, char** argv) {
         api::Model model(ctx, model_path);
         const std::string ex = (data / "examples").string();
         std::vector<api::Object> objects;
-        objects.push_back(model.encode_object(ex + "/cone_test0.ply", ex + "/cone_test0_candidates.csv"));
+        objects.push_back(model.encode_object(ex + "/plate_test0.ply", ex + "/plate_test0_candidates.csv"));
         objects.push_back(model.encode_object(ex + "/mug.glb", ex + "/mug_candidates.csv"));
         objects.push_back(model.encode_object(sphere_cloud(1500, 30)));
         objects.push_back(model.encode_object(box_cloud(400, 80, 40, 20)));

@@ -22,7 +22,7 @@ const char* kHelp =
     "\n"
     "--example picks a single touch instead: the shipped model (models/vtloc-lite-everyday.safetensors,\n"
     "trained on the synthetic benchmark; docs/results.md) on one touch it never trained on\n"
-    "(cone_test0) or one of the mug touches (real GelSight frames, not taken on the mug),\n"
+    "(plate_test0, a dinner plate) or one of the mug touches (real GelSight frames, not taken on the mug),\n"
     "printing the predicted and the true contact and writing a heat-map picture (PNG) and cloud\n"
     "(PLY).\n"
     "\n"
