@@ -26,6 +26,7 @@ layout(push_constant) uniform Push {
     int nx; int ny; int nz; int n_spin;
     uint H; uint K; uint F; int own_field;
     float press; float log_floor; float field_floor; float own_weight;
+    float exp_floor;  // exp(log_floor), from the host as on the CPU mirror: one exp a term less
 } p;
 
 float dot3(vec3 a, vec3 b) { precise float r = (a.x * b.x + a.y * b.y) + a.z * b.z; return r; }
@@ -78,7 +79,7 @@ float geometry_log(vec3 q, vec3 n, vec3 t, vec3 z, float sd, float sa) {
     vec3 w = cross3(z, n);
     float e_a = atan(sqrt(dot3(w, w)), -dot3(z, n));
     float r = (e_d / sd) * (e_d / sd) + (e_a / sa) * (e_a / sa);
-    return log(exp(-0.5 * r) + exp(p.log_floor));
+    return log(exp(-0.5 * r) + p.exp_floor);
 }
 
 void main() {

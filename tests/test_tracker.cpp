@@ -241,8 +241,7 @@ TEST_CASE("on a thin plate the grid names the face a pose presses, not the neare
     track::SurfaceOptions o;
     o.target_hypotheses = 20000;
     const track::Surface s = track::build_surface(dense, true, o, "plate");
-    const ops::pose::Grid g{s.dense.data(), s.dense_sample.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
-                            {s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
+    const ops::pose::Grid g = s.grid();
     int64_t poses = 0, far_nearest = 0, wrong = 0, wrong_sample = 0;
     for (int64_t i = 0; i < dense.shape[0]; ++i) {
         const float* p = &dense.data[size_t(i * 6)];

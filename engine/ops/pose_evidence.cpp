@@ -90,7 +90,7 @@ pose::Grid grid_of(const std::vector<const HostTensor*>& in, const Setup& st, Ta
         t.dense_sample.push_back(int32_t(r[3]));
     }
     for (int64_t s = 0; s < S; ++s)
-        for (int k = 0; k < 9; ++k) t.samples.push_back(in[0]->data[size_t(12 * s + k / 3 * 4 + k % 3)]);
+        for (int k = 0; k < 9; ++k) t.samples.push_back(in[0]->data[size_t(12 * s) + pose::padded_sample_offset(size_t(k))]);
     t.cells = in[2]->ints();
     for (size_t c = 0; c < t.cells.size(); ++c)
         if (t.cells[c] < -1 || t.cells[c] >= D)
@@ -148,9 +148,9 @@ void gpu(const GpuOpArgs& a) {
         int32_t nx, ny, nz, n_spin;
         uint32_t H, K, F;
         int32_t own_field;
-        float press, log_floor, field_floor, own_weight;
+        float press, log_floor, field_floor, own_weight, exp_floor;
     } push{st.origin.x, st.origin.y, st.origin.z, 1.0f / st.voxel, st.nx, st.ny, st.nz, int32_t(NS), H, K, F,
-           st.own_field, st.press, st.log_floor, st.field_floor, st.own_weight};
+           st.own_field, st.press, st.log_floor, st.field_floor, st.own_weight, std::exp(st.log_floor)};
     // Empty terms or fields: any read-only buffer fills the unused binding.
     const rt::BufferView& terms = K ? a.in[4].view : a.in[0].view;
     const rt::BufferView& fields = F ? a.in[5].view : a.in[0].view;

@@ -141,10 +141,12 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
 // offset is a loop over the lanes, whatever its width): samples [S, 9] -> [S, 12]
 // (point, 0, normal, 0, t1, 0); dense [D, 6] and each point's sample -> [D, 8] (point,
 // sample as a float, normal, 0).
+// Float k (0..8) of a sample's [9] row sits at this offset of its [12] row.
+inline size_t padded_sample_offset(size_t k) { return k / 3 * 4 + k % 3; }
 inline std::vector<float> evidence_samples(const std::vector<float>& s9) {
     std::vector<float> r(s9.size() / 9 * 12, 0.0f);
     for (size_t i = 0; i < s9.size() / 9; ++i)
-        for (size_t k = 0; k < 9; ++k) r[12 * i + k / 3 * 4 + k % 3] = s9[9 * i + k];
+        for (size_t k = 0; k < 9; ++k) r[12 * i + padded_sample_offset(k)] = s9[9 * i + k];
     return r;
 }
 inline std::vector<float> evidence_dense(const std::vector<float>& d6, const std::vector<int32_t>& sample) {

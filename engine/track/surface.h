@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "engine/ops/pose_evidence.h"
 #include "engine/tensor.h"
 
 namespace vtloc::track {
@@ -54,6 +55,11 @@ struct Surface {
     }
     // The grid cell holding q (-1 outside).
     int64_t cell_of(const float* q) const;
+    // These tables as the CPU mirror's grid (engine/ops/pose_evidence.h); it points into them.
+    ops::pose::Grid grid() const {
+        return {dense.data(), dense_sample.data(), cells.data(), samples.data(), spins.data(), int32_t(n_spin()),
+                {origin[0], origin[1], origin[2]}, voxel, dims[0], dims[1], dims[2]};
+    }
 };
 
 // dense [D, 6]: points and outward normals; from_mesh says whether they were

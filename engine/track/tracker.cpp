@@ -105,11 +105,6 @@ void term_row(float* r, const Rigid& rel, int steps, const FilterOptions& o, int
     r[15] = float(weight);
 }
 
-ops::pose::Grid grid_of(const Surface& s) {
-    return {s.dense.data(), s.dense_sample.data(), s.cells.data(), s.samples.data(), s.spins.data(), int32_t(s.n_spin()),
-            P{s.origin[0], s.origin[1], s.origin[2]}, s.voxel, s.dims[0], s.dims[1], s.dims[2]};
-}
-
 ops::pose::Frame frame_of(const Rigid& x) {
     const auto& R = x.R;
     return {P{float(R[0]), float(R[3]), float(R[6])}, P{float(R[1]), float(R[4]), float(R[7])},
@@ -274,7 +269,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
                          const std::vector<float>& cost, const std::vector<Rigid>& to_window) const {
     const Surface& s = surface_;
     const int64_t S = s.n_samples(), NS = s.n_spin();
-    const ops::pose::Grid grid = grid_of(s);
+    const ops::pose::Grid grid = s.grid();
     auto point = [&](int64_t i) { return std::array<double, 3>{s.samples[size_t(9 * i)], s.samples[size_t(9 * i + 1)], s.samples[size_t(9 * i + 2)]}; };
     auto dist = [](const std::array<double, 3>& a, const std::array<double, 3>& b) {
         return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
@@ -419,7 +414,7 @@ std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) 
     if (cloud.shape.size() != 2 || cloud.shape[1] < 3) throw Error("heat-map: the cloud must be [N, >= 3]");
     const int64_t N = cloud.shape[0], C = cloud.shape[1];
     std::vector<float> h(static_cast<size_t>(N), 0.0f);
-    const ops::pose::Grid grid = grid_of(surface_);
+    const ops::pose::Grid grid = surface_.grid();
     for (int64_t i = 0; i < N; ++i) {
         const float* q = &cloud.data[size_t(i * C)];
         const int64_t cell = surface_.cell_of(q);
