@@ -86,28 +86,38 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
            double band, bool opposes = false) {
     std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
     const int r = int(std::ceil(band / s.voxel));
+    const float band2 = float(band * band);
     for (int64_t i = 0; i < n; ++i) {
         const float* p = pts + i * stride;
         int c[3];
         for (int k = 0; k < 3; ++k) c[k] = int(std::floor((p[k] - s.origin[size_t(k)]) / s.voxel));
+        // Cell x's squared distance, summed as always; it only grows away from the point's own
+        // cell (float rounding is monotonic), so each row stops at the first cell past the band:
+        // the same cells as the whole cube, in half the visits.
+        auto visit = [&](int x, int y, int z, float yz_y, float yz_z) {
+            const float qx = s.origin[0] + (float(x) + 0.5f) * s.voxel;
+            const float d = (qx - p[0]) * (qx - p[0]) + yz_y + yz_z;
+            if (d > band2) return false;
+            const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
+            if (opposes) {
+                const int32_t o = cells[2 * cell];
+                if (o < 0) return true;
+                const float* m = pts + int64_t(o) * stride + 3;
+                if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) return true;
+            }
+            if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
+            return true;
+        };
+        const int x_lo = std::max(0, c[0] - r), x_hi = std::min(s.dims[0] - 1, c[0] + r);
+        const int x0 = std::clamp(c[0], x_lo, x_hi);
         for (int z = std::max(0, c[2] - r); z <= std::min(s.dims[2] - 1, c[2] + r); ++z)
-            for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y)
-                for (int x = std::max(0, c[0] - r); x <= std::min(s.dims[0] - 1, c[0] + r); ++x) {
-                    const float q[3] = {s.origin[0] + (float(x) + 0.5f) * s.voxel,
-                                        s.origin[1] + (float(y) + 0.5f) * s.voxel,
-                                        s.origin[2] + (float(z) + 0.5f) * s.voxel};
-                    const float d = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) +
-                                    (q[2] - p[2]) * (q[2] - p[2]);
-                    if (d > float(band * band)) continue;
-                    const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
-                    if (opposes) {
-                        const int32_t o = cells[2 * cell];
-                        if (o < 0) continue;
-                        const float* m = pts + int64_t(o) * stride + 3;
-                        if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) continue;
-                    }
-                    if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
-                }
+            for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y) {
+                const float qy = s.origin[1] + (float(y) + 0.5f) * s.voxel, qz = s.origin[2] + (float(z) + 0.5f) * s.voxel;
+                const float yz_y = (qy - p[1]) * (qy - p[1]), yz_z = (qz - p[2]) * (qz - p[2]);
+                visit(x0, y, z, yz_y, yz_z);  // the nearest column may be out of the band: the others still run
+                for (int x = x0 + 1; x <= x_hi && visit(x, y, z, yz_y, yz_z); ++x) {}
+                for (int x = x0 - 1; x >= x_lo && visit(x, y, z, yz_y, yz_z); --x) {}
+            }
     }
 }
 
