@@ -2,6 +2,8 @@
 // the shipped file's shapes and the loader's errors.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <fstream>
+#include <iterator>
 
 #include "base/error.h"
 #include "engine/safetensors.h"
@@ -107,4 +109,18 @@ TEST_CASE("sim: calibration loader errors name the file and the tensor", "[sim]"
     } catch (const Error& e) {
         CHECK(std::string(e.what()).find(nofile) != std::string::npos);
     }
+}
+
+TEST_CASE("sim: a calibration parsed from bytes equals the file's, and bad bytes name their source", "[sim]") {
+    const std::string path = sensor::default_calibration_path();
+    std::ifstream f(path, std::ios::binary);
+    std::vector<uint8_t> bytes((std::istreambuf_iterator<char>(f)), {});
+    REQUIRE(bytes.size() > 1000);
+    const Calibration a = sensor::parse_calibration(bytes, "memory"), &b = calib();
+    CHECK(a.poly[1] == b.poly[1]);
+    CHECK(a.real_bg == b.real_bg);
+    CHECK(a.press_radius == b.press_radius);
+    CHECK(a.mm_per_px == b.mm_per_px);
+    bytes.resize(bytes.size() / 2);  // data cut off
+    CHECK_THROWS_WITH(sensor::parse_calibration(bytes, "half.safetensors"), Catch::StartsWith("half.safetensors"));
 }

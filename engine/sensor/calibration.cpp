@@ -49,18 +49,32 @@ std::vector<uint8_t> bytes_u8(const SafetensorsFile& f, const std::string& name,
     return {b.begin(), b.end()};
 }
 
+Calibration read(const SafetensorsFile& f);
+
+// The reader's messages usually name the file already.
+template <class Load>
+SafetensorsFile open(const std::string& source, Load load) {
+    try {
+        return load();
+    } catch (const Error& e) {
+        std::string m = e.what();
+        throw Error(m.find(source) == std::string::npos ? source + ": " + m : m);
+    }
+}
+
 }  // namespace
 
 Calibration load_calibration(const std::string& path) {
-    SafetensorsFile f = [&] {
-        try {
-            return SafetensorsFile::load(path);
-        } catch (const Error& e) {
-            std::string m = e.what();
-            // The reader's messages usually name the file already.
-            throw Error(m.find(path) == std::string::npos ? path + ": " + m : m);
-        }
-    }();
+    return read(open(path, [&] { return SafetensorsFile::load(path); }));
+}
+
+Calibration parse_calibration(std::vector<uint8_t> bytes, const std::string& source) {
+    return read(open(source, [&] { return SafetensorsFile::parse(std::move(bytes), source); }));
+}
+
+namespace {
+
+Calibration read(const SafetensorsFile& f) {
     Calibration c;
     const TensorInfo* bg = f.find("real_bg");
     if (!bg) fail(f, "real_bg", "is missing");
@@ -110,6 +124,8 @@ Calibration load_calibration(const std::string& path) {
     }
     return c;
 }
+
+}  // namespace
 
 std::string default_calibration_path() {
     namespace fs = std::filesystem;

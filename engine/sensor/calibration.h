@@ -28,6 +28,8 @@ struct Calibration {
 // Throws vtloc::Error naming the file and the tensor for a missing tensor,
 // a wrong shape or dtype, or a non-finite value.
 Calibration load_calibration(const std::string& path);
+// The same from a file's bytes (`source` names it in errors; the fuzz target).
+Calibration parse_calibration(std::vector<uint8_t> bytes, const std::string& source);
 
 // The shipped calibration: $VTLOC_GELSIGHT_CALIB if set, else
 // <source tree>/data/gelsight/objectfolder_gelsight_calib.safetensors, else an

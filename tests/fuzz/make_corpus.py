@@ -121,6 +121,7 @@ def main():
         parts.append(text)
     put("dataset", "one_object.txt", "\n=====\n".join(parts))
     touches_corpus()
+    calibration_corpus()
     codebook_corpus()
 
 
@@ -145,6 +146,18 @@ def touches_corpus():
     put("touches", "flange.json", json.dumps({
         "format": "vtloc-touches/2", "motion": "flange", "tool": rot,
         "touches": [{"tactile": "a.png", "flange": rot}, {"tactile": "b.png", "flange": rot}]}))
+
+
+def calibration_corpus():
+    # An 8 x 8 sensor with a 2-bin table: without presses, and with one (a user's own sensor
+    # may ship none).
+    f32 = lambda n, v=0.5: struct.pack(f"<{n}f", *([v] * n))
+    tables = {c: ("F32", [2, 2, 6], f32(24, 0.1)) for c in ("poly_r", "poly_g", "poly_b")}
+    base = dict(tables, real_bg=("F32", [8, 8, 3], f32(192, 100.0)), depth_bg=("F32", [8, 8], f32(64, 0.0)))
+    put("calibration", "no_presses.safetensors", safetensors(base, {"sensor": "pixmm=0.2"}))
+    presses = dict(base, press_imgs=("U8", [1, 8, 8, 3], bytes(range(192))), press_f0=("U8", [8, 8, 3], bytes(192)),
+                   press_center=("F32", [1, 2], struct.pack("<2f", 4.0, 3.5)), press_radius=("I32", [1], struct.pack("<i", 3)))
+    put("calibration", "one_press.safetensors", safetensors(presses, {"sensor": "pixmm=0.1245"}))
 
 
 if __name__ == "__main__":
