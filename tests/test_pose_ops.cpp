@@ -258,6 +258,24 @@ TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU refere
     }
 }
 
+TEST_CASE("expected_distance skips zero weights without changing the sum", "[op][pose][expected_distance]") {
+    // The belief of a filter past a few touches: most weights exactly 0 (some -0), whole
+    // tiles of them, nonzero ones scattered; tiles of 1 to 256 at odd sizes.
+    for (int64_t S : {1, 9, 257, 1500}) {
+        INFO("S " << S);
+        Graph g;
+        const int pts = g.input("pts", {S, 3});
+        g.output(ops::expected_distance(g, pts, g.input("w", {S}), g.input("ans", {13, 3})), "cost");
+        HostTensor w = test::random_tensor({S}, uint32_t(S) + 1, 0.0f, 1.0f);
+        for (int64_t s = 0; s < S; ++s)
+            if (s % 7 != 3 || (s > 300 && s < 900)) w.data[size_t(s)] = s % 2 ? 0.0f : -0.0f;
+        TensorMap in{{"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)}, {"w", w},
+                     {"ans", test::random_tensor({13, 3}, uint32_t(S) + 2, -60.0f, 60.0f)}};
+        const TensorMap got = test::run_gpu_and_compare(g, WeightStore{}, in);
+        if (S == 1) CHECK(got.at("cost").data == std::vector<float>(13, 0.0f));  // the one weight is 0
+    }
+}
+
 TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     Graph g;
     int score = g.input("score", {12});

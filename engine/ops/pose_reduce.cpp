@@ -78,12 +78,12 @@ void expect_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     struct { uint32_t S, A; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[2].shape[0])};
     uint32_t local = elementwise_local_size(d);
-    while (local > 1 && local * 16 > d.max_shared_memory) local /= 2;
+    while (local > 1 && local * 16 + 4 > d.max_shared_memory) local /= 2;  // the tile and its count
     const uint64_t groups = (uint64_t(push.A) + local - 1) / local, tiles = (uint64_t(push.S) + local - 1) / local;
     if (groups > d.max_workgroup_count[0])
         throw Error("expected_distance: " + std::to_string(push.A) + " answers need more workgroups than the device's " +
                     std::to_string(d.max_workgroup_count[0]));
-    check_loop_budget(d, uint64_t(push.S) + 2 * tiles + 8, "expected_distance over " + std::to_string(push.S) + " points");
+    check_loop_budget(d, 2 * uint64_t(push.S) + 3 * tiles + 8, "expected_distance over " + std::to_string(push.S) + " points");
     a.seq.dispatch(pipeline(a.ctx, "expected_distance", 4, sizeof(push), {local}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
