@@ -3,7 +3,7 @@
     python3 models/results_tables.py OUT_DIR NAME=LABEL [NAME=LABEL ...]
 
 The first NAME is the model of the ILU N ablation. Baseline rows (Chance, Point
-Filtering) come from the first model's engine report; every model row is this
+Filtering, Codebook) come from the first model's engine report; every model row is this
 engine's, with the PyTorch reference's ND beside it.
 """
 import json
@@ -11,7 +11,9 @@ import os
 import re
 import sys
 
-BASELINES = ("Chance", "Point Filtering")
+# The single-touch baselines of `vtloc eval` (its JSON names), and their tables' labels.
+BASELINES = {"Chance": "Chance (analytic)", "Point Filtering": "Point Filtering (single touch)",
+             "Codebook": "Codebook (MidasTouch-style)"}
 
 
 def load(path):
@@ -33,7 +35,7 @@ def main():
         first = load(os.path.join(out, f"{pairs[0][0]}.{objects}.json"))
         for r in first["rows"]:
             if r["method"] in BASELINES:
-                label = "Chance (analytic)" if r["method"] == "Chance" else r["method"]
+                label = BASELINES[r["method"]]
                 print(f"| {label} | {r['subset']} | {r['objects']} | {r['touches']} | {row(r)} | - |")
         worst = 0.0
         for name, label in pairs:
