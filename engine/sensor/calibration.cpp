@@ -49,11 +49,11 @@ std::vector<uint8_t> bytes_u8(const SafetensorsFile& f, const std::string& name,
     return {b.begin(), b.end()};
 }
 
-Calibration read(const SafetensorsFile& f);
+Calibration from_file(const SafetensorsFile& f);
 
 // The reader's messages usually name the file already.
 template <class Load>
-SafetensorsFile open(const std::string& source, Load load) {
+SafetensorsFile open_tensors(const std::string& source, Load load) {
     try {
         return load();
     } catch (const Error& e) {
@@ -65,16 +65,16 @@ SafetensorsFile open(const std::string& source, Load load) {
 }  // namespace
 
 Calibration load_calibration(const std::string& path) {
-    return read(open(path, [&] { return SafetensorsFile::load(path); }));
+    return from_file(open_tensors(path, [&] { return SafetensorsFile::load(path); }));
 }
 
 Calibration parse_calibration(std::vector<uint8_t> bytes, const std::string& source) {
-    return read(open(source, [&] { return SafetensorsFile::parse(std::move(bytes), source); }));
+    return from_file(open_tensors(source, [&] { return SafetensorsFile::parse(std::move(bytes), source); }));
 }
 
 namespace {
 
-Calibration read(const SafetensorsFile& f) {
+Calibration from_file(const SafetensorsFile& f) {
     Calibration c;
     const TensorInfo* bg = f.find("real_bg");
     if (!bg) fail(f, "real_bg", "is missing");
