@@ -57,6 +57,19 @@ inline void check_rigid(const Rigid& m, const std::string& what) {
     if (det < 0) throw Error(what + ": the 3x3 part is a reflection (determinant -1), not a rotation");
 }
 
+// A 4x4 matrix given row by row as a checked rigid transform: its last row must be
+// 0 0 0 1 and its 3x3 part a rotation (check_rigid). Throws naming `what`.
+inline Rigid rigid_from_rows(const std::array<double, 16>& v, const std::string& what) {
+    if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1) throw Error(what + ": the last row must be 0 0 0 1");
+    Rigid out;
+    for (size_t r = 0; r < 3; ++r) {
+        for (size_t c = 0; c < 3; ++c) out.R[r * 3 + c] = v[4 * r + c];
+        out.t[r] = v[4 * r + 3];
+    }
+    check_rigid(out, what);
+    return out;
+}
+
 // The sensor's motion between two flange poses (robot frame) with the flange-to-sensor
 // tool: sensor_k = flange_k tool, motion = sensor_a^-1 sensor_b.
 inline Rigid sensor_motion(const Rigid& flange_a, const Rigid& flange_b, const Rigid& tool) {

@@ -1,5 +1,7 @@
 // vtloc sequence: several touches and the robot's motions between them -> the
 // sensor's pose on the object after each touch (SPEC section 6, api::Tracker).
+#include <algorithm>
+#include <array>
 #include <cstdio>
 
 #include "apps/vtloc/report.h"
@@ -62,14 +64,13 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     io::TouchSequence file = io::read_touch_sequence(touches_path);
     if (auto t = a.get("--tool")) {
         const std::vector<double> v = parse_numbers(*t, 16, "--tool");
-        Rigid tool;
-        for (int r = 0; r < 3; ++r) {
-            for (int c = 0; c < 3; ++c) tool.R[size_t(3 * r + c)] = v[size_t(4 * r + c)];
-            tool.t[size_t(r)] = v[size_t(4 * r + 3)];
+        std::array<double, 16> rows{};
+        std::copy(v.begin(), v.end(), rows.begin());
+        try {
+            file.tool = rigid_from_rows(rows, "--tool");
+        } catch (const Error& e) {
+            throw UsageError(e.what());
         }
-        if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1) throw UsageError("--tool: the last row must be 0 0 0 1");
-        check_rigid(tool, "--tool");
-        file.tool = tool;
     }
     std::vector<std::optional<api::Motion>> motions;
     for (const std::optional<Rigid>& m : file.relative_motions(touches_path)) motions.push_back(m ? std::optional(to_motion(*m)) : std::nullopt);

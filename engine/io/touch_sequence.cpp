@@ -23,15 +23,12 @@ Rigid parse_motion(const json& m, const std::string& where) {
         throw Error(where + ": a translation [dx, dy, dz] is the old translation-only format; motions are full "
                             "rigid motions now (a 4x4 matrix or {\"Q\": 3x3, \"q\": [x, y, z]})");
     if (m.is_array() && m.size() == 4) {
+        std::array<double, 16> v{};
         for (size_t r = 0; r < 4; ++r) {
             if (!m[r].is_array() || m[r].size() != 4) throw Error(where + ": a 4x4 matrix needs 4 rows of 4");
-            for (size_t c = 0; c < 4; ++c) {
-                const double v = number(m[r][c], where);
-                if (r == 3 && v != (c == 3 ? 1.0 : 0.0)) throw Error(where + ": the last row must be 0 0 0 1");
-                if (r < 3 && c < 3) out.R[r * 3 + c] = v;
-                if (r < 3 && c == 3) out.t[r] = v;
-            }
+            for (size_t c = 0; c < 4; ++c) v[4 * r + c] = number(m[r][c], where);
         }
+        return rigid_from_rows(v, where);
     } else if (m.is_object() && m.contains("Q") && m.contains("q")) {
         const json &Q = m["Q"], &q = m["q"];
         if (!Q.is_array() || Q.size() != 3 || !q.is_array() || q.size() != 3)
