@@ -71,6 +71,7 @@ py::dict estimate_dict(const api::TrackerEstimate& e) {
     for (const api::TrackerMode& m : e.modes) modes.append(py::make_tuple(vec3(m.contact), m.probability));
     d["modes"] = modes;
     d["mass_within_5mm"] = e.mass_within_5mm;
+    d["fit"] = e.fit;
     d["heatmap"] = floats(e.heatmap);
     d["sample_belief"] = floats(e.sample_belief);
     return d;
@@ -177,6 +178,18 @@ void bind_tracker(py::module_& m) {
             py::arg("motions"), py::arg("terms") = py::none(),
             "The windowed form: a list of the W - 1 motions between W touches; terms: one log term per touch "
             "(shape_term's, or None), computed once and reused across windows.")
+        .def(
+            "window_fit",
+            [](const api::Tracker& t, const py::list& motions, const py::object& pose) {
+                std::vector<api::Motion> ms;
+                for (size_t i = 0; i < motions.size(); ++i) ms.push_back(to_motion(motions[i], "motions[" + std::to_string(i) + "]"));
+                const api::Motion p = to_motion(pose, "pose");
+                py::gil_scoped_release release;
+                return t.window_fit(ms, p);
+            },
+            py::arg("motions"), py::arg("pose"),
+            "The geometry fit (log) of a 4 x 4 pose of the window's last touch, refined from it: above "
+            "estimate()['fit'] the search missed it, at or below a wrong pose fits as well.")
         .def("reset", &api::Tracker::reset, "Forgets every touch (a new grasp); the object's tables stay.")
         .def_property_readonly("touches", &api::Tracker::touches)
         .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })

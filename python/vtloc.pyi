@@ -92,6 +92,8 @@ class Tracker:
     def estimate(self) -> Dict[str, Any]: ...   # contact, pose (4x4), pose_contact, window_poses, modes, ...
     def evaluate_window(self, motions: List[npt.NDArray[np.floating]],
                         terms: Optional[List[Optional[npt.NDArray[np.float32]]]] = None) -> Dict[str, Any]: ...
+    def window_fit(self, motions: List[npt.NDArray[np.floating]],
+                   pose: npt.NDArray[np.floating]) -> float: ...  # against estimate()['fit']: search or ambiguity
     def add_touch_term(self, motion: Optional[npt.NDArray[np.floating]] = None,
                        term: Optional[npt.NDArray[np.float32]] = None) -> None: ...  # a precomputed shape_term
     def reset(self) -> None: ...  # forgets every touch; the object's tables stay

@@ -128,6 +128,40 @@ TEST_CASE("the tracker localises a tour on an asymmetric prism from geometry alo
     CHECK(solved == 3);
 }
 
+TEST_CASE("window_fit tells a missed search from an ambiguity: the truth fits, a wrong pose does not", "[track]") {
+    track::Tracker tr(test::gpu(), prism_surface());
+    const HostTensor dense = prism_dense(40000);
+    Tour t = tour(dense, 8, 1);
+    std::vector<Rigid> motions;
+    for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+    const track::Estimate e = tr.evaluate_window(motions);
+    const double truth = tr.window_fit(motions, t.poses.back());
+    INFO("estimate fit " << e.fit << ", truth " << truth << ", contact error " << dist(e.contact, t.contacts.back()) << " mm");
+    // Exact motions: every touch of the window sits on the surface within its press
+    // (0.5-1.1 mm against the assumed 0.8), a fraction of a nat each.
+    CHECK(truth > -4);
+    // Found (the first test case): the estimate's pose fits like the truth, within the refinement's resolution.
+    CHECK(dist(e.contact, t.contacts.back()) < 5);
+    CHECK(std::abs(e.fit - truth) < 1);
+    // Refining the estimate's own pose again cannot lose fit.
+    CHECK(tr.window_fit(motions, e.pose) >= e.fit - 1e-9);
+    // A pose on the far side of the prism (at least 30 mm away): its window leaves the surface,
+    // several touches at the robust floor (-9 nats each).
+    int64_t far = -1;
+    for (int64_t j = 0; j < dense.shape[0] && far < 0; j += 97)
+        if (dist({dense.data[size_t(6 * j)], dense.data[size_t(6 * j + 1)], dense.data[size_t(6 * j + 2)]}, t.contacts.back()) > 30) far = j;
+    REQUIRE(far >= 0);
+    CHECK(tr.window_fit(motions, pose_at(&dense.data[size_t(6 * far)], 0.3, 0.8)) < truth - 9);
+    // The pose and the motions are checked like add_touch's.
+    Rigid bad = t.poses.back();
+    bad.R[0] = 2;
+    CHECK_THROWS_WITH(tr.window_fit(motions, bad), Catch::Contains("the pose to fit: the 3x3 part is not a rotation"));
+    std::vector<Rigid> nan = motions;
+    nan[2].t[0] = NAN;
+    CHECK_THROWS_WITH(tr.window_fit(nan, t.poses.back()), Catch::Contains("touch 4's motion") && Catch::Contains("NaN or inf"));
+    test::require_no_validation_messages();
+}
+
 TEST_CASE("the tracker is deterministic and its single touch is spread", "[track]") {
     track::Tracker a(test::gpu(), prism_surface());
     a.add_touch(std::nullopt);

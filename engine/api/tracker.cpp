@@ -45,6 +45,8 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.online_window = o.window;
     f.mode_radius_mm = o.mode_radius_mm;
     f.grid_allowance = o.grid_allowance;
+    f.refine_widen = o.refine_widen;
+    if (!(o.refine_widen >= 0)) throw Error("tracker: refine_widen must be >= 0");
     if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))
         throw Error("tracker: widths must be > 0, grid_allowance >= 0 and press_mm finite");
     f.term_weight = 1;  // the network's temperature is applied when its field is made
@@ -139,6 +141,7 @@ struct Tracker::Impl {
         for (const auto& w : e.window_poses) o.window_poses.push_back(to_motion(w));
         for (const auto& m : e.modes) o.modes.push_back({m.contact, m.probability});
         o.mass_within_5mm = e.mass_within_5mm;
+        o.fit = e.fit;
         o.heatmap = tracker.heatmap(e, display_tensor);
         o.sample_belief = e.sample_belief;
         return o;
@@ -260,6 +263,14 @@ TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motion
 
 std::vector<float> Tracker::shape_term(const GelShape& shape) {
     return guarded([&] { return impl_->shape_field(&shape, 1); });
+}
+
+double Tracker::window_fit(const std::vector<Motion>& motions, const Motion& pose) const {
+    return guarded([&] {
+        std::vector<track::Rigid> m;
+        for (const Motion& x : motions) m.push_back(to_rigid(x));
+        return impl_->tracker.window_fit(m, to_rigid(pose));
+    });
 }
 
 std::vector<float> Tracker::belief() const { return impl_->tracker.belief(); }

@@ -150,6 +150,78 @@ std::array<double, 3> axis_contact(const Surface& s, const ops::pose::Grid& grid
     return c;
 }
 
+// The window's geometry at the tight widths (no grid allowance: a continuous pose
+// needs none) and the current touch's own (its pose on the surface): what the
+// refinement climbs and Estimate::fit reports.
+std::vector<ops::pose::Term> fit_terms(const std::vector<Rigid>& to_window, const FilterOptions& o, double q_mm = 0, double q_rad = 0) {
+    std::vector<ops::pose::Term> terms;
+    for (size_t k = 0; k < to_window.size(); ++k) {
+        float r[16];
+        term_row(r, to_window[k], int(to_window.size() - k), o, -1, 0, q_mm, q_rad);
+        terms.push_back(ops::pose::term_from_row(r));
+    }
+    return terms;
+}
+
+double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, const Rigid& x) {
+    const ops::pose::Frame f = frame_of(x);
+    const float press = float(o.press_mm), floor = float(o.log_floor);
+    double v = 0;
+    for (const ops::pose::Term& t : terms) {
+        const ops::pose::Frame m = ops::pose::moved(f, t);
+        v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, press, t.sigma_d, t.sigma_a, floor);
+    }
+    return v + double(ops::pose::geometry_log(grid, ops::pose::cell_of(grid, f.t), f, press, float(o.sigma_d_mm),
+                                              float(o.sigma_a_deg * M_PI / 180), floor));
+}
+
+// Pattern search over six degrees of freedom from x (rotations about the pose's
+// axes from 4 degrees, shifts from 0.8 mm, halved six times); fx: x's fit, then the result's.
+Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx) {
+    double step_r = 4.0 * M_PI / 180, step_t = 0.8;
+    for (int round = 0; round < 6; ++round, step_r /= 2, step_t /= 2)
+        for (bool moved = true; moved;) {
+            moved = false;
+            for (int k = 0; k < 6; ++k)
+                for (double sign : {1.0, -1.0}) {
+                    double d[6] = {0, 0, 0, 0, 0, 0};
+                    d[k] = sign * (k < 3 ? step_r : step_t);
+                    Rigid y = perturb(x, d);
+                    double fy = pose_fit(grid, terms, o, y);
+                    if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
+                }
+        }
+    return x;
+}
+
+// The refinement: with `widen` > 0 it first climbs at the grid's widths times widen (a
+// smoother landscape, which a pose several degrees off can climb: at long lever arms
+// the tight one's basin is a degree or two wide), then at the tight widths; fx: the
+// tight fit of the result.
+Rigid refine_pose(const ops::pose::Grid& grid, const std::vector<Rigid>& to_window, const FilterOptions& o, double spacing,
+                  int n_spin, Rigid x, double& fx) {
+    if (o.refine_widen > 0) {
+        const double f = o.refine_widen * o.grid_allowance;
+        const std::vector<ops::pose::Term> wide = fit_terms(to_window, o, f * spacing, f * 2 * M_PI / n_spin);
+        double fw = pose_fit(grid, wide, o, x);
+        x = climb(grid, wide, o, x, fw);
+    }
+    const std::vector<ops::pose::Term> tight = fit_terms(to_window, o);
+    fx = pose_fit(grid, tight, o, x);
+    return climb(grid, tight, o, x, fx);
+}
+
+// Each earlier touch of a window in the current touch's frame, oldest first.
+std::vector<Rigid> window_in_current(const std::vector<Rigid>& motions) {
+    std::vector<Rigid> out(motions.size());
+    Rigid chain;  // from the newest back
+    for (size_t k = motions.size(); k-- > 0;) {
+        chain = compose(motions[k], chain);
+        out[k] = inverse(chain);
+    }
+    return out;
+}
+
 }  // namespace
 
 void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
@@ -173,12 +245,7 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
                                                          impl_->weights, impl_->resident);
     if (!impl_->ctx && !impl_->graphs.count(key)) impl_->graphs.emplace(key, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1));
     Step st;
-    st.to_window.resize(size_t(m - 1));
-    Rigid chain;  // touch k's pose in the current one's frame, from the newest back
-    for (int64_t k = m - 2; k >= 0; --k) {
-        chain = compose(motions[size_t(k)], chain);
-        st.to_window[size_t(k)] = inverse(chain);
-    }
+    st.to_window = window_in_current(motions);
     HostTensor tr({K, 16}), fields({F, H});
     for (int64_t k = 0; k < m - 1; ++k) {
         const bool has = any_term && terms[size_t(k)] && !terms[size_t(k)]->empty();
@@ -265,6 +332,16 @@ Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::
     return finish(st.log, st.marginal, st.cost, st.to_window);
 }
 
+double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const {
+    for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
+    check_rigid(pose, "the pose to fit");
+    const ops::pose::Grid grid = surface_.grid();
+    const std::vector<Rigid> to_window = window_in_current(motions);
+    double f = pose_fit(grid, fit_terms(to_window, opt_), opt_, pose);
+    if (opt_.refine > 0) refine_pose(grid, to_window, opt_, surface_.spacing_mm, surface_.n_spin(), pose, f);
+    return f;
+}
+
 Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& marginal,
                          const std::vector<float>& cost, const std::vector<Rigid>& to_window) const {
     const Surface& s = surface_;
@@ -296,31 +373,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
-    std::vector<ops::pose::Term> terms;
-    for (size_t k = 0; k < to_window.size(); ++k) {
-        float r[16];
-        term_row(r, to_window[k], int(to_window.size() - k), opt_, -1, 0);
-        terms.push_back(ops::pose::term_from_row(r));
-    }
-    ops::pose::Term self{};
-    self.rel[0] = self.rel[4] = self.rel[8] = 1;
-    self.sigma_d = float(opt_.sigma_d_mm);
-    self.sigma_a = float(opt_.sigma_a_deg * M_PI / 180);
-    // The window's geometry and the touch's own (its pose on the surface), apart.
-    auto window_part = [&](const Rigid& x) {
-        const ops::pose::Frame f = frame_of(x);
-        double v = 0;
-        for (const ops::pose::Term& t : terms) {
-            ops::pose::Frame m = ops::pose::moved(f, t);
-            v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, float(opt_.press_mm), t.sigma_d, t.sigma_a, float(opt_.log_floor));
-        }
-        return v;
-    };
-    auto self_part = [&](const Rigid& x) {
-        const ops::pose::Frame f = frame_of(x);
-        return double(ops::pose::geometry_log(grid, ops::pose::cell_of(grid, f.t), f, float(opt_.press_mm), self.sigma_d, self.sigma_a, float(opt_.log_floor)));
-    };
-    auto objective = [&](const Rigid& x) { return window_part(x) + self_part(x); };
+    const std::vector<ops::pose::Term> terms = fit_terms(to_window, opt_);
     // The refined modes share the grid mass they hold by their refined fit (the
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
@@ -335,22 +388,8 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         for (int64_t j = 1; j < NS; ++j)
             if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
         Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
-        double fx = objective(x);
-        if (opt_.refine > 0) {
-            double step_r = 4.0 * M_PI / 180, step_t = 0.8;
-            for (int round = 0; round < 6; ++round, step_r /= 2, step_t /= 2)
-                for (bool moved = true; moved;) {
-                    moved = false;
-                    for (int k = 0; k < 6; ++k)
-                        for (double sign : {1.0, -1.0}) {
-                            double d[6] = {0, 0, 0, 0, 0, 0};
-                            d[k] = sign * (k < 3 ? step_r : step_t);
-                            Rigid y = perturb(x, d);
-                            double fy = objective(y);
-                            if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
-                        }
-                }
-        }
+        double fx = pose_fit(grid, terms, opt_, x);
+        if (opt_.refine > 0) x = refine_pose(grid, to_window, opt_, s.spacing_mm, int(NS), x, fx);
         fit[size_t(m)] = fx;
         refined[size_t(m)] = x;
         refined_contact[size_t(m)] = axis_contact(s, grid, x, opt_.press_mm);
@@ -379,6 +418,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     for (int m = 1; m < n_refine; ++m)
         if (e.modes[size_t(m)].probability > e.modes[size_t(best_mode)].probability) best_mode = m;
     e.pose = refined[size_t(best_mode)];
+    e.fit = fit[size_t(best_mode)];
     // The Bayes contact under the re-weighted belief, each refined mode's mass at
     // its refined contact (its peak; the grid spreads it over the spacing), among
     // those contacts and the samples the GPU's risk ranked best.

@@ -40,6 +40,7 @@ struct FilterOptions {
     double mode_radius_mm = 5;   // non-maximum suppression of the modes
     int n_modes = 8;
     int refine = 8;              // the best modes refined over six degrees of freedom
+    double refine_widen = 0;     // > 0: refine at the grid's widths times this first, then at the tight ones
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
 };
 
@@ -55,6 +56,7 @@ struct Estimate {
     std::vector<Rigid> window_poses;         // that pose carried to each touch of the window, oldest first
     std::vector<Mode> modes;                 // best first
     double mass_within_5mm = 0;              // the belief's mass within 5 mm of `contact`
+    double fit = 0;                          // `pose`'s refined geometry fit (log; window_fit's measure)
     std::vector<float> sample_belief;        // [S] summed over spins
 };
 
@@ -79,6 +81,13 @@ public:
     // Windowed (stateless): motions[i] from touch i to i + 1 (W - 1 of them),
     // terms[i] for touch i (empty vectors: none; or no terms at all).
     Estimate evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms = {});
+
+    // The geometry fit (log) of a pose of the current touch given the window's
+    // motions, refined from it as the estimate's modes are: the window's touches at
+    // the tight widths plus the touch's own. Beside Estimate::fit it tells, where
+    // the truth is known, a search that missed it (the truth fits better) from an
+    // ambiguity (a wrong pose fits as well).
+    double window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const;
 
     const Surface& surface() const { return surface_; }
     // What the tracker holds on the GPU now: the surface tables (resident) and

@@ -56,6 +56,12 @@ def test_tracker_equals_the_cli(cli, ctx, root):
     assert t.touches == 3 and t.belief.shape == (t.sample_points.shape[0] * t.n_spin,)
     win = t.evaluate_window([np.eye(4)])
     assert len(win["window_poses"]) == 2 and win["pose"].shape == (4, 4)
+    # window_fit: the estimate's own pose, refined again, fits at least as well as its `fit`.
+    assert t.window_fit([np.eye(4)], win["pose"]) >= win["fit"] - 1e-9
+    bad = np.eye(4)
+    bad[0, 0] = 2
+    with pytest.raises(vtloc.Error, match="not a rotation"):
+        t.window_fit([np.eye(4)], bad)
 
 
 def test_batch_equals_single_touches(tiny, mug, root):

@@ -375,6 +375,9 @@ struct TrackerOptions {
     std::string codebook_cache;
     double mode_radius_mm = 5;   // the modes' non-maximum suppression
     double grid_allowance = 0.25; // the grid's widths grow by this share of its spacing and spin step (fitted)
+    // > 0: each mode is refined at the grid's widths times this first, then at the tight
+    // ones (a wider basin for modes several degrees off; fitted on train windows).
+    double refine_widen = 0;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
     // The candidates protocol (the paper's S^c): hypotheses only at these contact points (in
     // the tracker's units, after object_units), n_spin each; empty: the whole surface.
@@ -394,6 +397,7 @@ struct TrackerEstimate {
     std::vector<Motion> window_poses;        // every touch of the window, oldest first (the current one last)
     std::vector<TrackerMode> modes;          // best first, probabilities under the belief
     double mass_within_5mm = 0;              // the belief's own mass within 5 mm of `contact`
+    double fit = 0;                          // `pose`'s geometry fit (log), as window_fit measures it
     std::vector<float> heatmap;              // belief over the tracker's display_cloud(), in [0, 1]
     std::vector<float> sample_belief;        // the belief at each of sample_points(), sums to 1
 };
@@ -437,6 +441,11 @@ public:
     std::vector<float> touch_term(const TouchResult* network, const Object* object, const GelShape* shape);
     // The windowed form over precomputed touch_term()s (one per touch; empty vectors: none).
     TrackerEstimate evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms);
+    // The geometry fit (log) of a pose of a window's last touch, refined from it as the
+    // estimate's modes are. With the true pose known (evaluation), a fit above the
+    // estimate's `fit` means the search missed the truth; at or below, a wrong pose
+    // fits the geometry as well (ambiguity).
+    double window_fit(const std::vector<Motion>& motions, const Motion& pose) const;
     std::vector<float> belief() const;        // over hypotheses, sums to 1
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
