@@ -52,7 +52,8 @@ nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
     }
     j["shape_ms"] = stats_json(ms);
     // Render-and-compare on the object as api::Tracker builds it from a mesh.
-    const io::TriangleMesh mesh = io::load_mesh(o.object);
+    io::TriangleMesh mesh = io::load_mesh(o.object);
+    io::orient_outward(mesh);
     const track::Surface surface = track::build_surface(io::tracker_dense_sample(mesh, o.object), true, track::SurfaceOptions{}, o.object);
     const auto t0 = std::chrono::steady_clock::now();
     const track::Codebook book = track::render_codebook(ctx, surface);

@@ -26,7 +26,8 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     if (cycle.empty()) throw Error(o.tour + ": the tracker bench needs at least two touches");
     // The surface as api::Tracker builds it from a mesh.
     const auto t0 = std::chrono::steady_clock::now();
-    const io::TriangleMesh mesh = io::load_mesh(seq.object);
+    io::TriangleMesh mesh = io::load_mesh(seq.object);
+    io::orient_outward(mesh);
     const HostTensor dense = io::tracker_dense_sample(mesh, seq.object);
     const track::Surface surface = track::build_surface(dense, true, track::SurfaceOptions{}, seq.object);
     const double build_ms = ms_since(t0);

@@ -171,6 +171,7 @@ Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions
         try {
             io::TriangleMesh mesh = io::load_mesh(path);
             for (float& v : mesh.positions) v = float(v * o.object_units);
+            io::orient_outward(mesh);  // a pose presses against the outward normal: an inward-wound file would veto every true pose
             HostTensor dense = io::tracker_dense_sample(mesh, path);
             HostTensor disp = display_sample(mesh, 4096, path);  // evenly spaced: a picture without holes
             PointCloud d;

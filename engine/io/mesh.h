@@ -47,6 +47,15 @@ HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed = k
 // The mesh's total triangle area (object units squared).
 double surface_area(const TriangleMesh& mesh);
 
+// Signed volume (object units cubed): positive when a closed mesh is wound outward
+// (counter-clockwise seen from outside), negative when wound inward.
+double signed_volume(const TriangleMesh& mesh);
+
+// Re-winds every triangle of a mesh wound inward (negative signed volume: e.g. an OFF file
+// written the other way round), so that face normals point out of the object; vertex
+// normals, where the file gives them, stay the file's. Returns whether it re-wound.
+bool orient_outward(TriangleMesh& mesh);
+
 // The multi-touch filter's dense sample of a mesh (api::Tracker, vtloc-bench):
 // about 4 points per unit^2 (0.5 mm apart in mm), between 20,000 and 300,000
 // points (a memory bound), seed kDefaultSampleSeed + 7.

@@ -16,6 +16,7 @@ struct V3 {
 };
 V3 operator-(V3 a, V3 b) { return {a.x - b.x, a.y - b.y, a.z - b.z}; }
 V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; }
+double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 double norm(V3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 
 }  // namespace
@@ -83,6 +84,25 @@ double surface_area(const TriangleMesh& mesh) {
         area += 0.5 * norm(cross(p[1] - p[0], p[2] - p[0]));
     }
     return area;
+}
+
+double signed_volume(const TriangleMesh& mesh) {
+    double v = 0;
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
+        V3 p[3];
+        for (size_t k = 0; k < 3; ++k) {
+            const float* q = &mesh.positions[3 * size_t(mesh.triangles[3 * t + k])];
+            p[k] = {q[0], q[1], q[2]};
+        }
+        v += dot(p[0], cross(p[1], p[2]));
+    }
+    return v / 6.0;
+}
+
+bool orient_outward(TriangleMesh& mesh) {
+    if (!(signed_volume(mesh) < 0)) return false;
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) std::swap(mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]);
+    return true;
 }
 
 HostTensor tracker_dense_sample(const TriangleMesh& mesh, const std::string& source) {

@@ -93,20 +93,11 @@ io::TriangleMesh Builder::finish() {
     }
     m_.positions = std::move(welded);
     m_.triangles = std::move(tris);
-    if (signed_volume(m_) < 0)
-        for (size_t t = 0; t < m_.triangle_count(); ++t) std::swap(m_.triangles[3 * t + 1], m_.triangles[3 * t + 2]);
+    io::orient_outward(m_);
     return std::move(m_);
 }
 
-double signed_volume(const io::TriangleMesh& mesh) {
-    double v = 0;
-    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-        V3 a = position(mesh, mesh.triangles[3 * t]), b = position(mesh, mesh.triangles[3 * t + 1]),
-           c = position(mesh, mesh.triangles[3 * t + 2]);
-        v += dot(a, cross(b, c));
-    }
-    return v / 6.0;
-}
+double signed_volume(const io::TriangleMesh& mesh) { return io::signed_volume(mesh); }
 
 std::vector<uint32_t> triangulate_polygon(const std::vector<P2>& poly_in) {
     const size_t n = poly_in.size();

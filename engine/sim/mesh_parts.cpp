@@ -861,8 +861,7 @@ io::TriangleMesh moved(io::TriangleMesh mesh, const std::function<P3(const P3&)>
         const P3 p = f(vertex(mesh, uint32_t(i)));
         mesh.positions[3 * i] = float(p.x), mesh.positions[3 * i + 1] = float(p.y), mesh.positions[3 * i + 2] = float(p.z);
     }
-    if (signed_volume(mesh) < 0)
-        for (size_t t = 0; t < mesh.triangle_count(); ++t) std::swap(mesh.triangles[3 * t + 1], mesh.triangles[3 * t + 2]);
+    io::orient_outward(mesh);
     return mesh;
 }
 
