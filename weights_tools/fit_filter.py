@@ -5,6 +5,9 @@ ending at the seen objects' train touches; --objects all on a dataset of trainin
 and the belief's calibration; the best by mean ND up to symmetry is the default in
 engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 
+With --refine, the knob is how much wider the refinement's first climb is than the grid's
+widths (refine_widen; 0: straight to the tight widths), at the geometry knobs fitted before.
+
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
 and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
 render_quadratic, was fitted before on the same windows, and the press percentile
@@ -14,7 +17,7 @@ read from the frame as a robot would. With --oracle, the same knob for the oracl
 renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
 beside the shipped weight, never shipped.
 
-    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--render | --oracle]
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--refine | --render | --oracle]
         [--sequence 4,8] [--out fit.json]
 """
 import argparse
@@ -31,6 +34,7 @@ GRID = {
 }
 
 
+GRID_REFINE = {"refine_widen": [0, 2, 4, 8, 16]}
 # render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
 GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
@@ -53,12 +57,13 @@ def main():
     ap.add_argument("--vtloc", default="build/vtloc")
     ap.add_argument("--data", required=True)
     ap.add_argument("--objects", default="known", help="known (the seen objects) or all")
+    ap.add_argument("--refine", action="store_true", help="fit refine_widen (the refinement's first, wider climb)")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
     ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID
     row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):
