@@ -19,6 +19,12 @@ V3 cross(V3 a, V3 b) { return {a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x
 double dot(V3 a, V3 b) { return a.x * b.x + a.y * b.y + a.z * b.z; }
 double norm(V3 a) { return std::sqrt(a.x * a.x + a.y * a.y + a.z * a.z); }
 
+// Corner k of triangle t, in double.
+V3 corner(const TriangleMesh& mesh, size_t t, size_t k) {
+    const float* q = &mesh.positions[3 * size_t(mesh.triangles[3 * t + k])];
+    return {q[0], q[1], q[2]};
+}
+
 }  // namespace
 
 HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed, const std::string& source) {
@@ -76,26 +82,15 @@ HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed, co
 double surface_area(const TriangleMesh& mesh) {
     double area = 0;
     for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-        V3 p[3];
-        for (size_t k = 0; k < 3; ++k) {
-            const float* q = &mesh.positions[3 * size_t(mesh.triangles[3 * t + k])];
-            p[k] = {q[0], q[1], q[2]};
-        }
-        area += 0.5 * norm(cross(p[1] - p[0], p[2] - p[0]));
+        const V3 a = corner(mesh, t, 0);
+        area += 0.5 * norm(cross(corner(mesh, t, 1) - a, corner(mesh, t, 2) - a));
     }
     return area;
 }
 
 double signed_volume(const TriangleMesh& mesh) {
     double v = 0;
-    for (size_t t = 0; t < mesh.triangle_count(); ++t) {
-        V3 p[3];
-        for (size_t k = 0; k < 3; ++k) {
-            const float* q = &mesh.positions[3 * size_t(mesh.triangles[3 * t + k])];
-            p[k] = {q[0], q[1], q[2]};
-        }
-        v += dot(p[0], cross(p[1], p[2]));
-    }
+    for (size_t t = 0; t < mesh.triangle_count(); ++t) v += dot(corner(mesh, t, 0), cross(corner(mesh, t, 1), corner(mesh, t, 2)));
     return v / 6.0;
 }
 
