@@ -4,7 +4,9 @@
 
 The first NAME is the model of the ILU N ablation. Baseline rows (Chance, Point
 Filtering, Codebook) come from the first model's engine report; every model row is this
-engine's, with the PyTorch reference's ND beside it.
+engine's, with the PyTorch reference's ND beside it. The several-touch tables (SPEC 6)
+come from sequence.{known,unknown}.json: ND against T per method, and per object the
+geometry rows at T = 8 with why each window missed (search or ambiguity).
 """
 import json
 import os
@@ -58,6 +60,52 @@ def main():
         j = load(os.path.join(out, f"{name}.iters{n}.json"))
         r = [r for r in j["rows"] if r["subset"] == "all"][0]
         print(f"| {n} | {r['nd']:.2f} | {r['top1']:.1f} | {r['top5']:.1f} | {j['time_per_touch_ms']:.2f} |")
+    sequence_tables(out)
+
+
+SEQ_METHODS = ["Geometry", "Geometry + network", "Geometry + network (test frames)",
+               "Geometry + render-and-compare (MidasTouch-style)", "Geometry + render-and-compare (oracle maps)"]
+
+
+def sequence_tables(out):
+    for objects, title in (("known", "Known objects (seen; windows ending at their test touches)"),
+                           ("unknown", "Unknown objects (unseen)")):
+        path = os.path.join(out, f"sequence.{objects}.json")
+        if not os.path.exists(path):
+            continue
+        j = load(path)
+        rows = {(r["method"], r["odometry_noise"], r["T"], r["subset"]): r for r in j["rows"]}
+        Ts = sorted({r["T"] for r in j["rows"]})
+        print(f"### Several touches: {title}, ND % (up to symmetry)\n")
+        print("| method | odometry noise | " + " | ".join(f"T = {t}" for t in Ts) +
+              " | T = 8, candidates | T = 4, candidates: non-uniform / uniform |")
+        print("| --- | --- |" + " --- |" * (len(Ts) + 2))
+        for m in SEQ_METHODS:
+            for noise in (False, True):
+                if (m, noise, Ts[0], "all") not in rows:
+                    continue
+                cells = [f"{rows[m, noise, t, 'all']['nd']:.1f} ({rows[m, noise, t, 'all']['nd_symmetry']:.1f})" for t in Ts]
+                c8 = rows.get((m, noise, 8, "all"))
+                c4 = [rows.get((m, noise, 4, s)) for s in ("non-uniform", "uniform")]
+                cells.append(f"{c8['nd_candidates']:.1f}" if c8 else "-")
+                cells.append(" / ".join(f"{r['nd_candidates']:.1f}" if r else "-" for r in c4))
+                print(f"| {m} | {'0.5 mm, 0.5 deg' if noise else 'no'} | " + " | ".join(cells) + " |")
+        per = j["per_object"].get("Geometry T8")
+        if not per:
+            continue
+        print(f"\n#### Per object, geometry alone, T = 8 ({objects}): why the misses\n")
+        print("Windows more than 5 mm off: *search* when the true pose, refined, fits the window's geometry "
+              "better than the estimate's (the grid or the refinement missed it), else *ambiguity* (a wrong pose "
+              "fits as well). Shares of the object's windows.\n")
+        print("| object | windows | ND % | up to symmetry | within 5 mm | missed: search | missed: ambiguity |")
+        print("| --- | ---: | ---: | ---: | ---: | ---: | ---: |")
+        for name, o in sorted(per.items(), key=lambda kv: kv[1]["nd"]):
+            s, a = o.get("missed_search"), o.get("missed_ambiguity")
+            if s is None:
+                print(f"| {name} | {o['touches']} | {o['nd']:.1f} | {o['nd_symmetry']:.1f} | - | - | - |")
+            else:
+                print(f"| {name} | {o['touches']} | {o['nd']:.1f} | {o['nd_symmetry']:.1f} | {1 - s - a:.2f} | {s:.2f} | {a:.2f} |")
+        print()
 
 
 if __name__ == "__main__":
