@@ -194,7 +194,7 @@ Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& ter
     return x;
 }
 
-// The refinement: with `widen` > 0 it first climbs at the grid's widths times widen (a
+// The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
 // smoother landscape, which a pose several degrees off can climb: at long lever arms
 // the tight one's basin is a degree or two wide), then at the tight widths; fx: the
 // tight fit of the result.
