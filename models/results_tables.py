@@ -104,7 +104,7 @@ def sequence_tables(out):
             if s is None:
                 print(f"| {name} | {o['touches']} | {o['nd']:.1f} | {o['nd_symmetry']:.1f} | - | - | - |")
             else:
-                print(f"| {name} | {o['touches']} | {o['nd']:.1f} | {o['nd_symmetry']:.1f} | {1 - s - a:.2f} | {s:.2f} | {a:.2f} |")
+                print(f"| {name} | {o['touches']} | {o['nd']:.1f} | {o['nd_symmetry']:.1f} | {max(0.0, 1 - s - a):.2f} | {s:.2f} | {a:.2f} |")
         print()
 
 
