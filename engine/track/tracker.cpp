@@ -196,20 +196,28 @@ Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& ter
 
 // The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
 // smoother landscape, which a pose several degrees off can climb: at long lever arms
-// the tight one's basin is a degree or two wide), then at the tight widths; fx: the
-// tight fit of the result.
-Rigid refine_pose(const ops::pose::Grid& grid, const std::vector<Rigid>& to_window, const FilterOptions& o, double spacing,
-                  int n_spin, Rigid x, double& fx) {
-    if (o.refine_widen > 0) {
-        const double f = o.refine_widen * o.grid_allowance;
-        const std::vector<ops::pose::Term> wide = fit_terms(to_window, o, f * spacing, f * 2 * M_PI / n_spin);
-        double fw = pose_fit(grid, wide, o, x);
-        x = climb(grid, wide, o, x, fw);
+// the tight one's basin is a degree or two wide), then at the tight widths. Both term
+// sets are made once per window (Refiner), not once per mode.
+struct Refiner {
+    const ops::pose::Grid& grid;
+    const FilterOptions& o;
+    std::vector<ops::pose::Term> tight, wide;
+    Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin)
+        : grid(g), o(opt), tight(fit_terms(to_window, opt)) {
+        const double f = opt.refine_widen * opt.grid_allowance;
+        if (opt.refine_widen > 0) wide = fit_terms(to_window, opt, f * spacing, f * 2 * M_PI / n_spin);
     }
-    const std::vector<ops::pose::Term> tight = fit_terms(to_window, o);
-    fx = pose_fit(grid, tight, o, x);
-    return climb(grid, tight, o, x, fx);
-}
+    double fit(const Rigid& x) const { return pose_fit(grid, tight, o, x); }
+    // x refined (when o.refine > 0); fx: its tight fit.
+    Rigid refine(Rigid x, double& fx) const {
+        if (o.refine > 0 && o.refine_widen > 0) {
+            double fw = pose_fit(grid, wide, o, x);
+            x = climb(grid, wide, o, x, fw);
+        }
+        fx = fit(x);
+        return o.refine > 0 ? climb(grid, tight, o, x, fx) : x;
+    }
+};
 
 // Each earlier touch of a window in the current touch's frame, oldest first.
 std::vector<Rigid> window_in_current(const std::vector<Rigid>& motions) {
@@ -336,9 +344,8 @@ double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose)
     for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
     check_rigid(pose, "the pose to fit");
     const ops::pose::Grid grid = surface_.grid();
-    const std::vector<Rigid> to_window = window_in_current(motions);
-    double f = pose_fit(grid, fit_terms(to_window, opt_), opt_, pose);
-    if (opt_.refine > 0) refine_pose(grid, to_window, opt_, surface_.spacing_mm, surface_.n_spin(), pose, f);
+    double f = 0;
+    Refiner(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin()).refine(pose, f);
     return f;
 }
 
@@ -373,7 +380,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
-    const std::vector<ops::pose::Term> terms = fit_terms(to_window, opt_);
+    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS));
     // The refined modes share the grid mass they hold by their refined fit (the
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
@@ -388,8 +395,8 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         for (int64_t j = 1; j < NS; ++j)
             if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
         Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
-        double fx = pose_fit(grid, terms, opt_, x);
-        if (opt_.refine > 0) x = refine_pose(grid, to_window, opt_, s.spacing_mm, int(NS), x, fx);
+        double fx = 0;
+        x = refiner.refine(x, fx);
         fit[size_t(m)] = fx;
         refined[size_t(m)] = x;
         refined_contact[size_t(m)] = axis_contact(s, grid, x, opt_.press_mm);
