@@ -27,6 +27,8 @@
 #include "engine/model/model_config.h"
 #include "engine/ops/tactile_preprocess.h"
 #include "runtime/context.h"
+#include "runtime/device_profile.h"
+#include "bench/plan.h"
 
 #ifndef VTLOC_SOURCE_DIR
 #define VTLOC_SOURCE_DIR ""
@@ -69,6 +71,9 @@ const char* kUsage = R"(usage: vtloc-bench [options]
                        and the CPU reference, and render-and-compare on the tracker stage's object
                        (its codebook rendered once, one touch scored)
   --no-probe           skip the fma peak probe
+  --plan-for FILE      only plan: the model's dispatches as the GPU of a device profile would get them
+                       (bench/device_profiles/, or `vtloc devices --save-profile`), recorded on this
+                       machine's device, never run: workgroups per dispatch per node and per stage
   --json FILE          write the report as JSON
   --plot FILE.png      draw latency over N and the per-stage breakdown
   --vs-pytorch         also time the PyTorch reference (weights_tools.bench_torch: float32, as many
@@ -82,7 +87,7 @@ struct Args {
     bench::ModelBenchOptions opt;
     int cpu_reps = 2, tracker_touches = 12, tracker_window = 8;
     bool probe = true, vs_pytorch = false, tracker = true, gel = true;
-    std::string tracker_tour;
+    std::string tracker_tour, plan_for;
 };
 
 std::vector<int64_t> int_list(const std::string& flag, const std::string& s) {
@@ -132,6 +137,7 @@ Args parse(int argc, char** argv) {
         std::string v = argv[++i];
         if (f == "--weights") a.weights = v;
         else if (f == "--config") a.config = v;
+        else if (f == "--plan-for") a.plan_for = v;
         else if (f == "--image") a.image = v;
         else if (f == "--object") a.object = v;
         else if (f == "--backend") a.backend = v;
@@ -326,6 +332,19 @@ int run(int argc, char** argv) {
 
     bench::ModelBenchInputs in;
     in.image = ops::tactile_image_tensor(img.pixels.data(), img.height, img.width);
+    if (!a.plan_for.empty()) {
+        rt::ContextOptions co;
+        co.plan_for = rt::read_device_profile(a.plan_for);
+        rt::Context plan_ctx(co);
+        report["plan"] = bench::plan_model(plan_ctx, weights, cfg, in.image, cloud);
+        bench::check_validation(plan_ctx, "vtloc-bench --plan-for");
+        bench::print_plan(report["plan"], stdout);
+        if (!a.json_path.empty()) {
+            std::ofstream f(a.json_path);
+            if (!(f << report.dump(2) << "\n")) throw Error("cannot write " + a.json_path);
+        }
+        return 0;
+    }
     in.cloud = cloud;
     in.object = object_path;
 

@@ -211,6 +211,21 @@ void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_al
     // Activations: one arena, reused across values with disjoint lifetimes.
     plan_ = plan_memory(graph_, order_, align, !keep_all);
     arena_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Device);
+    std::vector<uint64_t> scratch(graph_.nodes().size(), 0);
+    for (int ni : order_) {
+        const Node& n = graph_.nodes()[size_t(ni)];
+        const OpDef& op = find_op(n.op);
+        if (!op.scratch_bytes) continue;
+        std::vector<Shape> shapes;
+        for (int id : n.inputs) shapes.push_back(graph_.value(id).shape);
+        try {
+            scratch[size_t(ni)] = op.scratch_bytes(ctx_.info(), shapes, n.params);
+        } catch (const Error& e) {
+            throw Error("node '" + n.name + "' (" + n.op + "): " + e.what());
+        }
+        plan_.scratch_bytes = std::max(plan_.scratch_bytes, scratch[size_t(ni)]);
+    }
+    if (plan_.scratch_bytes) scratch_ = rt::Buffer(ctx_, plan_.scratch_bytes, rt::MemoryKind::Device);
 
     uint64_t in_bytes = 0, out_bytes = 0;
     for (const Value& v : graph_.values())
@@ -241,7 +256,8 @@ void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_al
         for (int id : n.outputs) out.push_back({view_of(id), graph_.value(id).shape});
         seq_->begin_node(n.name);
         try {
-            find_op(n.op).gpu(GpuOpArgs{ctx_, *seq_, in, out, n.params});
+            const rt::BufferView sv = scratch[size_t(ni)] ? rt::BufferView{scratch_.handle(), 0, scratch[size_t(ni)]} : rt::BufferView{};
+            find_op(n.op).gpu(GpuOpArgs{ctx_, *seq_, in, out, n.params, sv});
         } catch (const Error& e) {
             throw Error("node '" + n.name + "' (" + n.op + "): " + e.what());
         }

@@ -45,6 +45,7 @@ struct MemoryPlan {
     std::vector<int64_t> offset;  // per value; -1 for weights
     uint64_t arena_bytes = 0;     // size of the arena
     uint64_t total_bytes = 0;     // what one buffer per tensor would take
+    uint64_t scratch_bytes = 0;   // GpuExecutor: the nodes' scratch (OpDef::scratch_bytes), one buffer for all
 };
 // share = false gives every value bytes of its own (GpuExecutor's keep_all).
 MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share = true);
@@ -85,6 +86,7 @@ private:
     std::shared_ptr<ResidentWeights> resident_;
     uint64_t weight_bytes_ = 0;
     rt::Buffer arena_;
+    rt::Buffer scratch_;  // shared by the nodes that ask for scratch (OpDef::scratch_bytes)
     rt::Buffer staging_in_, staging_out_;
     rt::Buffer staging_all_;  // keep_all: a copy of the whole arena
     std::map<std::string, uint64_t> in_offsets_, out_offsets_;

@@ -15,6 +15,7 @@ namespace vtloc {
 namespace rt {
 class Context;
 class Sequence;
+struct DeviceInfo;
 }  // namespace rt
 
 struct GpuTensor {
@@ -28,6 +29,9 @@ struct GpuOpArgs {
     const std::vector<GpuTensor>& in;
     const std::vector<GpuTensor>& out;
     const Params& params;
+    // OpDef::scratch_bytes of this node's bytes, for its own use within the node (the
+    // executor shares one buffer among all nodes; barriers follow from the byte ranges).
+    rt::BufferView scratch{};
 };
 
 struct OpDef {
@@ -49,6 +53,10 @@ struct OpDef {
     // output, so node-by-node checks compare only what the op defines. Null: none.
     void (*take_unspecified)(const std::vector<const HostTensor*>& in, const Params& p, const HostTensor& ref,
                              HostTensor& gpu_out) = nullptr;
+    // Device bytes the GPU recorder needs beyond its outputs on this device (e.g.
+    // conv2d's partial sums where it splits a long reduction to fill a big GPU).
+    // Null: none. Its choice must be the one gpu() makes for the same device.
+    uint64_t (*scratch_bytes)(const rt::DeviceInfo& d, const std::vector<Shape>& in, const Params& p) = nullptr;
 };
 
 const OpDef& find_op(std::string_view name);

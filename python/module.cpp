@@ -52,6 +52,10 @@ PYBIND11_MODULE(vtloc, m) {
         for (const auto& d : devs) out.append(python::device_dict(d));
         return out;
     }, "Every Vulkan device with a compute queue, as dicts.");
+    m.def("device_profile", [](int index) {
+        py::gil_scoped_release release;
+        return api::device_profile(index);
+    }, py::arg("index"), "Device `index`'s limits as a device profile (JSON text) for vtloc-bench --plan-for.");
     m.def("inspect_model", [](const std::string& path) {
         api::ModelInfo info;
         {

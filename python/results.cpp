@@ -32,6 +32,7 @@ py::dict device_dict(const api::DeviceInfo& x) {
     d["timestamps"] = x.timestamps;
     d["device_local_bytes"] = x.device_local_bytes;
     d["host_vector_registers"] = x.host_vector_registers;
+    d["compute_units"] = x.compute_units;
     return d;
 }
 

@@ -5,6 +5,7 @@
 #include <cstdlib>
 #include <cstring>
 #include <strings.h>
+#include <thread>
 #include <utility>
 
 #include "base/error.h"
@@ -128,10 +129,34 @@ int compute_queue_family(VkPhysicalDevice pd) {
     return best;
 }
 
+bool has_device_extension(VkPhysicalDevice pd, const char* name) {
+    uint32_t n = 0;
+    if (vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr) != VK_SUCCESS) return false;
+    std::vector<VkExtensionProperties> ext(n);
+    if (vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, ext.data()) != VK_SUCCESS) return false;
+    for (const auto& e : ext)
+        if (std::strcmp(e.extensionName, name) == 0) return true;
+    return false;
+}
+
 DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};
     VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
     p2.pNext = &sub;
+    // The compute units, from whichever vendor extension the driver has (chained only then).
+    VkPhysicalDeviceShaderSMBuiltinsPropertiesNV nv{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_SM_BUILTINS_PROPERTIES_NV};
+    VkPhysicalDeviceShaderCorePropertiesAMD amd{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_CORE_PROPERTIES_AMD};
+    VkPhysicalDeviceShaderCoreBuiltinsPropertiesARM arm{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SHADER_CORE_BUILTINS_PROPERTIES_ARM};
+    void** tail = &sub.pNext;
+    auto chain = [&](auto& s, const char* ext) {
+        if (!has_device_extension(pd, ext)) return false;
+        *tail = &s;
+        tail = &s.pNext;
+        return true;
+    };
+    const bool has_nv = chain(nv, VK_NV_SHADER_SM_BUILTINS_EXTENSION_NAME);
+    const bool has_amd = chain(amd, VK_AMD_SHADER_CORE_PROPERTIES_EXTENSION_NAME);
+    const bool has_arm = chain(arm, VK_ARM_SHADER_CORE_BUILTINS_EXTENSION_NAME);
     vkGetPhysicalDeviceProperties2(pd, &p2);
     const VkPhysicalDeviceProperties& p = p2.properties;
     const VkPhysicalDeviceLimits& l = p.limits;
@@ -174,6 +199,9 @@ DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
         if (mp.memoryHeaps[i].flags & VK_MEMORY_HEAP_DEVICE_LOCAL_BIT)
             d.device_local_bytes += mp.memoryHeaps[i].size;
     if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU) d.host_vector_registers = host_vector_registers();
+    if (has_nv) d.compute_units = nv.shaderSMCount;
+    else if (has_amd) d.compute_units = amd.shaderEngineCount * amd.shaderArraysPerEngineCount * amd.computeUnitsPerShaderArray;
+    else if (has_arm) d.compute_units = arm.shaderCoreCount;
     return d;
 }
 
@@ -242,6 +270,11 @@ uint32_t host_vector_registers() {
 #endif
 }
 
+uint64_t fill_workgroups(const DeviceInfo& d) {
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU) return std::max(1u, std::thread::hardware_concurrency());
+    return 4ull * (d.compute_units ? d.compute_units : 16u);
+}
+
 std::vector<DeviceInfo> Context::list_devices() {
     VkInstance inst = make_instance(false);
     std::vector<DeviceInfo> out;
@@ -305,6 +338,15 @@ Context::Context(const ContextOptions& options) {
         di.pQueueCreateInfos = &qi;
         check_vk(vkCreateDevice(physical_, &di, nullptr, &device_), "vkCreateDevice");
         vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+        if (options.plan_for) {
+            const DeviceInfo real = info_;
+            info_ = *options.plan_for;
+            info_.index = real.index;
+            info_.has_timestamps = false;  // nothing runs: nothing to time
+            info_.has_compute_queue = true;
+            info_.device_local_bytes = real.device_local_bytes;
+            plan_only_ = true;
+        }
         pipelines_ = std::make_unique<PipelineCache>(*this);
     } catch (...) {
         release();

@@ -10,6 +10,7 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -53,11 +54,21 @@ struct DeviceInfo {
     // `vtloc check` and the bench report them (group_linear's tile read them until
     // 8 x 32 measured best with 16 as well: group_linear.cpp).
     uint32_t host_vector_registers = 0;  // rt::host_vector_registers()
+    // GPUs: compute units (NVIDIA SMs, AMD CUs, Arm shader cores) where the driver
+    // says (VK_NV_shader_sm_builtins, VK_AMD_shader_core_properties,
+    // VK_ARM_shader_core_builtins) or a device profile does; 0: unknown. Tile
+    // choices aim to give each of them several workgroups (fill_workgroups).
+    uint32_t compute_units = 0;
     // Offset alignment of any tensor: it may be bound as a storage, texel or uniform buffer.
     uint64_t tensor_alignment() const {
         return std::max<uint64_t>({16, storage_offset_alignment, texel_offset_alignment, uniform_offset_alignment});
     }
 };
+
+// How many workgroups a dispatch should offer to keep the device busy: four per
+// compute unit on a GPU (16 units assumed where the driver does not say), the host's
+// threads on a CPU device. Tile choices shrink their blocks towards it.
+uint64_t fill_workgroups(const DeviceInfo& d);
 
 // The host's vector registers as lavapipe's JIT code sees them (DeviceInfo's
 // host_vector_registers on CPU devices): 32 with AVX-512VL or on AArch64, else
@@ -78,6 +89,11 @@ struct ContextOptions {
     // VTLOC_MEMORY_BUDGET_MIB if set, else no limit beyond the device's own. Past
     // it an allocation fails as out-of-device-memory would, with a clear error.
     uint64_t memory_budget = 0;
+    // Plan only (rt/device_profile.h): the context reports these limits instead of
+    // its own device's, pipelines are checked against them but not compiled, and
+    // sequences record dispatches without running them (a submit that holds one
+    // throws). Buffers are still real, on the device picked above.
+    std::optional<DeviceInfo> plan_for;
 };
 
 // A message from the validation layer (warnings and errors only).
@@ -103,6 +119,8 @@ public:
     uint32_t queue_family() const { return queue_family_; }
     const DeviceInfo& info() const { return info_; }
     bool validation_enabled() const { return messenger_ != VK_NULL_HANDLE; }
+    // Made with ContextOptions::plan_for: info() is the profile's; nothing runs.
+    bool plan_only() const { return plan_only_; }
     PipelineCache& pipelines() { return *pipelines_; }
 
     // Memory type index with all of `required` (and `preferred` where possible).
@@ -153,6 +171,7 @@ private:
     uint64_t budget_ = 0;
     std::atomic<uint64_t> in_use_{0};
     std::atomic<bool> lost_{false}, simulate_loss_{false};
+    bool plan_only_ = false;
     std::mutex queue_mutex_;
 };
 

@@ -82,6 +82,7 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     VkDevice dev = ctx_.device();
     auto p = std::make_unique<Pipeline>();
     p->desc = desc;
+    if (ctx_.plan_only()) return *(pipelines_[desc] = std::move(p));  // checked against the profile, never compiled
 
     std::vector<VkDescriptorSetLayoutBinding> binds(desc.bindings);
     for (uint32_t i = 0; i < desc.bindings; ++i) {

@@ -184,6 +184,14 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
                     " workgroups exceeds the device's maxComputeWorkGroupCount");
 
     std::vector<std::pair<BufferView, Access>> accesses;
+    if (ctx_.plan_only()) {  // the profile's device: counted and logged, never recorded
+        for (const Binding& b : bindings) accesses.push_back({b.view, b.access});
+        track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+        ++dispatches_;
+        dispatch_log_.push_back({in_node_ ? current_node_ : std::string(), p.desc.shader, p.desc.spec,
+                                 p.desc.texel_bindings, {gx, gy, gz}});
+        return;
+    }
     std::vector<VkDescriptorBufferInfo> infos(bindings.size());
     std::vector<VkBufferView> views(bindings.size(), VK_NULL_HANDLE);
     std::vector<VkWriteDescriptorSet> writes(bindings.size());
@@ -280,6 +288,9 @@ void Sequence::end() {
 
 void Sequence::submit_and_wait() {
     if (!ended_) throw Error("Sequence::submit_and_wait before end()");
+    if (ctx_.plan_only() && dispatches_ > 0)
+        throw Error("this context plans for the device profile '" + ctx_.info().name +
+                    "': it records dispatches but never runs them");
     VkSubmitInfo si{VK_STRUCTURE_TYPE_SUBMIT_INFO};
     si.commandBufferCount = 1;
     si.pCommandBuffers = &cmd_;

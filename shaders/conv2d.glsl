@@ -45,6 +45,11 @@ layout(constant_id = 15) const uint XSHIFT = 4;
 // Store (and read the residual) 4 outputs at a time: needs OW % 4 == 0 and
 // C % 4 == 0, so every block's row segment starts on a vec4.
 layout(constant_id = 16) const bool YVEC4 = false;
+// > 1: invocations come in KSPLIT parts, part z summing input channels
+// [z * cper, (z + 1) * cper) into its own copy of the output (binding 5 is then the
+// op's scratch, [KSPLIT][N][Cout][OH][OW]) with no epilogue; conv2d_split_sum.comp
+// adds the parts. A small output of a long reduction then fills a big GPU.
+layout(constant_id = 17) const uint KSPLIT = 1;
 
 const uint IR = (R - 1) * SH + KHB;  // input window rows per iteration
 const uint IC = (C - 1) * SW + KW;   // input window columns
@@ -57,12 +62,20 @@ layout(push_constant) uniform Push {
     uint bx, by, cb, lanes;  // column blocks, row blocks, channel blocks, total invocations
     float slope;
     int xq;                  // vec4 texels of x (XVEC4)
+    uint part_lanes, cper;   // invocations and input channels per part (KSPLIT)
+    uint total;              // outputs of one part, N * Cout * OH * OW
 } p;
 
 void main() {
     uint id = (gl_WorkGroupID.y * gl_NumWorkGroups.x + gl_WorkGroupID.x) * gl_WorkGroupSize.x +
               gl_LocalInvocationID.x;
     if (id >= p.lanes) return;
+    uint z = 0;
+    if (KSPLIT > 1u) {
+        z = id / p.part_lanes;
+        id -= z * p.part_lanes;
+    }
+    const uint ci_end = min(p.Cin, (z + 1) * p.cper);
     // Neighbouring invocations take neighbouring pixel blocks of the same channels:
     // they read the same weights and overlapping input windows.
     // The last block along each axis is moved back to end at the edge (the host
@@ -85,7 +98,7 @@ void main() {
     [[unroll]] for (uint i = 0; i < TM * R * C; ++i) acc[i] = 0.0;
 
     int xbase = int(n * p.Cin * p.H * p.W) + iy0 * int(p.W) + ix0;
-    for (uint ci = 0; ci < p.Cin; ++ci)
+    for (uint ci = z * p.cper; ci < ci_end; ++ci)
       [[unroll]] for (uint ky0 = 0; ky0 < KH; ky0 += KHB) {
         int rowmask[IR];
         [[unroll]] for (uint r = 0; r < IR; ++r) {
@@ -159,7 +172,8 @@ void main() {
         if (GUARD_CO && co >= p.Cout) break;
         float b = HAS_BIAS ? LOAD_BIAS(int(co)) : 0.0;
         [[unroll]] for (uint r = 0; r < R; ++r) {
-            uint o = ((n * p.Cout + co) * p.OH + oy0 + r) * p.OW + ox0;  // the row segment's first output
+            // The row segment's first output (in part z's copy when split).
+            uint o = ((n * p.Cout + co) * p.OH + oy0 + r) * p.OW + ox0 + z * p.total;
 #ifdef LOAD_RES4
             if (YVEC4) {
                 [[unroll]] for (uint c = 0; c < C; c += 4) {

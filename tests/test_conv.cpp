@@ -26,6 +26,7 @@ struct ConvCase {
     bool bias, residual;
     uint32_t act;
     uint32_t layout;
+    int64_t split = 0;  // > 0: the input channels summed in that many parts (a big GPU's choice, forced here)
 };
 
 // Every case on every binding path (texel buffers and the storage-buffer fallback
@@ -47,11 +48,11 @@ void check_conv(const ConvCase& c, uint32_t seed) {
     const Shape rs{c.x[0], c.cout, oh, ow};
     const int res = c.residual ? g.input("res", rs) : -1;
     if (c.residual) inputs["res"] = random_tensor(rs, seed + 3);
-    g.output(ops::conv2d(g, x, wv, bv, res, ops::Conv2d{c.sh, c.sw, c.ph, c.pw, c.layout, ops::Act(c.act), 0.1, path}),
+    g.output(ops::conv2d(g, x, wv, bv, res, ops::Conv2d{c.sh, c.sw, c.ph, c.pw, c.layout, ops::Act(c.act), 0.1, path, c.split}),
              "y");
     INFO("conv x" << shape_str(c.x) << " -> " << c.cout << " k" << c.kh << "x" << c.kw << " s" << c.sh << "," << c.sw
                   << " p" << c.ph << "," << c.pw << " layout " << c.layout << " bias " << c.bias << " res "
-                  << c.residual << " " << ops::path_name(path));
+                  << c.residual << " split " << c.split << " " << ops::path_name(path));
     TensorMap got = run_gpu_and_compare(g, ws, inputs);
     const TensorMap cpu_out = run_cpu(g, ws, inputs);
     const HostTensor& want = cpu_out.at("y");
@@ -88,6 +89,31 @@ TEST_CASE("conv2d matches the CPU reference at odd shapes, on every binding path
     check_conv({{1, 4, 16, 16}, 8, 3, 3, 2, 2, 1, 1, true, false, ops::kActNone, kConvIHWO}, 10);
 }
 
+TEST_CASE("conv2d summing its input channels in parts matches the CPU reference", "[op][conv2d]") {
+    using ops::kConvIHWO, ops::kConvOIHW;
+    // Parts that do not divide the channels, one channel a part, more parts than
+    // channels (clamped); bias, residual and activation in the second pass; both
+    // binding paths, vec4 and scalar stores, batch 2.
+    check_conv({{1, 37, 7, 7}, 12, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO, 5}, 21);
+    check_conv({{2, 13, 9, 8}, 6, 3, 3, 2, 2, 1, 1, true, false, ops::kActLeaky, kConvOIHW, 3}, 22);
+    check_conv({{1, 4, 8, 8}, 8, 1, 1, 1, 1, 0, 0, false, true, ops::kActNone, kConvIHWO, 4}, 23);
+    check_conv({{1, 3, 6, 5}, 5, 3, 3, 1, 1, 1, 1, true, false, ops::kActTanh, kConvOIHW, 9}, 24);
+    // The parts are really made: two dispatches, the second the sum.
+    Graph g;
+    const int x = g.input("x", {1, 16, 6, 6});
+    g.output(ops::conv2d(g, x, g.weight("w", {8, 16, 3, 3}), -1, -1, ops::Conv2d{1, 1, 1, 1, kConvOIHW, ops::kActRelu, 0.1,
+                                                                                   ops::BufferPath::Texel, 4}), "y");
+    WeightStore ws;
+    ws.add("w", random_tensor({8, 16, 3, 3}, 25));
+    GpuExecutor ex(test::gpu(), g, ws);
+    const auto& log = ex.sequence().dispatch_log();
+    REQUIRE(log.size() == 2);
+    CHECK(log[0].shader == "conv2d");
+    CHECK(log[1].shader == "conv2d_split_sum");
+    CHECK(ex.memory_plan().scratch_bytes == 4u * 8 * 6 * 6 * 4);
+    test::require_no_validation_messages();
+}
+
 TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
     const rt::DeviceInfo& d = test::gpu().info();
     for (ops::ConvShape s : {ops::ConvShape{1, 3, 224, 224, 64, 7, 7, 2, 2, 112, 112},
@@ -118,6 +144,27 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
     ops::ConvTiles t = ops::choose_conv_tiles(small, {1, 16, 9, 9, 16, 3, 3, 1, 1, 9, 9}, true, false);
     CHECK(t.local <= 32);
     CHECK(t.tm % 4 == 0);
+    // lavapipe never splits; a GPU with many compute units splits a small output of a
+    // long reduction (ResNet-18's layer4 at 224: 7x7x512 from 512 x 3x3) until the
+    // dispatch offers fill_workgroups, and leaves a big output whole.
+    const ops::ConvShape layer4{1, 512, 7, 7, 512, 3, 3, 1, 1, 7, 7, 1}, stem{1, 3, 224, 224, 64, 7, 7, 2, 2, 112, 112, 3};
+    CHECK(tiles(layer4).ksplit == 1);
+    rt::DeviceInfo big = d;
+    big.type = VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU;
+    big.subgroup_size = 32;
+    big.compute_units = 132;
+    auto groups = [](const ops::ConvShape& s, const ops::ConvTiles& t) {
+        auto up = [](int64_t a, int64_t b) { return (a + b - 1) / b; };
+        return up(s.n * up(s.cout, t.tm) * up(s.oh, t.r) * up(s.ow, t.c), t.local) * t.ksplit;
+    };
+    const ops::ConvTiles t4 = ops::choose_conv_tiles(big, layer4, true, true);
+    INFO("layer4 on 132 units: tm " << t4.tm << " r " << t4.r << " c " << t4.c << " local " << t4.local << " parts " << t4.ksplit);
+    CHECK(t4.ksplit > 1);
+    CHECK(uint64_t(groups(layer4, t4)) >= rt::fill_workgroups(big));
+    CHECK(512 / t4.ksplit >= 8);  // at least 8 channels a part
+    CHECK(ops::choose_conv_tiles(big, stem, true, true).ksplit == 1);
+    big.compute_units = 8;  // a Jetson-class GPU: fewer parts
+    CHECK(ops::choose_conv_tiles(big, layer4, true, true).ksplit < t4.ksplit);
 }
 
 TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {

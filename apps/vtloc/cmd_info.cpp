@@ -1,5 +1,7 @@
 // vtloc info (a weight file) and vtloc devices (Vulkan devices).
 #include <cstdio>
+#include <fstream>
+#include <stdexcept>
 
 #include "apps/vtloc/report.h"
 
@@ -69,16 +71,25 @@ int cmd_info(Session&, int argc, char** argv) {
 }
 
 int cmd_devices(Session& s, int argc, char** argv) {
-    Args a(argc, argv, 2, {{"--json", false}});
+    Args a(argc, argv, 2, {{"--json", false}, {"--save-profile", true}});
     if (a.help()) {
-        std::puts("usage: vtloc devices [--json]\n"
+        std::puts("usage: vtloc devices [--json] [--save-profile FILE]\n"
                   "\n"
                   "Lists the Vulkan devices with compute and the limits the engine uses; '*' marks the\n"
-                  "one it picks (VTLOC_DEVICE=<index|name> chooses another).");
+                  "one it picks (VTLOC_DEVICE=<index|name> chooses another). --save-profile writes that\n"
+                  "device's limits as a device profile: `vtloc-bench --plan-for FILE` then shows, on any\n"
+                  "machine, the dispatches the engine would give it.");
         return 0;
     }
     std::vector<api::DeviceInfo> devices = api::list_devices();
     const int chosen = s.gpu().device().index;
+    if (auto path = a.get("--save-profile")) {
+        std::ofstream f(*path, std::ios::binary);
+        if (!(f << api::device_profile(chosen)) || !(f.close(), f))
+            throw std::runtime_error("cannot write the device profile to " + *path);
+        std::printf("wrote %s (device %d)\n", path->c_str(), chosen);
+        return 0;
+    }
     if (a.flag("--json")) {
         nlohmann::json out = nlohmann::json::array();
         for (const api::DeviceInfo& d : devices)
@@ -98,7 +109,8 @@ int cmd_devices(Session& s, int argc, char** argv) {
                            {"max_texel_buffer_elements", d.max_texel_buffer_elements},
                            {"timestamps", d.timestamps},
                            {"device_local_bytes", d.device_local_bytes},
-                           {"host_vector_registers", d.host_vector_registers}});
+                           {"host_vector_registers", d.host_vector_registers},
+                           {"compute_units", d.compute_units}});
         std::printf("%s\n", out.dump(2).c_str());
         return 0;
     }

@@ -84,6 +84,7 @@ void print_device(const api::DeviceInfo& d, bool chosen) {
                 (unsigned long long)(d.device_local_bytes >> 20), d.timestamps ? "yes" : "no");
     if (d.host_vector_registers > 0)  // a CPU device: its code runs on the host's vector registers
         std::printf("      host CPU vector registers %u\n", d.host_vector_registers);
+    if (d.compute_units > 0) std::printf("      compute units %u\n", d.compute_units);
 }
 
 void print_touch(const api::TouchResult& r, const std::string& indent) {

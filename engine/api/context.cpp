@@ -2,6 +2,7 @@
 #include <algorithm>
 
 #include "engine/api/api_internal.h"
+#include "runtime/device_profile.h"
 
 #ifndef VTLOC_VERSION
 #define VTLOC_VERSION "unknown"
@@ -44,7 +45,16 @@ DeviceInfo to_api(const rt::DeviceInfo& d) {
     o.timestamps = d.has_timestamps;
     o.device_local_bytes = d.device_local_bytes;
     o.host_vector_registers = d.host_vector_registers;
+    o.compute_units = d.compute_units;
     return o;
+}
+
+std::string device_profile(int index) {
+    return guarded([&] {
+        for (const rt::DeviceInfo& d : rt::Context::list_devices())
+            if (int(d.index) == index) return rt::device_profile_json(d);
+        throw Error("no Vulkan device with index " + std::to_string(index));
+    });
 }
 
 std::vector<DeviceInfo> list_devices() {

@@ -100,7 +100,7 @@ VtlocRunner::MemoryUse VtlocRunner::last_memory() const {
     if (!last_ || !last_->gpu) return m;
     m.weight_bytes = last_->gpu->weight_bytes();
     m.resident_weight_bytes = resident_ ? resident_->bytes() : 0;
-    m.arena_bytes = last_->gpu->memory_plan().arena_bytes;
+    m.arena_bytes = last_->gpu->memory_plan().arena_bytes + last_->gpu->memory_plan().scratch_bytes;
     m.unplanned_bytes = last_->gpu->memory_plan().total_bytes;
     return m;
 }
@@ -112,7 +112,7 @@ VtlocRunner::AllMemory VtlocRunner::all_memory() const {
         if (!c || !c->gpu) continue;
         ++m.graphs;
         m.weight_bytes_by_graph += c->gpu->weight_bytes();
-        m.arena_bytes += c->gpu->memory_plan().arena_bytes;
+        m.arena_bytes += c->gpu->memory_plan().arena_bytes + c->gpu->memory_plan().scratch_bytes;
     }
     return m;
 }

@@ -111,7 +111,7 @@ public:
     struct MemoryUse {
         uint64_t weight_bytes = 0;  // weights this graph reads
         uint64_t resident_weight_bytes = 0;  // every weight resident for this runner: each once, all shapes
-        uint64_t arena_bytes = 0;   // activation arena (lifetime-planned peak)
+        uint64_t arena_bytes = 0;   // activation arena (lifetime-planned peak) and the nodes' scratch
         uint64_t unplanned_bytes = 0;  // what one buffer per activation would take
     };
     const Graph* last_graph() const;

@@ -47,12 +47,12 @@ int conv2d(Graph& g, int x, int w, int bias, int residual, const Conv2d& c, cons
     std::vector<int> in{x, w};
     if (bias >= 0) in.push_back(bias);
     if (residual >= 0) in.push_back(residual);
-    return g.add1("conv2d", in,
-                  {{"stride_h", d(c.stride_h)}, {"stride_w", d(c.stride_w)}, {"pad_h", d(c.pad_h)},
-                   {"pad_w", d(c.pad_w)}, {"weight_layout", double(c.layout)}, {"act", double(c.act)},
-                   {"slope", c.slope}, {"residual", flag(residual >= 0)},
-                   {"texel", flag(c.path == BufferPath::Texel)}},
-                  name);
+    Params p{{"stride_h", d(c.stride_h)}, {"stride_w", d(c.stride_w)}, {"pad_h", d(c.pad_h)},
+             {"pad_w", d(c.pad_w)}, {"weight_layout", double(c.layout)}, {"act", double(c.act)},
+             {"slope", c.slope}, {"residual", flag(residual >= 0)},
+             {"texel", flag(c.path == BufferPath::Texel)}};
+    if (c.split > 0) p.set("split", d(c.split));
+    return g.add1("conv2d", in, p, name);
 }
 
 int max_pool2d(Graph& g, int x, const Pool2d& p, const std::string& name) {

@@ -33,6 +33,13 @@ bool shuffles_allowed(const GpuOpArgs& a) {
     return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(a.ctx.info());
 }
 
+uint32_t fill_local_size(const rt::DeviceInfo& d, uint64_t items) {
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    uint32_t local = elementwise_local_size(d);
+    while (local / 2 >= sg && local / 2 % sg == 0 && (items + local - 1) / local < rt::fill_workgroups(d)) local /= 2;
+    return local;
+}
+
 uint32_t row_local_size(const rt::DeviceInfo& d, uint64_t rows) {
     const uint32_t sg = std::max(1u, d.subgroup_size);
     uint32_t local = elementwise_local_size(d);

@@ -31,6 +31,9 @@ bool shuffles_allowed(const GpuOpArgs& a);
 // are only hundreds to thousands of rows, and a full 256-wide group would leave CPU
 // devices' threads (one workgroup each) idle.
 uint32_t row_local_size(const rt::DeviceInfo& d, uint64_t rows);
+// An elementwise pass over `items`: elementwise_local_size, halved (whole subgroups)
+// while the dispatch would offer fewer than rt::fill_workgroups(d) workgroups.
+uint32_t fill_local_size(const rt::DeviceInfo& d, uint64_t items);
 // Workgroup size for n invocations along x (one row of the output, its rows along y):
 // n in whole subgroups, at most the elementwise size (tactile_preprocess, concat).
 uint32_t row_span_local_size(const rt::DeviceInfo& d, uint64_t n);

@@ -5,7 +5,9 @@
 // (ops::Act, none), weight_layout (kConvOIHW = PyTorch's [Cout, Cin, KH, KW],
 // or kConvIHWO = [Cin, KH, KW, Cout], which the GPU reads 4 channels at a time),
 // texel (1: read inputs as texel buffers where the device allows; 0: storage
-// buffers, the fallback, forced for tests).
+// buffers, the fallback, forced for tests), split (0: the device's choice of
+// how many parts the input channels are summed in, see ConvTiles::ksplit; > 0:
+// that many, forced for tests).
 #include "engine/ops/conv2d.h"
 
 #include <algorithm>
@@ -124,48 +126,88 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
                 }
 }
 
+// Every choice gpu() makes, from the device and the input shapes (scratch_bytes
+// must make the same ones).
+struct ConvPlan {
+    ConvParams c;
+    ConvShape s;
+    bool vec4, texel, xvec4;
+    ConvTiles t;
+    uint32_t cper;  // input channels per part (t.ksplit parts)
+    uint64_t outputs() const { return uint64_t(s.n) * s.cout * s.oh * s.ow; }
+};
+
+ConvPlan conv_plan(const rt::DeviceInfo& d, const std::vector<Shape>& in, const Params& params) {
+    ConvPlan pl;
+    pl.c = conv_params(params);
+    pl.s = conv_shape(in[0], in[1], pl.c);
+    pl.s.pw = pl.c.pw;
+    pl.vec4 = pl.c.layout == kConvIHWO && pl.s.cout % 4 == 0;
+    // Texel buffers unless a tensor has more elements than the device allows in one.
+    pl.texel = params.get("texel", 1) != 0;
+    for (const Shape& sh : in) pl.texel &= uint64_t(numel(sh)) <= d.max_texel_elements;
+    // Input rows as whole vec4s when x has a whole number of them.
+    pl.xvec4 = pl.texel && numel(in[0]) % 4 == 0;
+    pl.t = choose_conv_tiles(d, pl.s, pl.vec4, pl.xvec4);
+    // "split" (tests): that many parts on any device; 0: the device's choice.
+    const int64_t split = int_param(params, "split", "split", 0, 0);
+    if (split > 0) pl.t.ksplit = uint32_t(std::min<int64_t>(split, pl.s.cin));
+    pl.cper = uint32_t((pl.s.cin + pl.t.ksplit - 1) / pl.t.ksplit);
+    pl.t.ksplit = uint32_t((pl.s.cin + pl.cper - 1) / pl.cper);  // no empty part
+    return pl;
+}
+
+uint64_t scratch_bytes(const rt::DeviceInfo& d, const std::vector<Shape>& in, const Params& params) {
+    const ConvPlan pl = conv_plan(d, in, params);
+    return pl.t.ksplit > 1 ? uint64_t(pl.t.ksplit) * pl.outputs() * 4 : 0;
+}
+
 void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
-    ConvParams c = conv_params(a.params);
-    ConvShape s = conv_shape(a.in[0].shape, a.in[1].shape, c);
-    s.pw = c.pw;
-    const bool vec4 = c.layout == kConvIHWO && s.cout % 4 == 0;
-    // Texel buffers unless a tensor has more elements than the device allows in one.
-    bool texel = a.params.get("texel", 1) != 0;
-    for (const GpuTensor& in : a.in) texel &= uint64_t(numel(in.shape)) <= d.max_texel_elements;
-    // Input rows as whole vec4s when x has a whole number of them.
-    const bool xvec4 = texel && numel(a.in[0].shape) % 4 == 0;
-    const ConvTiles t = choose_conv_tiles(d, s, vec4, xvec4);
+    std::vector<Shape> shapes;
+    for (const GpuTensor& t : a.in) shapes.push_back(t.shape);
+    const ConvPlan pl = conv_plan(d, shapes, a.params);
+    const ConvParams& c = pl.c;
+    const ConvShape& s = pl.s;
+    const ConvTiles& t = pl.t;
+    const bool vec4 = pl.vec4, texel = pl.texel, xvec4 = pl.xvec4, split = t.ksplit > 1;
     const uint32_t wmode = c.layout == kConvOIHW ? 0 : vec4 ? 2 : 1;
     // The shader indexes with 32-bit signed offsets into x.
     to_u32(numel(a.in[0].shape) * 2, "conv input size (x2)");
     to_u32(numel(a.in[1].shape), "conv weight size");
-    to_u32(numel(a.out[0].shape), "conv output size");
+    to_u32(int64_t(pl.outputs()) * t.ksplit, "conv output size (times its parts)");
+    if (split && a.scratch.size < uint64_t(t.ksplit) * pl.outputs() * 4)
+        throw Error("conv2d: its scratch is smaller than its " + std::to_string(t.ksplit) + " parts need");
     struct {
         uint32_t cin, h, w, cout, oh, ow;
         int32_t pad_h, pad_w;
         uint32_t bx, by, cb, lanes;
         float slope;
         int32_t xq;
+        uint32_t part_lanes, cper, total;
     } push{uint32_t(s.cin), uint32_t(s.h), uint32_t(s.w), uint32_t(s.cout), uint32_t(s.oh), uint32_t(s.ow),
            int32_t(c.ph), int32_t(c.pw),
            uint32_t((s.ow + t.c - 1) / t.c), uint32_t((s.oh + t.r - 1) / t.r), uint32_t((s.cout + t.tm - 1) / t.tm),
-           0, c.slope, int32_t(numel(a.in[0].shape) / 4)};
-    push.lanes = to_u32(s.n * int64_t(push.bx) * push.by * push.cb, "conv invocations");
+           0, c.slope, int32_t(numel(a.in[0].shape) / 4), 0, pl.cper, uint32_t(pl.outputs())};
+    push.part_lanes = to_u32(s.n * int64_t(push.bx) * push.by * push.cb, "conv invocations");
+    push.lanes = to_u32(int64_t(push.part_lanes) * t.ksplit, "conv invocations (times its parts)");
     const bool bias = a.in.size() - (c.residual ? 1 : 0) == 3;
     // Absent bias / residual: the input fills the binding; the shader never reads it.
     const rt::BufferView& bv = bias ? a.in[2].view : a.in[0].view;
     const rt::BufferView& rv = c.residual ? a.in.back().view : a.in[0].view;
+    // Split: the parts go to scratch, and the epilogue waits for the second pass.
+    const rt::BufferView yv = split ? a.scratch : a.out[0].view;
+    const bool epi_bias = bias && !split, epi_res = c.residual && !split;
     // Outputs (and the residual) 4 at a time when every block's row segment starts on a vec4.
-    const bool yvec4 = texel && s.ow % 4 == 0 && t.c % 4 == 0;
+    const bool yvec4 = texel && s.ow % 4 == 0 && t.c % 4 == 0 && (!split || pl.outputs() % 4 == 0);
     const VkFormat f1 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
     const VkFormat f4 = texel && vec4 ? VK_FORMAT_R32G32B32A32_SFLOAT : f1;
     const VkFormat fx4 = xvec4 ? VK_FORMAT_R32G32B32A32_SFLOAT : f1;
-    const VkFormat fr4 = yvec4 && c.residual ? VK_FORMAT_R32G32B32A32_SFLOAT : f1;
+    const VkFormat fr4 = yvec4 && epi_res ? VK_FORMAT_R32G32B32A32_SFLOAT : f1;
     rt::PipelineDesc desc{texel ? "conv2d" : "conv2d_ssbo", 9, sizeof(push),
                           {t.local, t.tm, t.r, t.c, uint32_t(s.kh), uint32_t(s.kw), uint32_t(s.sh), uint32_t(s.sw),
-                           wmode, c.act, bias ? 1u : 0u, c.residual ? 1u : 0u, s.cout < int64_t(t.tm) ? 1u : 0u,
-                           xvec4 ? 1u : 0u, t.kh_block, t.x_shift, yvec4 ? 1u : 0u},
+                           wmode, split ? 0u : c.act, epi_bias ? 1u : 0u, epi_res ? 1u : 0u, s.cout < int64_t(t.tm) ? 1u : 0u,
+                           xvec4 ? 1u : 0u, t.kh_block, t.x_shift, yvec4 ? 1u : 0u, t.ksplit},
                           texel ? 0x15fu : 0u};
     const rt::Pipeline& pipe = a.ctx.pipelines().get(desc);
     const uint64_t groups = (uint64_t(push.lanes) + t.local - 1) / t.local;
@@ -175,14 +217,27 @@ void gpu(const GpuOpArgs& a) {
     const rt::Access rd = rt::Access::Read;
     a.seq.dispatch(pipe,
                    {{a.in[0].view, rd, f1}, {a.in[1].view, rd, f1}, {a.in[1].view, rd, f4}, {bv, rd, f1},
-                    {rv, rd, f1}, {a.out[0].view, rt::Access::Write}, {a.in[0].view, rd, fx4},
-                    {a.out[0].view, rt::Access::Write}, {rv, rd, fr4}},
+                    {rv, rd, f1}, {yv, rt::Access::Write}, {a.in[0].view, rd, fx4},
+                    {yv, rt::Access::Write}, {rv, rd, fr4}},
                    &push, sizeof(push), gx, uint32_t(gy));
+    if (!split) return;
+    struct {
+        uint32_t total, cout, plane;
+        float slope;
+    } sum{uint32_t(pl.outputs()), uint32_t(s.cout), uint32_t(s.oh * s.ow), c.slope};
+    const uint32_t local = fill_local_size(d, pl.outputs());
+    const rt::Pipeline& add = a.ctx.pipelines().get(
+        {"conv2d_split_sum", 4, sizeof(sum), {local, t.ksplit, c.act, bias ? 1u : 0u, c.residual ? 1u : 0u}});
+    const uint64_t sum_groups = std::min<uint64_t>((pl.outputs() + local - 1) / local, d.max_workgroup_count[0]);
+    a.seq.dispatch(add, {{a.scratch, rd}, {bias ? bv : a.scratch, rd}, {c.residual ? rv : a.scratch, rd}, {a.out[0].view, rt::Access::Write}},
+                   &sum, sizeof(sum), uint32_t(sum_groups));
 }
 
 }  // namespace
 
 const OpDef op_conv2d{"conv2d", infer, cpu, gpu, 0,
-                        {"stride", "stride_h", "stride_w", "pad", "pad_h", "pad_w", "weight_layout", "act", "slope", "residual", "texel"}};
+                      {"stride", "stride_h", "stride_w", "pad", "pad_h", "pad_w", "weight_layout", "act", "slope", "residual", "texel",
+                       "split"},
+                      nullptr, scratch_bytes};
 
 }  // namespace vtloc::ops

@@ -27,6 +27,11 @@ struct ConvTiles {
     uint32_t tm, r, c, local;
     uint32_t kh_block;  // kernel rows per loop iteration: KH, or 1 for big kernels
     uint32_t x_shift;   // vec4 input rows: their offset mod 4 if the same for all blocks, else 4
+    // > 1: the input channels are split into this many parts, each summed by its own
+    // invocations into scratch, and a second pass adds the parts (then bias, residual,
+    // activation): a small output of a long reduction (ResNet's layer3/4) then still
+    // gives every compute unit of a big GPU workgroups.
+    uint32_t ksplit = 1;
     uint32_t accumulators() const { return tm * r * c; }
 };
 
@@ -39,7 +44,9 @@ uint32_t conv_window_shift(const ConvShape& s, uint32_t c);
 // whether weights (IHWO, Cout % 4 == 0) and input rows (numel % 4 == 0) are read
 // as vec4s. On CPU devices (lavapipe) every fetch costs far more than an fma, so
 // the model favours large register blocks that reuse each fetch, bounded by the
-// unrolled shader's size; GPUs get a small block and whole subgroups.
+// unrolled shader's size. GPUs get a small block and whole subgroups, the block
+// shrinking and then the reduction splitting (ksplit) until a dispatch offers
+// rt::fill_workgroups(d) workgroups.
 ConvTiles choose_conv_tiles(const rt::DeviceInfo& d, const ConvShape& s, bool vec4_weights, bool vec4_input);
 
 }  // namespace vtloc::ops

@@ -19,11 +19,25 @@ ConvTiles choose_conv_tiles(const rt::DeviceInfo& d, const ConvShape& s, bool ve
     const uint32_t max_local = std::min(d.max_invocations, d.max_workgroup_size[0]);
     auto blocks = [](int64_t n, int64_t b) { return (n + b - 1) / b; };
     if (d.type != VK_PHYSICAL_DEVICE_TYPE_CPU) {
-        // GPUs hide load latency with many threads: a small block, whole subgroups.
-        uint32_t local = elementwise_local_size(d);
-        const uint32_t c = uint32_t(std::min<int64_t>(4, s.ow));
-        return {s.cout > 4 ? 8u : 4u, uint32_t(std::min<int64_t>(2, s.oh)), c, std::min(local, 128u), uint32_t(s.kh),
-                conv_window_shift(s, c)};
+        // GPUs hide load latency with many threads: a small block, whole subgroups,
+        // and enough workgroups for every compute unit. Blocks shrink until the
+        // dispatch offers fill_workgroups(d); where even the smallest does not, the
+        // input channels are split (at least 8 per part, at most 64 parts).
+        const uint32_t local = std::min(elementwise_local_size(d), 128u);
+        const uint64_t target = rt::fill_workgroups(d);
+        const uint32_t blocks_tm_r_c[][3] = {{8, 2, 4}, {8, 2, 2}, {8, 1, 2}, {4, 1, 2}};
+        auto groups = [&](uint32_t tm, uint32_t r, uint32_t c) {
+            return uint64_t(blocks(s.n * blocks(s.cout, tm) * blocks(s.oh, r) * blocks(s.ow, c), local));
+        };
+        uint32_t tm = 4, r = 1, c = 1;
+        for (const auto& b : blocks_tm_r_c) {
+            tm = s.cout > 4 ? b[0] : 4u, r = uint32_t(std::min<int64_t>(b[1], s.oh)), c = uint32_t(std::min<int64_t>(b[2], s.ow));
+            if (groups(tm, r, c) >= target) break;
+        }
+        const uint64_t g = groups(tm, r, c);
+        const uint64_t most = uint64_t(std::clamp<int64_t>(s.cin / 8, 1, 64));
+        const uint32_t ksplit = uint32_t(std::min(most, (target + g - 1) / g));
+        return {tm, r, c, local, uint32_t(s.kh), conv_window_shift(s, c), std::max(1u, ksplit)};
     }
     // CPU devices run a subgroup as one SIMD instruction stream. What costs is
     // fetching: in fma units, measured on lavapipe, a texel fetch (a gather, one

@@ -246,7 +246,7 @@ std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int 
 
 uint64_t CodebookScorer::device_bytes() const {
     uint64_t arenas = 0;
-    for (const auto& [k, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;
+    for (const auto& [k, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes + ex->memory_plan().scratch_bytes;
     return 4 * (uint64_t(impl_->S) * uint64_t(4 * impl_->Q * impl_->Q) + 2 * uint64_t(impl_->NS)) + impl_->wmin_bytes + arenas;
 }
 

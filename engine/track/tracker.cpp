@@ -320,7 +320,7 @@ void Tracker::reset() {
 
 uint64_t Tracker::device_bytes() const {
     uint64_t arenas = 0;  // the tables go up with the first step graph; count them from the start
-    for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes;
+    for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes + ex->memory_plan().scratch_bytes;
     return std::max(surface_.device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
 }
 

@@ -123,6 +123,13 @@ def test_outputs_and_info(tiny, mug, touch, tiny_path, tmp_path):
     # CPU devices name the host's vector registers (16 or 32), GPUs 0.
     assert all(d["host_vector_registers"] == 0 if d["type"] != "CPU" else d["host_vector_registers"] in (16, 32)
                for d in vtloc.list_devices())
+    # A device's profile (vtloc-bench --plan-for) says what list_devices says.
+    d0 = vtloc.list_devices()[0]
+    prof = json.loads(vtloc.device_profile(d0["index"]))
+    assert prof["format"] == "vtloc-device-profile/1" and prof["name"] == d0["name"]
+    assert prof["subgroup_size"] == d0["subgroup_size"] and prof["compute_units"] == d0["compute_units"]
+    with pytest.raises(vtloc.Error, match="no Vulkan device with index 99"):
+        vtloc.device_profile(99)
 
 
 def test_cloud_without_normals_equals_the_cli(cli, tiny, tiny_path, mug, touch, tmp_path):

@@ -80,10 +80,16 @@ struct DeviceInfo {
     // 32 with AVX-512VL or on AArch64, else 16 (16 where GALLIUM_OVERRIDE_CPU_CAPS holds
     // Mesa's JIT below AVX-512); a CPU driver's speed depends on it. 0 on GPUs.
     uint32_t host_vector_registers = 0;
+    // GPUs: NVIDIA SMs, AMD CUs or Arm shader cores where the driver says; 0: unknown.
+    uint32_t compute_units = 0;
 };
 
 // Every Vulkan device with a compute queue.
 std::vector<DeviceInfo> list_devices();
+// The limits of device `index` (list_devices' index) as a device profile, JSON text
+// (format vtloc-device-profile/1): `vtloc-bench --plan-for FILE` makes the engine's
+// choices for that device on another machine (docs/performance.md).
+std::string device_profile(int index);
 
 enum class Validation {
     Environment,  // on when VTLOC_VALIDATION is 1/on/true/yes

@@ -1,0 +1,104 @@
+// Device profiles (runtime/device_profile.h) and planning on them: the shipped
+// profiles read, a written profile reads back the same, a bad one names its file
+// and field, and a plan-only context records what the profile's GPU would get
+// (checked against its limits) without running anything.
+#include <catch2/catch.hpp>
+#include <fstream>
+#include <sstream>
+
+#include "base/error.h"
+#include "engine/executor.h"
+#include "engine/ops/build.h"
+#include "runtime/device_profile.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+namespace {
+
+std::string profile_path(const std::string& name) { return std::string(VTLOC_SOURCE_DIR) + "/bench/device_profiles/" + name; }
+
+std::string read_text(const std::string& path) {
+    std::ifstream f(path);
+    std::stringstream ss;
+    ss << f.rdbuf();
+    return ss.str();
+}
+
+}  // namespace
+
+TEST_CASE("the shipped device profiles read, and a written profile reads back the same", "[runtime][profile]") {
+    for (const char* name : {"nvidia-h200.json", "jetson-orin-nano.json", "mali-4core-conservative.json"}) {
+        INFO(name);
+        const rt::DeviceInfo d = rt::read_device_profile(profile_path(name));
+        CHECK(d.type != VK_PHYSICAL_DEVICE_TYPE_CPU);
+        CHECK(d.compute_units > 0);
+        CHECK(rt::fill_workgroups(d) == 4ull * d.compute_units);
+        const rt::DeviceInfo back = rt::parse_device_profile(rt::device_profile_json(d), "written");
+        CHECK(back.name == d.name);
+        CHECK(back.subgroup_size == d.subgroup_size);
+        CHECK(back.subgroup_ops == d.subgroup_ops);
+        CHECK(back.max_workgroup_count == d.max_workgroup_count);
+        CHECK(back.max_texel_elements == d.max_texel_elements);
+        CHECK(back.compute_units == d.compute_units);
+    }
+    // This machine's device, written and read back (what `vtloc devices --save-profile` does).
+    const rt::DeviceInfo& real = test::gpu().info();
+    const rt::DeviceInfo back = rt::parse_device_profile(rt::device_profile_json(real), "this device");
+    CHECK(back.max_shared_memory == real.max_shared_memory);
+    CHECK(back.max_storage_buffer_range == real.max_storage_buffer_range);
+    CHECK(back.tensor_alignment() == real.tensor_alignment());
+}
+
+TEST_CASE("a bad device profile names its file and field", "[runtime][profile]") {
+    const std::string good = read_text(profile_path("nvidia-h200.json"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile("{", "p.json"), Catch::Contains("p.json") && Catch::Contains("invalid JSON"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile("{}", "p.json"), Catch::Contains("vtloc-device-profile/1"));
+    auto edited = [&](const std::string& from, const std::string& to) {
+        std::string s = good;
+        const size_t at = s.find(from);
+        REQUIRE(at != std::string::npos);
+        return s.replace(at, from.size(), to);
+    };
+    REQUIRE_THROWS_WITH(rt::parse_device_profile(edited("\"subgroup_size\": 32", "\"subgroup_size\": 24"), "p.json"),
+                        Catch::Contains("p.json") && Catch::Contains("'subgroup_size'") && Catch::Contains("power of two"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile(edited("\"max_invocations\": 1024", "\"max_invocations\": -3"), "p.json"),
+                        Catch::Contains("'max_invocations'"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile(edited("\"max_invocations\": 1024", "\"max_invocation\": 1024"), "p.json"),
+                        Catch::Contains("'max_invocations' is missing"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile(edited("\"discrete GPU\"", "\"gpu\""), "p.json"), Catch::Contains("'type'"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile(edited("\"quad\"", "\"quads\""), "p.json"),
+                        Catch::Contains("'subgroup_ops'") && Catch::Contains("quads"));
+    REQUIRE_THROWS_WITH(rt::read_device_profile("/nonexistent/p.json"), Catch::Contains("/nonexistent/p.json"));
+}
+
+TEST_CASE("a plan-only context records a profile's dispatches and runs none", "[runtime][profile]") {
+    rt::ContextOptions o;
+    o.validation = 1;
+    o.plan_for = rt::read_device_profile(profile_path("nvidia-h200.json"));
+    rt::Context plan(o);
+    CHECK(plan.plan_only());
+    CHECK(plan.info().compute_units == 132);
+    CHECK(plan.info().subgroup_size == 32);
+    // ResNet-18's layer3 and layer4 convolutions at 224: small outputs of long reductions.
+    Graph g;
+    int x = g.input("x", {1, 256, 14, 14});
+    const int w3 = g.weight("w3", {256, 256, 3, 3}), w4 = g.weight("w4", {512, 256, 3, 3});
+    x = ops::conv2d(g, x, w3, -1, -1, ops::Conv2d{1, 1, 1, 1, ops::kConvOIHW, ops::kActRelu}, "layer3");
+    g.output(ops::conv2d(g, x, w4, -1, -1, ops::Conv2d{2, 2, 1, 1, ops::kConvOIHW, ops::kActRelu}, "layer4"), "y");
+    WeightStore ws;
+    ws.add("w3", HostTensor({256, 256, 3, 3}));
+    ws.add("w4", HostTensor({512, 256, 3, 3}));
+    GpuExecutor ex(plan, g, ws);
+    const auto& log = ex.sequence().dispatch_log();
+    REQUIRE(log.size() == 4);  // each convolution in parts, then their sum
+    for (const auto& r : log) {
+        INFO(r.node << " " << r.shader << " " << r.groups[0] << "x" << r.groups[1]);
+        CHECK(uint64_t(r.groups[0]) * r.groups[1] * r.groups[2] >= 132);  // every SM has work
+        CHECK(r.spec[0] % 32 == 0);  // whole subgroups of the profile's size
+    }
+    CHECK(ex.memory_plan().scratch_bytes > 0);
+    REQUIRE_THROWS_WITH(ex.run({{"x", HostTensor({1, 256, 14, 14})}}),
+                        Catch::Contains("NVIDIA H200") && Catch::Contains("never runs them"));
+    CHECK(plan.take_validation_messages().empty());
+}
