@@ -162,6 +162,31 @@ TEST_CASE("window_fit tells a missed search from an ambiguity: the truth fits, a
     test::require_no_validation_messages();
 }
 
+TEST_CASE("refining more modes where the best fits poorly never loses fit", "[track]") {
+    // The same windows with the rescue off and always on: the rescued estimate refines a
+    // superset of the modes, so its pose fits at least as well; the modes reported stay n_modes.
+    track::FilterOptions off, on;
+    off.rescue_fit = -INFINITY;
+    on.rescue_fit = 0;
+    track::Tracker a(test::gpu(), prism_surface(), off), b(test::gpu(), prism_surface(), on);
+    int better = 0;
+    for (uint32_t seed : {1u, 4u, 5u}) {
+        Tour t = tour(prism_dense(40000), 5, seed);  // short windows: near ties, modes the first eight may miss
+        std::vector<Rigid> motions;
+        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        const track::Estimate ea = a.evaluate_window(motions), eb = b.evaluate_window(motions);
+        INFO("seed " << seed << ": fit " << ea.fit << " -> " << eb.fit);
+        CHECK(eb.fit >= ea.fit - 1e-9);
+        CHECK(eb.modes.size() <= size_t(on.n_modes));
+        better += eb.fit > ea.fit + 1e-6;
+    }
+    WARN("windows where the rescue found a better fit: " << better << " of 3");
+    track::FilterOptions bad;
+    bad.rescue_modes = -1;
+    CHECK_THROWS_WITH(track::Tracker(test::gpu(), prism_surface(), bad), Catch::Contains("rescue_modes"));
+    test::require_no_validation_messages();
+}
+
 TEST_CASE("the tracker is deterministic and its single touch is spread", "[track]") {
     track::Tracker a(test::gpu(), prism_surface());
     a.add_touch(std::nullopt);

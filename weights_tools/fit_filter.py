@@ -8,6 +8,10 @@ engine/api/vtloc/vtloc.h (TrackerOptions). Test touches are never used.
 With --refine, the knob is how much wider the refinement's first climb is than the grid's
 widths (refine_widen; 0: straight to the tight widths), at the geometry knobs fitted before.
 
+With --rescue, the knobs are when (rescue_fit) and how many more modes (rescue_modes) the
+refinement also climbs when its best mode fits the window poorly (the result and why the
+default stays off: docs/multitouch.md, "Refining more modes").
+
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
 and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
 render_quadratic, was fitted before on the same windows, and the press percentile
@@ -17,7 +21,7 @@ read from the frame as a robot would. With --oracle, the same knob for the oracl
 renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
 beside the shipped weight, never shipped.
 
-    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--refine | --render | --oracle]
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--refine | --rescue | --render | --oracle]
         [--sequence 4,8] [--out fit.json]
 """
 import argparse
@@ -35,6 +39,9 @@ GRID = {
 
 
 GRID_REFINE = {"refine_widen": [0, 2, 4, 8, 16]}
+# Refining more modes where the best refined one fits the window poorly (rescue_fit: the
+# threshold, log; -1e9: never; 0: always, since a fit is at most 0).
+GRID_RESCUE = {"rescue_fit": [-1e9, -1, 0], "rescue_modes": [24, 56]}
 # render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
 GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
@@ -58,16 +65,19 @@ def main():
     ap.add_argument("--data", required=True)
     ap.add_argument("--objects", default="known", help="known (the seen objects) or all")
     ap.add_argument("--refine", action="store_true", help="fit refine_widen (the refinement's first, wider climb)")
+    ap.add_argument("--rescue", action="store_true", help="fit rescue_fit and rescue_modes (more modes refined where none fits)")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
     ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_RESCUE if a.rescue else GRID
     row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):
         knobs = dict(zip(grid, values))
+        if a.rescue and knobs["rescue_fit"] < -1e8 and knobs["rescue_modes"] != grid["rescue_modes"][0]:
+            continue  # never rescued: one run is enough
         r = run(a.vtloc, a.data, a.objects, knobs, row, a.sequence)
         score = sum(v["nd_symmetry"] for v in r.values()) / len(r)
         results.append({"knobs": knobs, "score": score, "rows": r})

@@ -47,6 +47,8 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.grid_allowance = o.grid_allowance;
     f.refine_widen = o.refine_widen;
     if (!(o.refine_widen >= 0)) throw Error("tracker: refine_widen must be >= 0");
+    f.rescue_fit = o.rescue_fit;
+    f.rescue_modes = o.rescue_modes;
     if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))
         throw Error("tracker: widths must be > 0, grid_allowance >= 0 and press_mm finite");
     f.term_weight = 1;  // the network's temperature is applied when its field is made

@@ -40,6 +40,9 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
         throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
+    if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
+        throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
+                    std::to_string(opt_.rescue_modes));
     const Surface& s = surface_;
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
@@ -368,15 +371,18 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::stable_sort(order.begin(), order.end(), [&](int64_t a, int64_t b) { return marginal[size_t(a)] > marginal[size_t(b)]; });
     std::vector<int> owner(static_cast<size_t>(S), -1);
     std::vector<int64_t> mode_sample;
-    for (int64_t i : order) {
-        if (int(e.modes.size()) >= opt_.n_modes) break;
-        if (owner[size_t(i)] >= 0) continue;
-        const int m = int(e.modes.size());
-        e.modes.push_back(Mode{point(i), 0});
-        for (int64_t j = 0; j < S; ++j)
-            if (owner[size_t(j)] < 0 && dist(point(j), point(i)) <= opt_.mode_radius_mm) owner[size_t(j)] = m;
-        mode_sample.push_back(i);
-    }
+    size_t next = 0;  // where the greedy suppression goes on from
+    auto more_modes = [&](int count) {
+        for (; next < order.size() && int(mode_sample.size()) < count; ++next) {
+            const int64_t i = order[next];
+            if (owner[size_t(i)] >= 0) continue;
+            const int m = int(mode_sample.size());
+            for (int64_t j = 0; j < S; ++j)
+                if (owner[size_t(j)] < 0 && dist(point(j), point(i)) <= opt_.mode_radius_mm) owner[size_t(j)] = m;
+            mode_sample.push_back(i);
+        }
+    };
+    more_modes(opt_.n_modes);
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
@@ -385,22 +391,31 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
     // near miss. Samples outside the refined modes keep their grid mass.
-    const int n_refine = std::max(1, std::min<int>(opt_.refine, int(mode_sample.size())));
-    std::vector<double> fit(static_cast<size_t>(n_refine), 0.0);
-    std::vector<Rigid> refined(static_cast<size_t>(n_refine));
-    std::vector<std::array<double, 3>> refined_contact(static_cast<size_t>(n_refine));
-    for (int m = 0; m < n_refine; ++m) {
-        const int64_t smp = mode_sample[size_t(m)];
-        int64_t hb = smp * NS;
-        for (int64_t j = 1; j < NS; ++j)
-            if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
-        Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
-        double fx = 0;
-        x = refiner.refine(x, fx);
-        fit[size_t(m)] = fx;
-        refined[size_t(m)] = x;
-        refined_contact[size_t(m)] = axis_contact(s, grid, x, opt_.press_mm);
+    std::vector<double> fit;
+    std::vector<Rigid> refined;
+    std::vector<std::array<double, 3>> refined_contact;
+    auto refine_modes = [&](int upto) {
+        for (int m = int(fit.size()); m < upto; ++m) {
+            const int64_t smp = mode_sample[size_t(m)];
+            int64_t hb = smp * NS;
+            for (int64_t j = 1; j < NS; ++j)
+                if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
+            Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
+            double fx = 0;
+            x = refiner.refine(x, fx);
+            fit.push_back(fx);
+            refined.push_back(x);
+            refined_contact.push_back(axis_contact(s, grid, x, opt_.press_mm));
+        }
+    };
+    refine_modes(std::max(1, std::min<int>(opt_.refine, int(mode_sample.size()))));
+    if (opt_.refine > 0 && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit) {
+        more_modes(int(mode_sample.size()) + opt_.rescue_modes);
+        refine_modes(int(mode_sample.size()));
     }
+    const int n_refine = int(fit.size());
+    e.modes.assign(mode_sample.size(), Mode{});
+    for (size_t m = 0; m < mode_sample.size(); ++m) e.modes[m].contact = point(mode_sample[m]);
     auto refined_mode = [&](int64_t i) { return owner[size_t(i)] < n_refine ? owner[size_t(i)] : -1; };
     std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
     for (int64_t i = 0; i < S; ++i)
@@ -450,6 +465,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         if (dist(at[size_t(i)], e.contact) <= 5.0) e.mass_within_5mm += w[size_t(i)];
     for (int m = 0; m < n_refine; ++m) e.modes[size_t(m)].contact = refined_contact[size_t(m)];
     std::stable_sort(e.modes.begin(), e.modes.end(), [](const Mode& a, const Mode& b) { return a.probability > b.probability; });
+    if (e.modes.size() > size_t(opt_.n_modes)) e.modes.resize(size_t(opt_.n_modes));
     e.sample_belief.assign(w.begin(), w.end());
     e.pose_contact = axis_contact(s, grid, e.pose, opt_.press_mm);
     for (const Rigid& r : to_window) e.window_poses.push_back(compose(e.pose, r));

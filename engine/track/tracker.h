@@ -10,6 +10,7 @@
 // it, each scored directly). Everything runs on the GPU; the ops' CPU
 // references are the oracle (tests/test_tracker.cpp).
 #include <array>
+#include <cmath>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -41,6 +42,12 @@ struct FilterOptions {
     int n_modes = 8;
     int refine = 8;              // the best modes refined over six degrees of freedom
     double refine_widen = 0;     // > 0: refine at the grid's widths times this first, then at the tight ones
+    // When the best refined fit is below rescue_fit (log; -inf: never; 0: always, a fit
+    // being at most 0), the next rescue_modes modes are refined too: the truth's basin may
+    // be one the grid ranked lower. Off by default: on train windows "always, 24" scored best
+    // but moved two clean test decisions (docs/multitouch.md, "Refining more modes").
+    double rescue_fit = -INFINITY;
+    int rescue_modes = 24;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
 };
 
