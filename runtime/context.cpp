@@ -129,6 +129,8 @@ int compute_queue_family(VkPhysicalDevice pd) {
     return best;
 }
 
+}  // namespace
+
 bool has_device_extension(VkPhysicalDevice pd, const char* name) {
     uint32_t n = 0;
     if (vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr) != VK_SUCCESS) return false;
@@ -138,6 +140,8 @@ bool has_device_extension(VkPhysicalDevice pd, const char* name) {
         if (std::strcmp(e.extensionName, name) == 0) return true;
     return false;
 }
+
+namespace {
 
 DeviceInfo query_info(VkPhysicalDevice pd, uint32_t index) {
     VkPhysicalDeviceSubgroupProperties sub{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_SUBGROUP_PROPERTIES};

@@ -79,6 +79,8 @@ uint32_t host_vector_registers();
 bool mesa_jit_below_avx512();
 
 const char* device_type_name(VkPhysicalDeviceType t);
+// Whether the physical device offers a device extension (false where it cannot be asked).
+bool has_device_extension(VkPhysicalDevice pd, const char* name);
 
 struct ContextOptions {
     // Empty: VTLOC_VALIDATION decides (1/on/true turns the Khronos layer on).

@@ -8,16 +8,6 @@ namespace vtloc::check {
 
 namespace {
 
-bool has_extension(VkPhysicalDevice pd, const char* name) {
-    uint32_t n = 0;
-    if (vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, nullptr) != VK_SUCCESS) return false;
-    std::vector<VkExtensionProperties> ext(n);
-    if (vkEnumerateDeviceExtensionProperties(pd, nullptr, &n, ext.data()) != VK_SUCCESS) return false;
-    for (const VkExtensionProperties& e : ext)
-        if (!std::strcmp(e.extensionName, name)) return true;
-    return false;
-}
-
 std::string version_str(uint32_t v) {
     return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
            std::to_string(VK_API_VERSION_PATCH(v));
@@ -34,7 +24,7 @@ std::string driver_version_str(const rt::DeviceInfo& d) {
 std::string driver_str(rt::Context& ctx) {
     const rt::DeviceInfo& d = ctx.info();
     std::string s = "driverVersion " + driver_version_str(d);
-    if (!has_extension(ctx.physical_device(), VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME)) return s;
+    if (!rt::has_device_extension(ctx.physical_device(), VK_KHR_DRIVER_PROPERTIES_EXTENSION_NAME)) return s;
     VkPhysicalDeviceDriverPropertiesKHR drv{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_DRIVER_PROPERTIES_KHR};
     VkPhysicalDeviceProperties2 p2{VK_STRUCTURE_TYPE_PHYSICAL_DEVICE_PROPERTIES_2};
     p2.pNext = &drv;
