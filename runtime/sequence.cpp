@@ -139,7 +139,7 @@ VkDescriptorSet Sequence::allocate_set(const Pipeline& p) {
     }
 }
 
-VkBufferView Sequence::texel_view(const Pipeline& p, uint32_t index, const Binding& b) {
+VkDeviceSize Sequence::texel_range(const Pipeline& p, uint32_t index, const Binding& b) const {
     const DeviceInfo& info = ctx_.info();
     const std::string what = "shader '" + p.desc.shader + "': texel binding " + std::to_string(index);
     // The formats every Vulkan device supports for uniform texel buffers.
@@ -155,6 +155,10 @@ VkBufferView Sequence::texel_view(const Pipeline& p, uint32_t index, const Bindi
     if (range / texel > info.max_texel_elements)
         throw Error(what + " has " + std::to_string(range / texel) + " texels; the device allows " +
                     std::to_string(info.max_texel_elements));
+    return range;
+}
+
+VkBufferView Sequence::texel_view(const Binding& b, VkDeviceSize range) {
     VkBufferViewCreateInfo vi{VK_STRUCTURE_TYPE_BUFFER_VIEW_CREATE_INFO};
     vi.buffer = b.view.buffer;
     vi.format = b.texel_format;
@@ -183,19 +187,14 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
                     std::to_string(gy) + "x" + std::to_string(gz) +
                     " workgroups exceeds the device's maxComputeWorkGroupCount");
 
+    // Every binding is checked against the device's limits (a plan-only context's
+    // profile's too); only a real device gets descriptors and commands.
+    const bool plan = ctx_.plan_only();
     std::vector<std::pair<BufferView, Access>> accesses;
-    if (ctx_.plan_only()) {  // the profile's device: counted and logged, never recorded
-        for (const Binding& b : bindings) accesses.push_back({b.view, b.access});
-        track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
-        ++dispatches_;
-        dispatch_log_.push_back({in_node_ ? current_node_ : std::string(), p.desc.shader, p.desc.spec,
-                                 p.desc.texel_bindings, {gx, gy, gz}});
-        return;
-    }
     std::vector<VkDescriptorBufferInfo> infos(bindings.size());
     std::vector<VkBufferView> views(bindings.size(), VK_NULL_HANDLE);
     std::vector<VkWriteDescriptorSet> writes(bindings.size());
-    VkDescriptorSet set = allocate_set(p);
+    VkDescriptorSet set = plan ? VK_NULL_HANDLE : allocate_set(p);
     for (size_t i = 0; i < bindings.size(); ++i) {
         const BufferView& v = bindings[i].view;
         writes[i] = {VK_STRUCTURE_TYPE_WRITE_DESCRIPTOR_SET};
@@ -204,7 +203,8 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
         writes[i].descriptorCount = 1;
         accesses.push_back({v, bindings[i].access});
         if ((p.desc.texel_bindings >> i) & 1) {
-            views[i] = texel_view(p, uint32_t(i), bindings[i]);
+            const VkDeviceSize range = texel_range(p, uint32_t(i), bindings[i]);
+            if (!plan) views[i] = texel_view(bindings[i], range);
             writes[i].descriptorType = VK_DESCRIPTOR_TYPE_UNIFORM_TEXEL_BUFFER;
             writes[i].pTexelBufferView = &views[i];
             continue;
@@ -231,6 +231,13 @@ void Sequence::dispatch(const Pipeline& p, const std::vector<Binding>& bindings,
         infos[i] = {v.buffer, v.offset, v.size ? v.size : 4};
         writes[i].descriptorType = VK_DESCRIPTOR_TYPE_STORAGE_BUFFER;
         writes[i].pBufferInfo = &infos[i];
+    }
+    if (plan) {  // the profile's device: tracked (barriers) and logged, never recorded
+        track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);
+        ++dispatches_;
+        dispatch_log_.push_back({in_node_ ? current_node_ : std::string(), p.desc.shader, p.desc.spec,
+                                 p.desc.texel_bindings, {gx, gy, gz}});
+        return;
     }
     vkUpdateDescriptorSets(ctx_.device(), uint32_t(writes.size()), writes.data(), 0, nullptr);
     track(accesses, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT);

@@ -79,7 +79,9 @@ private:
                VkPipelineStageFlags stage);
     void barrier(VkPipelineStageFlags dst_stage, VkAccessFlags dst_access);
     VkDescriptorSet allocate_set(const Pipeline& p);
-    VkBufferView texel_view(const Pipeline& p, uint32_t index, const Binding& b);
+    // A texel binding's range in bytes, checked against the device's limits (names the binding).
+    VkDeviceSize texel_range(const Pipeline& p, uint32_t index, const Binding& b) const;
+    VkBufferView texel_view(const Binding& b, VkDeviceSize range);
     void timestamp();
     void check_recording(const char* what) const;
 
