@@ -41,7 +41,7 @@ GRID = {
 GRID_REFINE = {"refine_widen": [0, 2, 4, 8, 16]}
 # Refining more modes where the best refined one fits the window poorly (rescue_fit: the
 # threshold, log; -1e9: never; 0: always, since a fit is at most 0).
-GRID_RESCUE = {"rescue_fit": [-1e9, -1, 0], "rescue_modes": [24, 56]}
+GRID_RESCUE = {"rescue_fit": [0, -1, -1e9], "rescue_modes": [24]}
 # render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
 GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}

@@ -409,20 +409,29 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         }
     };
     refine_modes(std::max(1, std::min<int>(opt_.refine, int(mode_sample.size()))));
+    const int n_first = int(fit.size());
     if (opt_.refine > 0 && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit) {
         more_modes(int(mode_sample.size()) + opt_.rescue_modes);
         refine_modes(int(mode_sample.size()));
     }
     const int n_refine = int(fit.size());
+    // A rescued mode is credited with its refined fit only while its pose stays within the
+    // suppression radius of its own sample: else it would lend another place's fit to its own.
+    std::vector<char> ok(static_cast<size_t>(n_refine), 1);
+    for (int m = n_first; m < n_refine; ++m)
+        ok[size_t(m)] = dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
     e.modes.assign(mode_sample.size(), Mode{});
     for (size_t m = 0; m < mode_sample.size(); ++m) e.modes[m].contact = point(mode_sample[m]);
-    auto refined_mode = [&](int64_t i) { return owner[size_t(i)] < n_refine ? owner[size_t(i)] : -1; };
+    auto refined_mode = [&](int64_t i) { return owner[size_t(i)] < n_refine && ok[size_t(owner[size_t(i)])] ? owner[size_t(i)] : -1; };
     std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
     for (int64_t i = 0; i < S; ++i)
         if (refined_mode(i) >= 0) grid_mass[size_t(refined_mode(i))] += marginal[size_t(i)];
-    const double fmax = *std::max_element(fit.begin(), fit.end());
+    double fmax = -INFINITY;
+    for (int m = 0; m < n_refine; ++m)
+        if (ok[size_t(m)]) fmax = std::max(fmax, fit[size_t(m)]);
     double held = 0, z = 0;
-    for (int m = 0; m < n_refine; ++m) held += grid_mass[size_t(m)], z += std::exp(fit[size_t(m)] - fmax);
+    for (int m = 0; m < n_refine; ++m)
+        if (ok[size_t(m)]) held += grid_mass[size_t(m)], z += std::exp(fit[size_t(m)] - fmax);
     std::vector<double> w(static_cast<size_t>(S));
     double total = 0;
     for (int64_t i = 0; i < S; ++i) {
@@ -438,7 +447,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         if (owner[size_t(i)] >= 0) e.modes[size_t(owner[size_t(i)])].probability += w[size_t(i)];
     int best_mode = 0;
     for (int m = 1; m < n_refine; ++m)
-        if (e.modes[size_t(m)].probability > e.modes[size_t(best_mode)].probability) best_mode = m;
+        if (ok[size_t(m)] && e.modes[size_t(m)].probability > e.modes[size_t(best_mode)].probability) best_mode = m;
     e.pose = refined[size_t(best_mode)];
     e.fit = fit[size_t(best_mode)];
     // The Bayes contact under the re-weighted belief, each refined mode's mass at
@@ -463,7 +472,8 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     e.mass_within_5mm = 0;
     for (int64_t i = 0; i < S; ++i)
         if (dist(at[size_t(i)], e.contact) <= 5.0) e.mass_within_5mm += w[size_t(i)];
-    for (int m = 0; m < n_refine; ++m) e.modes[size_t(m)].contact = refined_contact[size_t(m)];
+    for (int m = 0; m < n_refine; ++m)
+        if (ok[size_t(m)]) e.modes[size_t(m)].contact = refined_contact[size_t(m)];
     std::stable_sort(e.modes.begin(), e.modes.end(), [](const Mode& a, const Mode& b) { return a.probability > b.probability; });
     if (e.modes.size() > size_t(opt_.n_modes)) e.modes.resize(size_t(opt_.n_modes));
     e.sample_belief.assign(w.begin(), w.end());

@@ -44,8 +44,9 @@ struct FilterOptions {
     double refine_widen = 0;     // > 0: refine at the grid's widths times this first, then at the tight ones
     // When the best refined fit is below rescue_fit (log; -inf: never; 0: always, a fit
     // being at most 0), the next rescue_modes modes are refined too: the truth's basin may
-    // be one the grid ranked lower. Off by default: on train windows "always, 24" scored best
-    // but moved two clean test decisions (docs/multitouch.md, "Refining more modes").
+    // be one the grid ranked lower. A rescued mode whose refined pose leaves the suppression
+    // radius of its own sample keeps its grid mass unrefined. Off by default until the
+    // sequence tables are rerun with it (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -INFINITY;
     int rescue_modes = 24;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior

@@ -386,9 +386,10 @@ struct TrackerOptions {
     // ones (a wider basin for modes several degrees off; fitted on train windows).
     double refine_widen = 0;
     // When the best refined mode fits the window below rescue_fit (log; -inf: never; 0:
-    // always, a fit being at most 0), the next rescue_modes modes are refined too. Off by
-    // default: on train windows 0 and 24 scored best, but it moved two clean test decisions
-    // and costs about 2.7 ms an estimate (docs/multitouch.md, "Refining more modes").
+    // always, a fit being at most 0), the next rescue_modes modes are refined too (each
+    // credited only while its refined pose stays near its own place). Off by default until
+    // the sequence tables are rerun with it; about 2.7 ms more an estimate
+    // (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -std::numeric_limits<double>::infinity();
     int rescue_modes = 24;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
