@@ -422,7 +422,11 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         ok[size_t(m)] = dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
     e.modes.assign(mode_sample.size(), Mode{});
     for (size_t m = 0; m < mode_sample.size(); ++m) e.modes[m].contact = point(mode_sample[m]);
-    auto refined_mode = [&](int64_t i) { return owner[size_t(i)] < n_refine && ok[size_t(owner[size_t(i)])] ? owner[size_t(i)] : -1; };
+    // owner is -1 for samples no mode claimed: test the bounds before reading ok.
+    auto refined_mode = [&](int64_t i) {
+        const int m = owner[size_t(i)];
+        return m >= 0 && m < n_refine && ok[size_t(m)] ? m : -1;
+    };
     std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
     for (int64_t i = 0; i < S; ++i)
         if (refined_mode(i) >= 0) grid_mass[size_t(refined_mode(i))] += marginal[size_t(i)];
