@@ -45,9 +45,9 @@ struct FilterOptions {
     // When the best refined fit is below rescue_fit (log; -inf: never; 0: always, a fit
     // being at most 0), the next rescue_modes modes are refined too: the truth's basin may
     // be one the grid ranked lower. A rescued mode whose refined pose leaves the suppression
-    // radius of its own sample keeps its grid mass unrefined. Off by default until the
-    // sequence tables are rerun with it (docs/multitouch.md, "Refining more modes").
-    double rescue_fit = -INFINITY;
+    // radius of its own sample keeps its grid mass unrefined. Fitted on train windows
+    // (docs/multitouch.md, "Refining more modes").
+    double rescue_fit = -1;
     int rescue_modes = 24;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
 };

@@ -387,10 +387,10 @@ struct TrackerOptions {
     double refine_widen = 0;
     // When the best refined mode fits the window below rescue_fit (log; -inf: never; 0:
     // always, a fit being at most 0), the next rescue_modes modes are refined too (each
-    // credited only while its refined pose stays near its own place). Off by default until
-    // the sequence tables are rerun with it; about 2.7 ms more an estimate
-    // (docs/multitouch.md, "Refining more modes").
-    double rescue_fit = -std::numeric_limits<double>::infinity();
+    // credited only while its refined pose stays near its own place). -1 and 24 are fitted
+    // on train windows (-1 and 0 tied; -1 refines fewer); about 2.7 ms more an estimate
+    // where it fires (docs/multitouch.md, "Refining more modes").
+    double rescue_fit = -1;
     int rescue_modes = 24;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
     // The candidates protocol (the paper's S^c): hypotheses only at these contact points (in
