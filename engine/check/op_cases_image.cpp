@@ -1,6 +1,6 @@
 // Self-test cases: conv2d (texel and storage-buffer paths, both weight
-// layouts, the tile shapes the device picks), max_pool2d, global_avg_pool and
-// tactile_preprocess (the shapes of tests/test_conv.cpp and
+// layouts, the tile shapes the device picks, big GPUs' split reduction),
+// max_pool2d, global_avg_pool and tactile_preprocess (the shapes of tests/test_conv.cpp and
 // tests/test_tactile_preprocess.cpp).
 #include <cmath>
 
@@ -21,6 +21,7 @@ struct Conv {
     bool bias, residual;
     uint32_t act, layout;
     const char* why;
+    int64_t split = 0;  // > 0: the input channels summed in that many parts (a big GPU's choice, forced)
 };
 
 OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
@@ -29,6 +30,7 @@ OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
     OpCase c("conv2d", std::string(k.why) + ": x" + shape_str(k.x) + " -> " + std::to_string(k.cout) + " k" +
                            std::to_string(k.kh) + "x" + std::to_string(k.kw) + " s" + std::to_string(k.sh) +
                            (k.layout == ops::kConvIHWO ? " IHWO" : " OIHW") +
+                           (k.split > 0 ? " in " + std::to_string(k.split) + " parts" : std::string()) +
                            " " + ops::path_name(path));
     const float bound = 1.0f / std::sqrt(float(cin * k.kh * k.kw));
     HostTensor w = random_tensor({k.cout, cin, k.kh, k.kw}, seed + 1, -bound, bound);
@@ -37,7 +39,7 @@ OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
     const int b = k.bias ? c.weight("b", random_tensor({k.cout}, seed + 2, -0.5f, 0.5f)) : -1;
     const int res = k.residual ? c.input("res", random_tensor({k.x[0], k.cout, oh, ow}, seed + 3)) : -1;
     c.output(ops::conv2d(c.g, x, wv, b, res,
-                         ops::Conv2d{k.sh, k.sw, k.ph, k.pw, k.layout, ops::Act(k.act), 0.1, path}),
+                         ops::Conv2d{k.sh, k.sw, k.ph, k.pw, k.layout, ops::Act(k.act), 0.1, path, k.split}),
              "y");
     return c;
 }
@@ -54,6 +56,10 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo&) {
         {{1, 9, 15, 14}, 20, 3, 3, 2, 2, 1, 1, false, false, kActNone, kConvIHWO, "partial channel block"},
         {{2, 4, 12, 23}, 5, 2, 5, 2, 1, 0, 2, false, false, kActLeaky, kConvOIHW, "rectangular kernel"},
         {{1, 7, 12, 16}, 8, 3, 3, 1, 1, 1, 1, true, true, kActRelu, kConvIHWO, "rows of 4n floats (x-shift)"},
+        // What big GPUs run for layer3/4 (ConvTiles::ksplit), forced here so that any device
+        // checks the parts and their sum: an uneven last part, then bias, residual, activation.
+        {{1, 19, 6, 5}, 12, 3, 3, 1, 1, 1, 1, true, true, kActRelu, kConvIHWO, "split reduction", 3},
+        {{2, 16, 7, 4}, 8, 3, 3, 2, 2, 1, 1, false, false, kActLeaky, kConvOIHW, "split reduction, no epilogue", 2},
     };
     uint32_t seed = 1;
     for (const Conv& k : convs) {  // every case on every binding path
