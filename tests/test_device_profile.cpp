@@ -102,3 +102,33 @@ TEST_CASE("a plan-only context records a profile's dispatches and runs none", "[
                         Catch::Contains("NVIDIA H200") && Catch::Contains("never runs them"));
     CHECK(plan.take_validation_messages().empty());
 }
+
+TEST_CASE("on a plan-only H200 the point MLPs and GMA's decoder give every SM work", "[runtime][profile]") {
+    // Layers of the paper's model that offered 16-64 workgroups before their tiles
+    // shrank on GPUs: SA3's last layer (a max over 128 rows), the point head's one row,
+    // a GMA decoder layer of 256 rows.
+    rt::ContextOptions o;
+    o.validation = 1;
+    o.plan_for = rt::read_device_profile(profile_path("nvidia-h200.json"));
+    rt::Context plan(o);
+    Graph g;
+    const int x = g.input("x", {512, 128}), row = g.input("row", {1, 1024}), pts = g.input("pts", {256, 128});
+    ops::GroupLinear sa3{ops::GroupLinear::Input::Rows, 0, true, 128, ops::kActRelu};
+    g.output(ops::group_linear(g, {x, g.weight("w", {512, 1024}), g.weight("b", {1024})}, sa3, "sa3.max"), "sa3");
+    g.output(ops::linear(g, row, g.weight("wr", {512, 1024}), -1, ops::kActRelu, 0.01, "point.mlp"), "head");
+    g.output(ops::linear(g, pts, g.weight("wg", {64, 128}), -1, ops::kActLeaky, 0.01, "gma.decoder"), "gma");
+    WeightStore ws;
+    ws.add("w", HostTensor({512, 1024}));
+    ws.add("b", HostTensor({1024}));
+    ws.add("wr", HostTensor({512, 1024}));
+    ws.add("wg", HostTensor({64, 128}));
+    GpuExecutor ex(plan, g, ws);
+    const auto& log = ex.sequence().dispatch_log();
+    REQUIRE(log.size() == 3);
+    for (const auto& r : log) {
+        INFO(r.node << " " << r.shader << " " << r.groups[0] << "x" << r.groups[1] << " of " << r.spec[0]);
+        CHECK(uint64_t(r.groups[0]) * r.groups[1] * r.groups[2] >= 132);
+        CHECK(r.spec[0] % 32 == 0);
+    }
+    CHECK(plan.take_validation_messages().empty());
+}

@@ -20,7 +20,9 @@ namespace {
 
 // shuffles: linear_subgroup.comp where it applies (K % 4 == 0 and the device has
 // shuffles), or gemm.comp's tiles.
-void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, uint32_t seed, bool shuffles = true) {
+// fill > 0: the shuffle shader's blocks as a GPU shrinks them to offer that many workgroups.
+void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, uint32_t seed, bool shuffles = true,
+                  int64_t fill = 0) {
     const int64_t in = x_shape.back();
     Graph g;
     WeightStore w;
@@ -30,9 +32,9 @@ void check_linear(const Shape& x_shape, int64_t out, bool bias, uint32_t act, ui
     w.add("fc.bias", random_tensor({out}, seed + 2, -bound, bound));
     int x = g.input("x", x_shape);
     const int b = bias ? g.weight("fc.bias", {out}) : -1;
-    g.output(ops::linear(g, x, g.weight("fc.weight", {out, in}), b, ops::Act(act), 0.2, "", shuffles), "y");
+    g.output(ops::linear(g, x, g.weight("fc.weight", {out, in}), b, ops::Act(act), 0.2, "", shuffles, fill), "y");
     INFO("linear x" << shape_str(x_shape) << " -> " << out << " bias " << bias << " act " << act
-                    << (shuffles ? ", shuffles where they apply" : ", gemm tiles"));
+                    << (shuffles ? ", shuffles where they apply" : ", gemm tiles") << ", fill " << fill);
     run_gpu_and_compare(g, w, {{"x", random_tensor(x_shape, seed, -2.0f, 2.0f)}});
 }
 
@@ -66,6 +68,32 @@ TEST_CASE("linear with K % 4 == 0 matches the CPU reference by shuffles and by t
         check_linear({130, 68}, 129, true, ops::kActTanh, 25, shuffles);
         check_linear({3, 4}, 1, true, ops::kActSigmoid, 26, shuffles);
     }
+}
+
+TEST_CASE("linear's blocks shrunk as a big GPU's are (forced) match the CPU reference", "[op][linear]") {
+    // GPUs give few rows (GMA's decoder, the heads) one subgroup a workgroup, then fewer
+    // outputs a block, down to one (linear.cpp); param fill forces it here.
+    for (int64_t fill : {int64_t(1) << 20, int64_t(48)}) {
+        check_linear({256, 16}, 64, true, ops::kActLeaky, 31, true, fill);
+        check_linear({1, 512}, 37, true, ops::kActRelu, 32, true, fill);
+        check_linear({5, 3, 64}, 13, false, ops::kActNone, 33, true, fill);
+    }
+    // What ran at the smallest blocks: one subgroup, one output a block.
+    Graph g;
+    g.output(ops::linear(g, g.input("x", {70, 32}), g.weight("w", {9, 32}), -1, ops::kActNone, 0.01, "", true, 1 << 20), "y");
+    WeightStore w;
+    w.add("w", random_tensor({9, 32}, 34));
+    GpuExecutor ex(test::gpu(), g, w);
+    const auto& log = ex.sequence().dispatch_log();
+    REQUIRE(log.size() == 1);
+    const rt::DeviceInfo& d = test::gpu().info();
+    if (ops::has_subgroup_shuffles(d)) {
+        CHECK(log[0].shader == "linear_subgroup");
+        CHECK(log[0].spec[0] == d.subgroup_size);
+        CHECK(log[0].spec[1] == 1u);
+        CHECK(log[0].groups[1] == 9u);
+    }
+    test::require_no_validation_messages();
 }
 
 TEST_CASE("linear fuses every activation into its epilogue", "[op][linear]") {
@@ -229,7 +257,7 @@ TEST_CASE("a misspelt or foreign parameter is refused with the node's name", "[o
     int x = g.input("x", {4, 10});
     int w = g.weight("fc.weight", {8, 10});
     REQUIRE_THROWS_WITH(g.add1("linear", {x, w}, {{"slop", 0.1}}, "fc1"),
-                        Catch::Contains("node 'fc1' (linear): unknown parameter 'slop' (it takes act, slope, subgroup)"));
+                        Catch::Contains("node 'fc1' (linear): unknown parameter 'slop' (it takes act, slope, subgroup, fill)"));
     REQUIRE_THROWS_WITH(g.add1("concat", {x, x}, {{"axis", 0}}, "cat"),
                         Catch::Contains("unknown parameter 'axis' (it takes none)"));
 }

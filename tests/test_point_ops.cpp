@@ -283,6 +283,90 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
 
 }  // namespace
 
+TEST_CASE("group_linear's tiles shrunk as a big GPU's are (forced) match the CPU reference", "[op][group_linear]") {
+    // On a GPU a layer of few rows or channels shrinks its workgroups to one subgroup, its
+    // channel block to 4, then its row block to 4, until the dispatch offers enough
+    // workgroups (group_linear.cpp). Param fill forces that rule here: every input mode, a
+    // max, ball padding skipped, the hidden layers and point-major rows, at the smallest
+    // tiles (fill 2^20) and part way (fill 40), on every binding path the GPU takes.
+    using In = ops::GroupLinear::Input;
+    using Hidden = ops::GroupLinear::Hidden;
+    const int64_t N = 200, S = 21, ns = 12, C1 = 20, C2 = 36;
+    WeightStore w;
+    w.add("w0t", test::random_tensor({6, 16}, 41, -0.5f, 0.5f));  // gathered rows: 3 features + xyz
+    w.add("b0", test::random_tensor({16}, 42, -0.2f, 0.2f));
+    w.add("w1t", test::random_tensor({16, C1}, 43, -0.4f, 0.4f));
+    w.add("b1", test::random_tensor({C1}, 44, -0.2f, 0.2f));
+    w.add("w2t", test::random_tensor({C1, C2}, 45, -0.3f, 0.3f));
+    w.add("b2", test::random_tensor({C2}, 46, -0.2f, 0.2f));
+    w.add("wat", test::random_tensor({3 + C1, C1}, 47, -0.3f, 0.3f));  // group all: xyz + the SA layer's C1
+    w.add("wpt", test::random_tensor({6, 16}, 48, -0.5f, 0.5f));  // per point: 3 features + xyz
+    const rt::DeviceInfo& d = test::gpu().info();
+    const uint32_t sg = std::max(1u, d.subgroup_size);
+    for (ops::BufferPath path : ops::kBufferPaths)
+        for (int64_t fill : {int64_t(1) << 20, int64_t(40)}) {
+            INFO(ops::path_name(path) << ", fill " << fill);
+            Graph g;
+            const int x = g.input("cloud", {N, 6});
+            const std::vector<int> f = ops::fps(g, x, S);
+            const int ball = ops::ball_query(g, x, f[1], 0.5, ns);
+            auto layer = [&](In in, bool max, int64_t group) {
+                ops::GroupLinear l{in, 3, max, group, ops::kActRelu, 0.01, path, Weights::Shuffle};
+                l.fill = fill;
+                return l;
+            };
+            const int w0t = g.weight("w0t", {6, 16}), b0 = g.weight("b0", {16}), w1t = g.weight("w1t", {16, C1}),
+                      b1 = g.weight("b1", {C1}), w2t = g.weight("w2t", {C1, C2}), b2 = g.weight("b2", {C2});
+            // The first layer from the gathered rows in registers, ball padding skipped.
+            ops::GroupLinear first = layer(In::Gather, false, 1);
+            first.hidden = Hidden::Gathered, first.skip_padding = true, first.point_major = true;
+            const int h = ops::group_linear(g, {x, f[1], ball, w0t, b0, w1t, b1, x}, first, "first");
+            ops::GroupLinear mx = layer(In::Rows, true, ns);
+            mx.skip_padding = true, mx.x_point_major = true;
+            g.output(ops::group_linear(g, {h, w2t, b2, ball}, mx, "max"), "max");
+            // Plain rows channel-major, and a gathering layer that is its own max.
+            const int hc = ops::group_linear(g, {x, f[1], ball, w0t, b0, x}, layer(In::Gather, false, 1), "gather");
+            g.output(ops::group_linear(g, {hc, w1t, b1}, layer(In::Rows, false, 1), "plain"), "plain");
+            const int one = ops::group_linear(g, {x, f[1], ball, w0t, b0, x}, layer(In::Gather, true, 1), "one");
+            g.output(one, "one");
+            // Per point, then its rows gathered (PerPoint), and a group-all layer.
+            ops::GroupLinear pp = layer(In::Points, false, 1);
+            pp.point_major = true;
+            const int u = ops::group_linear(g, {x, g.weight("wpt", {6, 16}), b0, x}, pp, "points");
+            ops::GroupLinear second = layer(In::Gather, true, 1);
+            second.hidden = Hidden::PerPoint;
+            g.output(ops::group_linear(g, {u, f[1], ball, g.weight("wpt", {6, 16}), w1t, b1}, second, "per_point"), "per_point");
+            const int all_in = ops::group_linear(g, {x, f[1], ball, w0t, b0, w1t, b1, x}, [&] {
+                ops::GroupLinear l = layer(In::Gather, true, 1);
+                l.hidden = Hidden::Gathered;
+                return l;
+            }(), "sa");
+            g.output(ops::group_linear(g, {f[1], g.weight("wat", {3 + C1, C1}), b1, all_in}, layer(In::GroupAll, true, S), "all"),
+                     "all");
+            test::run_gpu_and_compare(g, w, {{"cloud", random_cloud(N, 49, 6)}});
+            // What ran: whole subgroups, tiles of multiples of 4; at 2^20 the smallest.
+            GpuExecutor ex(test::gpu(), g, w);
+            int layers = 0;
+            for (const auto& r : ex.sequence().dispatch_log()) {
+                if (r.shader.rfind("point_mlp", 0) != 0) continue;
+                ++layers;
+                INFO(r.node << ": L " << r.spec[0] << " TM " << r.spec[1] << " TN " << r.spec[2] << ", groups "
+                            << r.groups[0] << " x " << r.groups[1]);
+                CHECK(r.spec[0] % sg == 0);
+                CHECK(r.spec[1] % 4 == 0);
+                CHECK(r.spec[2] % 4 == 0);
+                if (fill > 1000) {
+                    CHECK(r.spec[0] == sg);
+                    CHECK(r.spec[2] == 4);
+                    CHECK(r.spec[1] == (r.spec[4] != 0 ? 8u : 4u));  // a max keeps its row block (a loop)
+                } else {
+                    CHECK((uint64_t(r.groups[0]) * r.groups[1] >= uint64_t(fill) || (r.spec[0] == sg && r.spec[2] == 4)));
+                }
+            }
+            CHECK(layers == 9);
+        }
+}
+
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
     // Every path on three shapes (lavapipe's time goes to compiling each path's
     // pipelines): groups of 128, odd sizes with a group not a multiple of 4, and

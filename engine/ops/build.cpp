@@ -13,11 +13,12 @@ double d(int64_t v) { return double(v); }
 
 const char* path_name(BufferPath p) { return p == BufferPath::Texel ? "texel" : "storage-buffer"; }
 
-int linear(Graph& g, int x, int w, int bias, Act act, double slope, const std::string& name, bool subgroup) {
+int linear(Graph& g, int x, int w, int bias, Act act, double slope, const std::string& name, bool subgroup, int64_t fill) {
     std::vector<int> in{x, w};
     if (bias >= 0) in.push_back(bias);
     Params p{{"act", double(act)}, {"slope", slope}};
     if (!subgroup) p.set("subgroup", 0);
+    if (fill > 0) p.set("fill", d(fill));
     return g.add1("linear", in, p, name);
 }
 
@@ -222,6 +223,7 @@ int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, con
     if (l.rows_in_x) p.set("rows_in_x", 1);
     if (l.row_blocks) p.set("row_blocks", 1);
     if (l.skip_padding) p.set("pad", 1);
+    if (l.fill > 0) p.set("fill", d(l.fill));
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls
     return g.add1("group_linear", in, p, name);
 }

@@ -24,8 +24,10 @@ const char* path_name(BufferPath p);
 
 // Dense and elementwise.
 // subgroup = false: gemm.comp's shared-memory tiles even where the shuffle shader applies.
+// fill > 0 (tests): the shuffle shader's blocks as a GPU would shrink them to offer this
+// many workgroups, on any device.
 int linear(Graph& g, int x, int w, int bias, Act act = kActNone, double slope = 0.01, const std::string& name = "",
-           bool subgroup = true);
+           bool subgroup = true, int64_t fill = 0);
 int activation(Graph& g, Act act, int x, double slope = 0.01, const std::string& name = "");  // relu, leaky_relu, ...
 int concat(Graph& g, const std::vector<int>& xs, const std::string& name = "");
 // Elementwise with suffix broadcasting.
@@ -196,6 +198,9 @@ struct GroupLinear {
     // skip_padding on a plain output: one invocation per row block, as on a GPU, also
     // on a CPU device, where a ball's chunks are otherwise pooled (tests run both).
     bool row_blocks = false;
+    // > 0: the tiles a GPU would shrink to so as to offer this many workgroups, on any
+    // device (tests: lavapipe runs what a big GPU runs).
+    int64_t fill = 0;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

@@ -46,7 +46,8 @@
 // else channel-major [N, M] (point_major: [M, N]). Params act, slope as linear's. Param tile
 // (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, big-layer tiles, whatever the layer
 // and device (tests). Param rows_in_x = 1: row blocks along x, channel blocks along
-// y (tests; the default is the reverse, see gpu()).
+// y (tests; the default is the reverse, see gpu()). Param fill = W (tests): the tiles
+// a GPU would shrink to so as to offer W workgroups, on any device (see gpu()).
 #include <algorithm>
 #include <limits>
 
@@ -270,24 +271,40 @@ void gpu(const GpuOpArgs& a) {
     // blocks ran back to back, with 16 too (the same host with Mesa's JIT held to
     // AVX2: the point encoder 20 % faster), so it is the big-layer tile on every CPU device;
     // param tile 1 keeps 16 x 32 for tests and comparisons (bench/README.md).
+    // Param fill (tests): a GPU's rule below with that many workgroups to offer, on any device.
+    const int64_t fill = int64_t(a.params.get("fill", 0));
+    const bool cpu_rule = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && fill == 0;
     const int64_t big_blocks = l.max ? l.M / l.NS : (l.M + 15) / 16;
     const int tile = int(a.params.get("tile", 0));
-    const bool big = tile != 0 ||
-                     (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
-    const uint32_t TM = big && tile == 1 ? 16 : 8;
-    const uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
+    const bool big = tile != 0 || (cpu_rule && big_blocks >= 64 && double(l.M) * l.K * l.N >= 1e8);
+    uint32_t TM = big && tile == 1 ? 16 : 8;
+    uint32_t TN = big && l.N >= 32 ? 32 : l.N >= 16 ? 16 : l.N > 4 ? 8 : 4;
     // A plain output with pad on a CPU device: one invocation per ball, pooling the
     // chunks of a subgroup's balls (point_mlp.glsl POOL). A GPU keeps one invocation
     // per row block: 16x fewer invocations would leave it idle. Param row_blocks
     // (tests) keeps the GPU's way on any device.
-    const bool pool = l.pad && !l.max && wp == Weights::Shuffle && d.type == VK_PHYSICAL_DEVICE_TYPE_CPU &&
-                      a.params.get("row_blocks", 0) == 0;
-    const uint64_t blocks = l.max || pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + TM - 1) / TM;
+    const bool pool = l.pad && !l.max && wp == Weights::Shuffle && cpu_rule && a.params.get("row_blocks", 0) == 0;
+    auto blocks_of = [&](uint32_t tm) { return l.max || pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + tm - 1) / tm; };
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
     // spare invocations redo the last block.
     uint32_t L = std::min(64u, elementwise_local_size(d));
     const uint32_t sg = std::max(1u, d.subgroup_size);
-    while (L > sg && L / 2 >= blocks) L /= 2;
+    while (L > sg && L / 2 >= blocks_of(TM)) L /= 2;
+    // GPUs: a layer of few rows or channels (SA3, the SA2 maxes) must still give every
+    // compute unit work (rt::fill_workgroups). Workgroups shrink to one subgroup first (the
+    // same invocations, spread wider), then the channel block to 8 and 4, then the row
+    // block to 4 (a max's rows are a loop: its block stays).
+    if (!cpu_rule) {
+        const uint64_t want = fill > 0 ? uint64_t(fill) : rt::fill_workgroups(d);
+        auto groups = [&] { return (blocks_of(TM) + L - 1) / L * ((uint64_t(l.N) + TN - 1) / TN); };
+        while (groups() < want) {
+            if (L / 2 >= sg && (L / 2) % sg == 0) L /= 2;
+            else if (TN > 4 && !big) TN /= 2;
+            else if (TM > 4 && !big && !l.max) TM = 4;
+            else break;
+        }
+    }
+    const uint64_t blocks = blocks_of(TM);
     const uint64_t gx = (blocks + L - 1) / L, gy = (uint64_t(l.N) + TN - 1) / TN;
     // Channel blocks along x, so that the workgroups a driver runs one after the
     // other (x first on lavapipe) read the same input rows while they are still in
@@ -352,7 +369,7 @@ void take_unspecified(const std::vector<const HostTensor*>& in, const Params& p,
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
                             {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
-                             "x_point_major", "rows_in_x", "pad", "row_blocks"},
+                             "x_point_major", "rows_in_x", "pad", "row_blocks", "fill"},
                             take_unspecified};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,

@@ -90,11 +90,25 @@ void gpu(const GpuOpArgs& a) {
     // Without a bias any read-only buffer fills the binding; the shader skips it.
     const rt::BufferView& bias = a.in.size() == 3 ? a.in[2].view : a.in[1].view;
     if (M > 0 && N > 0 && use_subgroup_rows(a, M, N, K)) {
-        const uint32_t TN = std::min(8u, d.subgroup_size);
+        uint32_t TN = std::min(8u, d.subgroup_size);
         // Whole subgroups, no more than the rows need: spare lanes redo the last row,
         // which a one-row layer would otherwise pay for 64 times per block.
         uint32_t local = subgroup_group_size(d);
-        while (local / 2 >= uint64_t(M) && (local / 2) % std::max(1u, d.subgroup_size) == 0) local /= 2;
+        const uint32_t sg = std::max(1u, d.subgroup_size);
+        while (local / 2 >= uint64_t(M) && (local / 2) % sg == 0) local /= 2;
+        // GPUs: few rows (GMA's decoder, the point head) must still give every compute unit
+        // work (rt::fill_workgroups): one subgroup a workgroup, then fewer outputs a block.
+        // Param fill (tests): that many workgroups, on any device.
+        const int64_t fill = int64_t(a.params.get("fill", 0));
+        if (fill > 0 || d.type != VK_PHYSICAL_DEVICE_TYPE_CPU) {
+            const uint64_t want = fill > 0 ? uint64_t(fill) : rt::fill_workgroups(d);
+            auto groups = [&] { return (uint64_t(M) + local - 1) / local * ((uint64_t(N) + TN - 1) / TN); };
+            while (groups() < want) {
+                if (local / 2 >= sg && (local / 2) % sg == 0) local /= 2;
+                else if (TN > 1) TN /= 2;
+                else break;
+            }
+        }
         const uint64_t gx = (uint64_t(M) + local - 1) / local, gy = (uint64_t(N) + TN - 1) / TN;
         if (gx > d.max_workgroup_count[0] || gy > d.max_workgroup_count[1])
             throw Error("linear of " + std::to_string(M) + " rows and " + std::to_string(N) +
@@ -116,6 +130,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_linear{"linear", infer, cpu, gpu, 0, {"act", "slope", "subgroup"}};
+const OpDef op_linear{"linear", infer, cpu, gpu, 0, {"act", "slope", "subgroup", "fill"}};
 
 }  // namespace vtloc::ops
