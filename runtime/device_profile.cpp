@@ -73,7 +73,9 @@ DeviceInfo parse_device_profile(const std::string& text, const std::string& sour
     } catch (const json::exception& e) {
         throw Error(source + ": not a device profile (invalid JSON: " + e.what() + ")");
     }
-    if (!j.is_object() || j.value("format", "") != "vtloc-device-profile/1")
+    // value() would throw json's own error where "format" is not a string (found by fuzzing).
+    if (!j.is_object() || !j.contains("format") || !j.at("format").is_string() ||
+        j.at("format").get<std::string>() != "vtloc-device-profile/1")
         throw Error(source + ": not a device profile (needs \"format\": \"vtloc-device-profile/1\")");
     const Reader r{j, source};
     DeviceInfo d;

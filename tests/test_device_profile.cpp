@@ -54,6 +54,8 @@ TEST_CASE("a bad device profile names its file and field", "[runtime][profile]")
     const std::string good = read_text(profile_path("nvidia-h200.json"));
     REQUIRE_THROWS_WITH(rt::parse_device_profile("{", "p.json"), Catch::Contains("p.json") && Catch::Contains("invalid JSON"));
     REQUIRE_THROWS_WITH(rt::parse_device_profile("{}", "p.json"), Catch::Contains("vtloc-device-profile/1"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile("{\"format\": 64}", "p.json"), Catch::Contains("vtloc-device-profile/1"));
+    REQUIRE_THROWS_WITH(rt::parse_device_profile("[1]", "p.json"), Catch::Contains("vtloc-device-profile/1"));
     auto edited = [&](const std::string& from, const std::string& to) {
         std::string s = good;
         const size_t at = s.find(from);
