@@ -123,6 +123,7 @@ def main():
     touches_corpus()
     calibration_corpus()
     codebook_corpus()
+    device_profile_corpus()
 
 
 def codebook_corpus():
@@ -158,6 +159,14 @@ def calibration_corpus():
     presses = dict(base, press_imgs=("U8", [1, 8, 8, 3], bytes(range(192))), press_f0=("U8", [8, 8, 3], bytes(192)),
                    press_center=("F32", [1, 2], struct.pack("<2f", 4.0, 3.5)), press_radius=("I32", [1], struct.pack("<i", 3)))
     put("calibration", "one_press.safetensors", safetensors(presses, {"sensor": "pixmm=0.1245"}))
+
+
+def device_profile_corpus():
+    # The shipped profiles are valid seeds as they are.
+    shipped = os.path.join(HERE, "..", "..", "bench", "device_profiles")
+    for name in sorted(os.listdir(shipped)):
+        with open(os.path.join(shipped, name), "rb") as f:
+            put("device_profile", name, f.read())
 
 
 if __name__ == "__main__":

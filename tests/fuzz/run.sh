@@ -10,7 +10,7 @@ root="$(cd "$(dirname "$0")/../.." && pwd)"
 seconds="${1:-30}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(safetensors config mesh points image dataset touches codebook calibration)
+[ ${#targets[@]} -gt 0 ] || targets=(safetensors config mesh points image dataset touches codebook calibration device_profile)
 build="$root/build-fuzz"
 if [ ! -f "$build/CMakeCache.txt" ]; then
   CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DVTLOC_FUZZ=ON -DVTLOC_BUILD_TESTS=OFF \
