@@ -134,6 +134,44 @@ TEST_CASE("api: two threads with a context each give the results of one", "[api]
     }
 }
 
+TEST_CASE("api: a tracker's estimate, its modes climbed on the host's threads, is the same from two threads at once", "[api][threads][tracker]") {
+    // The refinement spreads its modes over up to 4 threads (engine/track/tracker.cpp); with
+    // the rescue always on (32 modes) two trackers at once, each on its own thread, must give
+    // the estimate of one alone, bit for bit.
+    const std::string potato = test::source_path("examples/potato_tour.ply");
+    api::TrackerOptions o;
+    o.hypotheses = 20000;
+    o.rescue_fit = 0;
+    const std::vector<api::Motion> window{{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}},
+                                          {{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}}};
+    auto run = [&] {
+        api::Context ctx;
+        api::Tracker tr(ctx, potato, o);
+        return tr.evaluate_window(window);
+    };
+    const api::TrackerEstimate want = run();
+    std::vector<api::TrackerEstimate> got(2);
+    std::vector<std::exception_ptr> errors(2);
+    auto work = [&](size_t i) {
+        try {
+            got[i] = run();
+        } catch (...) {
+            errors[i] = std::current_exception();
+        }
+    };
+    std::thread a(work, 0), b(work, 1);
+    a.join();
+    b.join();
+    for (size_t i = 0; i < 2; ++i) {
+        if (errors[i]) std::rethrow_exception(errors[i]);
+        CHECK(got[i].contact == want.contact);
+        CHECK(got[i].pose.R == want.pose.R);
+        CHECK(got[i].pose.t == want.pose.t);
+        CHECK(got[i].fit == want.fit);
+        CHECK(got[i].sample_belief == want.sample_belief);
+    }
+}
+
 TEST_CASE("api: four threads, a context each or one shared Model and Object, give the results of one", "[api][threads]") {
     const std::string mug = test::source_path("examples/mug.glb");
     const std::vector<api::TactileImage> images{example_image(1), example_image(2), example_image(3)};

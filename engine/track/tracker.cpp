@@ -2,8 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
+#include <exception>
+#include <functional>
 #include <map>
 #include <numeric>
+#include <thread>
 
 #include "base/error.h"
 #include "engine/executor.h"
@@ -222,6 +225,26 @@ struct Refiner {
     }
 };
 
+// body(i) for i in [0, n), interleaved over up to 4 of the host's threads (fewer for
+// small n); the first exception any of them throws is rethrown here.
+void parallel_for(size_t n, const std::function<void(size_t)>& body) {
+    const size_t workers = std::min<size_t>({n, 4, std::max(1u, std::thread::hardware_concurrency())});
+    std::vector<std::exception_ptr> errors(workers);
+    auto work = [&](size_t w) {
+        try {
+            for (size_t i = w; i < n; i += workers) body(i);
+        } catch (...) {
+            errors[w] = std::current_exception();
+        }
+    };
+    std::vector<std::thread> pool;
+    for (size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
+    if (workers > 0) work(0);
+    for (std::thread& t : pool) t.join();
+    for (const std::exception_ptr& e : errors)
+        if (e) std::rethrow_exception(e);
+}
+
 // Each earlier touch of a window in the current touch's frame, oldest first.
 std::vector<Rigid> window_in_current(const std::vector<Rigid>& motions) {
     std::vector<Rigid> out(motions.size());
@@ -395,18 +418,22 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::vector<Rigid> refined;
     std::vector<std::array<double, 3>> refined_contact;
     auto refine_modes = [&](int upto) {
-        for (int m = int(fit.size()); m < upto; ++m) {
-            const int64_t smp = mode_sample[size_t(m)];
+        const size_t from = fit.size(), n = size_t(std::max<int>(0, upto - int(from)));
+        fit.resize(from + n);
+        refined.resize(from + n);
+        refined_contact.resize(from + n);
+        // Each mode's climb is independent and pure, so the modes are spread over the host's
+        // threads (the GPU waits for the estimate anyway); every climb writes its own slot,
+        // so the result is the same with any number of threads.
+        auto climb_mode = [&](size_t m) {
+            const int64_t smp = mode_sample[m];
             int64_t hb = smp * NS;
             for (int64_t j = 1; j < NS; ++j)
                 if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
-            Rigid x = rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
-            double fx = 0;
-            x = refiner.refine(x, fx);
-            fit.push_back(fx);
-            refined.push_back(x);
-            refined_contact.push_back(axis_contact(s, grid, x, opt_.press_mm));
-        }
+            refined[m] = refiner.refine(rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm))), fit[m]);
+            refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
+        };
+        parallel_for(n, [&](size_t i) { climb_mode(from + i); });
     };
     refine_modes(std::max(1, std::min<int>(opt_.refine, int(mode_sample.size()))));
     const int n_first = int(fit.size());

@@ -388,8 +388,8 @@ struct TrackerOptions {
     // When the best refined mode fits the window below rescue_fit (log; -inf: never; 0:
     // always, a fit being at most 0), the next rescue_modes modes are refined too (each
     // credited only while its refined pose stays near its own place). -1 and 24 are fitted
-    // on train windows (-1 and 0 tied; -1 refines fewer); about 2.7 ms more an estimate
-    // where it fires (docs/multitouch.md, "Refining more modes").
+    // on train windows (-1 and 0 tied; -1 refines fewer); where it fires an estimate takes
+    // about 2.7 ms more on one thread, 1 ms on two (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -1;
     int rescue_modes = 24;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
