@@ -47,6 +47,7 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.grid_allowance = o.grid_allowance;
     f.refine_widen = o.refine_widen;
     if (!(o.refine_widen >= 0)) throw Error("tracker: refine_widen must be >= 0");
+    f.refine_reach_mm = o.refine_reach_mm;
     f.rescue_fit = o.rescue_fit;
     f.rescue_modes = o.rescue_modes;
     if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))

@@ -43,6 +43,8 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
         throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
+    if (!(opt_.refine_reach_mm >= 0))
+        throw Error("filter options: refine_reach_mm must be >= 0 (0: off), got " + std::to_string(opt_.refine_reach_mm));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
@@ -202,16 +204,28 @@ Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& ter
 
 // The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
 // smoother landscape, which a pose several degrees off can climb: at long lever arms
-// the tight one's basin is a degree or two wide), then at the tight widths. Both term
-// sets are made once per window (Refiner), not once per mode.
+// the tight one's basin is a degree or two wide), then at the tight widths. With
+// o.refine_reach_mm > 0 it also climbs from the nearest touches outward (below) and keeps
+// the better fit. The term sets are made once per window (Refiner), not once per mode.
 struct Refiner {
     const ops::pose::Grid& grid;
     const FilterOptions& o;
     std::vector<ops::pose::Term> tight, wide;
+    // The reach's stages: the tight terms within reach, 2 reach, 4 reach, ... of the
+    // current touch (lever arm = the motion's translation), each a proper subset.
+    std::vector<std::vector<ops::pose::Term>> stages;
     Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin)
         : grid(g), o(opt), tight(fit_terms(to_window, opt)) {
         const double f = opt.refine_widen * opt.grid_allowance;
         if (opt.refine_widen > 0) wide = fit_terms(to_window, opt, f * spacing, f * 2 * M_PI / n_spin);
+        if (opt.refine_reach_mm > 0)
+            for (double reach = opt.refine_reach_mm;; reach *= 2) {
+                std::vector<ops::pose::Term> near;
+                for (const ops::pose::Term& t : tight)
+                    if (std::sqrt(t.trel[0] * t.trel[0] + t.trel[1] * t.trel[1] + t.trel[2] * t.trel[2]) <= reach) near.push_back(t);
+                if (near.size() == tight.size()) break;
+                if (!near.empty() && (stages.empty() || near.size() > stages.back().size())) stages.push_back(std::move(near));
+            }
     }
     double fit(const Rigid& x) const { return pose_fit(grid, tight, o, x); }
     // x refined (when o.refine > 0); fx: its tight fit.
@@ -221,7 +235,25 @@ struct Refiner {
             x = climb(grid, wide, o, x, fw);
         }
         fx = fit(x);
-        return o.refine > 0 ? climb(grid, tight, o, x, fx) : x;
+        if (o.refine == 0) return x;
+        Rigid direct = climb(grid, tight, o, x, fx);
+        if (stages.empty()) return direct;
+        // From the nearest touches outward: a pose a spin step off puts the far touches of a
+        // long lever arm outside the tight basin, where the direct climb finds no slope; the
+        // near ones fix the pose's place and spin first. Near touches alone leave directions
+        // flat, along which that climb may drift, so the direct climb's pose stays when it
+        // fits better (ties too).
+        for (const auto& near : stages) {
+            double fn = pose_fit(grid, near, o, x);
+            x = climb(grid, near, o, x, fn);
+        }
+        double fc = fit(x);
+        x = climb(grid, tight, o, x, fc);
+        if (fc > fx) {
+            fx = fc;
+            return x;
+        }
+        return direct;
     }
 };
 

@@ -42,6 +42,11 @@ struct FilterOptions {
     int n_modes = 8;
     int refine = 8;              // the best modes refined over six degrees of freedom
     double refine_widen = 0;     // > 0: refine at the grid's widths times this first, then at the tight ones
+    // > 0: each mode is also refined from the nearest touches outward, the window's touches
+    // within this lever arm first, then twice it, ... until all are in; the better of that
+    // and the direct climb is kept (20 fitted on train windows: docs/multitouch.md, "Climbing
+    // from the nearest touches"; 0: the direct climb alone).
+    double refine_reach_mm = 20;
     // When the best refined fit is below rescue_fit (log; -inf: never; 0: always, a fit
     // being at most 0), the next rescue_modes modes are refined too: the truth's basin may
     // be one the grid ranked lower. A rescued mode whose refined pose leaves the suppression

@@ -385,6 +385,11 @@ struct TrackerOptions {
     // > 0: each mode is refined at the grid's widths times this first, then at the tight
     // ones (a wider basin for modes several degrees off; fitted on train windows).
     double refine_widen = 0;
+    // > 0: each mode is also refined from the nearest touches outward (the window's touches
+    // within this lever arm first, then twice it, ...), keeping the better fit: at long lever
+    // arms a pose a spin step off finds no slope at the far touches (20 fitted on train
+    // windows; 0: the direct climb alone).
+    double refine_reach_mm = 20;
     // When the best refined mode fits the window below rescue_fit (log; -inf: never; 0:
     // always, a fit being at most 0), the next rescue_modes modes are refined too (each
     // credited only while its refined pose stays near its own place). -1 and 24 are fitted
