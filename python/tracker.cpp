@@ -94,11 +94,12 @@ void bind_tracker(py::module_& m) {
                          double odometry_mm, double odometry_deg, int window, int n_spin, int64_t hypotheses,
                          double network_weight, double object_units, const py::object& candidates, double render_weight,
                          const std::string& codebook_cache, bool render_quadratic, double render_press_percentile,
-                         double render_cell_mm) {
+                         double render_cell_mm, int threads) {
                  api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
                                                  n_spin, hypotheses, network_weight, object_units);
                  o.render_weight = render_weight, o.codebook_cache = codebook_cache, o.render_quadratic = render_quadratic;
                  o.render_press_percentile = render_press_percentile, o.render_cell_mm = render_cell_mm;
+                 o.threads = threads;
                  if (!candidates.is_none()) {  // C x 3, the candidates protocol
                      const auto c = candidates.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
                      if (c.ndim() != 2 || c.shape(1) != 3)
@@ -117,7 +118,7 @@ void bind_tracker(py::module_& m) {
              py::arg("object_units") = 1.0, py::arg("candidates") = py::none(), py::arg("render_weight") = api::TrackerOptions{}.render_weight,
              py::arg("codebook_cache") = "", py::arg("render_quadratic") = api::TrackerOptions{}.render_quadratic,
              py::arg("render_press_percentile") = api::TrackerOptions{}.render_press_percentile,
-             py::arg("render_cell_mm") = api::TrackerOptions{}.render_cell_mm, py::keep_alive<1, 2>())
+             py::arg("render_cell_mm") = api::TrackerOptions{}.render_cell_mm, py::arg("threads") = 0, py::keep_alive<1, 2>())
         .def(
             "add_touch",
             [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object,

@@ -85,7 +85,8 @@ class Tracker:
                  candidates: Optional[npt.NDArray[np.floating]] = None,  # C x 3: hypotheses only there
                  render_weight: float = 0.25, codebook_cache: str = "",
                  render_quadratic: bool = True, render_press_percentile: float = 70.0,
-                 render_cell_mm: float = 3.0) -> None: ...
+                 render_cell_mm: float = 3.0,
+                 threads: int = 0) -> None: ...  # host threads an estimate may use (0: up to 4)
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
                   object: Optional[Object] = None,
                   shape: Optional[Dict[str, Any]] = None) -> None: ...  # GelShapeReader.read's dict

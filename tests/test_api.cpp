@@ -170,6 +170,20 @@ TEST_CASE("api: a tracker's estimate, its modes climbed on the host's threads, i
         CHECK(got[i].fit == want.fit);
         CHECK(got[i].sample_belief == want.sample_belief);
     }
+    // A thread budget (TrackerOptions::threads) changes who climbs, not what: one thread and
+    // three give the default's estimate, bit for bit; a negative budget is refused by name.
+    for (int n : {1, 3}) {
+        o.threads = n;
+        const api::TrackerEstimate e = run();
+        INFO(n << " threads");
+        CHECK(e.contact == want.contact);
+        CHECK(e.pose.R == want.pose.R);
+        CHECK(e.pose.t == want.pose.t);
+        CHECK(e.fit == want.fit);
+        CHECK(e.sample_belief == want.sample_belief);
+    }
+    o.threads = -1;
+    CHECK_THROWS_WITH(run(), Catch::Contains("threads"));
 }
 
 TEST_CASE("api: four threads, a context each or one shared Model and Object, give the results of one", "[api][threads]") {

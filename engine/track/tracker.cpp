@@ -43,6 +43,8 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
         throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
+    if (opt_.threads < 0 || opt_.threads > 256)
+        throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
     if (!(opt_.refine_reach_mm >= 0))
         throw Error("filter options: refine_reach_mm must be >= 0 (0: off), got " + std::to_string(opt_.refine_reach_mm));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
@@ -257,10 +259,11 @@ struct Refiner {
     }
 };
 
-// body(i) for i in [0, n), interleaved over up to 4 of the host's threads (fewer for
-// small n); the first exception any of them throws is rethrown here.
-void parallel_for(size_t n, const std::function<void(size_t)>& body) {
-    const size_t workers = std::min<size_t>({n, 4, std::max(1u, std::thread::hardware_concurrency())});
+// body(i) for i in [0, n), interleaved over up to `most` threads (0: up to 4 of the host's;
+// fewer for small n); the first exception any of them throws is rethrown here.
+void parallel_for(size_t n, int most, const std::function<void(size_t)>& body) {
+    const size_t cap = most > 0 ? size_t(most) : std::min<size_t>(4, std::max(1u, std::thread::hardware_concurrency()));
+    const size_t workers = std::min(n, cap);
     std::vector<std::exception_ptr> errors(workers);
     auto work = [&](size_t w) {
         try {
@@ -465,7 +468,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             refined[m] = refiner.refine(rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm))), fit[m]);
             refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
         };
-        parallel_for(n, [&](size_t i) { climb_mode(from + i); });
+        parallel_for(n, opt_.threads, [&](size_t i) { climb_mode(from + i); });
     };
     refine_modes(std::max(1, std::min<int>(opt_.refine, int(mode_sample.size()))));
     const int n_first = int(fit.size());

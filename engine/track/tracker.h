@@ -55,6 +55,10 @@ struct FilterOptions {
     double rescue_fit = -1;
     int rescue_modes = 24;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
+    // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
+    // fewer); n, at most n (a robot process with its own thread budget). The outputs do not
+    // depend on it: each mode's climb writes its own slot.
+    int threads = 0;
 };
 
 struct Mode {
