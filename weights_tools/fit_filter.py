@@ -43,7 +43,7 @@ GRID = {
 
 
 GRID_REFINE = {"refine_widen": [0, 2, 4, 8, 16]}
-GRID_REACH = {"refine_reach": [0, 20, 30, 45, 60]}
+GRID_REACH = {"refine_reach": [0, 10, 15, 20, 30, 45, 60]}
 # Refining more modes where the best refined one fits the window poorly (rescue_fit: the
 # threshold, log; -1e9: never; 0: always, since a fit is at most 0).
 GRID_RESCUE = {"rescue_fit": [0, -1, -1e9], "rescue_modes": [24]}
