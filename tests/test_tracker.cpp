@@ -189,19 +189,19 @@ TEST_CASE("refining more modes where the best fits poorly never loses fit", "[tr
 
 TEST_CASE("climbing from the nearest touches outward never loses fit and finds the truth from a spin off", "[track]") {
     // window_fit refines from a given pose: from the truth turned about its own axis by
-    // 6-12 degrees (more than the grid's half spin step of 5) the far touches of a 12-touch
+    // 6-20 degrees (more than the grid's half spin step of 5) the far touches of a 12-touch
     // tour (lever arms up to ~50 mm on this 60 mm prism) start several mm off the surface.
     track::FilterOptions off, on;
     off.refine_reach_mm = 0;
     on.refine_reach_mm = 15;
     track::Tracker a(test::gpu(), prism_surface(), off), b(test::gpu(), prism_surface(), on);
     int better = 0, reached = 0;
-    for (uint32_t seed : {1u, 2u, 3u}) {
+    for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
         Tour t = tour(prism_dense(40000), 12, seed);
         std::vector<Rigid> motions;
         for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
         const double truth = b.window_fit(motions, t.poses.back());
-        for (double deg : {6.0, -9.0, 12.0}) {
+        for (double deg : {6.0, -9.0, 12.0, -15.0, 20.0}) {
             const double th = deg * M_PI / 180, c = std::cos(th), s = std::sin(th);
             Rigid spun;
             spun.R = {c, -s, 0, s, c, 0, 0, 0, 1};
@@ -214,9 +214,10 @@ TEST_CASE("climbing from the nearest touches outward never loses fit and finds t
             reached += fa < truth - 0.5 && fb > truth - 0.1;
         }
     }
-    // At 12 degrees (a spin step and a bit), two of the three windows gain 0.9 and 2.3 nats,
-    // one of them up to the truth's own fit.
-    CHECK(better >= 2);
+    // 7 of the 30 starts gain more than half a nat, 2-3 of them up to the truth's own fit,
+    // in both the GCC build and clang's sanitizer build (whose tours and climbs differ in
+    // rounding, so the counts, not particular starts, are what is asserted).
+    CHECK(better >= 4);
     CHECK(reached >= 1);
     track::FilterOptions bad;
     bad.refine_reach_mm = NAN;
