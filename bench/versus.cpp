@@ -52,7 +52,7 @@ json run_pytorch(const TorchRun& t) {
     const std::string cmd = "cd '" + t.repo + "' && PYTHONDONTWRITEBYTECODE=1 '" + t.python +
                             "' -m weights_tools.bench_torch --weights '" + t.weights + "' --tactile '" + t.image +
                             "' --cloud '" + cloud.string() + "' --reps " + std::to_string(t.reps) + " --warmup " +
-                            std::to_string(t.warmup) + " --json '" + out.string() + "' >&2";
+                            std::to_string(t.warmup) + " --device " + t.device + " --json '" + out.string() + "' >&2";
     std::fprintf(stderr, "PyTorch reference: %s\n", cmd.c_str());
     const int rc = std::system(cmd.c_str());
     std::ifstream f(out);

@@ -18,6 +18,7 @@ struct TorchRun {
     std::string weights, image;
     HostTensor cloud;        // [N, 6]: the engine's cloud, written as PLY for the reference
     int reps = 20, warmup = 3;
+    std::string device = "cpu";  // bench_torch --device: cpu or cuda
 };
 
 // Runs python -m weights_tools.bench_torch; its JSON report. Throws vtloc::Error on failure.

@@ -79,6 +79,8 @@ const char* kUsage = R"(usage: vtloc-bench [options]
   --vs-pytorch         also time the PyTorch reference (weights_tools.bench_torch: float32, as many
                        threads as cores) on the same weights, image and cloud, in the same run, and
                        report engine/PyTorch ratios (VTLOC_PYTHON picks the interpreter)
+  --pytorch-device D   where --vs-pytorch runs PyTorch: cpu (default) or cuda (the same GPU, where
+                       torch has CUDA: each run synchronised)
 The GPU is the default Vulkan device (VTLOC_DEVICE picks another: index or name).
 )";
 
@@ -87,7 +89,7 @@ struct Args {
     bench::ModelBenchOptions opt;
     int cpu_reps = 2, tracker_touches = 12, tracker_window = 8;
     bool probe = true, vs_pytorch = false, tracker = true, gel = true;
-    std::string tracker_tour, plan_for;
+    std::string tracker_tour, plan_for, torch_device = "cpu";
 };
 
 std::vector<int64_t> int_list(const std::string& flag, const std::string& s) {
@@ -138,6 +140,10 @@ Args parse(int argc, char** argv) {
         if (f == "--weights") a.weights = v;
         else if (f == "--config") a.config = v;
         else if (f == "--plan-for") a.plan_for = v;
+        else if (f == "--pytorch-device") {
+            if (v != "cpu" && v != "cuda") throw Error("--pytorch-device: cpu or cuda, not '" + v + "'");
+            a.torch_device = v;
+        }
         else if (f == "--image") a.image = v;
         else if (f == "--object") a.object = v;
         else if (f == "--backend") a.backend = v;
@@ -360,7 +366,7 @@ int run(int argc, char** argv) {
 
     if (a.vs_pytorch) {
         bench::TorchRun t{python_interpreter(VTLOC_PYTHON), data_dir().string(), fs::absolute(weights_path).string(),
-                          fs::absolute(image_path).string(), cloud, a.opt.reps, a.opt.warmup};
+                          fs::absolute(image_path).string(), cloud, a.opt.reps, a.opt.warmup, a.torch_device};
         report["pytorch"] = bench::run_pytorch(t);
         report["engine_over_pytorch"] = bench::engine_over_pytorch(report.contains("gpu") ? report["gpu"] : report["cpu"],
                                                                    report["pytorch"]);

@@ -1,9 +1,13 @@
 """The PyTorch reference timed on the engine's inputs, for vtloc-bench --vs-pytorch.
 
   python3 -m weights_tools.bench_torch --weights W.safetensors --tactile IMG --cloud CLOUD.ply
-      [--reps 20] [--warmup 3] [--threads N] [--json OUT]
+      [--reps 20] [--warmup 3] [--threads N] [--device cpu|cuda] [--json OUT]
 
 float32, eval mode, no autograd, ``--threads`` intra-op threads (default: all cores).
+``--device cuda``: the model and the cloud on the GPU (the image decoded and cropped on
+the CPU, as the engine's is uploaded, then moved there inside the preprocess stage);
+each timed run ends with torch.cuda.synchronize(), so it counts the GPU's work.
+cuDNN's autotuner is left off (PyTorch's default): one touch at a time, as deployed.
 One touch end to end: preprocessing, cloud normalisation, tactile and point encoders
 (FPS and ball query included), GMA, the contact head, top-K and heat-map over the
 cloud's points; and each of those stages alone (the stage names of vtloc-bench).
@@ -41,28 +45,34 @@ def blas_of_torch():
     return {"built_with": built, "loaded": loaded}
 
 
-def timed(fn, reps, warmup):
+def timed(fn, reps, warmup, sync=lambda: None):
     for _ in range(warmup):
         fn()
+    sync()
     out = []
     for _ in range(reps):
         t0 = time.perf_counter()
         fn()
+        sync()
         out.append(1000.0 * (time.perf_counter() - t0))
     return {"median": statistics.median(out), "min": min(out), "n": len(out)}
 
 
 def run(args):
     torch.set_num_threads(args.threads or os.cpu_count() or 1)
-    net = model_mod.load(args.weights).float().eval()
+    if args.device == "cuda" and not torch.cuda.is_available():
+        raise ValueError("--device cuda: this torch sees no CUDA GPU")
+    dev = torch.device(args.device)
+    sync = torch.cuda.synchronize if dev.type == "cuda" else (lambda: None)
+    net = model_mod.load(args.weights).float().eval().to(dev)
     cfg = net.cfg
     image = torch.as_tensor(read_tactile(args.tactile))
-    cloud = torch.as_tensor(read_cloud(args.cloud)).float()
+    cloud = torch.as_tensor(read_cloud(args.cloud)).float().to(dev)
     t = cfg["tactile"]
     k = cfg["K"]
 
     def prep():
-        return preprocess(image, t["crop"], t["in_size"])  # 1 x 3 x S x S
+        return preprocess(image, t["crop"], t["in_size"]).to(dev)  # 1 x 3 x S x S
 
     def point_in():
         c, _, _ = post.normalise_cloud(cloud)
@@ -93,14 +103,15 @@ def run(args):
 
     with torch.no_grad():
         stages = {
-            "preprocess": timed(prep, args.reps, args.warmup),
-            "tactile": timed(lambda: net.tactile(x), args.reps, args.warmup),
-            "point": timed(lambda: net.point(point_in()), args.reps, args.warmup),
-            "heads": timed(heads, args.reps, args.warmup),
-            "retrieval": timed(retrieval, args.reps, args.warmup),
+            "preprocess": timed(prep, args.reps, args.warmup, sync),
+            "tactile": timed(lambda: net.tactile(x), args.reps, args.warmup, sync),
+            "point": timed(lambda: net.point(point_in()), args.reps, args.warmup, sync),
+            "heads": timed(heads, args.reps, args.warmup, sync),
+            "retrieval": timed(retrieval, args.reps, args.warmup, sync),
         }
-        e2e = timed(whole, args.reps, args.warmup)
-    return {"tool": "weights_tools.bench_torch", "torch": torch.__version__, "dtype": "float32",
+        e2e = timed(whole, args.reps, args.warmup, sync)
+    where = torch.cuda.get_device_name(dev) if dev.type == "cuda" else "cpu"
+    return {"tool": "weights_tools.bench_torch", "torch": torch.__version__, "dtype": "float32", "device": where,
             "threads": torch.get_num_threads(), "blas": blas_of_torch(), "config": cfg["name"],
             "points": int(cloud.shape[0]), "reps": args.reps, "warmup": args.warmup,
             "end_to_end_ms": e2e, "stages_ms": stages}
@@ -115,6 +126,7 @@ def main(argv=None):
     ap.add_argument("--reps", type=int, default=20)
     ap.add_argument("--warmup", type=int, default=3)
     ap.add_argument("--threads", type=int, default=0, help="0: all cores")
+    ap.add_argument("--device", choices=["cpu", "cuda"], default="cpu")
     ap.add_argument("--json", help="write here instead of stdout")
     args = ap.parse_args(argv)
     if args.reps < 1 or args.warmup < 0:

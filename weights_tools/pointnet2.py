@@ -23,11 +23,12 @@ def farthest_point_sample(xyz, npoint):
     squared distance to the chosen set is largest, lowest index on a tie."""
     xyz = xyz.float()
     B, N, _ = xyz.shape
-    rows = torch.arange(B)
-    order = torch.arange(N).expand(B, N)
-    out = torch.zeros(B, npoint, dtype=torch.long)
-    mind = torch.full((B, N), float("inf"), dtype=torch.float32)
-    far = torch.zeros(B, dtype=torch.long)
+    dev = xyz.device  # the reference also runs on a GPU (bench_torch --device)
+    rows = torch.arange(B, device=dev)
+    order = torch.arange(N, device=dev).expand(B, N)
+    out = torch.zeros(B, npoint, dtype=torch.long, device=dev)
+    mind = torch.full((B, N), float("inf"), dtype=torch.float32, device=dev)
+    far = torch.zeros(B, dtype=torch.long, device=dev)
     for i in range(npoint):
         out[:, i] = far
         mind = torch.minimum(mind, sqdist(xyz, xyz[rows, far][:, None, :]))
@@ -43,9 +44,9 @@ def ball_query(xyz, centres, radius, nsample):
     empty slots repeat the first point found."""
     xyz, centres = xyz.float(), centres.float()
     N = xyz.shape[1]
-    r = torch.tensor(radius, dtype=torch.float32)
+    r = torch.tensor(radius, dtype=torch.float32, device=xyz.device)
     d = sqdist(xyz[:, None, :, :], centres[:, :, None, :])  # B x S x N
-    idx = torch.where(d <= r * r, torch.arange(N), N)
+    idx = torch.where(d <= r * r, torch.arange(N, device=xyz.device), N)
     idx = idx.sort(dim=-1).values[..., :nsample]
     if idx.shape[-1] < nsample:  # fewer points than nsample in the whole cloud
         pad = idx.new_full(idx.shape[:-1] + (nsample - idx.shape[-1],), N)

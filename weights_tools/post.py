@@ -85,7 +85,7 @@ def heatmap(cloud_xyz, centres, ranks=None, symmetry=None):
     nearest centre (lowest rank on a tie), then min-max normalised (all zeros
     when max == min)."""
     c = torch.as_tensor(centres).double()
-    r = torch.arange(1, c.shape[0] + 1) if ranks is None else torch.as_tensor(ranks)
+    r = torch.arange(1, c.shape[0] + 1, device=c.device) if ranks is None else torch.as_tensor(ranks, device=c.device)
     if symmetry is not None:
         c, r = symmetric_copies(c, r, *symmetry)
     # sort by rank (stable) so the first minimum is the lowest rank
@@ -95,11 +95,11 @@ def heatmap(cloud_xyz, centres, ranks=None, symmetry=None):
     d = torch.sqrt(sqdist(p[:, None, :], c[None, :, :]))  # N x M
     dmin, w = d.min(dim=1)
     # torch.min's index on ties is not documented: take the first minimum explicitly
-    w = torch.where(d == dmin[:, None], torch.arange(c.shape[0]), c.shape[0]).min(dim=1).values
+    w = torch.where(d == dmin[:, None], torch.arange(c.shape[0], device=d.device), c.shape[0]).min(dim=1).values
     s = torch.exp(-dmin) / r[w].double()
     lo, hi = s.min(), s.max()
     if hi == lo:
-        return torch.zeros(p.shape[0], dtype=torch.float32)
+        return torch.zeros(p.shape[0], dtype=torch.float32, device=p.device)
     return ((s - lo) / (hi - lo)).float()
 
 

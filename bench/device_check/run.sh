@@ -77,8 +77,11 @@ if [ "${BENCH:-1}" = 1 ]; then
   step bench tactile
   vt timeout 40 $V/bin/vtloc-bench-tactile
   if [ -f $R18 ]; then
-    step bench, paper size
-    vt timeout 90 $V/bin/vtloc-bench --config vtloc-r18 --reps 10 --points 1024 --json "$O/bench_r18.json"
+    # PyTorch side by side on the same GPU where the machine's torch has CUDA.
+    VS=; [ -n "$PY" ] && $PY -c 'import torch; assert torch.cuda.is_available()' 2>/dev/null \
+      && VS="--vs-pytorch --pytorch-device cuda"
+    step bench, paper size ${VS:+with PyTorch on the GPU}
+    vt timeout 150 $V/bin/vtloc-bench --config vtloc-r18 --reps 10 --points 1024 $VS --json "$O/bench_r18.json"
   fi
   step bench point
   vt timeout 50 $V/bin/vtloc-bench-point

@@ -11,6 +11,7 @@ host = rep["host"]
 assert host["cpu"] and host["cores"] >= 1 and isinstance(host["simd"], list), host
 t = rep["pytorch"]
 assert t["tool"] == "weights_tools.bench_torch" and t["dtype"] == "float32" and t["threads"] >= 1, t
+assert t["device"] == "cpu", t  # the default: --pytorch-device cuda is for a GPU machine
 assert t["blas"]["built_with"] and t["blas"]["loaded"], t["blas"]
 assert t["end_to_end_ms"]["median"] > 0 and t["points"] == rep["inputs"]["points"]
 assert set(t["stages_ms"]) == {"preprocess", "tactile", "point", "heads", "retrieval"}, t["stages_ms"]
