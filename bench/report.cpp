@@ -26,6 +26,7 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
     std::fprintf(f, "  first run (graph build, upload%s): %.0f ms\n", name == "gpu" ? ", shader compile" : "",
                  b["first_run_ms"].get<double>());
     stats_line(f, "end to end (wall, one touch)", b["end_to_end_ms"]);
+    if (b.contains("end_to_end_late_ms")) stats_line(f, "end to end again, after the rest", b["end_to_end_late_ms"]);
     stats_line(f, "touch on a cached object (wall)", b["cached_touch_ms"]);
     if (name == "gpu") {
         const json& m = b["memory"];
@@ -97,6 +98,19 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
                             " (p10 %.4f, p90 %.4f); first step with setup %.4f ms; a step past N %.4f ms\n",
                          s["n"].get<int>(), med(s["per_iteration_ms"]), s["per_iteration_ms"]["p10"].get<double>(),
                          s["per_iteration_ms"]["p90"].get<double>(), med(s["first_step_ms"]), med(s["pass_through_step_ms"]));
+        }
+    }
+    if (b.contains("ilu_variants")) {
+        const json& v = b["ilu_variants"];
+        std::fprintf(f, "\n  ILU node's shaders at C = %lld, N = %d (GPU timestamps; wave 1 = the default's choice)\n",
+                     v["C"].get<long long>(), v["iters"].get<int>());
+        for (const json& r : v["rows"]) {
+            if (r.contains("refused")) {
+                std::fprintf(f, "    wave %4d  refused: %s\n", r["wave"].get<int>(), r["refused"].get<std::string>().c_str());
+                continue;
+            }
+            std::fprintf(f, "    wave %4d  %-16s workgroup %4u  %.4f ms\n", r["wave"].get<int>(),
+                         r.value("shader", std::string("?")).c_str(), r.value("workgroup", 0u), med(r["ms"]));
         }
     }
     if (b.contains("retrieval_split")) {

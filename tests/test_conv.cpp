@@ -129,12 +129,16 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
         CHECK((t.kh_block == s.kh || t.kh_block == 1));
     }
     // The shapes check_conv uses for the window-offset and vec4-store paths get
-    // the ones they test (vec4 stores: OW and the block width multiples of 4).
+    // the ones they test (vec4 stores: OW and the block width multiples of 4) from
+    // a CPU device's chooser, lavapipe's, on which CI runs them. A GPU's chooser
+    // (run on an H200) takes other tiles for them: there they test whatever it takes.
     auto tiles = [&](ops::ConvShape s) { return ops::choose_conv_tiles(d, s, true, true); };
-    CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).x_shift == 3);
-    CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).c % 4 == 0);
-    CHECK(tiles({1, 4, 16, 16, 8, 3, 3, 2, 2, 8, 8, 1}).x_shift == 3);
-    CHECK(tiles({1, 6, 13, 10, 12, 3, 3, 1, 1, 13, 10, 1}).x_shift == 4);
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU) {
+        CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).x_shift == 3);
+        CHECK(tiles({1, 7, 12, 16, 8, 3, 3, 1, 1, 12, 16, 1}).c % 4 == 0);
+        CHECK(tiles({1, 4, 16, 16, 8, 3, 3, 2, 2, 8, 8, 1}).x_shift == 3);
+        CHECK(tiles({1, 6, 13, 10, 12, 3, 3, 1, 1, 13, 10, 1}).x_shift == 4);
+    }
     // A GPU-like device with small limits still gets a legal tile.
     rt::DeviceInfo small = d;
     small.type = VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU;
@@ -148,7 +152,9 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
     // long reduction (ResNet-18's layer4 at 224: 7x7x512 from 512 x 3x3) until the
     // dispatch offers fill_workgroups, and leaves a big output whole.
     const ops::ConvShape layer4{1, 512, 7, 7, 512, 3, 3, 1, 1, 7, 7, 1}, stem{1, 3, 224, 224, 64, 7, 7, 2, 2, 112, 112, 3};
-    CHECK(tiles(layer4).ksplit == 1);
+    rt::DeviceInfo cpu = d;
+    cpu.type = VK_PHYSICAL_DEVICE_TYPE_CPU;
+    CHECK(ops::choose_conv_tiles(cpu, layer4, true, true).ksplit == 1);
     rt::DeviceInfo big = d;
     big.type = VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU;
     big.subgroup_size = 32;

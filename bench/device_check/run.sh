@@ -8,6 +8,8 @@
 # Env: OUT (default /tmp/vtloc-device-check), BENCH=0 (no benches), CORRECT=0 (no
 # tests), DEMO2=1 (the demo in three processes: the driver's shader cache),
 # TWICE=1 (the shipped-model bench twice), TT (test timeout, s, default 180),
+# TESTS (Catch2 test specs or shard names, one per line: each its own process, instead of the
+# shards, checks and goldens: a short rerun of what failed),
 # VTLOC_PYTHON (a Python with torch; default: the first found).
 # Exit status 0 only when every test process and check exited 0.
 set -u
@@ -92,11 +94,25 @@ if [ "${CORRECT:-1}" = 1 ]; then
   step tests, checks and goldens in parallel
   TT=${TT:-180}
   declare -A P
+  if [ -n "${TESTS:-}" ]; then
+    i=0
+    while IFS= read -r spec; do
+      [ -n "$spec" ] || continue
+      i=$((i + 1)); echo "test$i: $spec"
+      case $spec in  # a shard's name: that shard's list
+        shard[0-9]*) vt timeout "$TT" $V/bin/vtloc_tests -f "$D/$spec.txt" -r compact --durations yes >$L/test$i.log 2>&1 & ;;
+        *) vt timeout "$TT" $V/bin/vtloc_tests "$spec" -r compact --durations yes >$L/test$i.log 2>&1 & ;;
+      esac
+      P[test$i]=$!
+    done <<<"$TESTS"
+  else
   for f in "$D"/shard*.txt; do
     k=$(basename "$f" .txt)
     vt timeout "$TT" $V/bin/vtloc_tests -f "$f" -r compact --durations yes >$L/$k.log 2>&1 &
     P[$k]=$!
   done
+  fi
+  [ -n "${TESTS:-}" ] || {
   VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --json $L/check_model.json >$L/check_model.log 2>&1 &
   P[check_model]=$!
   VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --ops --json $L/check_ops.json >$L/check_ops.log 2>&1 &
@@ -111,6 +127,7 @@ if [ "${CORRECT:-1}" = 1 ]; then
     P[check_r18]=$!
   fi
   VTLOC_VALIDATION=1 vt timeout 60 $V/bin/vtloc demo >$L/demo.log 2>&1 || FAILED=1
+  }
   # Each process's own exit status: a crash at exit does not show in Catch2's count.
   for k in $(printf '%s\n' "${!P[@]}" | sort); do
     wait "${P[$k]}"
@@ -118,7 +135,7 @@ if [ "${CORRECT:-1}" = 1 ]; then
     [ $rc = 0 ] || FAILED=1
     echo "--- $k: exit status $rc; $(grep -E '^(Passed|Failed|All tests|OK:|FAIL)' $L/$k.log | tail -1)"
   done
-  echo "--- demo: $(grep -E '^(error|time)' $L/demo.log | tr '\n' ' ')"
+  [ -n "${TESTS:-}" ] || echo "--- demo: $(grep -iE '^error' $L/demo.log)last touch (n, mm, ND %, belief, ms): $(grep -E '^ +[0-9]+ +[0-9.]+ ' $L/demo.log | tail -1)"
 fi
 step end
 exit $FAILED
