@@ -24,6 +24,8 @@ rt::Context& gpu() {
 
 bool gpu_created() { return g_ctx != nullptr; }
 
+bool big_tiles_apply() { return gpu().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
+
 void release_gpu() { g_ctx.reset(); }
 
 void require_no_validation_messages() {

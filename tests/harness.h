@@ -20,6 +20,11 @@ bool gpu_created();
 // that crashed.
 void release_gpu();
 
+// Whether tests force group_linear's big-layer tiles (GroupLinear::Tile::Big*): only
+// CPU devices take them. A GPU never runs them, and NVIDIA's compiler spent minutes
+// on their unrolled shaders (an H200, 2026-11-30: tests stalled past 290 s).
+bool big_tiles_apply();
+
 // Fails the current test (CHECK) if the validation layer said anything since the last call.
 void require_no_validation_messages();
 

@@ -8,6 +8,7 @@
 
 #include "engine/model/heads.h"
 #include "engine/ops/build.h"
+#include "engine/ops/ilu_math.h"
 #include "tests/harness.h"
 #include "tests/ilu_test_util.h"
 
@@ -67,6 +68,8 @@ TEST_CASE("ilu_retrieve matches the CPU references, fused and apart, and the two
     cases.push_back(Case{3, 20, 12, 37, 41, 3, 7, 0, 9, 1});               // a batch; odd cloud and candidate counts
     cases.push_back(Case{2, 64, 64, 1000, 513, 6, 16, 0, 5, int(2 * sg)});  // ILU over two subgroups, K = 16
     cases.push_back(Case{1, 16, 8, 5, 3, 3, 5, 0, 0, 1});                   // N = 0, every candidate kept
+    // The register-resident ILU fuses: the default takes it on CPU devices only.
+    for (Case& c : cases) c.wave = c.wave == 1 ? int(sg) : c.wave;
     for (const Case& c : cases) {
         INFO("B " << c.B << " C " << c.C << " H " << c.H << " M " << c.M << " P " << c.P << " K " << c.K << " N "
                   << c.iters << " wave " << c.wave);
@@ -116,7 +119,7 @@ TEST_CASE("ilu_retrieve keeps the ILU and retrieval apart where together they ou
     WeightStore w = random_ilu(64, 32, 5);
     for (int64_t n : {2000, 24000}) {
         INFO(n << " candidates and points, subgroup " << sg);
-        Case c{1, 64, 32, n, n, 3, 5, 0, 64, 1};
+        Case c{1, 64, 32, n, n, 3, 5, 0, 64, int(sg)};
         Built f = build(w, c, true);
         test::run_gpu_and_compare(f.g, w, f.inputs);  // the heat-map's last points included
         GpuExecutor e(test::gpu(), f.g, w);
@@ -124,5 +127,31 @@ TEST_CASE("ilu_retrieve keeps the ILU and retrieval apart where together they ou
         for (const auto& d : e.sequence().dispatch_log()) fused = fused || d.shader == "ilu_retrieve";
         if (n == 2000) CHECK(fused);
         if (n == 24000 && sg <= 8) CHECK(!fused);  // wider subgroups take fewer iterations
+    }
+}
+
+TEST_CASE("the ILU's default shader: register-resident on CPU devices, the shared-memory one on GPUs",
+          "[op][ilu_retrieve][ilu]") {
+    rt::DeviceInfo d = test::gpu().info();
+    d.type = VK_PHYSICAL_DEVICE_TYPE_CPU;
+    CHECK(ops::ilu_math::wave_by_default(d));
+    for (auto t : {VK_PHYSICAL_DEVICE_TYPE_DISCRETE_GPU, VK_PHYSICAL_DEVICE_TYPE_INTEGRATED_GPU}) {
+        d.type = t;
+        CHECK_FALSE(ops::ilu_math::wave_by_default(d));
+    }
+    // On this device, the head as the model builds it (wave 1): the shader the rule names.
+    const rt::DeviceInfo& here = test::gpu().info();
+    WeightStore w = random_ilu(64, 32, 11);
+    Built f = build(w, Case{}, true);
+    test::run_gpu_and_compare(f.g, w, f.inputs);
+    GpuExecutor e(test::gpu(), f.g, w);
+    std::vector<std::string> shaders;
+    for (const auto& r : e.sequence().dispatch_log()) shaders.push_back(r.shader);
+    INFO(here.name);
+    if (ops::ilu_math::wave_by_default(here)) {
+        CHECK(shaders == std::vector<std::string>{"ilu_retrieve"});
+    } else {
+        REQUIRE(!shaders.empty());
+        CHECK((shaders.front() == "ilu_subgroup" || shaders.front() == "ilu"));
     }
 }

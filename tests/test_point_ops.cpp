@@ -238,6 +238,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
                     // A tile is the same code on every weight path; 8 x 32 on the one CPU devices take.
                     if (tile != Tile::Auto && ubo == Weights::Uniform) continue;
                     if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
+                    if (tile != Tile::Auto && !test::big_tiles_apply()) continue;
                     if (path == ops::BufferPath::Texel) require_weight_path(ubo);
                     const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
                                            (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
@@ -467,6 +468,7 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
                     // 8 x 32 differs from the others only in its spec constants: the path CPU devices take.
                     if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
+                    if (tile != Tile::Auto && !test::big_tiles_apply()) continue;
                     if (path == ops::BufferPath::Texel) require_weight_path(ubo);
                     const bool big = tile != Tile::Auto;
                     const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +

@@ -33,7 +33,7 @@ constexpr uint32_t kMaxWaveBlocks = 16;
 void choose_wave(const GpuOpArgs& a, Launch& l) {
     const rt::DeviceInfo& d = a.ctx.info();
     const double want = a.params.get("wave", 1);
-    if (want == 0) return;
+    if (want == 0 || (want == 1 && !wave_by_default(d))) return;
     // A forced width (want >= 2) is a test's request: refuse it by name rather than
     // quietly run the other shader.
     auto no = [&](const std::string& why) {
@@ -67,6 +67,8 @@ void choose_wave(const GpuOpArgs& a, Launch& l) {
 }
 
 }  // namespace
+
+bool wave_by_default(const rt::DeviceInfo& d) { return d.type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
 
 int64_t check_inputs(const std::vector<TensorDesc>& in, bool batch) {
     if (in[2].type != ElemType::I32 || in[2].shape != Shape{1})

@@ -35,9 +35,10 @@ void iterate(const std::vector<const HostTensor*>& in, State& s);
 // "subgroup" = 0 keeps the shared-memory sums (tests run both).
 // wave: the register-resident variant (shaders/ilu_wave.comp) where the device
 // has subgroup shuffles, C and H are multiples of 4 and the weights fit texel
-// buffers: a workgroup of one subgroup (wave_L invocations), no barriers. Param
-// "wave" = 0 turns it off; a value >= 2 asks for that workgroup size instead
-// (tests use twice the subgroup size to run its shared-memory path).
+// buffers: a workgroup of one subgroup (wave_L invocations), no barriers, on CPU
+// devices only (wave_by_default). Param "wave" = 0 turns it off; a value >= 2 asks
+// for that workgroup size instead on any device (tests use twice the subgroup size
+// to run its shared-memory path).
 struct Launch {
     uint32_t L, C, H, G;
     bool subgroup;
@@ -46,6 +47,13 @@ struct Launch {
     uint64_t wave_loops = 0;  // the wave shader's loop iterations in one invocation (kLoopIterationBudget)
 };
 Launch launch(const GpuOpArgs& a);
+// Whether param wave = 1 (the default) takes the register-resident shader. On
+// lavapipe it runs the lite head 9x faster than the shared-memory one (one subgroup
+// is one SIMD stream there); on an NVIDIA H200 the shared-memory one, 256
+// invocations, ran the paper's ILU node (C 128, N 16) in 0.27 ms against 0.66 ms
+// and the lite one's (C 64) in 0.09 against 0.17 ms (vtloc-bench, "ILU node's
+// shaders", 2026-11-30): one subgroup leaves a GPU's load latency unhidden.
+bool wave_by_default(const rt::DeviceInfo& d);
 // The wave shader's (ilu_wave.glsl) 15 bindings: the inputs, then c and contact;
 // gate and head.0 weights as vec4 texels, head.2 as floats (kWaveTexels).
 std::vector<rt::Binding> wave_bindings(const GpuOpArgs& a);
