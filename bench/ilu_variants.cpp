@@ -34,7 +34,7 @@ json ilu_variants(rt::Context& ctx, const WeightStore& w, int iters, int reps) {
     const int64_t C = w.get("ilu.convz.bias").shape.at(0);
     const TensorMap in{{"ft", ramp(C, 2.0f)}, {"fp", ramp(C, 1.0f)}, {"iters", ilu_iters_input(iters, iters)}};
     const rt::DeviceInfo& d = ctx.info();
-    const uint32_t most = std::min({d.max_invocations, d.max_workgroup_size[0], 1024u});
+    const uint32_t most = std::min({d.max_invocations, d.max_workgroup_size[0], 256u});
     std::vector<int> waves{0, 1};
     for (uint32_t L = std::max(1u, d.subgroup_size); L <= most; L *= 2) waves.push_back(int(L));
     json rows = json::array();

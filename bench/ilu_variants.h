@@ -9,10 +9,11 @@
 
 namespace vtloc::bench {
 
-// Rows {variant, workgroup, ms (median GPU time of the node at `iters`), chosen}:
-// the shared-memory shader (wave 0) and the register-resident one at the subgroup
-// size and its doublings up to the device's workgroup limit; "chosen" marks what
-// the default (wave 1) runs. A variant the device refuses is listed with its reason.
+// {C, iters, rows}: a row {wave, shader, workgroup, ms (the node's GPU time at `iters`,
+// stats over reps)} for the default (wave 1: the shader it picks), the shared-memory
+// shader (wave 0) and the register-resident one at the subgroup size and its doublings
+// up to 256 invocations or the device's limit; a variant the device refuses has
+// {wave, refused: the reason}. (512 and 1024 ran 5-20x slower on an H200 and lavapipe.)
 nlohmann::json ilu_variants(rt::Context& ctx, const WeightStore& w, int iters, int reps);
 
 }  // namespace vtloc::bench

@@ -313,8 +313,8 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     if (!opt.points.empty()) out["points"] = point_sweep(r, in, opt);
     // End to end again, after everything above: on a fresh NVIDIA machine the runs just
     // after the first one were 4x slower in some processes (docs/performance.md, "Real GPU").
-    out["end_to_end_late_ms"] = stats_json(time_ms(once, 1, opt.reps));
     if (r.on_gpu()) {
+        out["end_to_end_late_ms"] = stats_json(time_ms(once, 1, opt.reps));
         // After every shape above: the weights are held once, whatever the shape count.
         const VtlocRunner::AllMemory all = r.all_memory();
         out["memory_all_shapes"] = {{"graphs", all.graphs}, {"weights_resident_bytes", all.resident_weight_bytes},
