@@ -117,7 +117,23 @@ def main(path, plot, reps, iters, batches, points, window):
         need(abs(f - g["efficiency"][k]["gflops"] / p["gflops"]) < 1e-9, f"fraction_of_peak {k}")
         f = g["efficiency"][k]["fraction_of_peak_fastest"]
         need(abs(f - g["efficiency"][k]["gflops_fastest"] / p["gflops"]) < 1e-9, f"fraction_of_peak_fastest {k}")
+    stats(g["end_to_end_late_ms"], "gpu.end_to_end_late_ms", reps)  # the same timing after the rest
     if ilu:
+        # The fused node's shaders side by side: the default (wave 1), the shared-memory
+        # shader (0), then the register shader at the subgroup size and its doublings to 256.
+        v = g["ilu_variants"]
+        waves = [row["wave"] for row in v["rows"]]
+        need(waves[:2] == [0, 1] and waves[2] >= 1 and all(b == 2 * a for a, b in zip(waves[2:], waves[3:]))
+             and waves[-1] <= 256, f"ilu_variants waves {waves}")
+        for row in v["rows"]:
+            if "refused" in row:
+                need(row["wave"] >= 2 and row["refused"], f"ilu_variants refusal {row}")
+                continue
+            stats(row["ms"], f"ilu_variants wave {row['wave']}", reps)
+            # 0: never the register shader; >= 2: always; 1 (the default): on CPU devices only.
+            want_wave = row["wave"] >= 2 or (row["wave"] == 1 and r["device"]["type"] == "CPU")
+            need((row["shader"] == "ilu_wave") == want_wave and row["shader"] in ("ilu", "ilu_subgroup", "ilu_wave"),
+                 f"ilu_variants: wave {row['wave']} ran {row['shader']} on a {r['device']['type']} device")
         st = g["ilu"]["stepped"]
         need(st["n"] == s["stepped"] and len(st["step_ms"]) == st["n"], f"stepped {st}")
         stats(st["per_iteration_ms"], "stepped.per_iteration_ms", s["profile_reps"] * (st["n"] - 1))
