@@ -16,9 +16,7 @@ namespace {
 
 std::vector<int> inputs(Graph& g, const WeightStore& w, int64_t C) {
     std::vector<int> in{g.input("ft", {1, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
-    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-        in.push_back(g.weight(n, w.get(n).shape));
+    for (int v : ilu_weight_inputs(g, w)) in.push_back(v);
     return in;
 }
 

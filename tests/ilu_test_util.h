@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "engine/graph.h"
+#include "engine/model/heads.h"
 #include "engine/weights.h"
 #include "tests/harness.h"
 
@@ -29,9 +30,7 @@ inline WeightStore random_ilu(int64_t C, int64_t H, uint32_t seed) {
 // ft [B, C], fp [1, C], iters, then the ten weights: the ilu / ilu_retrieve inputs.
 inline std::vector<int> ilu_graph_inputs(Graph& g, const WeightStore& w, int64_t B, int64_t C) {
     std::vector<int> in{g.input("ft", {B, C}), g.input("fp", {1, C}), g.input("iters", {1}, ElemType::I32)};
-    for (const char* n : {"ilu.convz.weight", "ilu.convz.bias", "ilu.convr.weight", "ilu.convr.bias", "ilu.convq.weight",
-                          "ilu.convq.bias", "ilu.head.0.weight", "ilu.head.0.bias", "ilu.head.2.weight", "ilu.head.2.bias"})
-        in.push_back(g.weight(n, w.get(n).shape));
+    for (int v : ilu_weight_inputs(g, w)) in.push_back(v);
     return in;
 }
 

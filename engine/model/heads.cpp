@@ -14,6 +14,14 @@ std::vector<int> ilu_inputs(Graph& g, const WeightStore& w, int ft, int fp, int 
         throw Error("ILU iterations must be in 0.." + std::to_string(limits::kMaxIters) + ", got " +
                     std::to_string(max_iters));
     std::vector<int> in{ft, fp, iters};
+    for (int v : ilu_weight_inputs(g, w)) in.push_back(v);
+    return in;
+}
+
+}  // namespace
+
+std::vector<int> ilu_weight_inputs(Graph& g, const WeightStore& w) {
+    std::vector<int> in;
     for (const char* gate : {"convz", "convr", "convq"})
         for (const char* part : {".weight", ".bias"}) {
             std::string n = std::string("ilu.") + gate + part;
@@ -23,8 +31,6 @@ std::vector<int> ilu_inputs(Graph& g, const WeightStore& w, int ft, int fp, int 
         in.push_back(g.weight(n, w.get(n).shape));
     return in;
 }
-
-}  // namespace
 
 IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters) {
     std::vector<int> in = ilu_inputs(g, w, ft, fp, iters, max_iters);

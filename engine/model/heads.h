@@ -18,6 +18,9 @@ struct IluOutputs {
     int contact = -1;
 };
 IluOutputs build_ilu(Graph& g, const WeightStore& w, int ft, int fp, int iters, int max_iters);
+// The ILU's ten weights as graph values, in the order the ilu ops take them after
+// ft, fp and iters (convz, convr, convq weight and bias, then the head's two layers).
+std::vector<int> ilu_weight_inputs(Graph& g, const WeightStore& w);
 
 // The same head recorded as one ilu_step dispatch per iteration (1..64
 // max_iters), nodes "ilu.step0", "ilu.step1", ...: slower, but a profiled run
