@@ -94,23 +94,20 @@ if [ "${CORRECT:-1}" = 1 ]; then
   step tests, checks and goldens in parallel
   TT=${TT:-180}
   declare -A P
+  # One test process: its log $L/NAME.log, its pid in P[NAME].
+  tests_proc() { local k=$1; shift; vt timeout "$TT" $V/bin/vtloc_tests "$@" -r compact --durations yes >$L/$k.log 2>&1 & P[$k]=$!; }
   if [ -n "${TESTS:-}" ]; then
     i=0
     while IFS= read -r spec; do
       [ -n "$spec" ] || continue
       i=$((i + 1)); echo "test$i: $spec"
       case $spec in  # a shard's name: that shard's list
-        shard[0-9]*) vt timeout "$TT" $V/bin/vtloc_tests -f "$D/$spec.txt" -r compact --durations yes >$L/test$i.log 2>&1 & ;;
-        *) vt timeout "$TT" $V/bin/vtloc_tests "$spec" -r compact --durations yes >$L/test$i.log 2>&1 & ;;
+        shard[0-9]*) tests_proc test$i -f "$D/$spec.txt" ;;
+        *) tests_proc test$i "$spec" ;;
       esac
-      P[test$i]=$!
     done <<<"$TESTS"
   else
-  for f in "$D"/shard*.txt; do
-    k=$(basename "$f" .txt)
-    vt timeout "$TT" $V/bin/vtloc_tests -f "$f" -r compact --durations yes >$L/$k.log 2>&1 &
-    P[$k]=$!
-  done
+    for f in "$D"/shard*.txt; do tests_proc "$(basename "$f" .txt)" -f "$f"; done
   fi
   [ -n "${TESTS:-}" ] || {
   VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --json $L/check_model.json >$L/check_model.log 2>&1 &
