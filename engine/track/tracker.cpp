@@ -435,8 +435,16 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             const int64_t i = order[next];
             if (owner[size_t(i)] >= 0) continue;
             const int m = int(mode_sample.size());
-            for (int64_t j = 0; j < S; ++j)
-                if (owner[size_t(j)] < 0 && dist(point(j), point(i)) <= opt_.mode_radius_mm) owner[size_t(j)] = m;
+            const std::array<double, 3> pi = point(i);
+            const double r = opt_.mode_radius_mm;
+            for (int64_t j = 0; j < S; ++j) {
+                if (owner[size_t(j)] >= 0) continue;
+                // A coordinate more than r apart rules j out without the square root: the
+                // rounded distance is never below any one coordinate's difference.
+                const std::array<double, 3> pj = point(j);
+                if (std::abs(pj[0] - pi[0]) > r || std::abs(pj[1] - pi[1]) > r || std::abs(pj[2] - pi[2]) > r) continue;
+                if (dist(pj, pi) <= r) owner[size_t(j)] = m;
+            }
             mode_sample.push_back(i);
         }
     };
@@ -529,10 +537,15 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
                       [&](int64_t a, int64_t b) { return cost[size_t(a)] < cost[size_t(b)] || (cost[size_t(a)] == cost[size_t(b)] && a < b); });
     for (size_t i = 0; i < n_cost; ++i) cand.push_back(point(stride * by_cost[i]));
     for (size_t i = 0; i < std::min<size_t>(64, order.size()); ++i) cand.push_back(point(order[i]));  // the best-held samples
+    // Only the samples with weight: a zero weight adds +0 to a sum of non-negative terms,
+    // which leaves it as it is (past a few touches most of the belief underflows to 0).
+    std::vector<int64_t> held_at;
+    for (int64_t i = 0; i < S; ++i)
+        if (w[size_t(i)] != 0) held_at.push_back(i);
     double best_risk = INFINITY;
     for (const auto& c : cand) {
         double r = 0;
-        for (int64_t i = 0; i < S; ++i) r += w[size_t(i)] * dist(at[size_t(i)], c);
+        for (int64_t i : held_at) r += w[size_t(i)] * dist(at[size_t(i)], c);
         if (r < best_risk) best_risk = r, e.contact = c;
     }
     e.mass_within_5mm = 0;
