@@ -542,10 +542,17 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::vector<int64_t> held_at;
     for (int64_t i = 0; i < S; ++i)
         if (w[size_t(i)] != 0) held_at.push_back(i);
+    // A candidate stops once its partial risk reaches the best so far: the terms left are
+    // non-negative and a rounded sum never drops, so it could not have won (the same order
+    // of summation, so the same bits for those that run to the end).
     double best_risk = INFINITY;
     for (const auto& c : cand) {
         double r = 0;
-        for (int64_t i : held_at) r += w[size_t(i)] * dist(at[size_t(i)], c);
+        for (size_t q = 0; q < held_at.size(); ++q) {
+            const int64_t i = held_at[q];
+            r += w[size_t(i)] * dist(at[size_t(i)], c);
+            if ((q & 63) == 63 && r >= best_risk) break;
+        }
         if (r < best_risk) best_risk = r, e.contact = c;
     }
     e.mass_within_5mm = 0;
