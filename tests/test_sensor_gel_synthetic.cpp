@@ -8,6 +8,7 @@
 
 #include "engine/io/mesh.h"
 #include "engine/sensor/gel_shape.h"
+#include "engine/sim/primitives.h"
 #include "engine/sim/shapes.h"
 #include "engine/sim/touch_renderer.h"
 #include "tests/sim_fixtures.h"
@@ -27,10 +28,29 @@ struct Errors {
     }
 };
 
+// The contact (indentation > 0) stays off the frame's border: the frame holds it whole.
+bool whole(const std::vector<float>& ind, int w, int h) {
+    bool any = false;
+    for (int y = 0; y < h; ++y)
+        for (int x = 0; x < w; ++x)
+            if (ind[size_t(y * w + x)] > 0) {
+                if (x == 0 || y == 0 || x == w - 1 || y == h - 1) return false;
+                any = true;
+            }
+    return any;
+}
+
+std::vector<io::TriangleMesh> shapes_named(const std::vector<const char*>& names) {
+    std::vector<io::TriangleMesh> out;
+    for (const char* n : names) out.push_back(sim::make_shape(n));
+    return out;
+}
+
 // `per_shape` touches at random surface points of each shape, presses 0.3-1.5 mm (the datasets'),
 // random spins. The contact is the undeformed intersection (the renderer without its drape); the
 // error is over it, against the draped indentation, with and without the best constant offset.
-Errors read_back(const std::vector<const char*>& shapes, int per_shape, uint64_t seed, const ShapeOptions& o) {
+Errors read_back(const std::vector<io::TriangleMesh>& meshes, int per_shape, uint64_t seed, const ShapeOptions& o,
+                 bool whole_only = false) {
     const Calibration& c = vtloc::test::calib();
     static const GradientLut lut = build_gradient_lut(c);
     Errors out;
@@ -39,8 +59,7 @@ Errors read_back(const std::vector<const char*>& shapes, int per_shape, uint64_t
         state = state * 6364136223846793005ull + 1442695040888963407ull;
         return lo + (hi - lo) * double(state >> 11) / double(1ull << 53);
     };
-    for (const char* name : shapes) {
-        const io::TriangleMesh mesh = sim::make_shape(name);
+    for (const io::TriangleMesh& mesh : meshes) {
         sim::TouchRenderer draped(c, mesh), bare(c, mesh);
         bare.set_drape_sigmas_mm({});
         const sim::Appearance look;
@@ -55,6 +74,7 @@ Errors read_back(const std::vector<const char*>& shapes, int per_shape, uint64_t
             const sim::Touch t = draped.render(p, n, tp, look, seed + uint64_t(i));
             const sim::Touch t0 = bare.render(p, n, tp, look, seed + uint64_t(i));
             if (!t.ok || !t0.ok) continue;
+            if (whole_only && !whole(t0.indentation_mm, c.width, c.height)) continue;
             ++got;
             const GelShape s = gel_shape(c, lut, t.image, empty, o);
             double n_in = 0, mean = 0, true_mean = 0, inter = 0, uni = 0;
@@ -86,10 +106,10 @@ TEST_CASE("gel shape: the renderer's frames read back, on touches it was not fit
     const std::vector<const char*> solids{"sphere", "cylinder", "cone", "torus", "potato", "box", "capsule"};
     ShapeOptions o;
     o.mask_threshold = kRenderedMaskThreshold;
-    const Errors now = read_back(solids, 6, 23, o);
+    const Errors now = read_back(shapes_named(solids), 6, 23, o);
     ShapeOptions tables;  // the reader as fitted on the real presses: tables only, threshold 0.7
     tables.gentle_slope = 0;
-    const Errors before = read_back(solids, 6, 23, tables);
+    const Errors before = read_back(shapes_named(solids), 6, 23, tables);
     std::printf("gel shape on rendered frames (%zu touches): relief RMS / press %.3f (tables only %.3f), unexplained relief %.2f "
                 "(%.2f), absolute RMS / press %.3f (%.3f), mask IoU %.2f (%.2f)\n",
                 now.relief.size(), now.median(now.relief), before.median(before.relief), now.median(now.unexplained),
@@ -103,4 +123,25 @@ TEST_CASE("gel shape: the renderer's frames read back, on touches it was not fit
     CHECK(now.median(now.relief) < 0.85 * before.median(before.relief));
     CHECK(now.median(now.unexplained) < 0.95);  // the tables-only reader sees no contact: 1.0
     CHECK(now.median(now.iou) > 0.3);  // measured 0.42; the tables-only reader 0.00
+}
+
+TEST_CASE("gel shape: contacts the frame holds whole, where their depth is in the frame", "[sensor][gel_synthetic]") {
+    // Balls of 3-24 mm radius pressed 0.3-1.5 mm: their contacts stay off the frame's border, so
+    // unlike the solids above the frame itself could say how deep the gel sits. Touches whose
+    // undeformed contact reaches the border are skipped (chosen by geometry, before any reading).
+    std::vector<io::TriangleMesh> balls;
+    for (double r : {3.0, 6.0, 12.0, 24.0}) balls.push_back(sim::make_icosphere(r, 5));
+    ShapeOptions o;
+    o.mask_threshold = kRenderedMaskThreshold;
+    const Errors e = read_back(balls, 6, 23, o, /*whole_only=*/true);
+    std::printf("gel shape, whole contacts (%zu touches): relief RMS / press %.3f, absolute RMS / press %.3f, unexplained "
+                "relief %.2f, mask IoU %.2f\n",
+                e.relief.size(), e.median(e.relief), e.median(e.absolute), e.median(e.unexplained), e.median(e.iou));
+    REQUIRE(e.relief.size() == 24);
+    CHECK(e.median(e.relief) <= 0.20);       // measured 0.107
+    CHECK(e.median(e.unexplained) < 0.75);   // measured 0.46: the relief's shape is mostly read
+    // Measured 0.30: #43's 20 % is not met on the absolute depth even here. The solve pins z = 0
+    // at the mask's edge, where the renderer's draped gel is still pressed in (docs/gel_shape.md).
+    // The guard catches a reader that loses the contact (a map of zeros scores about 0.6).
+    CHECK(e.median(e.absolute) < 0.40);
 }
