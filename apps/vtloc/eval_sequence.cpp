@@ -137,6 +137,10 @@ void plot_sequence(const std::string& path, const nlohmann::json& rows, const st
 }
 
 int run_sequence(Session& s, const Args& a) {
+    // The single-touch report's options have no meaning here; say so rather than ignore them.
+    for (const char* o : {"--split", "--iters", "--topk", "--render", "--render-count", "--skip-bad", "--no-baselines", "--backend",
+                          "--mm-per-px", "--cloud"})
+        if (a.get(o)) throw UsageError(std::string(o) + " is not for --sequence (windows end at --end-split touches; the filter runs on the GPU)");
     const std::string data = a.required("--data");
     const std::vector<int> Ts = parse_ts(a.get("--sequence").value_or("1,2,3,4,6,8"));
     const bool geometry_only = a.flag("--geometry-only");
@@ -223,6 +227,8 @@ int run_sequence(Session& s, const Args& a) {
     std::map<RowKey, std::map<std::string, Score>> per_object;  // row -> object -> sum
     std::map<std::string, std::string> subset_of;
     int windows = 0;
+    // --per-touch: one line per window and row (the report's means hide which windows missed).
+    std::string per_window = "object,subset,touch,order,T,method,odometry_noise,error_mm,nd,nd_symmetry,rotation_deg,missed,nd_candidates\n";
     for (const sim::ObjectRecord& o : d.objects) {
         if (objects == "known" && o.object_split != "seen") continue;
         if (objects == "unknown" && o.object_split != "unseen") continue;
@@ -394,6 +400,11 @@ int run_sequence(Session& s, const Args& a) {
                         sc.cand_nd = 100 * dist(pick, truth.contact) / o.diameter_mm;
                         per_object[{method, with_noise, T}][o.name].add(sc);
                         ++windows;
+                        char line[512];
+                        std::snprintf(line, sizeof line, "%s,%s,%d,%d,%d,%s,%s,%.4f,%.4f,%.4f,%.3f,%s,%.4f\n", o.name.c_str(), o.subset.c_str(),
+                                      truth.id, truth.order, T, method, with_noise ? "yes" : "no", sc.mm, sc.nd, sc.nd_sym, sc.rot,
+                                      sc.miss_search ? "search" : sc.miss_ambiguity ? "ambiguity" : "", sc.cand_nd);
+                        per_window += line;
                     }
                 }
             }
@@ -445,6 +456,7 @@ int run_sequence(Session& s, const Args& a) {
         }
     std::printf("\nwindows   %d (ending at the %s touches with order >= 7)\n", windows, end_split.c_str());
     if (auto p = a.get("--markdown")) write_file_atomic(*p, md), std::printf("wrote     %s\n", p->c_str());
+    if (auto p = a.get("--per-touch")) write_file_atomic(*p, per_window), std::printf("wrote     %s\n", p->c_str());
     if (auto p = a.get("--plot")) plot_sequence(*p, rows, data);
     if (auto p = a.get("--json")) {
         nlohmann::json j{{"format", "vtloc-eval-sequence/1"}, {"data", data}, {"model", geometry_only ? "" : model_path},

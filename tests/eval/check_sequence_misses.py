@@ -2,8 +2,12 @@
 window either lands within 5 mm or misses for one of two reasons (search,
 ambiguity), so per row and per object the three shares sum to one, each in [0, 1].
 
-    check_sequence_misses.py REPORT.json
+    check_sequence_misses.py REPORT.json [WINDOWS.csv]
+
+With the report's --per-touch file, also: each object's windows average to its
+per-object ND, ND up to symmetry and miss shares, row by row.
 """
+import csv
 import json
 import sys
 
@@ -21,7 +25,33 @@ def check(where, within, search, ambiguity):
         fail(f"{where}: within 5 mm {within} + missed (search) {search} + missed (ambiguity) {ambiguity} != 1")
 
 
-def main(path):
+def check_windows(j, path):
+    groups = {}
+    with open(path) as f:
+        for w in csv.DictReader(f):
+            row = w["method"] + (" (noise)" if w["odometry_noise"] == "yes" else "") + " T" + w["T"]
+            if w["missed"] not in ("", "search", "ambiguity"):
+                fail(f"{path}: missed is {w['missed']!r}")
+            if w["missed"] == "" and float(w["error_mm"]) > 5:
+                fail(f"{path}: {w['object']} touch {w['touch']} {row}: {w['error_mm']} mm off and not missed")
+            groups.setdefault((row, w["object"]), []).append(w)
+    for row, objs in j["per_object"].items():
+        for name, o in objs.items():
+            ws = groups.pop((row, name), [])
+            if len(ws) != o["touches"]:
+                fail(f"{row} {name}: {len(ws)} window lines for {o['touches']} windows")
+            for key, col in (("nd", "nd"), ("nd_symmetry", "nd_symmetry")):
+                mean = sum(float(w[col]) for w in ws) / len(ws)
+                if abs(mean - o[key]) > 1e-3 + 1e-4 * abs(o[key]):  # the file keeps 4 decimals
+                    fail(f"{row} {name}: windows' mean {col} {mean} against the report's {o[key]}")
+            search = sum(w["missed"] == "search" for w in ws) / len(ws)
+            if abs(search - o["missed_search"]) > 1e-9:
+                fail(f"{row} {name}: windows' search share {search} against {o['missed_search']}")
+    if groups:
+        fail(f"window lines of rows or objects the report lacks: {sorted(groups)[:3]}")
+
+
+def main(path, windows=None):
     with open(path) as f:
         j = json.load(f)
     if j.get("format") != "vtloc-eval-sequence/1":
@@ -36,7 +66,9 @@ def main(path):
             n += 1
     if not j["rows"] or not n:
         fail("no rows")
-    print(f"ok: {len(j['rows'])} rows, {n} object entries")
+    if windows:
+        check_windows(j, windows)
+    print(f"ok: {len(j['rows'])} rows, {n} object entries" + (", window lines agree" if windows else ""))
 
 
 if __name__ == "__main__":
