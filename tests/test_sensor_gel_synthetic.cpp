@@ -134,15 +134,23 @@ TEST_CASE("gel shape: contacts the frame holds whole, where their depth is in th
     ShapeOptions o;
     o.mask_threshold = kRenderedMaskThreshold;
     const Errors e = read_back(balls, 6, 23, o, /*whole_only=*/true);
-    std::printf("gel shape, whole contacts (%zu touches): relief RMS / press %.3f, absolute RMS / press %.3f, unexplained "
-                "relief %.2f, mask IoU %.2f\n",
-                e.relief.size(), e.median(e.relief), e.median(e.absolute), e.median(e.unexplained), e.median(e.iou));
+    // The same frames with the solve run to convergence: the rendered frames' low mask threshold
+    // gives masks far wider than the real presses', where 50 SOR sweeps stop short of the answer
+    // (1000 sweeps: within 1 % of 500's median here).
+    ShapeOptions conv = o;
+    conv.sor_iterations = 1000;
+    const Errors c = read_back(balls, 6, 23, conv, /*whole_only=*/true);
+    std::printf("gel shape, whole contacts (%zu touches): relief RMS / press %.3f, absolute RMS / press %.3f (converged solve "
+                "%.3f), unexplained relief %.2f, mask IoU %.2f\n",
+                e.relief.size(), e.median(e.relief), e.median(e.absolute), c.median(c.absolute), e.median(e.unexplained),
+                e.median(e.iou));
     REQUIRE(e.relief.size() == 24);
     CHECK(e.median(e.relief) <= 0.20);       // measured 0.107
     CHECK(e.median(e.unexplained) < 0.75);   // measured 0.46: the relief's shape is mostly read
-    // Measured 0.30: #43's 20 % is not met on the absolute depth even here. The solve's z = 0 at
-    // the mask's edge is right (the true depth there is 0-3 % of the press); the gentle slopes'
-    // inverse reads them too shallow (docs/gel_shape.md). The guard catches a reader that loses
-    // the contact (a map of zeros scores about 0.6).
+    // #43's goal, absolute RMS inside the contact <= 20 % of the press on the median touch, holds on
+    // these contacts once the solve has converged (measured 0.152). With the default 50 sweeps it
+    // is 0.299: the depth comes out too shallow on the larger balls' wide masks (docs/gel_shape.md).
+    // That guard catches a reader that loses the contact (a map of zeros scores about 0.6).
+    CHECK(c.median(c.absolute) <= 0.20);
     CHECK(e.median(e.absolute) < 0.40);
 }
