@@ -140,7 +140,7 @@ int run_sequence(Session& s, const Args& a) {
     // The single-touch report's options have no meaning here; say so rather than ignore them.
     for (const char* o : {"--split", "--iters", "--topk", "--render", "--render-count", "--skip-bad", "--no-baselines", "--backend",
                           "--mm-per-px", "--cloud"})
-        if (a.get(o)) throw UsageError(std::string(o) + " is not for --sequence (windows end at --end-split touches; the filter runs on the GPU)");
+        if (a.get(o)) throw UsageError(std::string(o) + " is not for --sequence: it belongs to the single-touch report");
     const std::string data = a.required("--data");
     const std::vector<int> Ts = parse_ts(a.get("--sequence").value_or("1,2,3,4,6,8"));
     const bool geometry_only = a.flag("--geometry-only");
