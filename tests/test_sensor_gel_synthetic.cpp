@@ -46,14 +46,35 @@ std::vector<io::TriangleMesh> shapes_named(const std::vector<const char*>& names
     return out;
 }
 
+// One reading of a touch against the renderer's truth: draped (t) and undeformed (t0) indentation.
+void score(Errors& out, const GelShape& s, const sim::Touch& t, const sim::Touch& t0, double press_mm) {
+    double n_in = 0, mean = 0, true_mean = 0, inter = 0, uni = 0;
+    for (size_t q = 0; q < s.depth_mm.size(); ++q)
+        if (t0.indentation_mm[q] > 0)
+            mean += double(s.depth_mm[q]) - t.indentation_mm[q], true_mean += t.indentation_mm[q], n_in += 1;
+    mean /= std::max(1.0, n_in), true_mean /= std::max(1.0, n_in);
+    double se = 0, se_abs = 0, var = 0;
+    for (size_t q = 0; q < s.depth_mm.size(); ++q) {
+        const bool truth = t0.indentation_mm[q] > 0;
+        const double e = double(s.depth_mm[q]) - t.indentation_mm[q];
+        if (truth) se += (e - mean) * (e - mean), se_abs += e * e, var += std::pow(t.indentation_mm[q] - true_mean, 2);
+        inter += truth && s.mask[q], uni += truth || s.mask[q];
+    }
+    out.unexplained.push_back(var > 0 ? std::sqrt(se / var) : 1.0);
+    out.relief.push_back(std::sqrt(se / std::max(1.0, n_in)) / press_mm);
+    out.absolute.push_back(std::sqrt(se_abs / std::max(1.0, n_in)) / press_mm);
+    out.iou.push_back(uni > 0 ? inter / uni : 0);
+}
+
 // `per_shape` touches at random surface points of each shape, presses 0.3-1.5 mm (the datasets'),
 // random spins. The contact is the undeformed intersection (the renderer without its drape); the
 // error is over it, against the draped indentation, with and without the best constant offset.
-Errors read_back(const std::vector<io::TriangleMesh>& meshes, int per_shape, uint64_t seed, const ShapeOptions& o,
-                 bool whole_only = false) {
+// Each touch is rendered once and read with every entry of `readers` (one Errors each).
+std::vector<Errors> read_back(const std::vector<io::TriangleMesh>& meshes, int per_shape, uint64_t seed,
+                              const std::vector<ShapeOptions>& readers, bool whole_only = false) {
     const Calibration& c = vtloc::test::calib();
     static const GradientLut lut = build_gradient_lut(c);
-    Errors out;
+    std::vector<Errors> outs(readers.size());
     uint64_t state = seed;
     auto uniform = [&](double lo, double hi) {
         state = state * 6364136223846793005ull + 1442695040888963407ull;
@@ -76,26 +97,10 @@ Errors read_back(const std::vector<io::TriangleMesh>& meshes, int per_shape, uin
             if (!t.ok || !t0.ok) continue;
             if (whole_only && !whole(t0.indentation_mm, c.width, c.height)) continue;
             ++got;
-            const GelShape s = gel_shape(c, lut, t.image, empty, o);
-            double n_in = 0, mean = 0, true_mean = 0, inter = 0, uni = 0;
-            for (size_t q = 0; q < s.depth_mm.size(); ++q)
-                if (t0.indentation_mm[q] > 0)
-                    mean += double(s.depth_mm[q]) - t.indentation_mm[q], true_mean += t.indentation_mm[q], n_in += 1;
-            mean /= std::max(1.0, n_in), true_mean /= std::max(1.0, n_in);
-            double se = 0, se_abs = 0, var = 0;
-            for (size_t q = 0; q < s.depth_mm.size(); ++q) {
-                const bool truth = t0.indentation_mm[q] > 0;
-                const double e = double(s.depth_mm[q]) - t.indentation_mm[q];
-                if (truth) se += (e - mean) * (e - mean), se_abs += e * e, var += std::pow(t.indentation_mm[q] - true_mean, 2);
-                inter += truth && s.mask[q], uni += truth || s.mask[q];
-            }
-            out.unexplained.push_back(var > 0 ? std::sqrt(se / var) : 1.0);
-            out.relief.push_back(std::sqrt(se / std::max(1.0, n_in)) / tp.press_mm);
-            out.absolute.push_back(std::sqrt(se_abs / std::max(1.0, n_in)) / tp.press_mm);
-            out.iou.push_back(uni > 0 ? inter / uni : 0);
+            for (size_t k = 0; k < readers.size(); ++k) score(outs[k], gel_shape(c, lut, t.image, empty, readers[k]), t, t0, tp.press_mm);
         }
     }
-    return out;
+    return outs;
 }
 
 }  // namespace
@@ -106,10 +111,10 @@ TEST_CASE("gel shape: the renderer's frames read back, on touches it was not fit
     const std::vector<const char*> solids{"sphere", "cylinder", "cone", "torus", "potato", "box", "capsule"};
     ShapeOptions o;
     o.mask_threshold = kRenderedMaskThreshold;
-    const Errors now = read_back(shapes_named(solids), 6, 23, o);
     ShapeOptions tables;  // the reader as fitted on the real presses: tables only, threshold 0.7
     tables.gentle_slope = 0;
-    const Errors before = read_back(shapes_named(solids), 6, 23, tables);
+    const std::vector<Errors> read = read_back(shapes_named(solids), 6, 23, {o, tables});
+    const Errors &now = read[0], &before = read[1];
     std::printf("gel shape on rendered frames (%zu touches): relief RMS / press %.3f (tables only %.3f), unexplained relief %.2f "
                 "(%.2f), absolute RMS / press %.3f (%.3f), mask IoU %.2f (%.2f)\n",
                 now.relief.size(), now.median(now.relief), before.median(before.relief), now.median(now.unexplained),
@@ -133,13 +138,13 @@ TEST_CASE("gel shape: contacts the frame holds whole, where their depth is in th
     for (double r : {3.0, 6.0, 12.0, 24.0}) balls.push_back(sim::make_icosphere(r, 5));
     ShapeOptions o;
     o.mask_threshold = kRenderedMaskThreshold;
-    const Errors e = read_back(balls, 6, 23, o, /*whole_only=*/true);
     // The same frames with the solve run to convergence: the rendered frames' low mask threshold
     // gives masks far wider than the real presses', where 50 SOR sweeps stop short of the answer
     // (1000 sweeps: within 1 % of 500's median here).
     ShapeOptions conv = o;
     conv.sor_iterations = 1000;
-    const Errors c = read_back(balls, 6, 23, conv, /*whole_only=*/true);
+    const std::vector<Errors> read = read_back(balls, 6, 23, {o, conv}, /*whole_only=*/true);
+    const Errors &e = read[0], &c = read[1];
     std::printf("gel shape, whole contacts (%zu touches): relief RMS / press %.3f, absolute RMS / press %.3f (converged solve "
                 "%.3f), unexplained relief %.2f, mask IoU %.2f\n",
                 e.relief.size(), e.median(e.relief), e.median(e.absolute), c.median(c.absolute), e.median(e.unexplained),
