@@ -2,7 +2,7 @@
 // lap(z) = div(grad) inside the mask, z = 0 outside it in the image, the image's border free (a
 // ghost neighbour continues the gradient): red-black SOR (engine/ops/gel_shape.cpp; CPU mirror
 // engine/ops/gel_ops.h), one dispatch a stage: kClear empties the two colours' lists of the
-// pixels to update, kList zeroes z and appends each pixel inside the mask (and pinned by a
+// pixels to update, kList sets z (the start where it updates, with a start; else 0) and appends each pixel inside the mask (and pinned by a
 // neighbour) to its colour's list with its divergence, then one kHalfSweep per colour and sweep,
 // a lane per pixel of the colour's list. Within a colour the updates read only the other colour,
 // so the result is the reference's in any lane, workgroup or list order; the dispatches'
@@ -10,11 +10,13 @@
 // branch of a run-time switch under lane masks.
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int kStage = 0;
+layout(constant_id = 2) const bool kHasStart = false;  // else binding 4 is a stand-in, never read
 layout(std430, binding = 0) readonly buffer Grad_ { vec2 grad[]; };  // [H, W, 2]
 layout(std430, binding = 1) readonly buffer Mask_ { float mask[]; };  // [H, W]
 layout(std430, binding = 2) buffer Z_ { float z[]; };                 // [H, W]
 // Per colour: its list's length, then the lists (colour k from k * cap): pixel, divergence bits.
 layout(std430, binding = 3) buffer Ws_ { uint count[2]; uvec2 list[]; };
+layout(std430, binding = 4) readonly buffer Start_ { float start[]; };  // [H, W]: the first guess
 layout(push_constant) uniform Push { int H; int W; int colour; uint cap; float omega; } p;
 
 const int kClear = 0, kList = 1, kHalfSweep = 2;
@@ -42,6 +44,7 @@ void main() {
             const int r = int(q / uint(p.W)), c = int(q % uint(p.W));
             const int inside = int(r > 0) + int(r + 1 < p.H) + int(c > 0) + int(c + 1 < p.W);
             if (!(mask[q] > 0.5) || inside == 0) continue;  // inside == 0: a 1 x 1 image, nothing pins it
+            if (kHasStart) z[q] = start[q];
             const uint colour = uint((r + c) & 1), k = atomicAdd(count[colour], 1u);
             list[colour * p.cap + k] = uvec2(q, floatBitsToUint(divergence(r, c)));
         }

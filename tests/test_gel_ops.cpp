@@ -1,4 +1,5 @@
-// The gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson) against their CPU
+// The gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson and its coarse grids'
+// mean_pool2 and poisson_prolong) against their CPU
 // references (engine/ops/gel_ops.h, gel_mask.h) at odd sizes with fixed seeds, and their shape errors.
 #include <catch2/catch.hpp>
 #include <algorithm>
@@ -142,6 +143,78 @@ TEST_CASE("masked_poisson matches the CPU reference and solves a known cap", "[o
     CHECK(z[0] == 0.0f);
 }
 
+TEST_CASE("mean_pool2 and poisson_prolong match their CPU references exactly", "[op][gel][mean_pool2][poisson_prolong]") {
+    // Exact: the same operations in the same order (a block's count is a power of two).
+    for (auto [H, W] : {std::pair<int64_t, int64_t>{1, 1}, {1, 9}, {2, 2}, {7, 13}, {40, 53}, {120, 160}}) {
+        for (int64_t C : {0, 1, 2}) {  // 0: an [H, W] input
+            INFO(H << "x" << W << " channels " << C);
+            const Shape shape = C ? Shape{H, W, C} : Shape{H, W};
+            Graph g;
+            g.output(ops::mean_pool2(g, g.input("x", shape)), "y");
+            const uint32_t seed = uint32_t(H * 100 + W + C);
+            const TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, {{"x", test::random_tensor(shape, seed, -2.0f, 2.0f)}}, {0.0, 0.0});
+            CHECK(out.at("y").shape[0] == (H + 1) / 2);
+        }
+        INFO(H << "x" << W << " prolong");
+        Graph g;
+        g.output(ops::poisson_prolong(g, g.input("coarse", {(H + 1) / 2, (W + 1) / 2}), g.input("mask", {H, W})), "start");
+        HostTensor mask({H, W});
+        for (int64_t i = 0; i < H * W; ++i) mask.data[size_t(i)] = (i * 5 + 1) % 7 < 5;
+        test::run_gpu_and_compare(g, WeightStore{},
+                                  {{"coarse", test::random_tensor({(H + 1) / 2, (W + 1) / 2}, uint32_t(H + W), -3.0f, 3.0f)}, {"mask", mask}}, {0.0, 0.0});
+    }
+    // The plane of slope 1 (z = r + c on the coarse grid, in its pixels) is the plane of slope 1 on
+    // the fine grid, z = r + c - 1 (its pixels, its centres), inside the clamped border; and 0
+    // outside the mask.
+    const int h = 5, w = 6, H = 10, W = 12;
+    std::vector<float> zc(size_t(h * w)), mask(size_t(H * W), 1.0f), z0(size_t(H * W));
+    for (int r = 0; r < h; ++r)
+        for (int c = 0; c < w; ++c) zc[size_t(r * w + c)] = float(r + c);
+    mask[size_t(4 * W + 5)] = 0.0f;
+    ops::gel::poisson_prolong(zc.data(), h, w, mask.data(), H, W, z0.data());
+    for (int r = 1; r < H - 1; ++r)
+        for (int c = 1; c < W - 1; ++c) CHECK(z0[size_t(r * W + c)] == (r == 4 && c == 5 ? 0.0f : float(r + c - 1)));
+}
+
+TEST_CASE("masked_poisson from a start matches the CPU reference, and a coarse start converges sooner", "[op][gel][masked_poisson]") {
+    for (int64_t iterations : {0, 3}) {
+        for (auto [H, W] : {std::pair<int64_t, int64_t>{1, 9}, {11, 7}, {40, 53}}) {
+            INFO(H << "x" << W << ", " << iterations << " sweeps from a start");
+            Graph g;
+            g.output(ops::masked_poisson(g, g.input("gradient", {H, W, 2}), g.input("mask", {H, W}), iterations, 1.85, "solve",
+                                         g.input("start", {H, W})),
+                     "height");
+            HostTensor mask({H, W});
+            for (int64_t i = 0; i < H * W; ++i) mask.data[size_t(i)] = (i * 7 + 3) % 11 < 8;
+            TensorMap in{{"gradient", test::random_tensor({H, W, 2}, uint32_t(H * W), -1.0f, 1.0f)}, {"mask", mask},
+                         {"start", test::random_tensor({H, W}, uint32_t(H + W), -5.0f, 5.0f)}};
+            const TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, in);
+            if (iterations == 0)  // the start where the solve updates, 0 elsewhere
+                for (int64_t i = 0; i < H * W; ++i)
+                    CHECK(out.at("height").data[size_t(i)] == (mask.data[size_t(i)] > 0.5f ? in.at("start").data[size_t(i)] : 0.0f));
+        }
+    }
+    // A wide paraboloid cap (radius 45 px, depth 1 in z's pixel units): 20 sweeps from zeros stop
+    // far short; two coarse grids first (20 sweeps each) come within 2 % of the converged centre.
+    const int H = 101, W = 101;
+    std::vector<float> grad(size_t(H * W * 2)), mask(size_t(H * W)), plain(size_t(H * W)), coarse(size_t(H * W)), conv(size_t(H * W));
+    for (int r = 0; r < H; ++r)
+        for (int c = 0; c < W; ++c) {
+            const float y = float(r - 50), x = float(c - 50);
+            mask[size_t(r * W + c)] = x * x + y * y < 45.0f * 45.0f;
+            grad[size_t(r * W + c) * 2] = -2.0f * y / 2025.0f, grad[size_t(r * W + c) * 2 + 1] = -2.0f * x / 2025.0f;
+        }
+    ops::gel::masked_poisson(grad.data(), mask.data(), H, W, 2000, 1.85f, conv.data());
+    ops::gel::masked_poisson_multilevel(grad.data(), mask.data(), H, W, 0, 20, 20, 1.85f, plain.data());
+    ops::gel::masked_poisson_multilevel(grad.data(), mask.data(), H, W, 2, 20, 20, 1.85f, coarse.data());
+    const size_t centre = size_t(50 * W + 50);
+    CHECK(conv[centre] == Approx(1.0).epsilon(0.05));
+    CHECK(std::abs(coarse[centre] - conv[centre]) < 0.02f * conv[centre]);
+    CHECK(std::abs(plain[centre] - conv[centre]) > 0.2f * conv[centre]);
+    CHECK(ops::gel::poisson_levels(120, 160, 5) == 4);  // 60 x 80, 30 x 40, 15 x 20, 8 x 10; not 4 x 5
+    CHECK(ops::gel::poisson_levels(15, 200, 3) == 1);   // 8 x 100; not 4 x 50
+}
+
 TEST_CASE("gel_contact_mask matches the CPU reference exactly", "[op][gel][gel_contact_mask]") {
     struct Radii {
         int64_t close, open;
@@ -194,6 +267,11 @@ TEST_CASE("the gel's shape ops refuse bad shapes by name", "[op][gel]") {
     CHECK_THROWS_WITH(ops::gel_gradient(g, f, f, g.input("t5", {1, 8, 2}), lin, 2, 1, 1, -1), Catch::Contains("gentle must be >= 0"));
     CHECK_THROWS_WITH(ops::masked_poisson(g, g.input("gr", {4, 5, 2}), g.input("m", {5, 4}), 5, 1.5), Catch::Contains("mask must be [4, 5]"));
     CHECK_THROWS_WITH(ops::masked_poisson(g, g.input("gr2", {4, 5, 2}), g.input("m2", {4, 5}), 5, 2.5), Catch::Contains("omega"));
+    CHECK_THROWS_WITH(ops::masked_poisson(g, g.input("gr5", {4, 5, 2}), g.input("m5", {4, 5}), 5, 1.5, "", g.input("s5", {5, 4})),
+                      Catch::Contains("start must be [4, 5]"));
+    CHECK_THROWS_WITH(ops::mean_pool2(g, g.input("x1", {4})), Catch::Contains("mean_pool2: the input must be [H, W] or [H, W, C], got [4]"));
+    CHECK_THROWS_WITH(ops::poisson_prolong(g, g.input("zc", {2, 2}), g.input("m6", {5, 5})),
+                      Catch::Contains("poisson_prolong: the coarse answer must be [3, 3] for a [5, 5] mask, got [2, 2]"));
     CHECK_THROWS_WITH(ops::gel_contact_mask(g, g.input("gr3", {4, 5, 3}), 0.7, 2, 2),
                       Catch::Contains("gel_contact_mask: the gradient must be [H, W, 2], got [4, 5, 3]"));
     const int gr = g.input("gr4", {4, 5, 2});

@@ -1,4 +1,5 @@
-// Self-test cases of the gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson):
+// Self-test cases of the gel's shape ops (gel_gradient, gel_contact_mask, masked_poisson with
+// mean_pool2 and poisson_prolong):
 // grey-level frames, random tables, rings and blobs of slope over noise, a disc-shaped contact.
 #include <cmath>
 #include <random>
@@ -39,6 +40,38 @@ OpCase poisson_case(int64_t H, int64_t W, int64_t iterations, uint32_t seed) {
     return c;
 }
 
+// The solve from a coarse start: gradient and mask halved (mean_pool2), solved there, the answer
+// prolonged (poisson_prolong) as the full grid's start.
+OpCase coarse_start_case(int64_t H, int64_t W, int64_t iterations, uint32_t seed) {
+    OpCase c("masked_poisson", std::to_string(H) + "x" + std::to_string(W) + " from a coarse start (mean_pool2, poisson_prolong), " +
+                                   std::to_string(iterations) + " sweeps a grid");
+    HostTensor mask({H, W});
+    for (int64_t r = 0; r < H; ++r)
+        for (int64_t col = 0; col < W; ++col)
+            mask.data[size_t(r * W + col)] = std::hypot(double(r) - 0.5 * H, double(col) - 0.4 * W) < 0.4 * double(std::min(H, W));
+    const int grad = c.input("gradient", random_tensor({H, W, 2}, seed, -1.0f, 1.0f)), m = c.input("mask", mask);
+    const int grad2 = ops::mean_pool2(c.g, grad), m2 = ops::mean_pool2(c.g, m);
+    const int coarse = ops::masked_poisson(c.g, grad2, m2, iterations, 1.85);
+    c.output(ops::masked_poisson(c.g, grad, m, iterations, 1.85, "", ops::poisson_prolong(c.g, coarse, m)), "height");
+    return c;
+}
+
+OpCase mean_pool2_case(int64_t H, int64_t W, int64_t C, uint32_t seed) {
+    OpCase c("mean_pool2", std::to_string(H) + "x" + std::to_string(W) + "x" + std::to_string(C));
+    c.output(ops::mean_pool2(c.g, c.input("x", random_tensor({H, W, C}, seed, -2.0f, 2.0f))), "y");
+    c.tol = {0.0, 0.0};  // the same sums in the same order, over a power of two
+    return c;
+}
+
+OpCase prolong_case(int64_t H, int64_t W, uint32_t seed) {
+    OpCase c("poisson_prolong", std::to_string(H) + "x" + std::to_string(W));
+    HostTensor mask({H, W});
+    for (int64_t i = 0; i < H * W; ++i) mask.data[size_t(i)] = (i * 5 + 1) % 7 < 5;
+    c.output(ops::poisson_prolong(c.g, c.input("coarse", random_tensor({(H + 1) / 2, (W + 1) / 2}, seed, -3.0f, 3.0f)), c.input("mask", mask)),
+             "start");
+    return c;
+}
+
 // Rings and blobs of slope over noise near the threshold: holes, several pieces, a fringe.
 OpCase mask_case(int64_t H, int64_t W, int64_t close_radius, int64_t open_radius, uint32_t seed) {
     OpCase c("gel_contact_mask", std::to_string(H) + "x" + std::to_string(W) + ", close " + std::to_string(close_radius) + ", open " +
@@ -60,7 +93,8 @@ OpCase mask_case(int64_t H, int64_t W, int64_t close_radius, int64_t open_radius
 
 std::vector<OpCase> gel_cases(const rt::DeviceInfo&) {
     return {gradient_case(13, 17, 8, 2, 3, 11), gradient_case(120, 160, 16, 3, 4, 12), mask_case(37, 29, 1, 3, 14),
-            mask_case(120, 160, 2, 2, 15), poisson_case(23, 31, 20, 13)};
+            mask_case(120, 160, 2, 2, 15), poisson_case(23, 31, 20, 13), coarse_start_case(37, 45, 10, 16),
+            mean_pool2_case(37, 45, 2, 17), prolong_case(37, 45, 18)};
 }
 
 }  // namespace vtloc::check

@@ -149,9 +149,17 @@ int gel_gradient(Graph& g, int frame, int empty, int tables, int linear, int64_t
                   {{"n", d(n)}, {"tiles_y", d(tiles_y)}, {"tiles_x", d(tiles_x)}, {"gentle", gentle}}, name);
 }
 
-int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name) {
-    return g.add1("masked_poisson", {gradient, mask}, {{"iterations", d(iterations)}, {"omega", omega}},
+int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name, int start) {
+    std::vector<int> in{gradient, mask};
+    if (start >= 0) in.push_back(start);
+    return g.add1("masked_poisson", in, {{"iterations", d(iterations)}, {"omega", omega}},
                   name);  // output 1, the workspace, stays internal
+}
+
+int mean_pool2(Graph& g, int x, const std::string& name) { return g.add1("mean_pool2", {x}, {}, name); }
+
+int poisson_prolong(Graph& g, int coarse, int mask, const std::string& name) {
+    return g.add1("poisson_prolong", {coarse, mask}, {}, name);
 }
 
 int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius, const std::string& name) {

@@ -111,7 +111,10 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
 // gentle > 0: where the tables' slope is at most this, linear [H, W, 6]'s inverse instead.
 int gel_gradient(Graph& g, int frame, int empty, int tables, int linear, int64_t n, int64_t tiles_y, int64_t tiles_x,
                  double gentle, const std::string& name = "");
-int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name = "");
+int masked_poisson(Graph& g, int gradient, int mask, int64_t iterations, double omega, const std::string& name = "",
+                   int start = -1);  // start: a first guess [H, W] (poisson_prolong's), -1: zeros
+int mean_pool2(Graph& g, int x, const std::string& name = "");
+int poisson_prolong(Graph& g, int coarse, int mask, const std::string& name = "");
 // The contact mask [H, W] (exact 0/1) from that gradient (engine/ops/gel_mask.h): the 3x3 mean slope
 // above threshold, closed, holes filled, opened (disc radii, 0: none), the largest piece.
 int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius,

@@ -5,6 +5,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdint>
+#include <vector>
 
 namespace vtloc::ops::gel {
 
@@ -80,9 +81,12 @@ inline float divergence(const float* grad, int H, int W, int r, int c) {
 // zero: a neighbour beyond it is a ghost continuing the pixel's gradient (z -/+ g), since a
 // contact larger than the window (a large object pressed gently) goes on beyond the frame.
 // Within a colour the updates are independent.
-inline void masked_poisson(const float* grad, const float* mask, int H, int W, int iterations, float omega, float* z) {
+// start: the first guess ([H, W]; nullptr: zeros), taken where the solve updates, 0 elsewhere.
+inline void masked_poisson(const float* grad, const float* mask, int H, int W, int iterations, float omega, float* z,
+                           const float* start = nullptr) {
     const uint64_t HW = uint64_t(H) * uint64_t(W);
-    std::fill(z, z + HW, 0.0f);
+    const bool pinned = H > 1 || W > 1;
+    for (uint64_t p = 0; p < HW; ++p) z[p] = start && pinned && mask[p] > 0.5f ? start[p] : 0.0f;
     for (int it = 0; it < iterations; ++it)
         for (int colour = 0; colour < 2; ++colour)
             for (int r = 0; r < H; ++r)
@@ -96,6 +100,72 @@ inline void masked_poisson(const float* grad, const float* mask, int H, int W, i
                                      ((c > 0 ? z[p - 1] : -gc) + (c + 1 < W ? z[p + 1] : gc));
                     z[p] = (1.0f - omega) * z[p] + omega * ((nb - divergence(grad, H, W, r, c)) / float(inside));
                 }
+}
+
+// Op mean_pool2: each output pixel the mean of its block of up to 2 x 2 input pixels (an odd last
+// row or column: the pixels it has), per channel; x: [H, W, C] -> [ceil(H/2), ceil(W/2), C]. The
+// solve's coarse grids: the gradient keeps its value (a slope per pixel becomes one per two
+// pixels, see poisson_prolong), the mask its > 0.5 rule (3 of 4 pixels in the contact).
+inline void mean_pool2(const float* x, int H, int W, int C, float* out) {
+    const int h = (H + 1) / 2, w = (W + 1) / 2;
+    for (int r = 0; r < h; ++r)
+        for (int c = 0; c < w; ++c)
+            for (int k = 0; k < C; ++k) {
+                auto at = [&](int rr, int cc) { return x[(uint64_t(rr) * uint64_t(W) + uint64_t(cc)) * uint64_t(C) + uint64_t(k)]; };
+                const bool down = 2 * r + 1 < H, right = 2 * c + 1 < W;
+                const float top = right ? at(2 * r, 2 * c) + at(2 * r, 2 * c + 1) : at(2 * r, 2 * c);
+                const float bottom = !down ? 0.0f : right ? at(2 * r + 1, 2 * c) + at(2 * r + 1, 2 * c + 1) : at(2 * r + 1, 2 * c);
+                out[(uint64_t(r) * uint64_t(w) + uint64_t(c)) * uint64_t(C) + uint64_t(k)] =
+                    (top + bottom) / float((1 + int(down)) * (1 + int(right)));
+            }
+}
+
+// Op poisson_prolong: a coarse solve's answer zc [h, w] as the start of the solve on the grid it
+// halved ([H, W], h = ceil(H/2), w = ceil(W/2)): bilinear between the coarse pixels' centres
+// (clamped at the edges), times 2 (a coarse pixel is two of these, and z is in pixels), 0 where
+// mask <= 0.5.
+inline float prolong_at(const float* zc, int h, int w, int r, int c) {
+    const float fy = std::clamp(0.5f * float(r) - 0.25f, 0.0f, float(h - 1));
+    const float fx = std::clamp(0.5f * float(c) - 0.25f, 0.0f, float(w - 1));
+    const int a = h > 1 ? std::min(int(fy), h - 2) : 0, b = w > 1 ? std::min(int(fx), w - 2) : 0;
+    const int a1 = std::min(a + 1, h - 1), b1 = std::min(b + 1, w - 1);
+    const float wy = fy - float(a), wx = fx - float(b);
+    auto z = [&](int rr, int cc) { return zc[uint64_t(rr) * uint64_t(w) + uint64_t(cc)]; };
+    const float top = (1.0f - wx) * z(a, b) + wx * z(a, b1), bottom = (1.0f - wx) * z(a1, b) + wx * z(a1, b1);
+    return 2.0f * ((1.0f - wy) * top + wy * bottom);
+}
+
+inline void poisson_prolong(const float* zc, int h, int w, const float* mask, int H, int W, float* z0) {
+    for (int r = 0; r < H; ++r)
+        for (int c = 0; c < W; ++c) {
+            const uint64_t p = uint64_t(r) * uint64_t(W) + uint64_t(c);
+            z0[p] = mask[p] > 0.5f ? prolong_at(zc, h, w, r, c) : 0.0f;
+        }
+}
+
+// How many times the solve halves an H x W grid for its coarse start: at most `levels`, while the
+// coarser grid keeps both sides >= 8 pixels (below that a coarse answer says little).
+inline int poisson_levels(int H, int W, int levels) {
+    int n = 0;
+    while (n < levels && (H + 1) / 2 >= 8 && (W + 1) / 2 >= 8) H = (H + 1) / 2, W = (W + 1) / 2, ++n;
+    return n;
+}
+
+// The solve from a coarse start (the graph engine/sensor/gel_shape_gpu builds, op for op): the
+// gradient and mask halved poisson_levels(H, W, levels) times, the coarsest solved from zeros
+// with coarse_iterations sweeps, each finer grid started from the coarser answer (prolonged),
+// with coarse_iterations sweeps, and the full grid with `iterations`. levels 0: the plain solve.
+inline void masked_poisson_multilevel(const float* grad, const float* mask, int H, int W, int levels, int iterations,
+                                      int coarse_iterations, float omega, float* z) {
+    const int n = poisson_levels(H, W, levels);
+    if (n == 0) return masked_poisson(grad, mask, H, W, iterations, omega, z);
+    const int h = (H + 1) / 2, w = (W + 1) / 2;
+    std::vector<float> g2(size_t(h) * size_t(w) * 2), m2(size_t(h) * size_t(w)), z2(m2.size()), start(size_t(H) * size_t(W));
+    mean_pool2(grad, H, W, 2, g2.data());
+    mean_pool2(mask, H, W, 1, m2.data());
+    masked_poisson_multilevel(g2.data(), m2.data(), h, w, n - 1, coarse_iterations, coarse_iterations, omega, z2.data());
+    poisson_prolong(z2.data(), h, w, mask, H, W, start.data());
+    masked_poisson(grad, mask, H, W, iterations, omega, z, start.data());
 }
 
 }  // namespace vtloc::ops::gel

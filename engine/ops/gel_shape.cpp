@@ -2,9 +2,10 @@
 // gel_gradient: frame [H, W, 3], empty [H, W, 3] (grey levels), tables [T, n^3, 2], linear
 //   [H, W, 6] -> the indentation's gradient [H, W, 2] (params n, tiles_y, tiles_x, gentle; T =
 //   tiles_y * tiles_x): the tables' answer, or the linearised inverse where it is gentle;
-// masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact) -> the height [H, W] and a
+// masked_poisson: gradient [H, W, 2], mask [H, W] (> 0.5: contact)[, start [H, W]] -> the height [H, W] and a
 //   workspace (i32, unspecified: the pixels each half-sweep updates) (params iterations, omega):
-//   red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside it, the image's border free.
+//   red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside it, the image's border free,
+//   from the start where given (a coarser solve's answer, op poisson_prolong), else from zeros.
 // CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
 // shaders/masked_poisson.comp: two set-up dispatches (the lists' lengths cleared; then z zeroed
 // and per colour a list of the pixels to update with their divergence), then one dispatch per half-sweep over that colour's list, in
@@ -83,7 +84,7 @@ int64_t poisson_list_cap(int64_t H, int64_t W) {
 }
 
 std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const Params& p) {
-    expect_input_count(in, 2, 2);
+    expect_input_count(in, 2, 3);
     expect_f32(in);
     int_param(p, "iterations", 0, 10000);  // two dispatches a sweep on the GPU
     const double w = p.get("omega", -1);
@@ -91,13 +92,16 @@ std::vector<TensorDesc> poisson_infer(const std::vector<TensorDesc>& in, const P
     const Shape& g = in[0].shape;
     if (g.size() != 3 || g[2] != 2 || g[0] < 1 || g[1] < 1) throw Error("masked_poisson: the gradient must be [H, W, 2], got " + shape_str(g));
     if (in[1].shape != Shape{g[0], g[1]}) throw Error("masked_poisson: the mask must be " + shape_str({g[0], g[1]}) + ", got " + shape_str(in[1].shape));
+    if (in.size() == 3 && in[2].shape != Shape{g[0], g[1]})
+        throw Error("masked_poisson: the start must be " + shape_str({g[0], g[1]}) + ", got " + shape_str(in[2].shape));
     to_u32(g[0] * g[1] * 2, "gradient size");
     return {TensorDesc{{g[0], g[1]}}, TensorDesc{{2 + 4 * poisson_list_cap(g[0], g[1])}, ElemType::I32}};
 }
 
 void poisson_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*>& out, const Params& p) {
     gel::masked_poisson(in[0]->data.data(), in[1]->data.data(), int(in[0]->shape[0]), int(in[0]->shape[1]),
-                        int(p.get("iterations", 0)), float(p.get("omega", 1)), out[0]->data.data());
+                        int(p.get("iterations", 0)), float(p.get("omega", 1)), out[0]->data.data(),
+                        in.size() == 3 ? in[2]->data.data() : nullptr);
     std::fill(out[1]->data.begin(), out[1]->data.end(), 0.0f);
 }
 
@@ -114,15 +118,21 @@ void poisson_gpu(const GpuOpArgs& a) {
     check_loop_budget(d, std::max((HW + lanes - 1) / lanes, (cap + sweep_lanes - 1) / sweep_lanes), "masked_poisson");
     struct { int32_t H, W, colour; uint32_t cap; float omega; } push{H, W, 0, uint32_t(cap), float(a.params.get("omega", 1))};
     const rt::BufferView grad = a.in[0].view, mask = a.in[1].view, z = a.out[0].view, ws = a.out[1].view;
-    auto stage = [&](uint32_t s) -> const rt::Pipeline& { return pipeline(a.ctx, "masked_poisson", 4, sizeof(push), {local, s}); };
-    a.seq.dispatch(stage(0), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::Write}},
+    // Without a start, binding 4 is the mask (same size, never read: kHasStart is off).
+    const bool has_start = a.in.size() == 3;
+    const rt::BufferView start = has_start ? a.in[2].view : mask;
+    auto stage = [&](uint32_t s) -> const rt::Pipeline& {
+        return pipeline(a.ctx, "masked_poisson", 5, sizeof(push), {local, s, uint32_t(has_start)});
+    };
+    const rt::Binding read_start{start, rt::Access::Read};
+    a.seq.dispatch(stage(0), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::Write}, read_start},
                    &push, sizeof(push), 1);
-    a.seq.dispatch(stage(1), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::ReadWrite}},
+    a.seq.dispatch(stage(1), {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::Write}, {ws, rt::Access::ReadWrite}, read_start},
                    &push, sizeof(push), groups);
     const rt::Pipeline& sweep = stage(2);
     for (int32_t h = 0; h < 2 * iterations; ++h) {
         push.colour = h & 1;
-        a.seq.dispatch(sweep, {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::ReadWrite}, {ws, rt::Access::Read}},
+        a.seq.dispatch(sweep, {{grad, rt::Access::Read}, {mask, rt::Access::Read}, {z, rt::Access::ReadWrite}, {ws, rt::Access::Read}, read_start},
                        &push, sizeof(push), sweep_groups);
     }
 }

@@ -44,6 +44,8 @@ extern const OpDef op_pose_evidence;     // pose_evidence.cpp (multi-touch filte
 extern const OpDef op_log_softmax;       // log_softmax.cpp
 extern const OpDef op_gel_gradient;      // gel_shape.cpp (the gel's shape from a frame)
 extern const OpDef op_masked_poisson;    // gel_shape.cpp
+extern const OpDef op_mean_pool2;        // mean_pool2.cpp
+extern const OpDef op_poisson_prolong;   // poisson_prolong.cpp
 extern const OpDef op_gel_contact_mask;  // gel_contact_mask.cpp
 extern const OpDef op_codebook_render;   // codebook.cpp (render-and-compare)
 extern const OpDef op_codebook_window_min;  // codebook.cpp

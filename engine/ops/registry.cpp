@@ -36,6 +36,8 @@ const OpDef* const kOps[] = {
     &ops::op_expected_distance,
     &ops::op_gel_gradient,
     &ops::op_masked_poisson,
+    &ops::op_mean_pool2,
+    &ops::op_poisson_prolong,
     &ops::op_gel_contact_mask,
     &ops::op_codebook_render,
     &ops::op_codebook_window_min,

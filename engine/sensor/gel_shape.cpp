@@ -118,7 +118,8 @@ GelShape gel_shape(const Calibration& c, const GradientLut& lut, const std::vect
     s.mask = contact_mask(grad, H, W, o);
     // The height inside the mask, as op masked_poisson computes it.
     std::vector<float> mask(s.mask.begin(), s.mask.end()), z(HW);
-    ops::gel::masked_poisson(grad.data(), mask.data(), H, W, o.sor_iterations, float(o.sor_omega), z.data());
+    ops::gel::masked_poisson_multilevel(grad.data(), mask.data(), H, W, o.sor_levels, o.sor_iterations, o.sor_coarse_iterations,
+                                        float(o.sor_omega), z.data());
     s.depth_mm.resize(HW);
     for (size_t p = 0; p < HW; ++p) s.depth_mm[p] = s.mask[p] ? float(double(z[p]) * c.mm_per_px) : 0.0f;
     return s;

@@ -39,7 +39,11 @@ struct ShapeOptions {
     // gives the gradient; 0: the tables everywhere. Fitted on renders of the procedural solids.
     double gentle_slope = 0.35;
     int open_radius = 2, close_radius = 2;  // the mask's opening and closing (discs, pixels)
-    int sor_iterations = 50;      // red-black SOR sweeps of the Poisson solve
+    // The Poisson solve (ops::gel::masked_poisson_multilevel): red-black SOR, sor_iterations
+    // sweeps on the full grid, from a coarse start where sor_levels > 0: the grid halved up to
+    // sor_levels times, sor_coarse_iterations sweeps on each coarse grid (0: from zeros).
+    int sor_iterations = 50;
+    int sor_levels = 0, sor_coarse_iterations = 0;
     double sor_omega = 1.85;
 };
 

@@ -3,6 +3,7 @@
 #include "base/error.h"
 #include "engine/executor.h"
 #include "engine/ops/build.h"
+#include "engine/ops/gel_ops.h"
 
 namespace vtloc::sensor {
 
@@ -10,6 +11,26 @@ struct GelShapeGpu::Impl {
     WeightStore weights;
     std::unique_ptr<GpuExecutor> exec;
 };
+
+// The height from the gradient and mask: ops::gel::masked_poisson_multilevel's steps as nodes
+// (gel.height.1, .2, ...: the coarse grids, coarsest solved first).
+int GelShapeGpu::solve(Graph& g, int grad, int mask, int H, int W) const {
+    const int levels = ops::gel::poisson_levels(H, W, opt_.sor_levels);
+    std::vector<int> grads{grad}, masks{mask};
+    for (int l = 1; l <= levels; ++l) {
+        const std::string at = "gel.height." + std::to_string(l);
+        grads.push_back(ops::mean_pool2(g, grads.back(), at + ".gradient"));
+        masks.push_back(ops::mean_pool2(g, masks.back(), at + ".mask"));
+    }
+    int z = -1;
+    for (int l = levels; l >= 0; --l) {
+        const std::string at = l ? "gel.height." + std::to_string(l) : "gel.height";
+        const int start = z < 0 ? -1 : ops::poisson_prolong(g, z, masks[size_t(l)], at + ".start");
+        z = ops::masked_poisson(g, grads[size_t(l)], masks[size_t(l)], l ? opt_.sor_coarse_iterations : opt_.sor_iterations,
+                                opt_.sor_omega, at, start);
+    }
+    return z;
+}
 
 GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options, bool profile)
     : calib_(std::move(calib)), opt_(options), impl_(std::make_unique<Impl>()) {
@@ -25,7 +46,7 @@ GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, S
     const int mask = ops::gel_contact_mask(g, grad, opt_.mask_threshold, opt_.close_radius, opt_.open_radius, "gel.mask");
     g.output(grad, "gradient");
     g.output(mask, "mask");
-    g.output(ops::masked_poisson(g, grad, mask, opt_.sor_iterations, opt_.sor_omega, "gel.height"), "height");
+    g.output(solve(g, grad, mask, int(H), int(W)), "height");
     impl_->exec = std::make_unique<GpuExecutor>(ctx, g, impl_->weights, profile);
 }
 

@@ -12,6 +12,7 @@
 #include "engine/sensor/gel_shape.h"
 
 namespace vtloc {
+class Graph;
 namespace rt {
 class Context;
 }
@@ -32,6 +33,7 @@ public:
     std::vector<std::pair<std::string, double>> node_times() const;
 
 private:
+    int solve(Graph& g, int grad, int mask, int H, int W) const;
     struct Impl;
     Calibration calib_;
     ShapeOptions opt_;
