@@ -11,10 +11,65 @@
 #include "engine/io/object.h"
 #include "engine/sensor/gel_shape.h"
 #include "engine/sensor/gel_shape_gpu.h"
+#include "engine/sim/primitives.h"
+#include "engine/sim/touch_renderer.h"
 #include "engine/track/codebook.h"
 #include "engine/track/surface.h"
 
 namespace vtloc::bench {
+
+namespace {
+
+// One frame read with the options `now` (the real frames' defaults: 50 sweeps from zeros; the
+// rendered frames': a coarse start) and with 50 sweeps from zeros: the GPU's ms a frame (wall
+// clock) and the solve's own GPU time (its nodes' timestamps, a profiled twin: steadier than the
+// wall clock on a shared host).
+nlohmann::json compare_solves(rt::Context& ctx, const sensor::Calibration& c, const sensor::GradientLut& lut,
+                              const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, const sensor::ShapeOptions& now,
+                              int reps) {
+    sensor::ShapeOptions plain = now;
+    plain.sor_levels = 0, plain.sor_iterations = 50;
+    nlohmann::json j;
+    for (const auto& [name, o] : {std::pair<const char*, sensor::ShapeOptions>{"default", now}, {"plain_50", plain}}) {
+        sensor::GelShapeGpu gpu(ctx, c, lut, o);
+        sensor::GelShape shape = gpu.run(frame, empty);
+        std::vector<double> ms;
+        for (int r = 0; r < reps; ++r) {
+            const auto t0 = std::chrono::steady_clock::now();
+            shape = gpu.run(frame, empty);
+            ms.push_back(ms_since(t0));
+        }
+        size_t in = 0;
+        for (uint8_t m : shape.mask) in += m;
+        sensor::GelShapeGpu prof(ctx, c, lut, o, true);
+        std::vector<double> solve;
+        for (int r = 0; r < reps; ++r) {
+            prof.run(frame, empty);
+            double sum = 0;
+            for (const auto& [label, node_ms] : prof.node_times())
+                if (label.rfind("gel.height", 0) == 0) sum += node_ms;
+            solve.push_back(sum);
+        }
+        j[name] = {{"shape_ms", stats_json(ms)}, {"solve_gpu_ms", stats_json(solve)}, {"mask_pixels", in}, {"levels", o.sor_levels},
+                   {"sweeps", o.sor_iterations}, {"coarse_sweeps", o.sor_coarse_iterations}};
+    }
+    return j;
+}
+
+// A frame `vtloc synth`'s renderer draws (a 24 mm ball pressed 1 mm), read as vtloc eval reads
+// such frames: under their mask threshold nearly the whole frame is contact.
+nlohmann::json measure_rendered(rt::Context& ctx, const sensor::Calibration& c, const sensor::GradientLut& lut, int reps) {
+    sim::TouchRenderer renderer(c, sim::make_icosphere(24, 5));
+    sim::TouchParams tp;
+    tp.press_mm = 1.0;
+    const sim::Appearance look;
+    const sim::Touch t = renderer.render({0, 0, 24}, {0, 0, 1}, tp, look, 7);
+    nlohmann::json j = compare_solves(ctx, c, lut, t.image, renderer.background_frame(look), sensor::rendered_frame_options(), reps);
+    j["frame"] = "a 24 mm ball pressed 1 mm, rendered";
+    return j;
+}
+
+}  // namespace
 
 nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
     const sensor::Calibration c = sensor::load_calibration(sensor::default_calibration_path());
@@ -42,7 +97,7 @@ nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
         }
         for (auto& [label, v] : nodes) j["shape_nodes_ms"][label] = stats_json(v);
     }
-    sensor::GelShapeGpu gpu(*ctx, c, std::move(lut));
+    sensor::GelShapeGpu gpu(*ctx, c, lut);
     gpu.run(frame, c.press_f0);  // pipelines compiled, arena made
     std::vector<double> ms;
     for (int r = 0; r < o.reps; ++r) {
@@ -51,6 +106,8 @@ nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o) {
         ms.push_back(ms_since(t0));
     }
     j["shape_ms"] = stats_json(ms);
+    j["solves"] = compare_solves(*ctx, c, lut, frame, c.press_f0, {}, o.reps);
+    j["rendered"] = measure_rendered(*ctx, c, lut, o.reps);
     // Render-and-compare on the object as api::Tracker builds it from a mesh.
     io::TriangleMesh mesh = io::load_mesh(o.object);
     io::orient_outward(mesh);

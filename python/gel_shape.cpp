@@ -22,14 +22,17 @@ void bind_gel_shape(py::module_& m) {
                                     "The gel's shape from a GelSight frame (SPEC section 9) on the GPU: read(frame, empty=None)\n"
                                     "-> dict of depth_mm, grad_row, grad_col (H x W float32), mask (H x W uint8), mm_per_px.\n"
                                     "Frames: H x W x 3 uint8 RGB or a path; larger frames of the calibration's aspect are resampled.")
-        .def(py::init([](api::Context& ctx, const std::string& calibration, double mask_threshold, int iterations, bool match_lighting) {
+        .def(py::init([](api::Context& ctx, const std::string& calibration, double mask_threshold, int iterations, bool match_lighting,
+                         int levels, int coarse_iterations) {
                  api::GelShapeOptions o;
                  o.calibration = calibration, o.mask_threshold = mask_threshold, o.iterations = iterations;
+                 o.levels = levels, o.coarse_iterations = coarse_iterations;
                  o.match_lighting = match_lighting;
                  return api::GelShapeReader(ctx, o);
              }),
-             py::arg("context"), py::arg("calibration") = "", py::arg("mask_threshold") = 0.7, py::arg("iterations") = 50,
-             py::arg("match_lighting") = true, py::keep_alive<1, 2>())
+             py::arg("context"), py::arg("calibration") = "", py::arg("mask_threshold") = 0.7, py::arg("iterations") = api::GelShapeOptions{}.iterations,
+             py::arg("match_lighting") = true, py::arg("levels") = api::GelShapeOptions{}.levels,
+             py::arg("coarse_iterations") = api::GelShapeOptions{}.coarse_iterations, py::keep_alive<1, 2>())
         .def(
             "read",
             [](api::GelShapeReader& r, const py::object& frame, const py::object& empty) {

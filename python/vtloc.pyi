@@ -115,7 +115,8 @@ class Tracker:
 class GelShapeReader:
     """The gel's shape from a GelSight frame (SPEC section 9), on the GPU."""
     def __init__(self, context: Context, calibration: str = "", mask_threshold: float = 0.7,
-                 iterations: int = 50, match_lighting: bool = True) -> None: ...
+                 iterations: int = 50, match_lighting: bool = True, levels: int = 0,
+                 coarse_iterations: int = 30) -> None: ...  # levels > 0: the solve from a coarse start
     def read(self, frame: Union[str, npt.NDArray[np.uint8]],
              empty: Optional[Union[str, npt.NDArray[np.uint8]]] = None) -> Dict[str, Any]: ...
     # depth_mm, grad_row, grad_col: H x W float32; mask: H x W uint8; mm_per_px: float

@@ -67,7 +67,7 @@ TEST_CASE("gel shape: the contact mask equals OpenCV's on the 49 real presses", 
     const int H = c.height, W = c.width;
     const size_t HW = size_t(H) * size_t(W);
     ShapeOptions no_solve;  // only the gradient is wanted here
-    no_solve.sor_iterations = 0;
+    no_solve.sor_iterations = 0, no_solve.sor_levels = 0;
     size_t contact = 0;
     for (int i = 0; i < c.n_press; ++i) {
         INFO("press " << i);

@@ -47,11 +47,15 @@ GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
     guarded([&] {
         if (!(o.mask_threshold > 0) || o.iterations < 1 || o.iterations > 10000)
             throw Error("gel shape: mask_threshold must be > 0 and iterations 1..10000");
+        if (o.levels < 0 || o.levels > 8 || (o.levels > 0 && (o.coarse_iterations < 1 || o.coarse_iterations > 10000)))
+            throw Error("gel shape: levels must be 0..8 and, with levels, coarse_iterations 1..10000");
         sensor::Calibration c = sensor::load_calibration(o.calibration.empty() ? sensor::default_calibration_path() : o.calibration);
         sensor::GradientLut lut = sensor::build_gradient_lut(c);
         static_assert(sensor::kRenderedMaskThreshold == 0.05, "GelShapeOptions::rendered_frames() repeats it");
+        // (and the rendered frames' solve, sensor::rendered_frame_options(): tests/test_api_gel_shape.cpp checks they agree)
         sensor::ShapeOptions so;
         so.mask_threshold = o.mask_threshold, so.sor_iterations = o.iterations;
+        so.sor_levels = o.levels, so.sor_coarse_iterations = o.coarse_iterations;
         impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so, o.match_lighting);
     });
 }

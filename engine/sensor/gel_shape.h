@@ -41,11 +41,22 @@ struct ShapeOptions {
     int open_radius = 2, close_radius = 2;  // the mask's opening and closing (discs, pixels)
     // The Poisson solve (ops::gel::masked_poisson_multilevel): red-black SOR, sor_iterations
     // sweeps on the full grid, from a coarse start where sor_levels > 0: the grid halved up to
-    // sor_levels times, sor_coarse_iterations sweeps on each coarse grid (0: from zeros).
+    // sor_levels times, sor_coarse_iterations sweeps on each coarse grid (0: from zeros). From
+    // zeros, 50 sweeps converge on a real press's small mask, not on a rendered frame's wide one.
     int sor_iterations = 50;
     int sor_levels = 0, sor_coarse_iterations = 0;
     double sor_omega = 1.85;
 };
+
+// For frames rendered by vtloc synth's renderer: kRenderedMaskThreshold, and the solve from a
+// coarse start (2 halvings, 30 sweeps on each, 10 on the frame's grid), as 50 sweeps from zeros
+// stop well short on their wide masks (docs/gel_shape.md, "A coarse start").
+inline ShapeOptions rendered_frame_options() {
+    ShapeOptions o;
+    o.mask_threshold = kRenderedMaskThreshold;
+    o.sor_levels = 2, o.sor_coarse_iterations = 30, o.sor_iterations = 10;
+    return o;
+}
 
 struct GelShape {
     int height = 0, width = 0;

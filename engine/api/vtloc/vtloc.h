@@ -493,15 +493,23 @@ void render_tracker_png(const std::string& path, const Tracker& tracker, const s
 struct GelShapeOptions {
     std::string calibration;       // a Taxim-style calibration file; empty: the shipped GelSight one
     double mask_threshold = 0.7;   // the contact: 3x3 mean slope above this (fitted on the real presses)
-    int iterations = 50;           // red-black SOR sweeps of the height
+    // The height's solve: red-black SOR sweeps on the frame's grid (`iterations`), from a coarse
+    // start where levels > 0: the grid halved up to `levels` times, `coarse_iterations` sweeps
+    // on each. From zeros (levels 0), 50 sweeps converge on a real press's small contact but not
+    // on a wide one, which then needs the coarse start (rendered_frames() takes it).
+    int iterations = 50;
+    int levels = 0;
+    int coarse_iterations = 30;
     // Undo a gain and offset per channel between the frame and the empty frame (LED drift,
     // exposure; our renderer's training frames vary both) before the calibration reads shading.
     bool match_lighting = true;
     // For frames rendered by `vtloc synth` (gentle presses of large objects, no optical halo): a
-    // mask threshold of 0.05, chosen on renders of the procedural solids (docs/gel_shape.md).
+    // mask threshold of 0.05, chosen on renders of the procedural solids, and the solve from a
+    // coarse start for their wide contacts (docs/gel_shape.md).
     static GelShapeOptions rendered_frames() {
         GelShapeOptions o;
         o.mask_threshold = 0.05;
+        o.levels = 2, o.coarse_iterations = 30, o.iterations = 10;
         return o;
     }
 };
