@@ -7,8 +7,8 @@
 //   red-black SOR of lap(z) = div(g) inside the mask, z = 0 outside it, the image's border free,
 //   from the start where given (a coarser solve's answer, op poisson_prolong), else from zeros.
 // CPU references: engine/ops/gel_ops.h, operation for operation. -> shaders/gel_gradient.comp,
-// shaders/masked_poisson.comp: two set-up dispatches (the lists' lengths cleared; then z zeroed
-// and per colour a list of the pixels to update with their divergence), then one dispatch per half-sweep over that colour's list, in
+// shaders/masked_poisson.comp: two set-up dispatches (the lists' lengths cleared; then z set, to
+// the start or 0, and per colour a list of the pixels to update with their divergence), then one dispatch per half-sweep over that colour's list, in
 // all workgroups (the sequence's barrier between dependent dispatches orders the colours; one
 // workgroup with a barrier between colours, as before, ran serially on a CPU device, which gives
 // a workgroup one thread: 76 of lavapipe's 79 ms for a 120 x 160 frame; docs/gel_shape.md).
