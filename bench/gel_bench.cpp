@@ -20,17 +20,18 @@ namespace vtloc::bench {
 
 namespace {
 
-// One frame read with the options `now` (the real frames' defaults: 50 sweeps from zeros; the
-// rendered frames': a coarse start) and with 50 sweeps from zeros: the GPU's ms a frame (wall
-// clock) and the solve's own GPU time (its nodes' timestamps, a profiled twin: steadier than the
-// wall clock on a shared host).
+// One frame read with both solves, 50 sweeps from zeros (the real frames' default) and the coarse
+// start (the rendered frames'), under the mask threshold its reader uses; `uses` names its
+// reader's solve. Per solve: the GPU's ms a frame (wall clock) and the solve's own GPU time (its
+// nodes' timestamps, a profiled twin: steadier than the wall clock on a shared host).
 nlohmann::json compare_solves(rt::Context& ctx, const sensor::Calibration& c, const sensor::GradientLut& lut,
-                              const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, const sensor::ShapeOptions& now,
+                              const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty, const sensor::ShapeOptions& reader,
                               int reps) {
-    sensor::ShapeOptions plain = now;
-    plain.sor_levels = 0, plain.sor_iterations = 50;
-    nlohmann::json j;
-    for (const auto& [name, o] : {std::pair<const char*, sensor::ShapeOptions>{"default", now}, {"plain_50", plain}}) {
+    sensor::ShapeOptions zeros = reader, coarse = sensor::rendered_frame_options();
+    zeros.sor_levels = 0, zeros.sor_iterations = 50;
+    coarse.mask_threshold = reader.mask_threshold;
+    nlohmann::json j{{"uses", reader.sor_levels > 0 ? "coarse_start" : "from_zeros"}};
+    for (const auto& [name, o] : {std::pair<const char*, sensor::ShapeOptions>{"from_zeros", zeros}, {"coarse_start", coarse}}) {
         sensor::GelShapeGpu gpu(ctx, c, lut, o);
         sensor::GelShape shape = gpu.run(frame, empty);
         std::vector<double> ms;

@@ -18,8 +18,8 @@ struct GelBenchOptions {
 
 // JSON: frame, size [W, H], shape_ms (GPU) and shape_cpu_ms (stats), shape_nodes_ms {node: stats}
 // (GPU timestamps of a profiled run), solves and rendered (this frame, and a rendered one under
-// the rendered frames' mask: {default, plain_50} x {shape_ms, solve_gpu_ms, mask_pixels, ...},
-// the default solve beside 50 sweeps from zeros), codebook {object,
+// the rendered frames' mask: {from_zeros, coarse_start} x {shape_ms, solve_gpu_ms, mask_pixels,
+// ...}, and uses: the solve the frame's reader takes), codebook {object,
 // hypotheses, render_ms (once), score_ms (stats)}. ctx null: the CPU reference only.
 nlohmann::json measure_gel(rt::Context* ctx, const GelBenchOptions& o);
 

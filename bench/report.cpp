@@ -159,13 +159,13 @@ void gel(std::FILE* f, const json& g) {
     if (g.contains("shape_nodes_ms"))
         for (auto& [label, v] : g["shape_nodes_ms"].items()) std::fprintf(f, "    node %-22s %10.2f ms (GPU timestamps)\n", label.c_str(), med(v));
     std::fprintf(f, "  shape of one frame, CPU ref  %10.2f ms\n", med(g["shape_cpu_ms"]));
-    // The default solve (a coarse start) beside the one it replaced, on this frame and a rendered one.
+    // Both solves (50 sweeps from zeros, the coarse start) on this frame and on a rendered one.
     auto solves = [&](const char* what, const json& s) {
-        for (const char* k : {"default", "plain_50"})
-            std::fprintf(f, "  %-13s solve %-8s   %10.2f ms (GPU timestamps; frame %.2f ms wall, %lld contact pixels)\n", what, k,
-                         med(s[k]["solve_gpu_ms"]), med(s[k]["shape_ms"]), s[k]["mask_pixels"].get<long long>());
+        for (const char* k : {"from_zeros", "coarse_start"})
+            std::fprintf(f, "  %-10s %-12s%s %8.2f ms solve (GPU timestamps; frame %.2f ms wall, %lld contact pixels)\n", what, k,
+                         s["uses"] == k ? "*" : " ", med(s[k]["solve_gpu_ms"]), med(s[k]["shape_ms"]), s[k]["mask_pixels"].get<long long>());
     };
-    if (g.contains("solves")) solves("this frame", g["solves"]);
+    if (g.contains("solves")) solves("this frame", g["solves"]);  // *: the solve its reader uses
     if (g.contains("rendered")) solves("rendered", g["rendered"]);
     if (g.contains("codebook")) {
         const json& c = g["codebook"];

@@ -160,17 +160,18 @@ def main(path, plot, reps, iters, batches, points, window):
     need(gl["size"] == [160, 120], f"gel.size {gl['size']}")
     stats(gl["shape_ms"], "gel.shape_ms", reps)
     stats(gl["shape_cpu_ms"], "gel.shape_cpu_ms", reps)
-    # The default solve beside 50 sweeps from zeros, on the real frame and on a rendered one,
-    # whose wide contact takes the coarse start (docs/gel_shape.md).
-    for key in ("solves", "rendered"):
-        for solve in ("default", "plain_50"):
+    # Both solves, 50 sweeps from zeros and the coarse start, on the real frame (whose reader
+    # solves from zeros) and on a rendered one (coarse start; docs/gel_shape.md).
+    for key, uses in (("solves", "from_zeros"), ("rendered", "coarse_start")):
+        need(gl[key]["uses"] == uses, f"gel.{key}.uses {gl[key]['uses']}")
+        for solve in ("from_zeros", "coarse_start"):
             s = gl[key][solve]
             stats(s["shape_ms"], f"gel.{key}.{solve}.shape_ms", reps)
             stats(s["solve_gpu_ms"], f"gel.{key}.{solve}.solve_gpu_ms", reps)
             need(s["mask_pixels"] > 0, f"gel.{key}.{solve}: no contact")
-        need(gl[key]["plain_50"]["levels"] == 0 and gl[key]["plain_50"]["sweeps"] == 50, f"gel.{key}.plain_50 {gl[key]['plain_50']}")
-    need(gl["rendered"]["default"]["levels"] > 0, "gel.rendered.default: not the coarse start")
-    need(gl["rendered"]["default"]["mask_pixels"] > 10 * gl["solves"]["default"]["mask_pixels"] // 2,
+        need(gl[key]["from_zeros"]["levels"] == 0 and gl[key]["from_zeros"]["sweeps"] == 50, f"gel.{key}.from_zeros {gl[key]['from_zeros']}")
+        need(gl[key]["coarse_start"]["levels"] > 0, f"gel.{key}.coarse_start {gl[key]['coarse_start']}")
+    need(gl["rendered"]["coarse_start"]["mask_pixels"] > 10 * gl["solves"]["coarse_start"]["mask_pixels"] // 2,
          "gel.rendered: its contact should be far wider than the real press's")
     cb = gl["codebook"]
     need(cb["hypotheses"] >= 100000 and cb["dense_points"] > 0, f"gel.codebook {cb}")
