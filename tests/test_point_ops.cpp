@@ -212,8 +212,17 @@ struct FusedCase {
     int64_t M, K, N, group;
 };
 
+// What a sweep covers. The README's command leaves out the 16 x 32 tile (tests and
+// comparisons only: no device picks it, and its unrolled shader is the slowest to
+// compile); the long suite runs every tile.
+struct Sweep {
+    std::vector<Tile> tiles{Tile::Auto, Tile::Big8x32};
+    std::vector<Weights> weights{std::begin(kWeightPaths), std::end(kWeightPaths)};
+};
+const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}};
+
 // the fused MLP layer handles wide layers, large groups and ragged shapes: the cases given.
-void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
+void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep = {}) {
     // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
     // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
     // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: the uniform path falls back.
@@ -230,10 +239,11 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
             bool transposed;
         };
         std::vector<Same> same;  // outputs that must equal others bit for bit
+        size_t variants = 0;
         for (ops::BufferPath path : ops::kBufferPaths)
-            for (Weights ubo : kWeightPaths)
-                // The device's tile for this size, and CPU devices' two big-layer tiles.
-                for (Tile tile : {Tile::Auto, Tile::Big16x32, Tile::Big8x32}) {
+            for (Weights ubo : sweep.weights)
+                // The device's tile for this size, and CPU devices' big-layer tiles.
+                for (Tile tile : sweep.tiles) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
                     // A tile is the same code on every weight path; 8 x 32 on the one CPU devices take.
                     if (tile != Tile::Auto && ubo == Weights::Uniform) continue;
@@ -263,6 +273,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
                     pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
                     g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
                     same.push_back({"plain.cm_in.pm_out" + on, "plain" + on, true});
+                    ++variants;
                     if (tile != Tile::Auto) continue;
                     // The other workgroup grid: row blocks along x.
                     ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
@@ -278,7 +289,16 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases) {
             INFO(p.got);
             CHECK(out.at(p.got).data == (p.transposed ? test::transposed(out.at(p.want)) : out.at(p.want)).data);
         }
-        CHECK(same.size() == 4 * 9);  // 4 outputs on 9 path / weights / tile variants
+        // 4 outputs on each variant. Texel buffers: each weight path asked, the 16 x 32
+        // tile on all but uniform weights, 8 x 32 on shuffled ones; storage buffers:
+        // shuffled weights on each tile asked. Big tiles on CPU devices only.
+        const auto asked = [](const auto& list, auto v) { return size_t(std::count(list.begin(), list.end(), v)); };
+        const size_t W = sweep.weights.size(), S = asked(sweep.weights, Weights::Shuffle),
+                     U = asked(sweep.weights, Weights::Uniform);
+        const size_t t16 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big16x32) : 0,
+                     t8 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big8x32) : 0;
+        CHECK(variants == W + t16 * (W - U) + t8 * S + S * (1 + t16 + t8));
+        CHECK(same.size() == 4 * variants);
     }
 }
 
@@ -369,15 +389,19 @@ TEST_CASE("group_linear's tiles shrunk as a big GPU's are (forced) match the CPU
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
-    // Every path on three shapes (lavapipe's time goes to compiling each path's
-    // pipelines): groups of 128, odd sizes with a group not a multiple of 4, and
-    // 80 KiB weights (128 x 160). The full-size rows run in the long suite.
-    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}, FusedCase{48, 128, 160, 16}});
+    // Every path but the 16 x 32 tile (above) on two shapes: groups of 128 with vec4
+    // rows, and odd sizes with a group not a multiple of 4 (scalar loads, partial
+    // blocks); 80 KiB weights (128 x 160) on the uniform path it falls back from.
+    // A cold lavapipe spends most of this test compiling (~1.5 s a pipeline), so
+    // the long suite runs the full-size rows and every tile.
+    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}});
+    fused_mlp_cases({FusedCase{48, 128, 160, 16}}, Sweep{{Tile::Auto}, {Weights::Uniform}});
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
     fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
-                   FusedCase{640, 128, 160, 16}});
+                     FusedCase{640, 128, 160, 16}},
+                    kEveryTile);
 }
 
 TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_linear]") {
@@ -434,7 +458,7 @@ struct HiddenCase {
 };
 
 // a first layer computed in registers (hidden) equals the two layers: the cases given.
-void hidden_layer_cases(std::initializer_list<HiddenCase> cases) {
+void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sweep = {}) {
     // The first layer of a set-abstraction scale inside the second (group_linear
     // hidden: from the gathered row, or from that layer per source point, stored
     // point-major) against the same two layers as separate nodes: 0, 3 and 4 feature
@@ -463,8 +487,8 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases) {
         if (c.cf == 3) gin.push_back(x), fb = 3;  // the normals
         if (c.cf == 4) gin.push_back(feat), fb = 6;
         for (ops::BufferPath path : ops::kBufferPaths)
-            for (Weights ubo : kWeightPaths)
-                for (Tile tile : {Tile::Auto, Tile::Big16x32, Tile::Big8x32}) {
+            for (Weights ubo : sweep.weights)
+                for (Tile tile : sweep.tiles) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
                     // 8 x 32 differs from the others only in its spec constants: the path CPU devices take.
                     if (tile == Tile::Big8x32 && ubo != Weights::Shuffle) continue;
@@ -533,13 +557,15 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases) {
 }  // namespace
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
-    // Every path on three shapes: no feature columns, 4 from a wider tensor with
-    // balls of 128 (around 3 centres; 16 in the long suite), an odd output width.
+    // Every path but the 16 x 32 tile (Sweep) on three shapes: no feature columns, 4
+    // from a wider tensor with balls of 128 (around 3 centres; 16 in the long suite,
+    // with every tile), an odd output width.
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
 }
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
-    hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
+    hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}},
+                       kEveryTile);
 }
 
 TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {
