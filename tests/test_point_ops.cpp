@@ -557,10 +557,12 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
 }  // namespace
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
-    // Every path but the 16 x 32 tile (Sweep) on three shapes: no feature columns, 4
-    // from a wider tensor with balls of 128 (around 3 centres; 16 in the long suite,
-    // with every tile), an odd output width.
-    hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
+    // Every path but the 16 x 32 tile (Sweep) on two shapes: 4 feature columns from a
+    // wider tensor with balls of 128 (around 3 centres; 16 in the long suite, with
+    // every tile), and the normals with an odd output width. No feature columns on
+    // shuffled weights and the device's tile (each buffer path's default).
+    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
+    hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}});
 }
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
