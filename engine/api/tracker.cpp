@@ -167,10 +167,21 @@ std::vector<Motion> motions_from_flange_poses(const std::vector<Motion>& flange,
     });
 }
 
+namespace {
+
+// Every option, before the object is read and its surface built (seconds on a big mesh).
+void check_options(const TrackerOptions& o) {
+    if (!(o.object_units > 0) || !std::isfinite(o.object_units)) throw Error("tracker: object_units must be a finite number > 0");
+    surface_options(o);
+    track::Tracker::check_options(filter_options(o));
+    track::check_score_options({o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm});
+}
+
+}  // namespace
+
 Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions& o) {
     guarded([&] {
-        if (!(o.object_units > 0) || !std::isfinite(o.object_units))
-            throw Error("tracker: object_units must be a finite number > 0");
+        check_options(o);
         PointCloud cloud;
         try {
             io::TriangleMesh mesh = io::load_mesh(path);
@@ -197,6 +208,7 @@ Tracker::Tracker(Context& context, const std::string& path, const TrackerOptions
 
 Tracker::Tracker(Context& context, const PointCloud& cloud, const TrackerOptions& o) {
     guarded([&] {
+        check_options(o);
         if (cloud.normals.size() != cloud.xyz.size())
             throw Error("tracker: the cloud needs a normal per point (the filter checks each pose against the surface's normal)");
         HostTensor t = cloud_tensor(cloud);

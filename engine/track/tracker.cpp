@@ -38,8 +38,7 @@ struct Tracker::Impl {
 
 Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options) : Tracker(&ctx, std::move(surface), options) {}
 
-Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
-    : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
+void Tracker::check_options(const FilterOptions& opt_) {
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
         throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
@@ -50,6 +49,11 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
+}
+
+Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
+    : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
+    check_options(opt_);
     const Surface& s = surface_;
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));

@@ -83,6 +83,8 @@ public:
     // ctx null: every step runs on the ops' CPU references (the oracle; vtloc-bench times it).
     Tracker(rt::Context* ctx, Surface surface, FilterOptions options = {});
     ~Tracker();
+    // What the constructor refuses, without a surface (callers check before building one).
+    static void check_options(const FilterOptions& options);
     Tracker(const Tracker&) = delete;
     Tracker& operator=(const Tracker&) = delete;
 
