@@ -49,3 +49,51 @@ TEST_CASE("tracker: a mesh file wound inward gives the estimate of the outward o
     CHECK(eb.heatmap == ea.heatmap);
     CHECK(ctx.take_validation_messages().empty());
 }
+
+TEST_CASE("tracker: with_options is a tracker made with those options, its surface not built again", "[api][tracker]") {
+    const std::string path = std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply";
+    api::Context ctx;
+    api::TrackerOptions o;
+    o.hypotheses = 5000;
+    api::TrackerOptions other = o;  // filter options only: odometry, window, widths, the rescue
+    other.odometry_mm = 0.5, other.odometry_deg = 0.5, other.window = 2, other.sigma_d_mm = 1.3, other.rescue_fit = 0;
+    api::Tracker a(ctx, path, o);
+    a.add_touch(std::nullopt);  // a's touches are its own: the new tracker starts with none
+    api::Tracker b = a.with_options(other), made(ctx, path, other);
+    CHECK(b.touches() == 0);
+    CHECK(b.sample_points() == made.sample_points());
+    const api::Motion m1{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}}, m2{{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}};
+    for (api::Tracker* t : {&b, &made}) {
+        t->add_touch(std::nullopt);
+        t->add_touch(m1);
+        t->add_touch(m2);  // past the window of 2: the prior takes the first
+    }
+    const api::TrackerEstimate eb = b.estimate(), em = made.estimate();
+    CHECK(eb.sample_belief == em.sample_belief);
+    CHECK(eb.contact == em.contact);
+    CHECK(eb.pose.R == em.pose.R);
+    CHECK(eb.pose.t == em.pose.t);
+    CHECK(eb.fit == em.fit);
+    CHECK(eb.heatmap == em.heatmap);
+    CHECK(b.evaluate_window({m1, m2}).sample_belief == made.evaluate_window({m1, m2}).sample_belief);
+    CHECK(a.touches() == 1);
+    // What shapes the surface stays; a bad option is refused as the constructor refuses it.
+    auto refused = [&](api::TrackerOptions x, const char* name) {
+        INFO(name);
+        CHECK_THROWS_WITH(a.with_options(x), Catch::Contains(name));
+    };
+    api::TrackerOptions x = o;
+    x.n_spin = 18;
+    refused(x, "n_spin");
+    x = o, x.hypotheses = 6000;
+    refused(x, "hypotheses");
+    x = o, x.candidates = {{0, 0, 0}};
+    refused(x, "candidates");
+    x = o, x.object_units = 10;
+    refused(x, "object_units");
+    x = o, x.window = 0;
+    refused(x, "window");
+    x = o, x.render_cell_mm = 20;
+    refused(x, "render_cell_mm");
+    CHECK(ctx.take_validation_messages().empty());
+}

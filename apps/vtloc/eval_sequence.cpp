@@ -242,7 +242,7 @@ int run_sequence(Session& s, const Args& a) {
         api::TrackerOptions tn = to;
         if (noise) {
             tn.odometry_mm = noise->first, tn.odometry_deg = noise->second;
-            noisy_tracker.emplace(s.gpu(), mesh, tn);
+            noisy_tracker.emplace(clean.with_options(tn));  // the same surface: not built again
         }
         // The candidates protocol (the paper's): hypotheses only at the object's candidates S^c.
         const HostTensor cands = o.candidates();
@@ -253,7 +253,7 @@ int run_sequence(Session& s, const Args& a) {
         tc.candidates = tcn.candidates = cand_points;
         api::Tracker cand_clean(s.gpu(), mesh, tc);
         std::optional<api::Tracker> cand_noisy;
-        if (noise) cand_noisy.emplace(s.gpu(), mesh, tcn);
+        if (noise) cand_noisy.emplace(cand_clean.with_options(tcn));
         std::vector<const sim::TouchRecord*> tour;
         for (const sim::TouchRecord& t : o.touches)
             if (t.order >= 0) tour.push_back(&t);

@@ -65,12 +65,13 @@ struct Tracker::Impl {
     PointCloud display;
     HostTensor display_tensor;
     double network_weight, object_units;
+    TrackerOptions options;  // as made (with_options compares what shapes the surface)
     track::ScoreOptions score;  // render-and-compare's, checked here: the scorer is made at the first gel shape
     std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
-          object_units(o.object_units), score{o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm},
+          object_units(o.object_units), options(o), score{o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm},
           codebook_cache(o.codebook_cache) {
         track::check_score_options(score);
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
@@ -214,6 +215,27 @@ Tracker::Tracker(Context& context, const PointCloud& cloud, const TrackerOptions
         HostTensor t = cloud_tensor(cloud);
         impl_ = std::make_unique<Impl>(ContextAccess::rt(context), track::build_surface(t, false, surface_options(o), "cloud"), o, cloud);
         impl_->object_units = 1;  // a PointCloud is given in the tracker's units
+    });
+}
+
+Tracker::Tracker(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+
+Tracker Tracker::with_options(const TrackerOptions& o) const {
+    return guarded([&] {
+        check_options(o);
+        const TrackerOptions& mine = impl_->options;
+        auto same = [](const char* name, bool equal) {
+            if (!equal)
+                throw Error(std::string("tracker: with_options keeps the object's surface, so ") + name +
+                            " must be this tracker's (make a new Tracker to change it)");
+        };
+        same("n_spin", o.n_spin == mine.n_spin);
+        same("hypotheses", o.hypotheses == mine.hypotheses);
+        same("candidates", o.candidates == mine.candidates);
+        same("object_units", o.object_units == mine.object_units);
+        auto impl = std::make_unique<Impl>(*impl_->ctx, impl_->tracker.surface(), o, impl_->display);
+        impl->object_units = impl_->object_units;  // a PointCloud's tracker works in the cloud's units
+        return Tracker(std::move(impl));
     });
 }
 

@@ -438,6 +438,12 @@ public:
     ~Tracker();
     Tracker(Tracker&&) noexcept;
     Tracker& operator=(Tracker&&) noexcept;
+    // A new tracker, no touches, on this one's object under other options, its surface not
+    // read and built again (the build is most of a tracker's making): the estimates of a
+    // Tracker made from the object with `options`, bit for bit. What shapes the surface
+    // (n_spin, hypotheses, candidates, object_units) must be this tracker's: an Error names
+    // the option that differs.
+    Tracker with_options(const TrackerOptions& options) const;
 
     // The first touch takes no motion, every later one the motion from the
     // previous touch. network: that touch's TouchResult (its heat-map over
@@ -478,6 +484,7 @@ public:
     struct Impl;
 
 private:
+    explicit Tracker(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };
 
