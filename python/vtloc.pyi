@@ -99,6 +99,7 @@ class Tracker:
     def add_touch_term(self, motion: Optional[npt.NDArray[np.floating]] = None,
                        term: Optional[npt.NDArray[np.float32]] = None) -> None: ...  # a precomputed shape_term
     def reset(self) -> None: ...  # forgets every touch; the object's tables stay
+    def with_options(self, **options: Any) -> "Tracker": ...  # the constructor's names; the surface reused
     @property
     def touches(self) -> int: ...
     @property

@@ -61,6 +61,9 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     a.add_touch(std::nullopt);  // a's touches are its own: the new tracker starts with none
     api::Tracker b = a.with_options(other), made(ctx, path, other);
     CHECK(b.touches() == 0);
+    CHECK(b.options().odometry_mm == 0.5);
+    CHECK(b.options().window == 2);
+    CHECK(a.options().window == o.window);
     CHECK(b.sample_points() == made.sample_points());
     const api::Motion m1{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}}, m2{{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}};
     for (api::Tracker* t : {&b, &made}) {

@@ -239,6 +239,8 @@ Tracker Tracker::with_options(const TrackerOptions& o) const {
     });
 }
 
+const TrackerOptions& Tracker::options() const { return impl_->options; }
+
 Tracker::~Tracker() = default;
 Tracker::Tracker(Tracker&&) noexcept = default;
 Tracker& Tracker::operator=(Tracker&&) noexcept = default;

@@ -69,6 +69,30 @@ def test_tracker_equals_the_cli(cli, ctx, root):
         t.window_fit([np.eye(4)], bad)
 
 
+def test_tracker_with_options_equals_one_made_so(ctx, root):
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    t = vtloc.Tracker(ctx, mug_path, hypotheses=5000)
+    u = t.with_options(odometry_mm=0.5, window=2, sigma_d_mm=1.3)
+    made = vtloc.Tracker(ctx, mug_path, hypotheses=5000, odometry_mm=0.5, window=2, sigma_d_mm=1.3)
+    step = np.eye(4)
+    step[:3, 3] = [5.0, 0.0, 0.0]
+    for tr in (u, made):
+        tr.add_touch(None)
+        tr.add_touch(step)
+        tr.add_touch(step)
+    a, b = u.estimate(), made.estimate()
+    assert a["contact"].tolist() == b["contact"].tolist()
+    assert a["pose"].tolist() == b["pose"].tolist()
+    assert np.array_equal(a["sample_belief"], b["sample_belief"])
+    assert t.touches == 0 and u.touches == 3
+    with pytest.raises(vtloc.Error, match="n_spin"):
+        t.with_options(n_spin=18)
+    with pytest.raises(vtloc.Error, match="bogus"):
+        t.with_options(bogus=1)
+    with pytest.raises(vtloc.Error, match="window"):
+        t.with_options(window=0)
+
+
 def test_batch_equals_single_touches(tiny, mug, root):
     frames = [vtloc.load_tactile_image(os.path.join(root, "examples", f"touch_0{i}.png")) for i in (1, 2, 3)]
     batch = tiny.localize(mug, frames)

@@ -444,6 +444,7 @@ public:
     // (n_spin, hypotheses, candidates, object_units) must be this tracker's: an Error names
     // the option that differs.
     Tracker with_options(const TrackerOptions& options) const;
+    const TrackerOptions& options() const;  // as this tracker was made with them
 
     // The first touch takes no motion, every later one the motion from the
     // previous touch. network: that touch's TouchResult (its heat-map over
