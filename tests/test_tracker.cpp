@@ -397,48 +397,58 @@ TEST_CASE("the surface's grid and each point's sample match a brute-force search
     const HostTensor dense = io::sample_surface(m, 700, 5, "prism");
     track::SurfaceOptions o;
     o.target_hypotheses = 3000, o.n_spin = 12, o.max_cells = 12000;
-    const track::Surface s = track::build_surface(dense, true, o, "prism");
-    const double band = std::max(o.band_mm, double(s.voxel));
-    auto nearest = [&](const float* pts, int64_t n, int64_t stride, double within, const float* q, const float* opposing) {
-        int32_t best = -1;
-        float best_d = std::numeric_limits<float>::infinity();
-        for (int64_t i = 0; i < n; ++i) {
-            const float* p = pts + i * stride;
-            const float d = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
-            if (d > float(within * within)) continue;
-            if (opposing && !(p[3] * opposing[0] + p[4] * opposing[1] + p[5] * opposing[2] < 0)) continue;
-            if (d < best_d) best_d = d, best = int32_t(i);
-        }
-        return best;
-    };
-    auto centre = [&](int64_t x, int64_t y, int64_t z) {
-        return std::array<float, 3>{s.origin[0] + (float(x) + 0.5f) * s.voxel, s.origin[1] + (float(y) + 0.5f) * s.voxel,
-                                    s.origin[2] + (float(z) + 0.5f) * s.voxel};
-    };
-    int64_t mismatches = 0, filled = 0;
-    for (int64_t z = 0; z < s.dims[2]; ++z)
-        for (int64_t y = 0; y < s.dims[1]; ++y)
-            for (int64_t x = 0; x < s.dims[0]; ++x) {
-                const auto q = centre(x, y, z);
-                const size_t c = size_t((z * s.dims[1] + y) * s.dims[0] + x);
-                const int32_t a = nearest(s.dense.data(), s.n_dense(), 6, band, q.data(), nullptr);
-                const int32_t b = a < 0 ? -1 : nearest(s.dense.data(), s.n_dense(), 6, band, q.data(), &s.dense[size_t(6 * a + 3)]);
-                mismatches += s.cells[2 * c] != a || s.cells[2 * c + 1] != b;
-                filled += a >= 0;
+    // On one thread and on three (slabs of z, each cell written by one): the same grid.
+    std::vector<track::Surface> built;
+    for (int threads : {1, 3}) {
+        o.threads = threads;
+        INFO(threads << " threads");
+        built.push_back(track::build_surface(dense, true, o, "prism"));
+        const track::Surface& s = built.back();
+        const double band = std::max(o.band_mm, double(s.voxel));
+        auto nearest = [&](const float* pts, int64_t n, int64_t stride, double within, const float* q, const float* opposing) {
+            int32_t best = -1;
+            float best_d = std::numeric_limits<float>::infinity();
+            for (int64_t i = 0; i < n; ++i) {
+                const float* p = pts + i * stride;
+                const float d = (q[0] - p[0]) * (q[0] - p[0]) + (q[1] - p[1]) * (q[1] - p[1]) + (q[2] - p[2]) * (q[2] - p[2]);
+                if (d > float(within * within)) continue;
+                if (opposing && !(p[3] * opposing[0] + p[4] * opposing[1] + p[5] * opposing[2] < 0)) continue;
+                if (d < best_d) best_d = d, best = int32_t(i);
             }
-    CHECK(mismatches == 0);
-    CHECK(filled > 1000);
-    const double sample_band = std::max(band, 1.5 * s.spacing_mm);
-    for (int64_t i = 0; i < s.n_dense(); ++i) {
-        const float* p = &s.dense[size_t(6 * i)];
-        const int64_t c = s.cell_of(p);
-        REQUIRE(c >= 0);
-        const auto q = centre(c % s.dims[0], c / s.dims[0] % s.dims[1], c / s.dims[0] / s.dims[1]);
-        const int32_t a = nearest(s.samples.data(), s.n_samples(), 9, sample_band, q.data(), nullptr);
-        const int32_t b = a < 0 ? -1 : nearest(s.samples.data(), s.n_samples(), 9, sample_band, q.data(), &s.samples[size_t(9 * a + 3)]);
-        const int32_t want = a < 0 ? -1 : b >= 0 && p[3] * s.samples[size_t(9 * a + 3)] + p[4] * s.samples[size_t(9 * a + 4)] +
-                                                       p[5] * s.samples[size_t(9 * a + 5)] < 0 ? b : a;
-        INFO("dense point " << i);
-        CHECK(s.dense_sample[size_t(i)] == want);
+            return best;
+        };
+        auto centre = [&](int64_t x, int64_t y, int64_t z) {
+            return std::array<float, 3>{s.origin[0] + (float(x) + 0.5f) * s.voxel, s.origin[1] + (float(y) + 0.5f) * s.voxel,
+                                        s.origin[2] + (float(z) + 0.5f) * s.voxel};
+        };
+        int64_t mismatches = 0, filled = 0;
+        for (int64_t z = 0; z < s.dims[2]; ++z)
+            for (int64_t y = 0; y < s.dims[1]; ++y)
+                for (int64_t x = 0; x < s.dims[0]; ++x) {
+                    const auto q = centre(x, y, z);
+                    const size_t c = size_t((z * s.dims[1] + y) * s.dims[0] + x);
+                    const int32_t a = nearest(s.dense.data(), s.n_dense(), 6, band, q.data(), nullptr);
+                    const int32_t b = a < 0 ? -1 : nearest(s.dense.data(), s.n_dense(), 6, band, q.data(), &s.dense[size_t(6 * a + 3)]);
+                    mismatches += s.cells[2 * c] != a || s.cells[2 * c + 1] != b;
+                    filled += a >= 0;
+                }
+        CHECK(mismatches == 0);
+        CHECK(filled > 1000);
+        const double sample_band = std::max(band, 1.5 * s.spacing_mm);
+        for (int64_t i = 0; i < s.n_dense(); ++i) {
+            const float* p = &s.dense[size_t(6 * i)];
+            const int64_t c = s.cell_of(p);
+            REQUIRE(c >= 0);
+            const auto q = centre(c % s.dims[0], c / s.dims[0] % s.dims[1], c / s.dims[0] / s.dims[1]);
+            const int32_t a = nearest(s.samples.data(), s.n_samples(), 9, sample_band, q.data(), nullptr);
+            const int32_t b = a < 0 ? -1 : nearest(s.samples.data(), s.n_samples(), 9, sample_band, q.data(), &s.samples[size_t(9 * a + 3)]);
+            const int32_t want = a < 0 ? -1 : b >= 0 && p[3] * s.samples[size_t(9 * a + 3)] + p[4] * s.samples[size_t(9 * a + 4)] +
+                                                           p[5] * s.samples[size_t(9 * a + 5)] < 0 ? b : a;
+            INFO("dense point " << i);
+            CHECK(s.dense_sample[size_t(i)] == want);
+        }
     }
+    CHECK(built[0].cells == built[1].cells);
+    CHECK(built[0].dense_sample == built[1].dense_sample);
+    CHECK(built[0].dims[2] > 3);  // more slabs than threads
 }

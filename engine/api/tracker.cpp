@@ -27,6 +27,7 @@ track::SurfaceOptions surface_options(const TrackerOptions& o) {
     track::SurfaceOptions s;
     s.n_spin = o.n_spin;
     s.target_hypotheses = o.hypotheses;
+    s.threads = o.threads;
     if (o.candidates.size() > 100000) throw Error("tracker: at most 100,000 candidates, got " + std::to_string(o.candidates.size()));
     for (const auto& c : o.candidates)
         for (double v : c) s.candidates.push_back(float(v));

@@ -7,6 +7,7 @@
 
 #include "base/error.h"
 #include "engine/ops/codebook_math.h"
+#include "engine/track/parallel.h"
 
 namespace vtloc::track {
 
@@ -82,43 +83,52 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
 // For every cell within `band` of a point, the nearest point (lowest index on a tie),
 // into slot `slot` of `cells` ([V, 2]). With `opposes`, only points whose normal (at
 // 3..5 of the point) turns away from that of the point in slot 0: a thin part's far face.
+// Slabs of z run on up to `threads` threads (SurfaceOptions::threads): each cell is
+// written by one slab, its points visited in index order, so the grid is the same
+// on any number of threads.
 void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, int64_t stride, const Surface& s,
-           double band, bool opposes = false) {
+           double band, int threads, bool opposes = false) {
     std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
     const int r = int(std::ceil(band / s.voxel));
     const float band2 = float(band * band);
-    for (int64_t i = 0; i < n; ++i) {
-        const float* p = pts + i * stride;
-        int c[3];
-        for (int k = 0; k < 3; ++k) c[k] = int(std::floor((p[k] - s.origin[size_t(k)]) / s.voxel));
-        // Cell x's squared distance, summed as always; it only grows away from the point's own
-        // cell (float rounding is monotonic), so each row stops at the first cell past the band:
-        // the same cells as the whole cube, in half the visits.
-        auto visit = [&](int x, int y, int z, float yz_y, float yz_z) {
-            const float qx = s.origin[0] + (float(x) + 0.5f) * s.voxel;
-            const float d = (qx - p[0]) * (qx - p[0]) + yz_y + yz_z;
-            if (d > band2) return false;
-            const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
-            if (opposes) {
-                const int32_t o = cells[2 * cell];
-                if (o < 0) return true;
-                const float* m = pts + int64_t(o) * stride + 3;
-                if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) return true;
-            }
-            if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
-            return true;
-        };
-        const int x_lo = std::max(0, c[0] - r), x_hi = std::min(s.dims[0] - 1, c[0] + r);
-        const int x0 = std::clamp(c[0], x_lo, x_hi);
-        for (int z = std::max(0, c[2] - r); z <= std::min(s.dims[2] - 1, c[2] + r); ++z)
-            for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y) {
-                const float qy = s.origin[1] + (float(y) + 0.5f) * s.voxel, qz = s.origin[2] + (float(z) + 0.5f) * s.voxel;
-                const float yz_y = (qy - p[1]) * (qy - p[1]), yz_z = (qz - p[2]) * (qz - p[2]);
-                visit(x0, y, z, yz_y, yz_z);  // the nearest column may be out of the band: the others still run
-                for (int x = x0 + 1; x <= x_hi && visit(x, y, z, yz_y, yz_z); ++x) {}
-                for (int x = x0 - 1; x >= x_lo && visit(x, y, z, yz_y, yz_z); --x) {}
-            }
-    }
+    const int nz = s.dims[2], slabs = std::min(nz, 16);
+    parallel_for(size_t(slabs), threads, [&](size_t slab) {
+        const int z_begin = int(int64_t(slab) * nz / slabs), z_end = int(int64_t(slab + 1) * nz / slabs);
+        for (int64_t i = 0; i < n; ++i) {
+            const float* p = pts + i * stride;
+            int c[3];
+            for (int k = 0; k < 3; ++k) c[k] = int(std::floor((p[k] - s.origin[size_t(k)]) / s.voxel));
+            const int z_lo = std::max({0, c[2] - r, z_begin}), z_hi = std::min({nz - 1, c[2] + r, z_end - 1});
+            if (z_lo > z_hi) continue;
+            // Cell x's squared distance, summed as always; it only grows away from the point's own
+            // cell (float rounding is monotonic), so each row stops at the first cell past the band:
+            // the same cells as the whole cube, in half the visits.
+            auto visit = [&](int x, int y, int z, float yz_y, float yz_z) {
+                const float qx = s.origin[0] + (float(x) + 0.5f) * s.voxel;
+                const float d = (qx - p[0]) * (qx - p[0]) + yz_y + yz_z;
+                if (d > band2) return false;
+                const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
+                if (opposes) {
+                    const int32_t o = cells[2 * cell];
+                    if (o < 0) return true;
+                    const float* m = pts + int64_t(o) * stride + 3;
+                    if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) return true;
+                }
+                if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
+                return true;
+            };
+            const int x_lo = std::max(0, c[0] - r), x_hi = std::min(s.dims[0] - 1, c[0] + r);
+            const int x0 = std::clamp(c[0], x_lo, x_hi);
+            for (int z = z_lo; z <= z_hi; ++z)
+                for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y) {
+                    const float qy = s.origin[1] + (float(y) + 0.5f) * s.voxel, qz = s.origin[2] + (float(z) + 0.5f) * s.voxel;
+                    const float yz_y = (qy - p[1]) * (qy - p[1]), yz_z = (qz - p[2]) * (qz - p[2]);
+                    visit(x0, y, z, yz_y, yz_z);  // the nearest column may be out of the band: the others still run
+                    for (int x = x0 + 1; x <= x_hi && visit(x, y, z, yz_y, yz_z); ++x) {}
+                    for (int x = x0 - 1; x >= x_lo && visit(x, y, z, yz_y, yz_z); --x) {}
+                }
+        }
+    });
 }
 
 }  // namespace
@@ -229,13 +239,13 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
     if (cells > o.max_cells) throw Error(source + ": the lookup grid would need " + std::to_string(cells) + " cells");
     s.cells.assign(size_t(2 * cells), -1);
     const double band = std::max(o.band_mm, double(s.voxel));
-    splat(s.cells, 0, s.dense.data(), D, 6, s, band);
-    splat(s.cells, 1, s.dense.data(), D, 6, s, band, true);
+    splat(s.cells, 0, s.dense.data(), D, 6, s, band, o.threads);
+    splat(s.cells, 1, s.dense.data(), D, 6, s, band, o.threads, true);
     // Each dense point's sample: of the samples nearest its cell's centre (and their
     // far-face counterparts), the one on the point's own face.
     std::vector<int32_t> near(size_t(2 * cells), -1);
-    splat(near, 0, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm));
-    splat(near, 1, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm), true);
+    splat(near, 0, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm), o.threads);
+    splat(near, 1, s.samples.data(), s.n_samples(), 9, s, std::max(band, 1.5 * s.spacing_mm), o.threads, true);
     s.dense_sample.assign(size_t(D), -1);
     for (int64_t i = 0; i < D; ++i) {
         const float* p = &s.dense[size_t(6 * i)];

@@ -22,6 +22,8 @@ struct SurfaceOptions {
     int64_t max_cells = 2000000;         // lookup grid cells at most (8 bytes each)
     double band_mm = 4.0;                // cells farther from the surface hold no point
     double min_voxel_mm = 0.5;
+    // Host threads the lookup grid is built on (0: up to 4; the grid is the same on any number).
+    int threads = 0;
     // The candidates protocol (SPEC 6; the paper's S^c): hypotheses only at these points
     // [C * 3] (each with the normal of its nearest dense point), spacing 0. Empty: the surface.
     std::vector<float> candidates;

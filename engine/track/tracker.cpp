@@ -13,6 +13,7 @@
 #include "engine/ops/build.h"
 #include "engine/ops/pose_evidence.h"
 #include "engine/resident_weights.h"
+#include "engine/track/parallel.h"
 #include "engine/weights.h"
 
 namespace vtloc::track {
@@ -262,27 +263,6 @@ struct Refiner {
         return direct;
     }
 };
-
-// body(i) for i in [0, n), interleaved over up to `most` threads (0: up to 4 of the host's;
-// fewer for small n); the first exception any of them throws is rethrown here.
-void parallel_for(size_t n, int most, const std::function<void(size_t)>& body) {
-    const size_t cap = most > 0 ? size_t(most) : std::min<size_t>(4, std::max(1u, std::thread::hardware_concurrency()));
-    const size_t workers = std::min(n, cap);
-    std::vector<std::exception_ptr> errors(workers);
-    auto work = [&](size_t w) {
-        try {
-            for (size_t i = w; i < n; i += workers) body(i);
-        } catch (...) {
-            errors[w] = std::current_exception();
-        }
-    };
-    std::vector<std::thread> pool;
-    for (size_t w = 1; w < workers; ++w) pool.emplace_back(work, w);
-    if (workers > 0) work(0);
-    for (std::thread& t : pool) t.join();
-    for (const std::exception_ptr& e : errors)
-        if (e) std::rethrow_exception(e);
-}
 
 // Each earlier touch of a window in the current touch's frame, oldest first.
 std::vector<Rigid> window_in_current(const std::vector<Rigid>& motions) {

@@ -397,8 +397,8 @@ struct TrackerOptions {
     // about 2.7 ms more on one thread, 1 ms on two (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -1;
     int rescue_modes = 24;
-    // Host threads an estimate climbs its modes on: 0, up to 4; n, at most n. Outputs do not
-    // depend on it.
+    // Host threads an estimate climbs its modes on, and the object's lookup grid is built on:
+    // 0, up to 4; n, at most n. Outputs do not depend on it.
     int threads = 0;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
     // The candidates protocol (the paper's S^c): hypotheses only at these contact points (in

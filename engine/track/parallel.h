@@ -1,0 +1,12 @@
+#pragma once
+// Host threads for the filter's CPU loops (the modes' climbs, the surface's grid).
+#include <cstddef>
+#include <functional>
+
+namespace vtloc::track {
+
+// body(i) for i in [0, n), interleaved over up to `most` threads (0: up to 4 of the host's;
+// fewer for small n); the first exception any of them throws is rethrown here.
+void parallel_for(size_t n, int most, const std::function<void(size_t)>& body);
+
+}  // namespace vtloc::track
