@@ -440,12 +440,13 @@ TEST_CASE("balls of very different lengths in one subgroup pool their chunks exa
         g.output(ops::group_linear(g, in, last), "max");
         return test::run_both(g, w, inputs);
     };
-    for (Tile tile : {Tile::Auto, Tile::Big16x32})
+    // The big tile CPU devices take (8 x 32; the 16 x 32 one no device picks compiles slowest).
+    for (Tile tile : {Tile::Auto, Tile::Big8x32})
         for (bool pm : {false, true}) {
             if (tile != Tile::Auto && !test::big_tiles_apply()) continue;
             const test::BothRuns full = run(tile, pm, false, false);
             for (bool rb : {false, true}) {
-                INFO((tile == Tile::Auto ? "auto tile" : "16 x 32") << (pm ? ", point-major" : ", channel-major")
+                INFO((tile == Tile::Auto ? "auto tile" : "8 x 32") << (pm ? ", point-major" : ", channel-major")
                                                                    << (rb ? ", row blocks" : ", pooled"));
                 const test::BothRuns r = run(tile, pm, true, rb);
                 test::require_close(r.gpu.at("max"), r.cpu.at("max"), {}, "max against the CPU reference");
