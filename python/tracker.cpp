@@ -197,29 +197,34 @@ void bind_tracker(py::module_& m) {
                 api::TrackerOptions o = t.options();  // what is not named stays this tracker's
                 for (const auto& [key, value] : kw) {
                     const std::string k = key.cast<std::string>();
-                    if (k == "press_mm") o.press_mm = value.cast<double>();
-                    else if (k == "sigma_d_mm") o.sigma_d_mm = value.cast<double>();
-                    else if (k == "sigma_a_deg") o.sigma_a_deg = value.cast<double>();
-                    else if (k == "odometry_mm") o.odometry_mm = value.cast<double>();
-                    else if (k == "odometry_deg") o.odometry_deg = value.cast<double>();
-                    else if (k == "window") o.window = value.cast<int>();
-                    else if (k == "network_weight") o.network_weight = value.cast<double>();
-                    else if (k == "render_weight") o.render_weight = value.cast<double>();
-                    else if (k == "render_quadratic") o.render_quadratic = value.cast<bool>();
-                    else if (k == "render_press_percentile") o.render_press_percentile = value.cast<double>();
-                    else if (k == "render_cell_mm") o.render_cell_mm = value.cast<double>();
-                    else if (k == "codebook_cache") o.codebook_cache = value.cast<std::string>();
-                    else if (k == "threads") o.threads = value.cast<int>();
-                    else if (k == "n_spin") o.n_spin = value.cast<int>();  // refused by the engine if it differs
-                    else if (k == "hypotheses") o.hypotheses = value.cast<int64_t>();
-                    else if (k == "object_units") o.object_units = value.cast<double>();
-                    else throw api::Error("with_options: no option '" + k + "' (the constructor's, but object and candidates)");
+                    try {
+                        if (k == "press_mm") o.press_mm = value.cast<double>();
+                        else if (k == "sigma_d_mm") o.sigma_d_mm = value.cast<double>();
+                        else if (k == "sigma_a_deg") o.sigma_a_deg = value.cast<double>();
+                        else if (k == "odometry_mm") o.odometry_mm = value.cast<double>();
+                        else if (k == "odometry_deg") o.odometry_deg = value.cast<double>();
+                        else if (k == "window") o.window = value.cast<int>();
+                        else if (k == "network_weight") o.network_weight = value.cast<double>();
+                        else if (k == "render_weight") o.render_weight = value.cast<double>();
+                        else if (k == "render_quadratic") o.render_quadratic = value.cast<bool>();
+                        else if (k == "render_press_percentile") o.render_press_percentile = value.cast<double>();
+                        else if (k == "render_cell_mm") o.render_cell_mm = value.cast<double>();
+                        else if (k == "codebook_cache") o.codebook_cache = value.cast<std::string>();
+                        else if (k == "threads") o.threads = value.cast<int>();
+                        else if (k == "n_spin") o.n_spin = value.cast<int>();  // refused by the engine if it differs
+                        else if (k == "hypotheses") o.hypotheses = value.cast<int64_t>();
+                        else if (k == "object_units") o.object_units = value.cast<double>();
+                        else throw api::Error("with_options: no option '" + k + "' (the constructor's, but object and candidates)");
+                    } catch (const py::cast_error&) {
+                        throw api::Error("with_options: " + k + " has the wrong type");
+                    }
                 }
                 py::gil_scoped_release free;
                 return t.with_options(o);
             },
             "A new tracker (no touches) on this one's object with the named options changed, its surface "
-            "not built again; options that shape the surface (n_spin, hypotheses, object_units) must stay.",
+            "not built again; options that shape the surface (n_spin, hypotheses, object_units) must stay. "
+            "It keeps this tracker (and so its context) alive.",
             py::keep_alive<0, 1>())
         .def("reset", &api::Tracker::reset, "Forgets every touch (a new grasp); the object's tables stay.")
         .def_property_readonly("touches", &api::Tracker::touches)

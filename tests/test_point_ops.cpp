@@ -5,6 +5,8 @@
 // over K <= 70 terms of O(1)).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdlib>
 #include <filesystem>

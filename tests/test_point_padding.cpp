@@ -183,7 +183,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
         for (size_t m = 0; m < pad.size(); ++m) padded += pad[m];
         INFO(padded << " of " << pad.size() << " rows are padding");
         if (c.radius < 1.0) CHECK(padded * 2 > int64_t(pad.size()));  // the case pads as meant
-        int64_t maxes = 0;
+        int64_t maxes = 0, layout_twins = 0;
         for (const auto& [name, t] : r.gpu) {
             if (name.rfind("pad.", 0) != 0) continue;
             const std::string full = "full" + name.substr(3);
@@ -191,8 +191,10 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
             CHECK(t.data == r.gpu.at(full).data);  // bit for bit: the rows left out repeat row 0
             test::require_close(t, r.cpu.at(name), {}, name + " against the CPU reference");
             test::require_close(r.gpu.at(full), r.cpu.at(full), {}, full + " against the CPU reference");
-            if (const size_t at = name.find(".pm"); at != std::string::npos && r.gpu.count(name.substr(0, at) + name.substr(at + 3)))
+            if (const size_t at = name.find(".pm"); at != std::string::npos && r.gpu.count(name.substr(0, at) + name.substr(at + 3))) {
                 CHECK(t.data == r.gpu.at(name.substr(0, at) + name.substr(at + 3)).data);  // the same sums in the same order
+                ++layout_twins;
+            }
             ++maxes;
         }
         // texel: 3 weight paths (+ the big tile on CPU devices); storage: the auto tile (+ the big one);
@@ -201,6 +203,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
         CHECK(int64_t(variants(all_weights).size()) == nv);
         const int64_t layouts = 2 * 2 + (nv - 2);  // both on the two defaults, one elsewhere
         CHECK(maxes == 3 * layouts + nv);
+        CHECK(layout_twins == 3 * 2);  // 3 hidden kinds on the two variants that run both layouts
         for (const std::string& name : plain_names)  // [C2, M], or [M, C2] (.pm)
             require_real_rows_close(r.gpu.at(name), r.cpu.at(name), pad, name.find(".pm") != std::string::npos, name);
         CHECK(int64_t(plain_names.size()) == 2 * layouts);

@@ -91,6 +91,8 @@ def test_tracker_with_options_equals_one_made_so(ctx, root):
         t.with_options(bogus=1)
     with pytest.raises(vtloc.Error, match="window"):
         t.with_options(window=0)
+    with pytest.raises(vtloc.Error, match="odometry_mm has the wrong type"):
+        t.with_options(odometry_mm="far")
 
 
 def test_batch_equals_single_touches(tiny, mug, root):

@@ -35,16 +35,28 @@ configure() {  # build-dir sanitizers target
 # their logs (reports do not halt a run, so one run shows them all).
 status=0
 # shard BUILD-DIR TARGET SPEC: the test cases SPEC selects, dealt in declaration
-# order to one list per core (neighbours in a file cost alike, so the lists take
+# order to one list per process (neighbours in a file cost alike, so the lists take
 # about as long; two fixed halves ran 6 and 12 minutes side by side), each a
 # Catch input file (-f: a name per line, quoted by Catch); prints the filters.
+# Processes: one per core, at least 2, at most one per 6 GiB available (each holds
+# ~5.5 GB with ASan's shadow); SANITIZE_JOBS overrides.
 shard() {
-  local n k out=""
+  local n k mem_gib out="" names="$1/shard.names"
   n=$(nproc)
   [ "$n" -ge 2 ] || n=2
-  (cd "$1" && "tests/$2" --list-test-names-only "$3") | sed '/^$/d; s/[\\",]/\\&/g' |
-    awk -v n="$n" -v dir="$1" '{ print > (dir "/shard." ((NR - 1) % n) ".txt") }'
-  for ((k = 0; k < n; k++)); do out+="${out:+|}--order decl --durations yes -f $1/shard.$k.txt"; done
+  mem_gib=$(awk '/^MemAvailable:/ { print int($2 / 1048576) }' /proc/meminfo 2> /dev/null || echo 12)
+  [ "$n" -le $((mem_gib / 6)) ] || n=$((mem_gib / 6))
+  [ "$n" -ge 1 ] || n=1
+  n=${SANITIZE_JOBS:-$n}
+  find "$1" -maxdepth 1 -name 'shard.*.txt' -delete  # a shorter list must not leave old ones (set -f: no globs)
+  # Catch 2's listing exits with the number of cases it lists: its output is what counts.
+  (cd "$1" && "tests/$2" --list-test-names-only "$3" > "$names") || true
+  if [ "$(sed '/^$/d' "$names" | wc -l)" -lt "$n" ]; then
+    echo "sanitize: listing $2's cases ($3) gave fewer than $n" >&2
+    exit 1
+  fi
+  sed '/^$/d; s/[\\",]/\\&/g' "$names" | awk -v n="$n" -v dir="$1" '{ print > (dir "/shard." ((NR - 1) % n) ".txt") }'
+  for ((k = 0; k < n; k++)); do out+="${out:+|}--order decl --durations yes -f shard.$k.txt"; done
   printf '%s' "$out"
 }
 
