@@ -34,6 +34,10 @@ track::SurfaceOptions surface_options(const TrackerOptions& o) {
     return s;
 }
 
+track::ScoreOptions score_options(const TrackerOptions& o) {
+    return {o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm};
+}
+
 track::FilterOptions filter_options(const TrackerOptions& o) {
     if (o.window < 1 || o.window > 64) throw Error("tracker: window must be 1..64, got " + std::to_string(o.window));
     if (!(o.network_weight >= 0) || !std::isfinite(o.network_weight)) throw Error("tracker: network_weight must be >= 0");
@@ -67,14 +71,12 @@ struct Tracker::Impl {
     HostTensor display_tensor;
     double network_weight, object_units;
     TrackerOptions options;  // as made (with_options compares what shapes the surface)
-    track::ScoreOptions score;  // render-and-compare's, checked here: the scorer is made at the first gel shape
+    track::ScoreOptions score;  // render-and-compare's, checked with the others (check_options): the scorer is made at the first gel shape
     std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
-          object_units(o.object_units), options(o), score{o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm},
-          codebook_cache(o.codebook_cache) {
-        track::check_score_options(score);
+          object_units(o.object_units), options(o), score(score_options(o)), codebook_cache(o.codebook_cache) {
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
         const bool n = display.normals.size() == display.xyz.size();
         std::vector<float> rows;
@@ -176,7 +178,7 @@ void check_options(const TrackerOptions& o) {
     if (!(o.object_units > 0) || !std::isfinite(o.object_units)) throw Error("tracker: object_units must be a finite number > 0");
     surface_options(o);
     track::Tracker::check_options(filter_options(o));
-    track::check_score_options({o.render_weight, o.render_quadratic, o.render_press_percentile, o.render_cell_mm});
+    track::check_score_options(score_options(o));
 }
 
 }  // namespace

@@ -91,7 +91,7 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
     std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
     const int r = int(std::ceil(band / s.voxel));
     const float band2 = float(band * band);
-    const int nz = s.dims[2], slabs = std::min(nz, 16);
+    const int nz = s.dims[2], slabs = threads == 1 ? 1 : std::min(nz, 16);  // each slab scans every point
     parallel_for(size_t(slabs), threads, [&](size_t slab) {
         const int z_begin = int(int64_t(slab) * nz / slabs), z_end = int(int64_t(slab + 1) * nz / slabs);
         for (int64_t i = 0; i < n; ++i) {
