@@ -216,18 +216,37 @@ struct FusedCase {
 
 // What a sweep covers. The README's command leaves out the 16 x 32 tile (tests and
 // comparisons only: no device picks it, and its unrolled shader is the slowest to
-// compile); the long suite runs every tile.
+// compile), and with `pairs` each layer variant (buffer path, weight path, tile)
+// runs half its output modes on one case and the other half on the next, taking
+// turns: every pair of factors (variant and mode, variant and case, mode and case)
+// still meets, for half the pipelines (a cold lavapipe compiles each for ~1 s). The
+// long suite runs the whole product.
 struct Sweep {
     std::vector<Tile> tiles{Tile::Auto, Tile::Big8x32};
     std::vector<Weights> weights{std::begin(kWeightPaths), std::end(kWeightPaths)};
+    bool pairs = true;
+    // With pairs, mode set `set` (0 or 1) runs on variant v of case k when they alternate.
+    bool runs(size_t v, size_t k, int set) const { return !pairs || (v + k) % 2 == size_t(set); }
 };
-const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}};
+// Over two cases or more, every variant ran both mode sets (one case alone
+// pairs its variants with the modes by turns).
+void require_both_sets(const std::map<std::string, int>& sets_run, size_t cases) {
+    if (cases < 2) return;
+    for (const auto& [on, bits] : sets_run) {
+        INFO("variant " << on);
+        CHECK(bits == 3);
+    }
+}
+
+const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {std::begin(kWeightPaths), std::end(kWeightPaths)}, false};
 
 // the fused MLP layer handles wide layers, large groups and ragged shapes: the cases given.
 void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep = {}) {
     // Paper-like (128 neighbours, K = 131); a group size that is not a multiple of
     // 4 (scalar row loads); odd M, K, N (partial blocks, scalar weight loads).
     // 128 x 160 weights (80 KiB) exceed lavapipe's 64 KiB uniform range: the uniform path falls back.
+    std::map<std::string, int> sets_run;  // per variant, which mode sets ran (bits), over all cases
+    size_t k = 0;
     for (FusedCase c : cases) {
         WeightStore w;
         w.add("w", test::random_tensor({c.K, c.N}, 31, -0.15f, 0.15f));
@@ -241,7 +260,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
             bool transposed;
         };
         std::vector<Same> same;  // outputs that must equal others bit for bit
-        size_t variants = 0;
+        size_t variants = 0, twins = 0;
         for (ops::BufferPath path : ops::kBufferPaths)
             for (Weights ubo : sweep.weights)
                 // The device's tile for this size, and CPU devices' big-layer tiles.
@@ -254,35 +273,45 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
                     if (path == ops::BufferPath::Texel) require_weight_path(ubo);
                     const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
                                            (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile}),
-                             "max_relu" + on);
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo, tile}),
-                             "max" + on);  // negative maxima
-                    g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
-                             "plain" + on);
-                    // The rows point-major (x [M, K]): the same sums in the same order, so the
-                    // same bits as the channel-major outputs above (out [M, N]: transposed).
-                    ops::GroupLinear pm{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
-                    pm.x_point_major = true;
-                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "max_relu.pm" + on);
-                    same.push_back({"max_relu.pm" + on, "max_relu" + on, false});
-                    pm.max = false, pm.group = 1, pm.act = ops::kActLeaky, pm.slope = 0.1;
-                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm" + on);
-                    same.push_back({"plain.pm" + on, "plain" + on, false});
-                    pm.point_major = true;
-                    g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm_out" + on);
-                    same.push_back({"plain.pm_out" + on, "plain" + on, true});
-                    pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
-                    g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
-                    same.push_back({"plain.cm_in.pm_out" + on, "plain" + on, true});
+                    // Set 0: the maxes; set 1: the plain outputs. The rows point-major (x [M, K]) give
+                    // the same sums in the same order, so the same bits as the channel-major
+                    // outputs (out [M, N]: transposed); each twin runs in its original's set.
+                    const bool maxes = sweep.runs(variants, k, 0), plains = sweep.runs(variants, k, 1);
+                    sets_run[on] |= (maxes ? 1 : 0) | (plains ? 2 : 0);
+                    if (maxes) {
+                        g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile}),
+                                 "max_relu" + on);
+                        g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, c.group, ops::kActNone, 0.01, path, ubo, tile}),
+                                 "max" + on);  // negative maxima
+                        ops::GroupLinear pm{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
+                        pm.x_point_major = true;
+                        g.output(ops::group_linear(g, {xt, wv, bv}, pm), "max_relu.pm" + on);
+                        same.push_back({"max_relu.pm" + on, "max_relu" + on, false});
+                        twins += 1;
+                    }
+                    if (plains) {
+                        g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
+                                 "plain" + on);
+                        ops::GroupLinear pm{In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile};
+                        pm.x_point_major = true;
+                        g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm" + on);
+                        same.push_back({"plain.pm" + on, "plain" + on, false});
+                        pm.point_major = true;
+                        g.output(ops::group_linear(g, {xt, wv, bv}, pm), "plain.pm_out" + on);
+                        same.push_back({"plain.pm_out" + on, "plain" + on, true});
+                        pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
+                        g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
+                        same.push_back({"plain.cm_in.pm_out" + on, "plain" + on, true});
+                        twins += 3;
+                    }
                     ++variants;
                     if (tile != Tile::Auto) continue;
                     // The other workgroup grid: row blocks along x.
                     ops::GroupLinear rx{In::Rows, 0, true, c.group, ops::kActRelu, 0.01, path, ubo, tile};
                     rx.rows_in_x = true;
-                    g.output(ops::group_linear(g, {x, wv, bv}, rx), "max_relu.rows_in_x" + on);
+                    if (maxes) g.output(ops::group_linear(g, {x, wv, bv}, rx), "max_relu.rows_in_x" + on);
                     rx.max = false, rx.group = 1;
-                    g.output(ops::group_linear(g, {x, wv, bv}, rx), "plain.rows_in_x" + on);
+                    if (plains) g.output(ops::group_linear(g, {x, wv, bv}, rx), "plain.rows_in_x" + on);
                 }
         INFO("M " << c.M << " K " << c.K << " N " << c.N << " group " << c.group);
         const HostTensor xv = test::random_tensor({c.K, c.M}, 33);
@@ -300,8 +329,11 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
         const size_t t16 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big16x32) : 0,
                      t8 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big8x32) : 0;
         CHECK(variants == W + t16 * (W - U) + t8 * S + S * (1 + t16 + t8));
-        CHECK(same.size() == 4 * variants);
+        CHECK(same.size() == twins);
+        CHECK(twins >= variants);  // every variant ran a set
+        ++k;
     }
+    require_both_sets(sets_run, cases.size());
 }
 
 }  // namespace
@@ -393,11 +425,12 @@ TEST_CASE("group_linear's tiles shrunk as a big GPU's are (forced) match the CPU
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
     // Every path but the 16 x 32 tile (above) on two shapes: groups of 128 with vec4
     // rows, and odd sizes with a group not a multiple of 4 (scalar loads, partial
-    // blocks); 80 KiB weights (128 x 160) on the uniform path it falls back from.
+    // blocks), each path's maxes on one and its plain outputs on the other, by turns
+    // (Sweep::pairs); 80 KiB weights (128 x 160) on the uniform path it falls back from.
     // A cold lavapipe spends most of this test compiling (~1.5 s a pipeline), so
     // the long suite runs the full-size rows and every tile.
     fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}});
-    fused_mlp_cases({FusedCase{48, 128, 160, 16}}, Sweep{{Tile::Auto}, {Weights::Uniform}});
+    fused_mlp_cases({FusedCase{48, 128, 160, 16}}, Sweep{{Tile::Auto}, {Weights::Uniform}, false});
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
@@ -468,8 +501,11 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
     // odd and vec4 output widths, plain and max outputs, both buffer paths (and
     // from the gathered row every weight path and the big-layer tiles). All are
     // checked against the CPU reference.
+    std::map<std::string, int> sets_run;  // per variant, which of plain (1) and max (2) ran
+    size_t ci = 0;
     for (HiddenCase c : cases) {
         const int64_t N = 300, K0 = c.cf + 3;
+        size_t variant = 0;
         WeightStore w;
         w.add("w0", test::random_tensor({K0, c.C1}, 61, -0.5f, 0.5f));
         w.add("b0", test::random_tensor({c.C1}, 62, -0.2f, 0.2f));
@@ -499,7 +535,10 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
                     const bool big = tile != Tile::Auto;
                     const std::string on = std::string(".") + ops::path_name(path) + "." + weights_name(ubo) +
                                            (tile == Tile::Big16x32 ? ".big" : tile == Tile::Big8x32 ? ".big8" : "");
+                    const size_t vi = variant++;
                     for (bool max : {false, true}) {
+                        if (!sweep.runs(vi, ci, max)) continue;  // plain and max take turns (Sweep)
+                        sets_run[on] |= max ? 2 : 1;
                         ops::GroupLinear first{In::Gather, fb, false, 1, ops::kActRelu, 0.01, path, ubo};
                         std::vector<int> fin = gin;
                         fin.insert(fin.begin() + 3, {w0, b0});
@@ -553,7 +592,9 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
                     for (int64_t k = 0; k < C; ++k) differ += pm.data[size_t(p * C + k)] != cm.data[size_t(k * N + p)];
                 CHECK(differ == 0);
             }
+        ++ci;
     }
+    require_both_sets(sets_run, cases.size());
 }
 
 }  // namespace
@@ -562,7 +603,8 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
     // Every path but the 16 x 32 tile (Sweep) on two shapes: 4 feature columns from a
     // wider tensor with balls of 128 (around 3 centres; 16 in the long suite, with
     // every tile), and the normals with an odd output width. No feature columns on
-    // shuffled weights and the device's tile (each buffer path's default).
+    // shuffled weights and the device's tile (each buffer path's default). Plain and
+    // max second layers take turns over the shapes on each path (Sweep::pairs).
     hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}});
 }
