@@ -260,7 +260,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
             bool transposed;
         };
         std::vector<Same> same;  // outputs that must equal others bit for bit
-        size_t variants = 0, twins = 0;
+        size_t variants = 0;
         for (ops::BufferPath path : ops::kBufferPaths)
             for (Weights ubo : sweep.weights)
                 // The device's tile for this size, and CPU devices' big-layer tiles.
@@ -287,7 +287,6 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
                         pm.x_point_major = true;
                         g.output(ops::group_linear(g, {xt, wv, bv}, pm), "max_relu.pm" + on);
                         same.push_back({"max_relu.pm" + on, "max_relu" + on, false});
-                        twins += 1;
                     }
                     if (plains) {
                         g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, false, 1, ops::kActLeaky, 0.1, path, ubo, tile}),
@@ -302,7 +301,6 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
                         pm.x_point_major = false;  // channel-major in, point-major out (after sa_gather)
                         g.output(ops::group_linear(g, {x, wv, bv}, pm), "plain.cm_in.pm_out" + on);
                         same.push_back({"plain.cm_in.pm_out" + on, "plain" + on, true});
-                        twins += 3;
                     }
                     ++variants;
                     if (tile != Tile::Auto) continue;
@@ -332,8 +330,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
         CHECK(variants == W + t16 * (W - U) + t8 * S + S * (1 + t16 + t8));
         const size_t max_sets = sweep.pairs ? (variants + 1 - k % 2) / 2 : variants,
                      plain_sets = sweep.pairs ? variants - max_sets : variants;
-        CHECK(twins == max_sets + 3 * plain_sets);
-        CHECK(same.size() == twins);
+        CHECK(same.size() == max_sets + 3 * plain_sets);
         ++k;
     }
     require_both_sets(sets_run, cases.size());
