@@ -10,7 +10,8 @@ namespace {
 
 const char* kHelp =
     "usage: vtloc shape --tactile FRAME.png --out DIR [--background EMPTY.png] [--calibration C]\n"
-    "                   [--json]\n"
+    "                   [--rendered] [--mask-threshold T] [--sweeps N] [--levels L]\n"
+    "                   [--coarse-sweeps N] [--json]\n"
     "\n"
     "The gel's shape from a GelSight frame (SPEC section 9): the colour change against the sensor's\n"
     "empty frame, inverted through the calibration into the gel's slopes, a contact mask, and the\n"
@@ -23,19 +24,36 @@ const char* kHelp =
     "  --calibration C        a Taxim-style calibration (default: the shipped GelSight one,\n"
     "                         data/gelsight, CC BY 4.0)\n"
     "  --out DIR              where to write the three files\n"
+    "  --rendered             the reader for frames rendered by `vtloc synth` (gentle presses of\n"
+    "                         large objects): mask threshold 0.05 and the solve from a coarse\n"
+    "                         start (levels 2, 30 coarse sweeps, 10 sweeps); the options below\n"
+    "                         change single values of either reader\n"
+    "  --mask-threshold T     the contact: 3x3 mean slope above T (default 0.7, fitted on real\n"
+    "                         ball presses)\n"
+    "  --sweeps N             the height's SOR sweeps on the frame's grid, 1..10000 (default 50)\n"
+    "  --levels L             a coarse start: the grid halved up to L times, 0..8 (default 0: from\n"
+    "                         zeros; a wide contact needs it)\n"
+    "  --coarse-sweeps N      sweeps on each coarse grid, 1..10000 (default 30)\n"
     "  --json                 print the summary as JSON\n";
 
 }  // namespace
 
 int cmd_shape(Session& s, int argc, char** argv) {
-    Args a(argc, argv, 2, {{"--tactile"}, {"--background"}, {"--calibration"}, {"--out"}, {"--json", false}});
+    Args a(argc, argv, 2,
+           {{"--tactile"}, {"--background"}, {"--calibration"}, {"--out"}, {"--rendered", false}, {"--mask-threshold"},
+            {"--sweeps"}, {"--levels"}, {"--coarse-sweeps"}, {"--json", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
     }
     const std::string tactile = a.required("--tactile"), out = a.required("--out");
-    api::GelShapeOptions o;
+    api::GelShapeOptions o = a.flag("--rendered") ? api::GelShapeOptions::rendered_frames() : api::GelShapeOptions{};
     o.calibration = a.get("--calibration").value_or("");
+    o.mask_threshold = a.number("--mask-threshold", o.mask_threshold);
+    if (!(o.mask_threshold > 0)) throw UsageError("--mask-threshold must be > 0");
+    o.iterations = a.integer("--sweeps", o.iterations, 1, 10000);
+    o.levels = a.integer("--levels", o.levels, 0, 8);
+    o.coarse_iterations = a.integer("--coarse-sweeps", o.coarse_iterations, 1, 10000);
     const api::TactileImage frame = api::load_tactile_image(tactile);
     std::optional<api::TactileImage> empty;
     if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
