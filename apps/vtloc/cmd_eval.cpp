@@ -269,17 +269,37 @@ void print_run_lines(const Session& s, const eval::Options& opt, const eval::Rep
 }  // namespace
 
 namespace eval {
+const std::vector<EvalOption> kEvalOptions{
+    {"--model", true, OptionFor::both},           {"--data", true, OptionFor::both},
+    {"--objects", true, OptionFor::both},         {"--json", true, OptionFor::both},
+    {"--markdown", true, OptionFor::both},        {"--per-touch", true, OptionFor::both},
+    {"--replot", true, OptionFor::both},  // answered before either report runs
+    {"--split", true, OptionFor::single},         {"--iters", true, OptionFor::single},
+    {"--topk", true, OptionFor::single},          {"--render", true, OptionFor::single},
+    {"--render-count", true, OptionFor::single},  {"--skip-bad", false, OptionFor::single},
+    {"--no-baselines", false, OptionFor::single}, {"--backend", true, OptionFor::single},
+    {"--mm-per-px", true, OptionFor::single},     {"--cloud", true, OptionFor::single},
+    {"--sequence", true, OptionFor::sequence},    {"--geometry-only", false, OptionFor::sequence},
+    {"--odometry-noise", true, OptionFor::sequence}, {"--filter", true, OptionFor::sequence},
+    {"--end-split", true, OptionFor::sequence},   {"--plot", true, OptionFor::sequence},
+    {"--render-compare", false, OptionFor::sequence}, {"--rows", true, OptionFor::sequence}};
+
+void refuse_other_report(const Args& a, OptionFor report) {
+    for (const EvalOption& o : kEvalOptions) {
+        if (o.report == OptionFor::both || o.report == report || !a.get(o.name)) continue;
+        if (report == OptionFor::single) throw UsageError(std::string(o.name) + " is for --sequence");
+        throw UsageError(std::string(o.name) + " is not for --sequence: it belongs to the single-touch report");
+    }
+}
+
 std::string image_path(const sim::ObjectRecord& o, const sim::TouchRecord& t) {
     return (fs::path(o.folder) / t.image).string();
 }
 }  // namespace eval
 
 int cmd_eval(Session& s, int argc, char** argv) {
-    std::vector<OptionSpec> specs{{"--model"},     {"--data"},     {"--split"},      {"--objects"},
-                                  {"--iters"},     {"--topk"},     {"--sequence"},   {"--json"},
-                                  {"--markdown"},  {"--plot"},      {"--per-touch"}, {"--render"},    {"--render-count"},
-                                  {"--skip-bad", false}, {"--no-baselines", false}, {"--backend"},
-                                  {"--mm-per-px"}, {"--cloud"}, {"--geometry-only", false}, {"--odometry-noise"}, {"--filter"}, {"--end-split"}, {"--replot"}, {"--render-compare", false}, {"--rows"}};
+    std::vector<OptionSpec> specs;
+    for (const eval::EvalOption& o : eval::kEvalOptions) specs.push_back({o.name, o.value});
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -295,8 +315,7 @@ int cmd_eval(Session& s, int argc, char** argv) {
         return 0;
     }
     if (a.get("--sequence")) return eval::run_sequence(s, a);
-    for (const char* o : {"--geometry-only", "--odometry-noise", "--filter", "--end-split", "--plot", "--render-compare", "--rows"})
-        if (a.get(o)) throw UsageError(std::string(o) + " is for --sequence");
+    eval::refuse_other_report(a, eval::OptionFor::single);
     eval::Options opt = parse(a);
     if (opt.model.empty()) opt.model = default_model_path();
 

@@ -12,6 +12,18 @@
 
 namespace vtloc::cli::eval {
 
+// Every option of `vtloc eval` and the report it belongs to (cmd_eval.cpp): one table, so an
+// option given to the other report is refused by name, and a new one is placed once.
+enum class OptionFor { both, single, sequence };
+struct EvalOption {
+    const char* name;
+    bool value;  // takes a value
+    OptionFor report;
+};
+extern const std::vector<EvalOption> kEvalOptions;
+// Throws UsageError naming the first option given that belongs to the other report.
+void refuse_other_report(const Args& a, OptionFor report);
+
 // vtloc eval --sequence (eval_sequence.cpp): SPEC 6's protocols; prints and writes its own report.
 int run_sequence(Session& s, const Args& a);
 // ND and ND up to symmetry against T (the "all" rows of a vtloc-eval-sequence/1 report) as a PNG.

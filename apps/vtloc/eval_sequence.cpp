@@ -138,9 +138,7 @@ void plot_sequence(const std::string& path, const nlohmann::json& rows, const st
 
 int run_sequence(Session& s, const Args& a) {
     // The single-touch report's options have no meaning here; say so rather than ignore them.
-    for (const char* o : {"--split", "--iters", "--topk", "--render", "--render-count", "--skip-bad", "--no-baselines", "--backend",
-                          "--mm-per-px", "--cloud"})
-        if (a.get(o)) throw UsageError(std::string(o) + " is not for --sequence: it belongs to the single-touch report");
+    refuse_other_report(a, OptionFor::sequence);
     const std::string data = a.required("--data");
     const std::vector<int> Ts = parse_ts(a.get("--sequence").value_or("1,2,3,4,6,8"));
     const bool geometry_only = a.flag("--geometry-only");
