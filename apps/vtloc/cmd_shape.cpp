@@ -33,7 +33,8 @@ const char* kHelp =
     "  --sweeps N             the height's SOR sweeps on the frame's grid, 1..10000 (default 50)\n"
     "  --levels L             a coarse start: the grid halved up to L times, 0..8 (default 0: from\n"
     "                         zeros; a wide contact needs it)\n"
-    "  --coarse-sweeps N      sweeps on each coarse grid, 1..10000 (default 30)\n"
+    "  --coarse-sweeps N      sweeps on each coarse grid, 1..10000 (default 30; only with levels\n"
+    "                         above 0)\n"
     "  --json                 print the summary as JSON\n";
 
 }  // namespace
