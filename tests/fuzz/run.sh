@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
-# Builds the libFuzzer targets (clang; ASan + UBSan + coverage, in build-fuzz/)
-# and runs each for SECONDS on a working copy of its seed corpus
-# (tests/fuzz/corpus/<target>, grown in build-fuzz/corpus/<target>). A crash,
-# a leak, an uncaught exception other than vtloc::Error, or a 10 s hang fails
-# the run and leaves the input in build-fuzz/findings/<target>/.
+# Builds the libFuzzer targets (clang; ASan + UBSan, coverage in the files each
+# reads through: tests/fuzz/CMakeLists.txt) in build-asan/, the build the
+# sanitizer run shares, and runs each for SECONDS on a working copy of its seed
+# corpus (tests/fuzz/corpus/<target>, grown in build-asan/corpus/<target>). A
+# crash, a leak, an uncaught exception other than vtloc::Error, or a 10 s hang
+# fails the run and leaves the input in build-asan/findings/<target>/.
 #   bash tests/fuzz/run.sh [SECONDS] [TARGET ...]     (default: 30 s, every target)
 set -euo pipefail
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -11,12 +12,9 @@ seconds="${1:-30}"
 shift || true
 targets=("$@")
 [ ${#targets[@]} -gt 0 ] || targets=(safetensors config mesh points image dataset touches codebook calibration device_profile)
-build="$root/build-fuzz"
-if [ ! -f "$build/CMakeCache.txt" ]; then
-  CC=clang CXX=clang++ cmake -S "$root" -B "$build" -DVTLOC_FUZZ=ON -DVTLOC_BUILD_TESTS=OFF \
-    -DVTLOC_BUILD_PYTHON=OFF -DCMAKE_BUILD_TYPE=RelWithDebInfo > /dev/null
-fi
-cmake --build "$build" -j"$(nproc)" --target "${targets[@]/#/fuzz_}" > /dev/null
+build="$root/build-asan"
+. "$root/tests/sanitize/asan_build.sh"
+sanitizer_build "$root" "$build" "address,undefined" "${targets[@]/#/fuzz_}"
 status=0
 for t in "${targets[@]}"; do
   corpus="$build/corpus/$t" findings="$build/findings/$t"

@@ -21,13 +21,7 @@ if [ ! -d "$goldens" ]; then
   exit 1
 fi
 
-configure() {  # build-dir sanitizers target
-  if [ ! -f "$1/CMakeCache.txt" ]; then
-    CC=clang CXX=clang++ cmake -S "$root" -B "$1" -DVTLOC_SANITIZE="$2" -DVTLOC_BUILD_PYTHON=OFF \
-      -DCMAKE_BUILD_TYPE=RelWithDebInfo -DVTLOC_GOLDENS_DIR="$goldens" > /dev/null
-  fi
-  cmake --build "$1" -j"$(nproc)" --target "$3" > /dev/null
-}
+. "$here/asan_build.sh"
 
 # run BUILD-DIR SANITIZERS TARGET REPORT-PATTERN TEST-FILTERS [ENV=VALUE ...]: builds the
 # test binary TARGET, runs it once per filter of TEST-FILTERS ('|' between them; the
@@ -63,7 +57,7 @@ shard() {
 run() {
   local build="$root/$1" sanitizers="$2" target="$3" pattern="$4" filters="$5"
   shift 5
-  configure "$build" "$sanitizers" "$target"
+  sanitizer_build "$root" "$build" "$sanitizers" "$target"
   local pids=() logs=() k=0 filter
   case "$filters" in
     shards:*) filters=$(shard "$build" "$target" "${filters#shards:}") ;;
