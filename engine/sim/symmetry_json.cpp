@@ -1,10 +1,11 @@
 // The symmetry declaration's JSON form (object.json's "symmetry"), apart from the
 // geometry in symmetry.cpp: the reader is fuzzed (tests/fuzz/fuzz_dataset.cpp), and
 // libFuzzer's coverage is compiled into its file alone.
+#include "engine/sim/symmetry.h"
+
 #include <cmath>
 
 #include "base/error.h"
-#include "engine/sim/symmetry.h"
 
 namespace vtloc::sim {
 
