@@ -167,6 +167,13 @@ TEST_CASE("distance up to symmetry, and the symmetry's JSON", "[sim][symmetry]")
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 1}}, {"order", 2}, {"flip", {0, 0.5, 1}}}, "o.json"),
                       Catch::Contains("o.json: symmetry flip axis must be perpendicular"));
     CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"axis", {0, 0, 1}}}, "o.json"), Catch::Contains("o.json: symmetry must be"));
+    // Finite, but its squared length overflows: it must not normalise to a zero axis.
+    CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {1e200, 0, 0}}, {"order", 2}}, "o.json"),
+                      Catch::Contains("o.json: symmetry axis is too long to normalise"));
+    CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 1}}, {"order", 2}, {"flip", {0, 1e200, 0}}}, "o.json"),
+                      Catch::Contains("o.json: symmetry flip axis is too long to normalise"));
+    CHECK_THROWS_WITH(sim::symmetry_from_json(nlohmann::json{{"point", {0, 0, 0}}, {"axis", {0, 0, 0}}, {"order", 2}}, "o.json"),
+                      Catch::Contains("o.json: symmetry axis is zero"));
     // Every rotation about a point: only the distances to it count.
     sim::Symmetry round;
     round.all = true;

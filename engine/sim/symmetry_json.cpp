@@ -18,6 +18,14 @@ Vec3d unit(const Vec3d& a) {
     return {a[0] / n, a[1] / n, a[2] / n};
 }
 
+// An axis given finite but so long that its squared length overflows would normalise to
+// zero and pass as a direction.
+void check_direction(const Vec3d& a, const std::string& where, const char* what) {
+    const double n2 = norm2(a);
+    if (n2 < 1e-12) throw Error(where + ": symmetry " + what + " is zero");
+    if (!std::isfinite(n2)) throw Error(where + ": symmetry " + what + " is too long to normalise");
+}
+
 }  // namespace
 
 nlohmann::json symmetry_json(const Symmetry& s) {
@@ -50,14 +58,14 @@ Symmetry symmetry_from_json(const nlohmann::json& j, const std::string& where) {
         throw Error(where + ": symmetry must be null, {\"point\", \"axis\", \"order\", \"flip\"} or {\"point\", \"all\": true}");
     s.point = vec(j["point"], "point");
     s.axis = vec(j["axis"], "axis");
-    if (norm2(s.axis) < 1e-12) throw Error(where + ": symmetry axis is zero");
+    check_direction(s.axis, where, "axis");
     s.axis = unit(s.axis);
     if (!j["order"].is_number_integer() || j["order"].get<int>() < 0 || j["order"].get<int>() > 3600)
         throw Error(where + ": symmetry order must be an integer 0..3600 (0: every angle)");
     s.order = j["order"].get<int>();
     if (j.contains("flip") && !j["flip"].is_null()) {
         Vec3d f = vec(j["flip"], "flip");
-        if (norm2(f) < 1e-12) throw Error(where + ": symmetry flip axis is zero");
+        check_direction(f, where, "flip axis");
         f = unit(f);
         if (std::abs(f[0] * s.axis[0] + f[1] * s.axis[1] + f[2] * s.axis[2]) > 1e-3)
             throw Error(where + ": symmetry flip axis must be perpendicular to the axis");
