@@ -101,32 +101,38 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
             const int z_lo = std::max({0, c[2] - r, z_begin}), z_hi = std::min({nz - 1, c[2] + r, z_end - 1});
             if (z_lo > z_hi) continue;
             // Cell x's squared distance, summed as always; it only grows away from the point's own
-            // cell (float rounding is monotonic), so each row stops at the first cell past the band:
-            // the same cells as the whole cube, in half the visits.
-            auto visit = [&](int x, int y, int z, float yz_y, float yz_z) {
+            // cell (float rounding is monotonic), so each row stops at the first cell past the band,
+            // and a row or plane whose (y, z) terms alone pass it is skipped: the same cells as the
+            // whole cube, in under half the visits.
+            auto visit = [&](int x, size_t row, float yz_y, float yz_z) {
                 const float qx = s.origin[0] + (float(x) + 0.5f) * s.voxel;
                 const float d = (qx - p[0]) * (qx - p[0]) + yz_y + yz_z;
                 if (d > band2) return false;
-                const size_t cell = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]) + size_t(x);
-                if (opposes) {
+                const size_t cell = row + size_t(x);
+                if (!(d < best[cell])) return true;
+                if (opposes) {  // after the distance: most cells fail it without this read
                     const int32_t o = cells[2 * cell];
                     if (o < 0) return true;
                     const float* m = pts + int64_t(o) * stride + 3;
                     if (!(p[3] * m[0] + p[4] * m[1] + p[5] * m[2] < 0)) return true;
                 }
-                if (d < best[cell]) best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
+                best[cell] = d, cells[2 * cell + size_t(slot)] = int32_t(i);
                 return true;
             };
             const int x_lo = std::max(0, c[0] - r), x_hi = std::min(s.dims[0] - 1, c[0] + r);
             const int x0 = std::clamp(c[0], x_lo, x_hi);
-            for (int z = z_lo; z <= z_hi; ++z)
+            for (int z = z_lo; z <= z_hi; ++z) {
+                const float qz = s.origin[2] + (float(z) + 0.5f) * s.voxel, yz_z = (qz - p[2]) * (qz - p[2]);
+                if (yz_z > band2) continue;
                 for (int y = std::max(0, c[1] - r); y <= std::min(s.dims[1] - 1, c[1] + r); ++y) {
-                    const float qy = s.origin[1] + (float(y) + 0.5f) * s.voxel, qz = s.origin[2] + (float(z) + 0.5f) * s.voxel;
-                    const float yz_y = (qy - p[1]) * (qy - p[1]), yz_z = (qz - p[2]) * (qz - p[2]);
-                    visit(x0, y, z, yz_y, yz_z);  // the nearest column may be out of the band: the others still run
-                    for (int x = x0 + 1; x <= x_hi && visit(x, y, z, yz_y, yz_z); ++x) {}
-                    for (int x = x0 - 1; x >= x_lo && visit(x, y, z, yz_y, yz_z); --x) {}
+                    const float qy = s.origin[1] + (float(y) + 0.5f) * s.voxel, yz_y = (qy - p[1]) * (qy - p[1]);
+                    if (yz_y + yz_z > band2) continue;  // (dx^2 + yz_y) + yz_z >= yz_y + yz_z, rounded
+                    const size_t row = (size_t(z) * size_t(s.dims[1]) + size_t(y)) * size_t(s.dims[0]);
+                    visit(x0, row, yz_y, yz_z);  // the nearest column may be out of the band: the others still run
+                    for (int x = x0 + 1; x <= x_hi && visit(x, row, yz_y, yz_z); ++x) {}
+                    for (int x = x0 - 1; x >= x_lo && visit(x, row, yz_y, yz_z); --x) {}
                 }
+            }
         }
     });
 }
