@@ -114,6 +114,16 @@ def make_model(cfg, seed):
     return model
 
 
+def init_tactile(model, path, config):
+    """Start the tactile encoder from weights_tools.pretrain's tactile.pt."""
+    got = torch.load(path, map_location="cpu")
+    if not isinstance(got, dict) or "tactile" not in got:
+        raise ValueError(f"{path}: not a weights_tools.pretrain tactile.pt")
+    if got.get("config") != config:
+        raise ValueError(f"{path}: pretrained for config {got.get('config')}, not {config}")
+    model.tactile.load_state_dict(got["tactile"])
+
+
 def provenance(args, ds, objects, step, elapsed, val):
     commit, dirty = git_commit()
     used = {o.name: o for o in objects}
@@ -126,7 +136,7 @@ def provenance(args, ds, objects, step, elapsed, val):
                     for o in ds.objects],
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
         "lambda": args.lam, "objects_per_batch": args.groups, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
-        "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
+        "init_tactile": args.init_tactile, "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
         # the command that started the run (a resume or --export-only keeps it), then this one
         "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.first_argv),
         "last_command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
@@ -151,6 +161,7 @@ def load_checkpoint(args, ckpt_path):
     args.match = saved.get("match", 0.0)  # runs from before the auxiliary losses had none
     args.feature_scale = saved.get("feature_scale", 0.0)
     args.groups = saved.get("groups", 1)
+    args.init_tactile = saved.get("init_tactile")
     args.first_argv = saved.get("first_argv", args.argv)
     return ckpt
 
@@ -167,6 +178,8 @@ class Trainer:
         torch.set_num_threads(args.threads or os.cpu_count() or 1)
         self.ds = read_dataset(args.data)
         self.model = make_model(cfg, args.seed)
+        if args.init_tactile and ckpt is None:  # a resumed run has the weights in its checkpoint
+            init_tactile(self.model, args.init_tactile, args.config)
         self.objects = load_objects(self.model, self.ds, args.val_fraction)
         self.match = LocalMatch(cfg) if args.match > 0 else None  # seeded by make_model's manual_seed
         self.params = [p for p in self.model.parameters() if p.requires_grad]
@@ -214,7 +227,8 @@ class Trainer:
                      "match": None if self.match is None else self.match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
                                                        "steps", "val_fraction", "rotate", "match",
-                                                       "feature_scale", "groups", "first_argv")}},
+                                                       "feature_scale", "groups", "init_tactile",
+                                                       "first_argv")}},
                     self.ckpt_path)
 
     def train_step(self, warmup):
@@ -348,6 +362,7 @@ def parse_args(argv=None):
                     help="weight of the training-only penalty keeping F^p and F^t near unit RMS (0: off)")
     ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
     ap.add_argument("--rotate", action="store_true", help="also rotate the frames at random (a sensor spin)")
+    ap.add_argument("--init-tactile", help="start the tactile encoder from weights_tools.pretrain's tactile.pt")
     ap.add_argument("--bn-every", type=int, default=50,
                     help="recompute the point branch's BatchNorm statistics every N steps (0: once)")
     ap.add_argument("--ckpt-minutes", type=float, default=5.0)

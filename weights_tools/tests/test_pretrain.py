@@ -1,0 +1,84 @@
+"""pretrain.py: places grouped as --extra-views writes them, the loss, a run that never
+reads validation or test touches, resume, and train.py starting from its encoder."""
+
+import csv
+import types
+
+import numpy as np
+import pytest
+import torch
+
+from fake_dataset import make_dataset
+from weights_tools import config, pretrain, train
+from weights_tools.dataset import read_dataset
+
+
+@pytest.fixture(scope="module")
+def data_dir(tmp_path_factory):
+    return make_dataset(str(tmp_path_factory.mktemp("ds") / "data"), n_train=10, n_extra=4)
+
+
+def _touch(i, c):
+    return types.SimpleNamespace(id=i, contact=np.array(c, dtype=np.float64))
+
+
+def test_places_group_consecutive_renders_of_one_contact():
+    ts = [_touch(0, [1, 2, 3]), _touch(1, [1, 2, 3.0000004]), _touch(2, [1, 2, 3.0000001]),
+          _touch(3, [1, 2, 3.01]), _touch(4, [1, 2, 3])]  # 4 is at 0's place, but not next to it
+    assert pretrain.places(ts) == [[0, 1, 2], [3], [4]]
+
+
+def test_nt_xent_prefers_the_pair():
+    z = torch.nn.functional.normalize(torch.randn(6, 8, generator=torch.Generator().manual_seed(0)), dim=-1)
+    same = pretrain.nt_xent(z, z, 0.1)
+    shuffled = pretrain.nt_xent(z, z[[1, 2, 3, 4, 5, 0]], 0.1)
+    assert same < shuffled
+    # orthogonal, well separated pairs: the loss is near 0; a uniform guess is log(2P - 1)
+    e = torch.eye(6)
+    assert pretrain.nt_xent(e, e, 0.05) < 1e-6
+    assert torch.isclose(pretrain.nt_xent(torch.ones(6, 8) / 8 ** 0.5, torch.ones(6, 8) / 8 ** 0.5, 1.0),
+                         torch.log(torch.tensor(11.0)))
+
+
+def _args(data_dir, out, *extra):
+    return pretrain.parse_args(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(out), "--threads", "1",
+                                "--places", "3", *extra])
+
+
+def test_frames_are_the_training_touches_only(data_dir):
+    ds = read_dataset(data_dir)
+    f = pretrain.Frames(ds)
+    m = train.make_model(config.named("vtloc-tiny"), 0)
+    want = sum(o.n_train for o in train.load_objects(m, ds))
+    assert sum(len(p) for p in f.train + f.held) == f.images.shape[0] == want
+
+
+def test_run_resume_and_init(data_dir, tmp_path):
+    full, step = pretrain.run(_args(data_dir, tmp_path / "a", "--steps", "6"))
+    assert step == 6 and (tmp_path / "a" / "tactile.pt").exists()
+    with open(tmp_path / "a" / "log.csv") as f:
+        rows = list(csv.DictReader(f))
+    assert rows[0]["step"] == "0" and rows[-1]["step"] == "6" and np.isfinite(float(rows[-1]["loss"]))
+    # interrupted and resumed: the same encoder as the run straight through
+    pretrain.run(_args(data_dir, tmp_path / "b", "--steps", "6", "--stop-after", "3"))
+    assert not (tmp_path / "b" / "tactile.pt").exists()
+    with pytest.raises(ValueError, match="--resume"):
+        pretrain.run(_args(data_dir, tmp_path / "b", "--steps", "6"))
+    resumed, step = pretrain.run(_args(data_dir, tmp_path / "b", "--steps", "6", "--resume"))
+    sa, sb = full.state_dict(), resumed.state_dict()
+    assert step == 6 and all(torch.allclose(sa[k].double(), sb[k].double(), atol=1e-6) for k in sa)
+    # train.py starts its tactile encoder there (and nothing else), and its checkpoint says so
+    (tmp_path / "t").mkdir()
+    t = train.Trainer(train.parse_args(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(tmp_path / "t"),
+                                        "--batch", "4", "--threads", "1", "--steps", "1",
+                                        "--init-tactile", str(tmp_path / "a" / "tactile.pt")]),
+                      str(tmp_path / "t" / "checkpoint.pt"), None)
+    got = t.model.tactile.state_dict()
+    assert all(torch.equal(got[k], sa[k]) for k in sa)
+    scratch = train.make_model(config.named("vtloc-tiny"), 0).point.state_dict()
+    assert all(torch.equal(t.model.point.state_dict()[k], scratch[k]) for k in scratch)
+    t.checkpoint()
+    assert torch.load(tmp_path / "t" / "checkpoint.pt")["args"]["init_tactile"].endswith("tactile.pt")
+    with pytest.raises(ValueError, match="pretrained for config vtloc-tiny, not vtloc-lite"):
+        train.init_tactile(train.make_model(config.named("vtloc-lite"), 0), str(tmp_path / "a" / "tactile.pt"),
+                           "vtloc-lite")
