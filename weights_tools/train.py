@@ -136,7 +136,7 @@ def provenance(args, ds, objects, step, elapsed, val):
                     for o in ds.objects],
         "steps": step, "wall_time_s": round(elapsed, 1), "seed": args.seed, "batch": args.batch,
         "lambda": args.lam, "objects_per_batch": args.groups, "match_weight": args.match, "feature_scale_weight": args.feature_scale, "lr": args.lr, "val_fraction": args.val_fraction, "rotate": args.rotate,
-        "init_tactile": args.init_tactile, "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
+        "init_tactile": args.init_tactile, "freeze_tactile": args.freeze_tactile, "val_loss": val[0], "val_nd": val[1], "git_commit": commit, "git_dirty": dirty,
         # the command that started the run (a resume or --export-only keeps it), then this one
         "command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.first_argv),
         "last_command": " ".join([os.path.basename(sys.executable), "-m", "weights_tools.train"] + args.argv),
@@ -162,6 +162,7 @@ def load_checkpoint(args, ckpt_path):
     args.feature_scale = saved.get("feature_scale", 0.0)
     args.groups = saved.get("groups", 1)
     args.init_tactile = saved.get("init_tactile")
+    args.freeze_tactile = saved.get("freeze_tactile", False)
     args.first_argv = saved.get("first_argv", args.argv)
     return ckpt
 
@@ -180,6 +181,9 @@ class Trainer:
         self.model = make_model(cfg, args.seed)
         if args.init_tactile and ckpt is None:  # a resumed run has the weights in its checkpoint
             init_tactile(self.model, args.init_tactile, args.config)
+        if args.freeze_tactile:  # F^t as pretrained: no gradient, BatchNorm statistics kept
+            for p in self.model.tactile.parameters():
+                p.requires_grad_(False)
         self.objects = load_objects(self.model, self.ds, args.val_fraction)
         self.match = LocalMatch(cfg) if args.match > 0 else None  # seeded by make_model's manual_seed
         self.params = [p for p in self.model.parameters() if p.requires_grad]
@@ -227,7 +231,7 @@ class Trainer:
                      "match": None if self.match is None else self.match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
                                                        "steps", "val_fraction", "rotate", "match",
-                                                       "feature_scale", "groups", "init_tactile",
+                                                       "feature_scale", "groups", "init_tactile", "freeze_tactile",
                                                        "first_argv")}},
                     self.ckpt_path)
 
@@ -238,6 +242,7 @@ class Trainer:
         if self.step % args.bn_every == 0 if args.bn_every else self.step == 0:
             calibrate_point_bn(model, objects)
         batch = self.sampler.next()
+        self.model.tactile.train(not args.freeze_tactile)  # validation may have set train mode
         for g in self.opt.param_groups:
             g["lr"] = learning_rate(args.lr, self.step, self.progress(), warmup)
         loss, seq, rec, _, aux = group_losses(model, [(objects[k], i) for k, i in batch], args.lam, self.gen,
@@ -363,6 +368,8 @@ def parse_args(argv=None):
     ap.add_argument("--val-fraction", type=float, default=VAL_FRACTION)
     ap.add_argument("--rotate", action="store_true", help="also rotate the frames at random (a sensor spin)")
     ap.add_argument("--init-tactile", help="start the tactile encoder from weights_tools.pretrain's tactile.pt")
+    ap.add_argument("--freeze-tactile", action="store_true",
+                    help="train everything but the tactile encoder (with --init-tactile: a probe of the pretrained F^t)")
     ap.add_argument("--bn-every", type=int, default=50,
                     help="recompute the point branch's BatchNorm statistics every N steps (0: once)")
     ap.add_argument("--ckpt-minutes", type=float, default=5.0)

@@ -82,3 +82,17 @@ def test_run_resume_and_init(data_dir, tmp_path):
     with pytest.raises(ValueError, match="pretrained for config vtloc-tiny, not vtloc-lite"):
         train.init_tactile(train.make_model(config.named("vtloc-lite"), 0), str(tmp_path / "a" / "tactile.pt"),
                            "vtloc-lite")
+
+
+def test_frozen_tactile_stays_as_pretrained(data_dir, tmp_path):
+    pretrain.run(_args(data_dir, tmp_path / "p", "--steps", "2"))
+    tac = str(tmp_path / "p" / "tactile.pt")
+    want = torch.load(tac)["tactile"]
+    m, _, _ = train.run(train.parse_args(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(tmp_path / "t"),
+                                          "--batch", "4", "--threads", "1", "--steps", "4", "--ckpt-minutes", "0",
+                                          "--init-tactile", tac, "--freeze-tactile"]))
+    got = m.tactile.state_dict()  # weights and BatchNorm statistics, through validations too
+    assert all(torch.equal(got[k], want[k]) for k in want)
+    scratch = train.make_model(config.named("vtloc-tiny"), 0).point.state_dict()
+    assert any(not torch.equal(m.point.state_dict()[k], scratch[k]) for k in scratch if k.endswith("weight"))
+    assert torch.load(tmp_path / "t" / "checkpoint.pt")["args"]["freeze_tactile"] is True
