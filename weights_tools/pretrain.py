@@ -11,10 +11,12 @@ the batch is a negative (NT-Xent, as in SimCLR).  Only the touches weights_tools
 trains on are read (its validation contacts and every test touch stay unseen), so a
 model fine-tuned from the result validates as fairly as one trained from scratch.
 
-Writes RUN_DIR/checkpoint.pt (resumable), RUN_DIR/log.csv and RUN_DIR/tactile.pt (the
-encoder's state dict; ``weights_tools.train --init-tactile`` starts from it).  The log's
-``retrieval`` column: on 10 % of the places held out here, the share of first views
-whose nearest second view (cosine) is of the same place; ``retrieval_chance`` is 1 / n.
+Writes RUN_DIR/checkpoint.pt (resumable: --resume continues with the checkpoint's settings),
+RUN_DIR/log.csv and RUN_DIR/tactile.pt (the encoder's state dict and the run's settings;
+``weights_tools.train --init-tactile`` starts from it on the same data and --val-fraction).  The log's
+``retrieval`` column: on about 10 % of the multi-render places, held out here, the share of first views
+whose nearest second view (cosine on F^t, among those places' second views) is of the same
+place; ``retrieval_chance`` is 1 / n.  Only places with several renders can be held out.
 """
 
 import argparse
@@ -32,6 +34,7 @@ import torch.nn.functional as F
 from . import config as config_mod
 from . import model as model_mod
 from .dataset import DatasetError, read_dataset
+from .train import cli_main, load_file, save_atomic
 from .train_data import VAL_FRACTION, images_to_input, split_contacts
 
 HELD_SHARE = 0.1  # places held out of pretraining to measure retrieval
@@ -69,8 +72,8 @@ class Frames:
                 rows = list(range(len(imgs), len(imgs) + len(group)))
                 imgs += [obj.image(by_id[i]) for i in group]
                 (self.held if rng.random() < HELD_SHARE and len(group) > 1 else self.train).append(rows)
-        if not self.train:
-            raise DatasetError(f"{ds.root}: no seen object with training touches")
+        if len(self.train) < 2:  # one place has no negative: the loss would be 0
+            raise DatasetError(f"{ds.root}: pretraining needs training touches at two places or more")
         if len({f.shape for f in imgs}) > 1:
             raise DatasetError(f"{ds.root}: frames of different sizes")
         self.images = torch.from_numpy(np.stack(imgs))
@@ -123,44 +126,70 @@ def retrieval(encoder, frames, cfg):
     return hit.float().mean().item(), 1.0 / len(frames.held)
 
 
-def save_atomic(obj, path):
-    torch.save(obj, path + ".tmp")
-    os.replace(path + ".tmp", path)
+SETTINGS = ("config", "data", "val_fraction", "places", "temperature", "lr", "seed")
+
+
+def settings(args):
+    """What makes a run the same run (and what train.py --init-tactile checks)."""
+    return {k: (os.path.abspath(args.data) if k == "data" else getattr(args, k)) for k in SETTINGS}
+
+
+def _resume(args, ckpt_path, encoder, head, opt, gen):
+    """Continue the checkpoint: its settings replace the command line's, on the same data."""
+    ck = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings", "encoder", "head", "optimizer"))
+    saved = ck["settings"]
+    if saved["data"] != os.path.abspath(args.data):
+        raise ValueError(f"{ckpt_path}: pretrained on {saved['data']}, not {os.path.abspath(args.data)}")
+    for k in SETTINGS:
+        setattr(args, k, saved[k])
+    try:
+        encoder.load_state_dict(ck["encoder"])
+        head.load_state_dict(ck["head"])
+        opt.load_state_dict(ck["optimizer"])
+    except (RuntimeError, ValueError) as e:
+        raise ValueError(f"{ckpt_path}: does not fit config {args.config} ({e})") from None
+    gen.set_state(ck["aug_rng"])
+    return ck["step"], ck["elapsed_s"]
+
+
+def _open_log(path, resume_step):
+    """log.csv for appending; on resume without the rows written after the checkpoint."""
+    rows = []
+    if resume_step is not None and os.path.exists(path):
+        with open(path, newline="") as f:
+            rows = [r for r in csv.DictReader(f) if int(r["step"]) <= resume_step]
+    f = open(path, "w", newline="")
+    log = csv.DictWriter(f, LOG_COLUMNS)
+    log.writeheader()
+    log.writerows(rows)
+    return f, log, bool(rows)
 
 
 def run(args):
-    cfg = config_mod.named(args.config)
-    torch.set_num_threads(args.threads or os.cpu_count() or 1)
+    """Pretrain (or continue) the run in args.out -> (encoder, step)."""
     os.makedirs(args.out, exist_ok=True)
     ckpt_path = os.path.join(args.out, "checkpoint.pt")
     if os.path.exists(ckpt_path) and not args.resume:
         raise ValueError(f"{ckpt_path}: exists; pass --resume to continue it or use another --out")
+    resuming = args.resume and os.path.exists(ckpt_path)
+    if resuming:  # the settings first: they decide the model and the optimiser
+        args.config = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings",))["settings"]["config"]
+    cfg = config_mod.named(args.config)
+    torch.set_num_threads(args.threads or os.cpu_count() or 1)
     torch.manual_seed(args.seed)
     encoder = model_mod.VTLoc(cfg).tactile.train()  # the same initialisation train.py's model gets
     head = Projection(cfg["C"])
     params = list(encoder.parameters()) + list(head.parameters())
     opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
     gen = torch.Generator().manual_seed(args.seed)
-    step, elapsed = 0, 0.0
-    if args.resume and os.path.exists(ckpt_path):
-        ck = torch.load(ckpt_path, map_location="cpu")
-        if ck["config"] != args.config:
-            raise ValueError(f"{ckpt_path}: pretrained config {ck['config']}, not {args.config}")
-        encoder.load_state_dict(ck["encoder"])
-        head.load_state_dict(ck["head"])
-        opt.load_state_dict(ck["optimizer"])
-        gen.set_state(ck["aug_rng"])
-        step, elapsed = ck["step"], ck["elapsed_s"]
+    step, elapsed = _resume(args, ckpt_path, encoder, head, opt, gen) if resuming else (0, 0.0)
     frames = Frames(read_dataset(args.data), args.val_fraction)
     multi = sum(len(r) > 1 for r in frames.train)
     print(f"{args.config} tactile encoder: {len(frames.train)} places ({multi} with several renders), "
           f"{len(frames.held)} held out; {frames.images.shape[0]} frames", file=sys.stderr)
-    log_path = os.path.join(args.out, "log.csv")
-    new_log = not (args.resume and os.path.exists(log_path))
-    with open(log_path, "w" if new_log else "a", newline="") as f:
-        log = csv.DictWriter(f, LOG_COLUMNS)
-        if new_log:
-            log.writeheader()
+    f, log, kept = _open_log(os.path.join(args.out, "log.csv"), step if resuming else None)
+    with f:
+        if not kept:
             share, chance = retrieval(encoder, frames, cfg)
             log.writerow({"step": 0, "elapsed_s": 0, "retrieval": share, "retrieval_chance": chance})
         last_ckpt = time.monotonic()
@@ -186,16 +215,17 @@ def run(args):
                 f.flush()
             stop = args.stop_after is not None and step >= args.stop_after
             if done or stop or time.monotonic() - last_ckpt > 60 * args.ckpt_minutes:
-                save_atomic({"config": args.config, "encoder": encoder.state_dict(), "head": head.state_dict(),
+                save_atomic({"settings": settings(args), "encoder": encoder.state_dict(), "head": head.state_dict(),
                              "optimizer": opt.state_dict(), "aug_rng": gen.get_state(), "step": step,
                              "elapsed_s": elapsed}, ckpt_path)
                 last_ckpt = time.monotonic()
             if stop and not done:
                 return encoder, step
-    save_atomic({"config": args.config, "tactile": encoder.state_dict(), "steps": step}, os.path.join(args.out, "tactile.pt"))
+    out = os.path.join(args.out, "tactile.pt")
+    save_atomic({"settings": settings(args), "tactile": encoder.state_dict(), "steps": step}, out)
     share, chance = retrieval(encoder, frames, cfg)
-    print(f"{step} steps in {elapsed / 60:.1f} min; held-out retrieval {share} (chance {chance}); "
-          f"wrote {os.path.join(args.out, 'tactile.pt')}", file=sys.stderr)
+    print(f"{step} steps in {elapsed / 60:.1f} min; held-out retrieval {share} (chance {chance}); wrote {out}",
+          file=sys.stderr)
     return encoder, step
 
 
@@ -227,13 +257,7 @@ def parse_args(argv=None):
 
 
 def main(argv=None):
-    args = parse_args(argv)
-    try:
-        run(args)
-    except (DatasetError, ValueError, KeyError, OSError) as e:
-        print(f"error: {e}", file=sys.stderr)
-        return 2
-    return 0
+    return cli_main(run, parse_args(argv))
 
 
 if __name__ == "__main__":

@@ -2,7 +2,7 @@
 
   python3 -m weights_tools.train --config vtloc-lite --data DIR --out RUN_DIR
       [--minutes M] [--steps S] [--seed 0] [--batch 16] [--lambda 1.0] [--resume]
-      [--export-only]
+      [--export-only] [--init-tactile PRETRAIN_RUN/tactile.pt [--freeze-tactile]]
 
 Trains on the ``train`` and ``extra`` touches of the ``seen`` objects; a fixed share of
 each seen object's ``train`` contacts is held out for validation (test touches are never
@@ -16,6 +16,7 @@ import csv
 import json
 import math
 import os
+import pickle
 import shutil
 import subprocess
 import sys
@@ -114,14 +115,30 @@ def make_model(cfg, seed):
     return model
 
 
-def init_tactile(model, path, config):
-    """Start the tactile encoder from weights_tools.pretrain's tactile.pt."""
-    got = torch.load(path, map_location="cpu")
-    if not isinstance(got, dict) or "tactile" not in got:
-        raise ValueError(f"{path}: not a weights_tools.pretrain tactile.pt")
-    if got.get("config") != config:
-        raise ValueError(f"{path}: pretrained for config {got.get('config')}, not {config}")
-    model.tactile.load_state_dict(got["tactile"])
+def load_file(path, what, keys):
+    """A torch.save dict holding ``keys`` -> it; anything else a ValueError naming the file."""
+    try:
+        got = torch.load(path, map_location="cpu")
+    except (OSError, EOFError, RuntimeError, ValueError, pickle.UnpicklingError, AttributeError) as e:
+        raise ValueError(f"{path}: not a readable {what} ({type(e).__name__}: {e})") from None
+    if not isinstance(got, dict) or any(k not in got for k in keys):
+        raise ValueError(f"{path}: not a {what}")
+    return got
+
+
+def init_tactile(model, path, args):
+    """Start the tactile encoder from weights_tools.pretrain's tactile.pt, which must have
+    been pretrained with the same config, data and --val-fraction (or it may have read
+    this run's validation contacts)."""
+    got = load_file(path, "weights_tools.pretrain tactile.pt", ("settings", "tactile"))
+    was = got["settings"]
+    for k, now in (("config", args.config), ("data", os.path.abspath(args.data)), ("val_fraction", args.val_fraction)):
+        if was.get(k) != now:
+            raise ValueError(f"{path}: pretrained with {k} {was.get(k)}, this run has {now}")
+    try:
+        model.tactile.load_state_dict(got["tactile"])
+    except RuntimeError as e:
+        raise ValueError(f"{path}: does not fit config {args.config} ({e})") from None
 
 
 def provenance(args, ds, objects, step, elapsed, val):
@@ -180,7 +197,7 @@ class Trainer:
         self.ds = read_dataset(args.data)
         self.model = make_model(cfg, args.seed)
         if args.init_tactile and ckpt is None:  # a resumed run has the weights in its checkpoint
-            init_tactile(self.model, args.init_tactile, args.config)
+            init_tactile(self.model, args.init_tactile, args)
         if args.freeze_tactile:  # F^t as pretrained: no gradient, BatchNorm statistics kept
             for p in self.model.tactile.parameters():
                 p.requires_grad_(False)
@@ -390,14 +407,18 @@ def parse_args(argv=None):
     return args
 
 
-def main(argv=None):
-    args = parse_args(argv)
+def cli_main(run_fn, args):
+    """Run a tool; a bad input is one line on stderr and exit status 2."""
     try:
-        run(args)
+        run_fn(args)
     except (DatasetError, ValueError, KeyError, OSError) as e:
         print(f"error: {e}", file=sys.stderr)
         return 2
     return 0
+
+
+def main(argv=None):
+    return cli_main(run, parse_args(argv))
 
 
 if __name__ == "__main__":
