@@ -13,7 +13,7 @@ model fine-tuned from the result validates as fairly as one trained from scratch
 
 Writes RUN_DIR/checkpoint.pt (resumable: --resume continues with the checkpoint's settings),
 RUN_DIR/log.csv and RUN_DIR/tactile.pt (the encoder's state dict and the run's settings;
-``weights_tools.train --init-tactile`` starts from it on the same data and --val-fraction).  The log's
+``weights_tools.train --init-tactile`` starts from it on the same training touches).  The log's
 ``retrieval`` column: on about 10 % of the multi-render places, held out here, the share of first views
 whose nearest second view (cosine on F^t, among those places' second views) is of the same
 place; ``retrieval_chance`` is 1 / n.  Only places with several renders can be held out.
@@ -35,7 +35,7 @@ from . import config as config_mod
 from . import model as model_mod
 from .dataset import DatasetError, read_dataset
 from .train import cli_main, load_file, save_atomic
-from .train_data import VAL_FRACTION, images_to_input, split_contacts
+from .train_data import VAL_FRACTION, images_to_input, split_contacts, training_fingerprint
 
 HELD_SHARE = 0.1  # places held out of pretraining to measure retrieval
 LOG_COLUMNS = ("step", "elapsed_s", "loss", "retrieval", "retrieval_chance")
@@ -126,22 +126,21 @@ def retrieval(encoder, frames, cfg):
     return hit.float().mean().item(), 1.0 / len(frames.held)
 
 
-SETTINGS = ("config", "data", "val_fraction", "places", "temperature", "lr", "seed")
+SETTINGS = ("config", "val_fraction", "places", "temperature", "lr", "seed")
 
 
-def settings(args):
-    """What makes a run the same run (and what train.py --init-tactile checks)."""
-    return {k: (os.path.abspath(args.data) if k == "data" else getattr(args, k)) for k in SETTINGS}
+def settings(args, touches):
+    """What makes a run the same run; ``touches`` (train_data.training_fingerprint) and
+    ``val_fraction`` are what train.py --init-tactile checks."""
+    return dict({k: getattr(args, k) for k in SETTINGS}, data=os.path.abspath(args.data), touches=touches)
 
 
-def _resume(args, ckpt_path, encoder, head, opt, gen):
-    """Continue the checkpoint: its settings replace the command line's, on the same data."""
+def _resume(args, ckpt_path, encoder, head, opt, gen, touches):
+    """Continue the checkpoint (its settings already in args) on the same training touches."""
     ck = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings", "encoder", "head", "optimizer"))
-    saved = ck["settings"]
-    if saved["data"] != os.path.abspath(args.data):
-        raise ValueError(f"{ckpt_path}: pretrained on {saved['data']}, not {os.path.abspath(args.data)}")
-    for k in SETTINGS:
-        setattr(args, k, saved[k])
+    if ck["settings"].get("touches") != touches:
+        raise ValueError(f"{ckpt_path}: pretrained on other training touches ({ck['settings'].get('data')}) "
+                         f"than {os.path.abspath(args.data)}'s")
     try:
         encoder.load_state_dict(ck["encoder"])
         head.load_state_dict(ck["head"])
@@ -172,9 +171,13 @@ def run(args):
     if os.path.exists(ckpt_path) and not args.resume:
         raise ValueError(f"{ckpt_path}: exists; pass --resume to continue it or use another --out")
     resuming = args.resume and os.path.exists(ckpt_path)
-    if resuming:  # the settings first: they decide the model and the optimiser
-        args.config = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings",))["settings"]["config"]
+    if resuming:  # the run's own settings replace the command line's: they decide the model and the data
+        saved = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings",))["settings"]
+        for k in SETTINGS:
+            setattr(args, k, saved[k])
     cfg = config_mod.named(args.config)
+    ds = read_dataset(args.data)
+    touches = training_fingerprint(ds, args.val_fraction)
     torch.set_num_threads(args.threads or os.cpu_count() or 1)
     torch.manual_seed(args.seed)
     encoder = model_mod.VTLoc(cfg).tactile.train()  # the same initialisation train.py's model gets
@@ -182,8 +185,8 @@ def run(args):
     params = list(encoder.parameters()) + list(head.parameters())
     opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
     gen = torch.Generator().manual_seed(args.seed)
-    step, elapsed = _resume(args, ckpt_path, encoder, head, opt, gen) if resuming else (0, 0.0)
-    frames = Frames(read_dataset(args.data), args.val_fraction)
+    step, elapsed = _resume(args, ckpt_path, encoder, head, opt, gen, touches) if resuming else (0, 0.0)
+    frames = Frames(ds, args.val_fraction)
     multi = sum(len(r) > 1 for r in frames.train)
     print(f"{args.config} tactile encoder: {len(frames.train)} places ({multi} with several renders), "
           f"{len(frames.held)} held out; {frames.images.shape[0]} frames", file=sys.stderr)
@@ -215,14 +218,14 @@ def run(args):
                 f.flush()
             stop = args.stop_after is not None and step >= args.stop_after
             if done or stop or time.monotonic() - last_ckpt > 60 * args.ckpt_minutes:
-                save_atomic({"settings": settings(args), "encoder": encoder.state_dict(), "head": head.state_dict(),
+                save_atomic({"settings": settings(args, touches), "encoder": encoder.state_dict(), "head": head.state_dict(),
                              "optimizer": opt.state_dict(), "aug_rng": gen.get_state(), "step": step,
                              "elapsed_s": elapsed}, ckpt_path)
                 last_ckpt = time.monotonic()
             if stop and not done:
                 return encoder, step
     out = os.path.join(args.out, "tactile.pt")
-    save_atomic({"settings": settings(args), "tactile": encoder.state_dict(), "steps": step}, out)
+    save_atomic({"settings": settings(args, touches), "tactile": encoder.state_dict(), "steps": step}, out)
     share, chance = retrieval(encoder, frames, cfg)
     print(f"{step} steps in {elapsed / 60:.1f} min; held-out retrieval {share} (chance {chance}); wrote {out}",
           file=sys.stderr)

@@ -33,7 +33,7 @@ from .dataset import DatasetError, read_dataset
 # here because tests and scripts use them as weights_tools.train.<name>.
 from .train_data import (EXTRA_CLEARANCE_MM, VAL_FRACTION, Sampler, TrainObject,  # noqa: F401
                          _normalise, calibrate_point_bn, images_to_input, load_objects,
-                         point_features, rotated_crops, sampling_plan, split_contacts)
+                         point_features, rotated_crops, sampling_plan, split_contacts, training_fingerprint)
 from .train_losses import (GAMMA, LocalMatch, chamfer_batch, feature_scale, group_losses,  # noqa: F401
                            losses, validate, validate_calibrated)
 
@@ -126,15 +126,16 @@ def load_file(path, what, keys):
     return got
 
 
-def init_tactile(model, path, args):
+def init_tactile(model, path, args, touches):
     """Start the tactile encoder from weights_tools.pretrain's tactile.pt, which must have
-    been pretrained with the same config, data and --val-fraction (or it may have read
-    this run's validation contacts)."""
+    been pretrained with the same config on the same training touches (``touches``:
+    train_data.training_fingerprint; other touches may include this run's validation
+    contacts)."""
     got = load_file(path, "weights_tools.pretrain tactile.pt", ("settings", "tactile"))
     was = got["settings"]
-    for k, now in (("config", args.config), ("data", os.path.abspath(args.data)), ("val_fraction", args.val_fraction)):
+    for k, now in (("config", args.config), ("val_fraction", args.val_fraction), ("touches", touches)):
         if was.get(k) != now:
-            raise ValueError(f"{path}: pretrained with {k} {was.get(k)}, this run has {now}")
+            raise ValueError(f"{path}: pretrained with {k} {was.get(k)} ({was.get('data')}), this run has {now}")
     try:
         model.tactile.load_state_dict(got["tactile"])
     except RuntimeError as e:
@@ -197,7 +198,7 @@ class Trainer:
         self.ds = read_dataset(args.data)
         self.model = make_model(cfg, args.seed)
         if args.init_tactile and ckpt is None:  # a resumed run has the weights in its checkpoint
-            init_tactile(self.model, args.init_tactile, args)
+            init_tactile(self.model, args.init_tactile, args, training_fingerprint(self.ds, args.val_fraction))
         if args.freeze_tactile:  # F^t as pretrained: no gradient, BatchNorm statistics kept
             for p in self.model.tactile.parameters():
                 p.requires_grad_(False)

@@ -2,6 +2,7 @@
 train/validation split, the point branch with precomputed sampling, batch-order
 sampling and the batched (augmented) tactile preprocessing."""
 
+import hashlib
 import math
 import zlib
 
@@ -66,6 +67,20 @@ def split_contacts(obj, fraction=VAL_FRACTION):
                                     > EXTRA_CLEARANCE_MM):
             ids.append(t.id)
     return ids, val_ids
+
+
+def training_fingerprint(ds, fraction=VAL_FRACTION):
+    """Names the training touches (seen objects, ids and contacts to 1 um) of a dataset and
+    validation share: equal wherever the same data is read, whatever its folder."""
+    h = hashlib.sha256()
+    for obj in ds.objects:
+        if obj.object_split != "seen":
+            continue
+        by_id = {t.id: t for t in obj.touches}
+        h.update(obj.name.encode() + b"\0")
+        for i in split_contacts(obj, fraction)[0]:
+            h.update(np.int64(i).tobytes() + np.round(np.asarray(by_id[i].contact, dtype=np.float64), 3).tobytes())
+    return h.hexdigest()[:16]
 
 
 def load_objects(model, ds, fraction=VAL_FRACTION):

@@ -4,6 +4,7 @@ reads validation or test touches, resume, and train.py starting from its encoder
 import csv
 import glob
 import os
+import shutil
 import types
 
 import numpy as np
@@ -97,8 +98,9 @@ def test_run_resume_and_init(data_dir, tmp_path):
     assert step == 6 and all(torch.equal(sa[k], sb[k]) for k in sa)  # --places from the checkpoint
     with open(tmp_path / "b" / "log.csv") as f:
         assert [r["step"] for r in csv.DictReader(f)] == ["0", "6"]
-    with pytest.raises(ValueError, match="pretrained on"):
-        pretrain.run(_args(str(tmp_path), tmp_path / "b", "--steps", "8", "--resume"))
+    other = make_dataset(str(tmp_path / "other_b"), n_train=10, n_extra=8, seed=2)
+    with pytest.raises(ValueError, match="pretrained on other training touches"):
+        pretrain.run(_args(other, tmp_path / "b", "--steps", "8", "--resume"))
     # train.py starts its tactile encoder there (and nothing else), and its checkpoint says so
     (tmp_path / "t").mkdir()
     t = train.Trainer(train.parse_args(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(tmp_path / "t"),
@@ -111,15 +113,23 @@ def test_run_resume_and_init(data_dir, tmp_path):
     assert all(torch.equal(t.model.point.state_dict()[k], scratch[k]) for k in scratch)
     t.checkpoint()
     assert torch.load(tmp_path / "t" / "checkpoint.pt")["args"]["init_tactile"].endswith("tactile.pt")
-    # another config, other data or another validation split: an error, not silent leakage
+    # another config, other training touches or another validation split: an error, not silent
+    # leakage; the same touches in another folder are the same data
     tac = str(tmp_path / "a" / "tactile.pt")
-    for extra, msg in ((["--config", "vtloc-lite"], "config vtloc-tiny, this run has vtloc-lite"),
-                       (["--val-fraction", "0.1"], "val_fraction 0.3, this run has 0.1"),
-                       (["--data", str(tmp_path)], "pretrained with data")):
+    other = make_dataset(str(tmp_path / "other"), n_train=10, n_extra=8, seed=1)
+    moved = shutil.copytree(data_dir, str(tmp_path / "moved"))
+    for extra, msg in ((["--config", "vtloc-lite"], "config vtloc-tiny .*, this run has vtloc-lite"),
+                       (["--val-fraction", "0.1"], "val_fraction 0.3 .*, this run has 0.1"),
+                       (["--data", other], "pretrained with touches"),
+                       (["--data", moved], None)):
         a = train.parse_args(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(tmp_path / "u"),
                               "--val-fraction", "0.3", "--steps", "1"] + extra)
+        fp = train.training_fingerprint(read_dataset(a.data), a.val_fraction)
+        if msg is None:
+            train.init_tactile(train.make_model(config.named(a.config), 0), tac, a, fp)
+            continue
         with pytest.raises(ValueError, match=msg):
-            train.init_tactile(train.make_model(config.named(a.config), 0), tac, a)
+            train.init_tactile(train.make_model(config.named(a.config), 0), tac, a, fp)
     # a file that is not one: one line through main, exit status 2
     (tmp_path / "bad.pt").write_bytes(b"not a torch file")
     assert train.main(["--config", "vtloc-tiny", "--data", data_dir, "--out", str(tmp_path / "v"), "--steps", "1",
