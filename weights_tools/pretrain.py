@@ -35,12 +35,10 @@ from . import config as config_mod
 from . import model as model_mod
 from .dataset import DatasetError, read_dataset
 from .train import cli_main, load_file, save_atomic
-from .train_data import VAL_FRACTION, images_to_input, split_contacts, training_fingerprint
+from .train_data import VAL_FRACTION, images_to_input, seen_splits, training_fingerprint
 
 HELD_SHARE = 0.1  # places held out of pretraining to measure retrieval
 LOG_COLUMNS = ("step", "elapsed_s", "loss", "retrieval", "retrieval_chance")
-
-
 SAME_PLACE_MM = 1e-3  # renders of one contact differ in the last digits of its CSV row
 
 
@@ -62,10 +60,8 @@ class Frames:
 
     def __init__(self, ds, fraction=VAL_FRACTION):
         imgs, self.train, self.held = [], [], []
-        for obj in ds.objects:
-            if obj.object_split != "seen":
-                continue
-            ids = set(split_contacts(obj, fraction)[0])
+        for obj, train_ids, _ in seen_splits(ds, fraction):
+            ids = set(train_ids)
             by_id = {t.id: t for t in obj.touches}
             rng = np.random.default_rng(zlib.crc32(obj.name.encode()))
             for group in places([t for t in obj.touches if t.id in ids]):
@@ -135,9 +131,8 @@ def settings(args, touches):
     return dict({k: getattr(args, k) for k in SETTINGS}, data=os.path.abspath(args.data), touches=touches)
 
 
-def _resume(args, ckpt_path, encoder, head, opt, gen, touches):
-    """Continue the checkpoint (its settings already in args) on the same training touches."""
-    ck = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings", "encoder", "head", "optimizer"))
+def _resume(ck, ckpt_path, args, encoder, head, opt, gen, touches):
+    """Continue the checkpoint ``ck`` (its settings already in args) on the same training touches."""
     if ck["settings"].get("touches") != touches:
         raise ValueError(f"{ckpt_path}: pretrained on other training touches ({ck['settings'].get('data')}) "
                          f"than {os.path.abspath(args.data)}'s")
@@ -170,11 +165,12 @@ def run(args):
     ckpt_path = os.path.join(args.out, "checkpoint.pt")
     if os.path.exists(ckpt_path) and not args.resume:
         raise ValueError(f"{ckpt_path}: exists; pass --resume to continue it or use another --out")
-    resuming = args.resume and os.path.exists(ckpt_path)
-    if resuming:  # the run's own settings replace the command line's: they decide the model and the data
-        saved = load_file(ckpt_path, "weights_tools.pretrain checkpoint", ("settings",))["settings"]
+    ck = None
+    if args.resume and os.path.exists(ckpt_path):  # its settings replace the command line's
+        ck = load_file(ckpt_path, "weights_tools.pretrain checkpoint",
+                       ("settings", "encoder", "head", "optimizer", "aug_rng", "step", "elapsed_s"))
         for k in SETTINGS:
-            setattr(args, k, saved[k])
+            setattr(args, k, ck["settings"][k])
     cfg = config_mod.named(args.config)
     ds = read_dataset(args.data)
     touches = training_fingerprint(ds, args.val_fraction)
@@ -185,12 +181,12 @@ def run(args):
     params = list(encoder.parameters()) + list(head.parameters())
     opt = torch.optim.AdamW(params, lr=args.lr, weight_decay=1e-4)
     gen = torch.Generator().manual_seed(args.seed)
-    step, elapsed = _resume(args, ckpt_path, encoder, head, opt, gen, touches) if resuming else (0, 0.0)
+    step, elapsed = (0, 0.0) if ck is None else _resume(ck, ckpt_path, args, encoder, head, opt, gen, touches)
     frames = Frames(ds, args.val_fraction)
     multi = sum(len(r) > 1 for r in frames.train)
     print(f"{args.config} tactile encoder: {len(frames.train)} places ({multi} with several renders), "
           f"{len(frames.held)} held out; {frames.images.shape[0]} frames", file=sys.stderr)
-    f, log, kept = _open_log(os.path.join(args.out, "log.csv"), step if resuming else None)
+    f, log, kept = _open_log(os.path.join(args.out, "log.csv"), None if ck is None else step)
     with f:
         if not kept:
             share, chance = retrieval(encoder, frames, cfg)

@@ -69,28 +69,26 @@ def split_contacts(obj, fraction=VAL_FRACTION):
     return ids, val_ids
 
 
+def seen_splits(ds, fraction=VAL_FRACTION):
+    """(object, training ids, validation ids) of each seen object: what train.py and
+    pretrain.py read."""
+    return [(obj, *split_contacts(obj, fraction)) for obj in ds.objects if obj.object_split == "seen"]
+
+
 def training_fingerprint(ds, fraction=VAL_FRACTION):
     """Names the training touches (seen objects, ids and contacts to 1 um) of a dataset and
     validation share: equal wherever the same data is read, whatever its folder."""
     h = hashlib.sha256()
-    for obj in ds.objects:
-        if obj.object_split != "seen":
-            continue
+    for obj, ids, _ in seen_splits(ds, fraction):
         by_id = {t.id: t for t in obj.touches}
         h.update(obj.name.encode() + b"\0")
-        for i in split_contacts(obj, fraction)[0]:
+        for i in ids:
             h.update(np.int64(i).tobytes() + np.round(np.asarray(by_id[i].contact, dtype=np.float64), 3).tobytes())
     return h.hexdigest()[:16]
 
 
 def load_objects(model, ds, fraction=VAL_FRACTION):
-    out = []
-    for obj in ds.objects:
-        if obj.object_split != "seen":
-            continue
-        tr, va = split_contacts(obj, fraction)
-        if tr:
-            out.append(TrainObject(model, obj, tr, va))
+    out = [TrainObject(model, obj, tr, va) for obj, tr, va in seen_splits(ds, fraction) if tr]
     if not out:
         raise DatasetError(f"{ds.root}/dataset.json: no seen object with training touches")
     return out
