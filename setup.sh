@@ -9,7 +9,7 @@ packages=(
   cmake g++ make pkg-config
   libvulkan-dev mesa-vulkan-drivers vulkan-validationlayers glslang-tools
   nlohmann-json3-dev catch2
-  libglm-dev libtinygltf-dev libstb-dev libopencv-dev
+  libglm-dev libtinygltf-dev libstb-dev libopencv-dev libpng-dev libjpeg-dev
   python3 python3-torch python3-torchvision python3-numpy python3-pil python3-pytest
   python3-tqdm libopenblas0-pthread
   pybind11-dev python3-dev

@@ -3,12 +3,12 @@
 #include <algorithm>
 #include <cmath>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "bench/report.h"
 #include "bench/stages.h"
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 
 namespace vtloc::bench {
 
@@ -147,7 +147,7 @@ void draw_plot(const json& r, const std::string& path) {
         line_chart(m, {600, 45, 600, 400}, "ILU head on the GPU over N", "ms", node);
     }
     stage_bars(m, {0, 470, 1200, 240}, r);
-    if (!cv::imwrite(path, m)) throw Error("cannot write the plot to " + path);
+    io::write_png(path, m);
 }
 
 }  // namespace vtloc::bench

@@ -4,11 +4,10 @@
 #include <cmath>
 #include <cstdio>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "base/atomic_write.h"
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 
 namespace vtloc::bench {
 
@@ -72,9 +71,7 @@ void plot_soak(const std::string& path, const std::vector<double>& rss, const st
     std::snprintf(t, sizeof t, "GPU memory held by the context (MiB) after the warm-up (%.0f -> %.0f MiB)", gpu.front(), gpu[from]);
     panel(m, {80, 320, 790, 200}, gpu, from, t, 0);
     text(m, "run", {460, 565});
-    std::vector<uint8_t> png;
-    if (!cv::imencode(".png", m, png)) throw Error(path + ": the soak plot could not be encoded");
-    write_file_atomic(path, png.data(), png.size());
+    io::write_png(path, m);
 }
 
 }  // namespace vtloc::bench

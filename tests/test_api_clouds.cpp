@@ -6,10 +6,10 @@
 
 #include <cmath>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <random>
 
 #include "engine/io/depth.h"
+#include "engine/io/image_mat.h"
 #include "engine/model/cloud_reduce.h"
 #include "tests/api_test_util.h"
 #include "tests/harness.h"
@@ -33,8 +33,8 @@ void write_sphere_depth(const std::string& depth, const std::string& mask) {
             d.at<uint16_t>(v, u) = uint16_t(std::lround((-b - std::sqrt(disc)) / (2 * a)));
             m.at<uint8_t>(v, u) = u < 80 ? 255 : 0;
         }
-    REQUIRE(cv::imwrite(depth, d));
-    REQUIRE(cv::imwrite(mask, m));
+    vtloc::io::write_png(depth, d);
+    vtloc::io::write_png(mask, m);
 }
 
 }  // namespace
@@ -48,7 +48,7 @@ TEST_CASE("a depth view becomes the camera-frame cloud the intrinsics say", "[io
     REQUIRE(all.viewpoint.has_value());
     CHECK(half.size() < all.size());
     CHECK(half.size() > all.size() / 3);
-    const cv::Mat d = cv::imread(depth, cv::IMREAD_UNCHANGED);
+    const cv::Mat d = vtloc::io::read_mat(depth);
     size_t i = 0;  // rows in image order
     for (int v = 0; v < 120; ++v)
         for (int u = 0; u < 160; ++u) {
@@ -142,9 +142,9 @@ TEST_CASE("depth input errors name the file and the problem", "[api]") {
     write_sphere_depth(depth, mask);
     const std::string rgb = test::temp_path("rgb_depth.png"), zero = test::temp_path("zero_depth.png"),
                       small = test::temp_path("small_mask.png");
-    REQUIRE(cv::imwrite(rgb, cv::Mat(120, 160, CV_8UC3, cv::Scalar(1, 2, 3))));
-    REQUIRE(cv::imwrite(zero, cv::Mat(120, 160, CV_16UC1, cv::Scalar(0))));
-    REQUIRE(cv::imwrite(small, cv::Mat(10, 10, CV_8UC1, cv::Scalar(255))));
+    vtloc::io::write_png(rgb, cv::Mat(120, 160, CV_8UC3, cv::Scalar(1, 2, 3)));
+    vtloc::io::write_png(zero, cv::Mat(120, 160, CV_16UC1, cv::Scalar(0)));
+    vtloc::io::write_png(small, cv::Mat(10, 10, CV_8UC1, cv::Scalar(255)));
     CHECK_THAT(test::api_error([&] { api::load_depth_cloud(rgb, {kFx, kFy, kCx, kCy}); }),
                Catch::Contains("rgb_depth.png") && Catch::Contains("single-channel 16-bit"));
     CHECK_THAT(test::api_error([&] { api::load_depth_cloud(zero, {kFx, kFy, kCx, kCy}); }),

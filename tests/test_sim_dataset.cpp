@@ -3,12 +3,12 @@
 #include <catch2/catch.hpp>
 #include <filesystem>
 #include <fstream>
-#include <opencv2/imgcodecs.hpp>
 #include <set>
 #include <sstream>
 #include <string>
 
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 #include "engine/sim/dataset.h"
 #include "engine/sim/dataset_builder.h"
 #include "engine/sim/everyday_shapes.h"
@@ -317,9 +317,9 @@ TEST_CASE("dataset builder: --indentation writes each touch's ground-truth inden
         fs::path p = fs::path(ob.folder) / t.image;
         p.replace_extension(".depth.png");
         INFO(p.string());
-        cv::Mat m = cv::imread(p.string(), cv::IMREAD_UNCHANGED);
+        cv::Mat m = vtloc::io::read_mat(p.string());
         REQUIRE(m.type() == CV_16UC1);
-        cv::Mat frame = cv::imread((fs::path(ob.folder) / t.image).string(), cv::IMREAD_UNCHANGED);
+        cv::Mat frame = vtloc::io::read_mat((fs::path(ob.folder) / t.image).string());
         CHECK(m.size() == frame.size());
         double hi = 0;
         cv::minMaxLoc(m, nullptr, &hi);

@@ -9,12 +9,12 @@
 #include <cstdio>
 #include <map>
 #include <opencv2/core.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <string>
 #include <unordered_map>
 #include <vector>
 
+#include "engine/io/image_mat.h"
 #include "engine/io/mesh.h"
 #include "engine/sim/everyday_shapes.h"
 #include "engine/sim/shapes.h"
@@ -263,7 +263,7 @@ TEST_CASE("everyday objects: picture for the docs", "[.picture]") {
                     cv::Scalar(40, 40, 40), 1, cv::LINE_AA);
     }
     const std::string path = std::string(VTLOC_SOURCE_DIR) + "/docs/everyday_objects.png";
-    REQUIRE(cv::imwrite(path, sheet));
+    vtloc::io::write_png(path, sheet);
     WARN("wrote " << path);
 }
 

@@ -7,7 +7,7 @@ layer, and the test list in shards. run.sh (copied beside the pack) runs it ther
 Usage: python3 bench/device_check/pack.py [--build build] [--out .devcheck]
 Needs the Debian 12 build machine's packages and its apt archive (for the Vulkan
 loader and the reference LAPACK, fetched as .deb files and unpacked, not
-installed). Why some libraries are stubs: bench/README.md, "device_check/"."""
+installed)."""
 import argparse, os, re, shutil, subprocess, sys, tempfile
 
 ap = argparse.ArgumentParser()
@@ -21,7 +21,6 @@ LIBDIRS = ['/lib/x86_64-linux-gnu', '/usr/lib/x86_64-linux-gnu']
 # 22.04 or newer; the packed files need GLIBC_2.35 and GLIBCXX_3.4.30), and zlib.
 SYSTEM = {'libc.so.6', 'libm.so.6', 'libstdc++.so.6', 'libgcc_s.so.1', 'libpthread.so.0', 'libdl.so.2',
           'librt.so.1', 'ld-linux-x86-64.so.2', 'libz.so.1'}
-STUBS = ['libgdal.so.32', 'libgdcmMSFF.so.3.0', 'libgdcmDSED.so.3.0', 'libOpenEXR-3_1.so.30']
 DEBS = {'liblapack3': {'liblapack.so.3': 'lapack/liblapack.so.3'}, 'libblas3': {'libblas.so.3': 'blas/libblas.so.3'},
         'libgfortran5': {'libgfortran.so.5': 'libgfortran.so.5'}, 'libquadmath0': {'libquadmath.so.0': 'libquadmath.so.0'}}
 GL_DEBS = ['libvulkan1', 'libglvnd0', 'libglx0', 'libegl1', 'libgl1', 'libopengl0', 'libgles2']
@@ -58,28 +57,6 @@ def apt_download(pkgs, dest):
         sh(['apt-get', *o, 'download', *pkgs], cwd=dest)
 
 
-def make_stub(lib, wanted, dest):
-    """A library named `lib` defining each symbol of `wanted` that the real one defines."""
-    asm = ['.text']
-    count = 0
-    for line in sh(['nm', '-D', '-S', '--defined-only', find_lib(lib)]).splitlines():
-        f = line.split()
-        if len(f) < 3 or f[-1] not in wanted:
-            continue
-        name, kind, count = f[-1], f[-2], count + 1
-        if kind in 'TtWi':
-            asm += [f'.globl "{name}"', f'.type "{name}",@function', f'"{name}":', 'xor %eax,%eax', 'ret']
-        else:
-            size = int(f[1], 16) if len(f) == 4 else 8
-            asm += ['.data', f'.globl "{name}"', f'.type "{name}",@object', f'.size "{name}",{size}', f'"{name}":',
-                    f'.zero {max(size, 8)}', '.text']
-    with tempfile.NamedTemporaryFile('w', suffix='.s', delete=False) as s:
-        s.write('\n'.join(asm) + '\n')
-    sh(['gcc', '-shared', '-nostdlib', '-o', os.path.join(dest, lib), '-Wl,-soname,' + lib, s.name])
-    os.unlink(s.name)
-    return count
-
-
 def main():
     with tempfile.TemporaryDirectory() as work:
         pack(work)
@@ -97,11 +74,11 @@ def pack(work):
     for libs in DEBS.values():
         for name, rel in libs.items():
             real[name] = os.path.join(work, 'x/usr/lib/x86_64-linux-gnu', rel)
-    # The closure of what the programs and the layer load, minus system, stubbed and deb libraries.
+    # The closure of what the programs and the layer load, minus system and deb libraries.
     carried, todo = {}, [os.path.join(B, b) for b in BINS] + [LAYER]
     while todo:
         for n in needed(todo.pop()):
-            if n in SYSTEM or n in STUBS or n in real or n in carried:
+            if n in SYSTEM or n in real or n in carried:
                 continue
             carried[n] = find_lib(n)
             todo.append(carried[n])
@@ -114,14 +91,6 @@ def pack(work):
         shutil.copy(p, dst)
         sh(['strip', '--strip-unneeded', dst])
     shutil.copy(LAYER_JSON, os.path.join(root, 'layer'))
-    imported = set()
-    for d in ('bin', 'lib'):
-        for f in os.listdir(os.path.join(root, d)):
-            for line in sh(['nm', '-D', '--undefined-only', os.path.join(root, d, f)]).splitlines():
-                if line.split():
-                    imported.add(line.split()[-1].split('@')[0])
-    for lib in STUBS:
-        print(f'stub {lib}: {make_stub(lib, imported, os.path.join(root, "lib"))} symbols')
     # The test runner has the source and goldens folders compiled in (VTLOC_SOURCE_DIR,
     # VTLOC_BUILD_GOLDENS_DIR); run.sh links the first and writes the goldens into the second.
     cache = open(os.path.join(B, 'CMakeCache.txt')).read()

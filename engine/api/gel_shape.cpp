@@ -4,13 +4,13 @@
 #include <cstdio>
 #include <filesystem>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "base/atomic_write.h"
 
 #include "engine/api/api_internal.h"
 #include "engine/io/image.h"
+#include "engine/io/image_mat.h"
 #include "engine/sensor/gel_shape_gpu.h"
 #include "engine/sensor/lighting.h"
 
@@ -84,12 +84,6 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
 
 namespace {
 
-void write_png(const std::string& path, const cv::Mat& m) {
-    std::vector<uint8_t> png;
-    if (!cv::imencode(".png", m, png)) throw Error(path + ": cannot encode the PNG");
-    write_file_atomic(path, png.data(), png.size());
-}
-
 // A grey map in [0, top] as a 3-channel panel, scaled up and captioned.
 cv::Mat panel(const cv::Mat& bgr, const std::string& caption, int scale) {
     cv::Mat big;
@@ -121,7 +115,7 @@ std::vector<std::string> write_gel_shape(const std::string& dir, const GelShape&
         const std::string height = dir + "/height.png", ply = dir + "/shape.ply", pic = dir + "/shape.png";
         cv::Mat um(H, W, CV_16UC1);
         for (size_t i = 0; i < HW; ++i) um.ptr<uint16_t>()[i] = uint16_t(std::clamp(std::lround(double(s.depth_mm[i]) * 1000.0), 0L, 65535L));
-        write_png(height, um);
+        io::write_png(height, um);
         std::string text;
         size_t n = 0;
         char line[96];
@@ -149,7 +143,7 @@ std::vector<std::string> write_gel_shape(const std::string& dir, const GelShape&
         cv::hconcat(std::vector<cv::Mat>{panel(f, "frame", k), panel(coloured(slope, H, W, 1.5), "slope (0..1.5)", k),
                                          panel(coloured(s.depth_mm, H, W, deepest), cap, k), panel(coloured(mask, H, W, 1), "contact", k)},
                     sheet);
-        write_png(pic, sheet);
+        io::write_png(pic, sheet);
         return std::vector<std::string>{height, ply, pic};
     });
 }

@@ -1,26 +1,13 @@
 #include "engine/io/image.h"
 
+#include <cmath>
 #include <cstring>
-
-#include <opencv2/core.hpp>
-#include <opencv2/core/utils/logger.hpp>
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "engine/io/file_bytes.h"
 
 namespace vtloc::io {
 
 namespace {
-
-// OpenCV logs its own warnings for undecodable data; our Error says it once.
-void quiet_opencv() {
-    static const bool once = [] {
-        cv::utils::logging::setLogLevel(cv::utils::logging::LOG_LEVEL_ERROR);
-        return true;
-    }();
-    (void)once;
-}
 
 uint32_t be16(const uint8_t* p) { return uint32_t(p[0]) << 8 | p[1]; }
 uint32_t be32(const uint8_t* p) { return be16(p) << 16 | be16(p + 2); }
@@ -30,9 +17,9 @@ uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | 
 // below what would let a forged header allocate gigabytes.
 constexpr uint32_t kMaxImageSide = 8192;
 
-// OpenCV picks a decoder by content, and Debian's also reads DICOM, NITF and
-// more through GDCM and GDAL (a fuzzer led a ".png" into a 2.6 GB DICOM
-// allocation): only PNG, JPEG and BMP reach it, with their size checked first.
+// Only PNG, JPEG and BMP are decoded, and their size is read from the header
+// before any decoder allocates for it (when OpenCV decoded, a fuzzer led a
+// ".png" with a DICOM body into a 2.6 GB allocation).
 void check_format(const std::vector<uint8_t>& b, const std::string& path) {
     const size_t n = b.size();
     uint32_t w = 0, h = 0;
@@ -60,89 +47,59 @@ void check_format(const std::vector<uint8_t>& b, const std::string& path) {
                        std::to_string(kMaxImageSide) + " a side is read");
 }
 
-// Decodes a PNG, JPEG or BMP file as stored (depth, channels), or throws naming the file.
-cv::Mat decode(const std::string& path) {
-    quiet_opencv();
+}  // namespace
+
+StoredImage read_image_file(const std::string& path) {
     std::vector<uint8_t> bytes = read_file_bytes(path);
     if (bytes.empty()) fail(path, "file is empty, not an image");
     check_format(bytes, path);
-    cv::Mat raw;
-    try {
-        // IMREAD_UNCHANGED keeps grey/alpha/16-bit visible to us and skips EXIF rotation.
-        raw = cv::imdecode(bytes, cv::IMREAD_UNCHANGED);
-    } catch (const cv::Exception& e) {
-        fail(path, "cannot decode image (" + e.msg + ")");
-    }
-    if (raw.empty()) {
-        // imdecode cannot tell us why; the signature check says whether any codec claims the bytes.
-        bool known = false;
-        try {
-            known = cv::haveImageReader(path);
-        } catch (const cv::Exception&) {
-        }
-        fail(path, known ? "image data is corrupt or truncated" : "not an image (no image format recognised)");
-    }
-    return raw;
+    return decode_image(bytes, path);
 }
 
-}  // namespace
-
 RgbImage load_tactile_image(const std::string& path) {
-    cv::Mat raw = decode(path);
-    if (raw.depth() == CV_16U) {
-        raw.convertTo(raw, CV_8U, 1.0 / 257.0);  // 65535 -> 255
-    } else if (raw.depth() != CV_8U) {
-        fail(path, "unsupported pixel type (only 8- and 16-bit integer images are read)");
-    }
-    cv::Mat rgb;
-    switch (raw.channels()) {
-        case 1: cv::cvtColor(raw, rgb, cv::COLOR_GRAY2RGB); break;
-        case 3: cv::cvtColor(raw, rgb, cv::COLOR_BGR2RGB); break;
-        case 4: cv::cvtColor(raw, rgb, cv::COLOR_BGRA2RGB); break;
-        default: fail(path, "unsupported image with " + std::to_string(raw.channels()) + " channels");
-    }
-    if (rgb.rows < kMinImageSide || rgb.cols < kMinImageSide)
-        fail(path, "image is " + std::to_string(rgb.cols) + "x" + std::to_string(rgb.rows) +
+    const StoredImage raw = read_image_file(path);
+    if (raw.width < kMinImageSide || raw.height < kMinImageSide)
+        fail(path, "image is " + std::to_string(raw.width) + "x" + std::to_string(raw.height) +
                        " pixels; at least " + std::to_string(kMinImageSide) + "x" +
                        std::to_string(kMinImageSide) + " needed");
-    RgbImage out(rgb.rows, rgb.cols);
-    for (int y = 0; y < rgb.rows; ++y)
-        std::memcpy(out.at(y, 0), rgb.ptr<uint8_t>(y), size_t(rgb.cols) * 3);
+    // Grey (+ alpha) replicated, alpha dropped, 16 bits rounded to 8 (65535 -> 255).
+    RgbImage out(raw.height, raw.width);
+    const size_t n = size_t(raw.width) * size_t(raw.height);
+    const int c = raw.channels;
+    for (size_t i = 0; i < n; ++i) {
+        for (int k = 0; k < 3; ++k) {
+            const size_t s = i * size_t(c) + size_t(c < 3 ? 0 : k);
+            out.pixels[i * 3 + size_t(k)] =
+                raw.bits == 16 ? uint8_t(std::lround(raw.samples16()[s] / 257.0)) : raw.data[s];
+        }
+    }
     return out;
 }
 
 DepthImage load_depth_image(const std::string& path) {
-    cv::Mat raw = decode(path);
-    if (raw.channels() != 1 || raw.depth() != CV_16U)
-        fail(path, "a depth image must be a single-channel 16-bit PNG, got " + std::to_string(raw.channels()) +
-                       " channel(s) of " + (raw.depth() == CV_8U ? "8" : raw.depth() == CV_16U ? "16" : "other") +
-                       "-bit values");
-    DepthImage out{raw.rows, raw.cols, std::vector<uint16_t>(size_t(raw.rows) * size_t(raw.cols))};
-    for (int y = 0; y < raw.rows; ++y)
-        std::memcpy(&out.depth[size_t(y) * size_t(raw.cols)], raw.ptr<uint16_t>(y), size_t(raw.cols) * 2);
+    const StoredImage raw = read_image_file(path);
+    if (raw.channels != 1 || raw.bits != 16)
+        fail(path, "a depth image must be a single-channel 16-bit PNG, got " + std::to_string(raw.channels) +
+                       " channel(s) of " + std::to_string(raw.bits) + "-bit values");
+    DepthImage out{raw.height, raw.width, std::vector<uint16_t>(size_t(raw.height) * size_t(raw.width))};
+    std::memcpy(out.depth.data(), raw.data.data(), raw.data.size());
     return out;
 }
 
 MaskImage load_mask_image(const std::string& path) {
-    cv::Mat raw = decode(path);
-    if (raw.channels() != 1) fail(path, "a mask must be a single-channel image, got " + std::to_string(raw.channels()) + " channels");
-    MaskImage out{raw.rows, raw.cols, std::vector<uint8_t>(size_t(raw.rows) * size_t(raw.cols))};
-    for (int y = 0; y < raw.rows; ++y)
-        for (int x = 0; x < raw.cols; ++x)
-            out.on[size_t(y) * size_t(raw.cols) + size_t(x)] =
-                raw.depth() == CV_16U ? raw.at<uint16_t>(y, x) != 0 : raw.depth() == CV_8U ? raw.at<uint8_t>(y, x) != 0 : 0;
-    if (raw.depth() != CV_8U && raw.depth() != CV_16U) fail(path, "a mask must hold 8- or 16-bit integers");
+    const StoredImage raw = read_image_file(path);
+    if (raw.channels != 1) fail(path, "a mask must be a single-channel image, got " + std::to_string(raw.channels) + " channels");
+    MaskImage out{raw.height, raw.width, std::vector<uint8_t>(size_t(raw.height) * size_t(raw.width))};
+    for (size_t i = 0; i < out.on.size(); ++i) out.on[i] = raw.bits == 16 ? raw.samples16()[i] != 0 : raw.data[i] != 0;
     return out;
 }
 
 void save_png(const std::string& path, const RgbImage& image) {
-    quiet_opencv();
     if (image.height <= 0 || image.width <= 0) fail(path, "cannot write an empty image");
-    cv::Mat rgb(image.height, image.width, CV_8UC3, const_cast<uint8_t*>(image.pixels.data()));
-    cv::Mat bgr;
-    cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-    std::vector<uint8_t> png;
-    if (!cv::imencode(".png", bgr, png)) fail(path, "PNG encoding failed");
+    StoredImage im;
+    im.height = image.height, im.width = image.width, im.channels = 3, im.bits = 8;
+    im.data = image.pixels;
+    const std::vector<uint8_t> png = encode_png(im, path);
     write_file_atomic(path, png.data(), png.size());
 }
 

@@ -1,8 +1,10 @@
 #pragma once
-// Tactile images: any PNG/JPEG/... file OpenCV decodes, as 8-bit RGB.
+// Tactile frames, depth images and masks from PNG, JPEG or BMP files (engine/io/image_codec.h).
 #include <cstdint>
 #include <string>
 #include <vector>
+
+#include "engine/io/image_codec.h"
 
 namespace vtloc::io {
 
@@ -43,6 +45,10 @@ struct MaskImage {
     std::vector<uint8_t> on;  // 0/1, row-major
 };
 MaskImage load_mask_image(const std::string& path);
+
+// A PNG, JPEG or BMP file's pixels as stored, its header's size checked
+// (at most 8192 a side) before decoding; throws naming the file.
+StoredImage read_image_file(const std::string& path);
 
 // Writes a PNG (lossless, so a frame survives a round trip bit for bit).
 void save_png(const std::string& path, const RgbImage& image);

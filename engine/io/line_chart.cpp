@@ -3,11 +3,10 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "base/atomic_write.h"
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 
 namespace vtloc::io {
 
@@ -86,9 +85,7 @@ void save_line_chart_png(const std::string& path, const LineChart& c) {
         else cv::line(img, cv::Point(R + 15, ly), cv::Point(R + 45, ly), col, 2, cv::LINE_AA);
         text(img, s.name, cv::Point(R + 52, ly + 5), 0.42);
     }
-    std::vector<uint8_t> png;
-    if (!cv::imencode(".png", img, png)) throw Error(path + ": cannot encode the chart");
-    write_file_atomic(path, png.data(), png.size());
+    write_png(path, img);
 }
 
 }  // namespace vtloc::io

@@ -11,12 +11,12 @@
 #include <mutex>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 #include <sstream>
 #include <thread>
 
 #include "base/error.h"
+#include "engine/io/image.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/splitmix64.h"
 #include "engine/sim/partial_view.h"
@@ -108,8 +108,9 @@ void check_options(const std::vector<ObjectSource>& objects, const BuildOptions&
 std::vector<float> user_background(const BuildOptions& opt, const Calibration& calib) {
     std::vector<float> background;
     if (opt.background.empty()) return background;
-    cv::Mat bg = cv::imread(opt.background, cv::IMREAD_COLOR);
-    if (bg.empty()) throw Error(opt.background + ": cannot read the background image");
+    const io::RgbImage rgb = io::load_tactile_image(opt.background);  // names the file when it cannot
+    cv::Mat bg;
+    cv::cvtColor(cv::Mat(rgb.height, rgb.width, CV_8UC3, const_cast<uint8_t*>(rgb.pixels.data())), bg, cv::COLOR_RGB2BGR);
     if (bg.rows != calib.height || bg.cols != calib.width)
         cv::resize(bg, bg, cv::Size(calib.width, calib.height), 0, 0, cv::INTER_AREA);
     background.assign(size_t(calib.height) * size_t(calib.width) * 3, 0);

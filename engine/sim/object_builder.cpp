@@ -9,9 +9,10 @@
 #include <fstream>
 #include <nlohmann/json.hpp>
 #include <numeric>
-#include <opencv2/imgcodecs.hpp>
+#include <opencv2/core.hpp>
 
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/splitmix64.h"
 #include "engine/sim/shapes.h"
@@ -108,7 +109,7 @@ TouchRecord record(const Touch& t, int id, const std::string& split, const Touch
 
 void write_png(const fs::path& p, const std::vector<uint8_t>& img, int h, int w) {
     cv::Mat m(h, w, CV_8UC3, const_cast<uint8_t*>(img.data()));
-    if (!cv::imwrite(p.string(), m)) throw Error(p.string() + ": cannot write the PNG");
+    io::write_png(p.string(), m);
 }
 
 // The touch's frame, and with --indentation its indentation map beside it
@@ -121,7 +122,7 @@ void write_touch(const fs::path& dir, const TouchRecord& r, const Touch& t, int 
         d.ptr<uint16_t>()[i] = uint16_t(std::clamp(std::lround(double(t.indentation_mm[size_t(i)]) * 1000.0), 0L, 65535L));
     fs::path p = dir / r.image;
     p.replace_extension(".depth.png");
-    if (!cv::imwrite(p.string(), d)) throw Error(p.string() + ": cannot write the PNG");
+    io::write_png(p.string(), d);
 }
 
 }  // namespace

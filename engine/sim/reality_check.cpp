@@ -8,10 +8,10 @@
 #include <map>
 #include <string>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "base/error.h"
+#include "engine/io/image_mat.h"
 #include "engine/sim/primitives.h"
 #include "engine/sim/touch_renderer.h"
 
@@ -67,13 +67,7 @@ void write_side_by_side(const std::string& path, const Calibration& c, const Rea
                       f.index, f.annotated_r, f.radius_ratio, f.centre_dist, f.drgb_inside, f.drgb_outside);
         cv::putText(canvas, label, {6, y0 + 19}, cv::FONT_HERSHEY_SIMPLEX, 0.45, {255, 255, 255}, 1, cv::LINE_AA);
     }
-    bool ok = false;
-    try {
-        ok = cv::imwrite(path, canvas);
-    } catch (const cv::Exception&) {
-        ok = false;
-    }
-    if (!ok) throw Error(path + ": cannot write the reality-check picture");
+    io::write_png(path, canvas);
 }
 
 // Residual offsets after the best quadratic-in-position fit (RealityReport).

@@ -1,4 +1,4 @@
-// The tactile image path: a file decoded by OpenCV, checked and converted to RGB,
+// The tactile image path: a PNG, JPEG or BMP file decoded (engine/io/image_codec.cpp),
 // then the model's input tensor; also the 16-bit depth-image path.
 #include "base/error.h"
 #include "engine/io/image.h"

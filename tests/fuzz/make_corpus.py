@@ -107,6 +107,18 @@ def main():
     put("image", "rgb_16x12.png", b"\0" + png(16, 12, 3, 8, rgb))
     depth = b"".join(struct.pack(">H", 400 + x + y) for y in range(6) for x in range(8))
     put("image", "depth_8x6.png", b"\1" + png(8, 6, 1, 16, depth))
+    # JPEG (baseline, progressive, grey) through PIL's libjpeg; a bottom-up 24-bit BMP by hand.
+    import io
+    from PIL import Image
+    frame = Image.frombytes("RGB", (16, 12), rgb)
+    for name, im, opts in (("baseline.jpg", frame, {"quality": 90}), ("progressive.jpg", frame, {"progressive": True}),
+                           ("grey.jpg", frame.convert("L"), {})):
+        buf = io.BytesIO()
+        im.save(buf, "JPEG", **opts)
+        put("image", name, b"\0" + buf.getvalue())
+    bmp_pixels = b"".join(bytes(rgb[(y * 16 + x) * 3 + c] for x in range(16) for c in (2, 1, 0)) for y in reversed(range(12)))
+    put("image", "rgb_16x12.bmp", b"\0" + b"BM" + struct.pack("<IHHI", 54 + len(bmp_pixels), 0, 0, 54) +
+        struct.pack("<IiiHHIIiiII", 40, 16, 12, 1, 24, 0, len(bmp_pixels), 2835, 2835, 0, 0) + bmp_pixels)
 
     small = os.path.join(HERE, "..", "..", "build", "tests", "synth", "out", "small")
     parts = []
