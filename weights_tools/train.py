@@ -2,13 +2,15 @@
 
   python3 -m weights_tools.train --config vtloc-lite --data DIR --out RUN_DIR
       [--minutes M] [--steps S] [--seed 0] [--batch 16] [--lambda 1.0] [--resume]
-      [--export-only] [--init-tactile PRETRAIN_RUN/tactile.pt [--freeze-tactile]]
+      [--export-only] [--init-tactile PRETRAIN_RUN/tactile.pt [--freeze-tactile]] [--keep-best]
 
 Trains on the ``train`` and ``extra`` touches of the ``seen`` objects; a fixed share of
 each seen object's ``train`` contacts is held out for validation (test touches are never
 read).  A batch holds touches of one object, so the point encoder runs once per batch.
 Writes RUN_DIR/checkpoint.pt (atomically, every few minutes), RUN_DIR/log.csv and at the
-end RUN_DIR/model.safetensors with ``vtloc.provenance`` metadata.  See docs/training.md.
+end RUN_DIR/model.safetensors with ``vtloc.provenance`` metadata; with --keep-best also
+RUN_DIR/best.pt (the checkpoint of the lowest validation ND so far) and, at the end, its
+export RUN_DIR/model-best.safetensors.  See docs/training.md.
 """
 
 import argparse
@@ -181,6 +183,7 @@ def load_checkpoint(args, ckpt_path):
     args.groups = saved.get("groups", 1)
     args.init_tactile = saved.get("init_tactile")
     args.freeze_tactile = saved.get("freeze_tactile", False)
+    args.keep_best = saved.get("keep_best", False)
     args.first_argv = saved.get("first_argv", args.argv)
     return ckpt
 
@@ -212,6 +215,7 @@ class Trainer:
         self.sampler = Sampler(self.objects, args.batch, args.seed, args.groups)
         self.gen = torch.Generator().manual_seed(args.seed)
         self.step, self.elapsed = 0, 0.0
+        self.best_nd = None  # --keep-best: the lowest validation ND so far (kept in the checkpoint)
         if ckpt is not None:
             self._restore(ckpt)
         self.budget_s = None if args.minutes is None else 60.0 * args.minutes
@@ -228,6 +232,7 @@ class Trainer:
             self.match.load_state_dict(ckpt["match"])
         self.opt.load_state_dict(ckpt["optimizer"])
         self.step, self.elapsed = ckpt["step"], ckpt["elapsed_s"]
+        self.best_nd = ckpt.get("best_val_nd")
         self.sampler.load(ckpt["sampler"])
         self.gen.set_state(ckpt["aug_rng"])
         torch.set_rng_state(ckpt["torch_rng"])
@@ -245,12 +250,13 @@ class Trainer:
         args = self.args
         save_atomic({"state_dict": self.model.state_dict(), "optimizer": self.opt.state_dict(),
                      "step": self.step, "elapsed_s": self.elapsed, "sampler": self.sampler.state(),
+                     "best_val_nd": self.best_nd,
                      "aug_rng": self.gen.get_state(), "torch_rng": torch.get_rng_state(), "config": self.cfg,
                      "match": None if self.match is None else self.match.state_dict(), "args": {
                          k: getattr(args, k) for k in ("config", "seed", "batch", "lam", "lr", "minutes",
                                                        "steps", "val_fraction", "rotate", "match",
                                                        "feature_scale", "groups", "init_tactile", "freeze_tactile",
-                                                       "first_argv")}},
+                                                       "keep_best", "first_argv")}},
                     self.ckpt_path)
 
     def train_step(self, warmup):
@@ -273,11 +279,18 @@ class Trainer:
         return loss, seq, rec, aux
 
     def validate_and_checkpoint(self, log, last_ckpt):
-        """Validation row, checkpoint and (--keep-every) its timed copy -> (loss, ND)."""
+        """Validation row, checkpoint, (--keep-every) its timed copy and (--keep-best) its
+        copy as best.pt when the validation ND is the run's lowest -> (loss, ND)."""
         args = self.args
         val = validate_calibrated(self.model, self.objects, args.lam)
         log.write(step=self.step, elapsed_s=self.elapsed, val_loss=val[0], val_nd=val[1])
+        better = args.keep_best and val[1] is not None and (self.best_nd is None or val[1] < self.best_nd)
+        if better:
+            self.best_nd = val[1]
         self.checkpoint()
+        if better:
+            shutil.copyfile(self.ckpt_path, os.path.join(args.out, "best.pt.tmp"))
+            os.replace(os.path.join(args.out, "best.pt.tmp"), os.path.join(args.out, "best.pt"))
         if args.keep_every and int(self.elapsed / (60 * args.keep_every)) > int(last_ckpt / (60 * args.keep_every)):
             # the equal-budget comparisons need this run as it stood at a shorter budget
             mark = int(self.elapsed / (60 * args.keep_every)) * args.keep_every
@@ -344,6 +357,24 @@ class Trainer:
         print(f"{step} steps in {elapsed / 60:.1f} min ({step * args.batch / max(elapsed, 1e-9):.0f} "
               f"touches/s); validation ND {val[1] if val[1] is None else round(val[1], 2)} %; "
               f"wrote {out}", file=sys.stderr)
+        if args.keep_best:
+            self.export_best()
+
+    def export_best(self):
+        """RUN_DIR/model-best.safetensors from best.pt: the weights of the run's lowest
+        validation ND, statistics recomputed and validated again for the provenance."""
+        args, objects = self.args, self.objects
+        path = os.path.join(args.out, "best.pt")
+        if not os.path.exists(path):
+            raise ValueError(f"{path}: missing (no validation ran with --keep-best)")
+        best = load_file(path, "checkpoint", ("state_dict", "step", "elapsed_s"))
+        model = make_model(self.cfg, args.seed)
+        model.load_state_dict(best["state_dict"])
+        calibrate_point_bn(model, objects)
+        val = validate(model, objects, args.lam)
+        out = os.path.join(args.out, "model-best.safetensors")
+        export_weights(model, out, provenance(args, self.ds, objects, best["step"], best["elapsed_s"], val))
+        print(f"best validation ND {round(val[1], 2)} % at step {best['step']}; wrote {out}", file=sys.stderr)
 
 
 def run(args):
@@ -394,6 +425,8 @@ def parse_args(argv=None):
     ap.add_argument("--log-every", type=int, default=25)
     ap.add_argument("--keep-every", type=float, default=0,
                     help="also keep the checkpoint as checkpoint-<M>min.pt every M minutes of training")
+    ap.add_argument("--keep-best", action="store_true",
+                    help="keep the checkpoint of the lowest validation ND as best.pt; export it too, as model-best.safetensors")
     ap.add_argument("--threads", type=int, default=0, help="torch threads (0: all cores)")
     ap.add_argument("--resume", action="store_true", help="continue RUN_DIR/checkpoint.pt to its budget")
     ap.add_argument("--export-only", action="store_true", help="export RUN_DIR/checkpoint.pt and stop")

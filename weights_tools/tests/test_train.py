@@ -119,6 +119,29 @@ def test_training_lowers_loss_and_resumes(data_dir, tiny, tmp_path):
                         "-o", str(tmp_path / "w.safetensors")]) == 0
 
 
+def test_keep_best_keeps_and_exports_the_lowest_validation(data_dir, tmp_path):
+    """--keep-best: best.pt is the checkpoint of the lowest validation ND in log.csv, a
+    resumed run keeps the same one, and model-best.safetensors is its export."""
+    # validation after every step; a large learning rate, so that the lowest is not the last
+    run = ["--steps", "12", "--ckpt-minutes", "0", "--keep-best", "--lr", "0.01"]
+    train.run(train.parse_args(_args(data_dir, tmp_path / "a", *run)))
+    b = tmp_path / "b"
+    train.run(train.parse_args(_args(data_dir, b, *run, "--stop-after", "5")))
+    train.run(train.parse_args(["--data", data_dir, "--out", str(b), "--resume", "--threads", "1",
+                                "--ckpt-minutes", "0"]))  # --keep-best comes from the checkpoint
+    for d in (tmp_path / "a", b):
+        with open(d / "log.csv") as f:
+            rows = [(float(r["val_nd"]), int(r["step"])) for r in csv.DictReader(f) if r["val_nd"]]
+        assert len(rows) == 12
+        nd, step = min(rows, key=lambda r: (r[0], r[1]))
+        assert step < 12 and torch.load(d / "best.pt")["step"] == step, rows  # the run ends elsewhere
+        _, meta = safetensors_io.load(str(d / "model-best.safetensors"))
+        prov = json.loads(meta["vtloc.provenance"])
+        assert prov["steps"] == step and abs(prov["val_nd"] - nd) <= 1e-4
+    ta, tb = torch.load(tmp_path / "a" / "best.pt")["state_dict"], torch.load(b / "best.pt")["state_dict"]
+    assert all(torch.allclose(ta[k].double(), tb[k].double(), atol=1e-6) for k in ta)
+
+
 def test_mcr_head_trains(data_dir, tmp_path):
     m, step, _ = train.run(train.parse_args(
         ["--config", "vtloc-mcr-tiny", "--data", data_dir, "--out", str(tmp_path), "--steps", "3",
