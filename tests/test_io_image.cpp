@@ -92,13 +92,22 @@ TEST_CASE("grey, alpha, 16-bit, JPEG and BMP images", "[io]") {
     RgbImage a = load_tactile_image(temp_path("alpha.png"));
     CHECK((a.at(7, 7)[0] == 30 && a.at(7, 7)[1] == 20 && a.at(7, 7)[2] == 10));
 
-    cv::Mat deep(8, 8, CV_16UC3, cv::Scalar(0, 65535, 257 * 100));
+    // Samples whose high and low bytes differ, so that a swap of red and blue that
+    // moved single bytes instead of whole samples would show.
+    cv::Mat deep(8, 8, CV_16UC3, cv::Scalar(0x0102, 65535, 0x1234));
     write_png(temp_path("deep.png"), deep);
     RgbImage d = load_tactile_image(temp_path("deep.png"));
-    CHECK((d.at(0, 0)[0] == 100 && d.at(0, 0)[1] == 255 && d.at(0, 0)[2] == 0));
+    CHECK((d.at(0, 0)[0] == 18 && d.at(0, 0)[1] == 255 && d.at(0, 0)[2] == 1));  // 0x1234 / 257 = 18.1
     const cv::Mat deep_again = read_mat(temp_path("deep.png"));  // as stored: 16 bits, BGR
     REQUIRE(deep_again.type() == CV_16UC3);
     CHECK(cv::norm(deep_again, deep, cv::NORM_INF) == 0);
+    cv::Mat deep4(3, 5, CV_16UC4, cv::Scalar(0x0102, 0x0304, 0x0506, 0x0708));
+    write_png(temp_path("deep4.png"), deep4);
+    const StoredImage stored4 = read_image_file(temp_path("deep4.png"));  // RGBA order in the file
+    REQUIRE((stored4.channels == 4 && stored4.bits == 16));
+    CHECK((stored4.sample16(0) == 0x0506 && stored4.sample16(1) == 0x0304 && stored4.sample16(2) == 0x0102 &&
+           stored4.sample16(3) == 0x0708));
+    CHECK(cv::norm(read_mat(temp_path("deep4.png")), deep4, cv::NORM_INF) == 0);
     {
         cv::Mat depth(5, 7, CV_16UC1);
         for (int i = 0; i < 35; ++i) depth.at<uint16_t>(i / 7, i % 7) = uint16_t(i * 1871 + 3);  // high and low bytes differ

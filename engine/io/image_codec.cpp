@@ -167,9 +167,48 @@ bool is_png(const std::vector<uint8_t>& b) { return b.size() >= 8 && std::memcmp
 bool is_jpeg(const std::vector<uint8_t>& b) { return b.size() >= 3 && b[0] == 0xFF && b[1] == 0xD8 && b[2] == 0xFF; }
 bool is_bmp(const std::vector<uint8_t>& b) { return b.size() >= 2 && b[0] == 'B' && b[1] == 'M'; }
 
+uint32_t be16(const uint8_t* p) { return uint32_t(p[0]) << 8 | p[1]; }
+uint32_t be32(const uint8_t* p) { return be16(p) << 16 | be16(p + 2); }
+uint32_t le32(const uint8_t* p) { return uint32_t(p[0]) | uint32_t(p[1]) << 8 | uint32_t(p[2]) << 16 | uint32_t(p[3]) << 24; }
+
+// The largest side accepted: far above any tactile frame or depth camera, far
+// below what would let a forged header allocate gigabytes.
+constexpr uint32_t kMaxImageSide = 8192;
+
+// Only PNG, JPEG and BMP are decoded, and their size is read from the header
+// before any decoder allocates for it (when OpenCV decoded, a fuzzer led a
+// ".png" with a DICOM body into a 2.6 GB allocation).
+void check_header(const std::vector<uint8_t>& b, const std::string& path) {
+    const size_t n = b.size();
+    uint32_t w = 0, h = 0;
+    if (is_png(b) && n >= 24 && std::memcmp(&b[12], "IHDR", 4) == 0) {
+        w = be32(&b[16]), h = be32(&b[20]);
+    } else if (is_bmp(b) && n >= 26) {
+        w = le32(&b[18]);
+        const int32_t sh = int32_t(le32(&b[22]));  // negative: rows stored top-down
+        h = sh < 0 ? uint32_t(-int64_t(sh)) : uint32_t(sh);
+    } else if (is_jpeg(b)) {
+        for (size_t i = 2; i + 9 < n && !w;) {  // segments until a start-of-frame marker
+            if (b[i] != 0xFF) fail(path, "JPEG data is corrupt (no marker where one belongs)");
+            const uint8_t m = b[i + 1];
+            if (m == 0xFF) { ++i; continue; }
+            if (m == 0xDA || m == 0xD9) break;  // scan data or end before any frame header
+            if (m >= 0xC0 && m <= 0xCF && m != 0xC4 && m != 0xC8 && m != 0xCC) h = be16(&b[i + 5]), w = be16(&b[i + 7]);
+            i += 2 + be16(&b[i + 2]);
+        }
+        if (!w || !h) fail(path, "JPEG data is corrupt (no frame header with the image size)");
+    } else {
+        fail(path, "not an image this engine reads (PNG, JPEG or BMP; other formats are refused)");
+    }
+    if (w == 0 || h == 0 || w > kMaxImageSide || h > kMaxImageSide)
+        fail(path, "the image header says " + std::to_string(w) + "x" + std::to_string(h) + " pixels; at most " +
+                       std::to_string(kMaxImageSide) + " a side is read");
+}
+
 }  // namespace
 
 StoredImage decode_image(const std::vector<uint8_t>& bytes, const std::string& path) {
+    check_header(bytes, path);
     StoredImage im;
     if (is_png(bytes)) {
         PngIo io;
@@ -193,6 +232,19 @@ StoredImage decode_image(const std::vector<uint8_t>& bytes, const std::string& p
     }
     if (im.width <= 0 || im.height <= 0) fail(path, "the image has no pixels");
     return im;
+}
+
+uint16_t StoredImage::sample16(size_t i) const {
+    uint16_t v = 0;
+    std::memcpy(&v, data.data() + 2 * i, 2);
+    return v;
+}
+
+void StoredImage::swap_red_blue() {
+    if (channels < 3) return;
+    const size_t sample = size_t(bits / 8), pixel = sample * size_t(channels);
+    for (size_t p = 0; p + pixel <= data.size(); p += pixel)
+        for (size_t k = 0; k < sample; ++k) std::swap(data[p + k], data[p + 2 * sample + k]);
 }
 
 std::vector<uint8_t> encode_png(const StoredImage& im, const std::string& path) {

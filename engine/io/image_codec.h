@@ -16,11 +16,15 @@ struct StoredImage {
     std::vector<uint8_t> data;  // rows top-down, height * width * channels * bits / 8 bytes
 
     size_t row_bytes() const { return size_t(width) * size_t(channels) * size_t(bits / 8); }
-    const uint16_t* samples16() const { return reinterpret_cast<const uint16_t*>(data.data()); }
+    // Sample i of a 16-bit image (copied out: the bytes need not be aligned for uint16_t).
+    uint16_t sample16(size_t i) const;
+    // Swaps the first and third channel of 3- and 4-channel pixels (RGB <-> BGR), at 8 or 16 bits.
+    void swap_red_blue();
 };
 
-// Decodes PNG, JPEG or BMP bytes (chosen by their signature). Palette and
-// sub-8-bit PNGs come out as 8-bit, a PNG's transparency colour as alpha;
+// Decodes PNG, JPEG or BMP bytes (chosen by their signature); the header's size
+// is checked (at most 8192 a side) before any decoder allocates for it. Palette
+// and sub-8-bit PNGs come out as 8-bit, a PNG's transparency colour as alpha;
 // JPEG comes out grey or RGB. Throws vtloc::Error("<path>: <problem>").
 StoredImage decode_image(const std::vector<uint8_t>& bytes, const std::string& path);
 

@@ -6,21 +6,11 @@
 #include <cstring>
 #include <opencv2/core.hpp>
 #include <string>
-#include <utility>
 
 #include "engine/io/file_bytes.h"
 #include "engine/io/image.h"
 
 namespace vtloc::io {
-
-namespace detail {
-// Swaps the first and third channel of 3- and 4-channel pixels (BGR <-> RGB), in place.
-template <typename T>
-void swap_red_blue(T* p, size_t pixels, int channels) {
-    if (channels < 3) return;
-    for (size_t i = 0; i < pixels; ++i) std::swap(p[i * size_t(channels)], p[i * size_t(channels) + 2]);
-}
-}  // namespace detail
 
 inline StoredImage stored_from_mat(const cv::Mat& m, const std::string& path) {
     if (m.empty()) fail(path, "cannot write an empty image");
@@ -30,11 +20,7 @@ inline StoredImage stored_from_mat(const cv::Mat& m, const std::string& path) {
     if (im.channels > 4) fail(path, "a PNG holds at most 4 channels");
     im.data.resize(im.row_bytes() * size_t(im.height));
     for (int y = 0; y < m.rows; ++y) std::memcpy(&im.data[size_t(y) * im.row_bytes()], m.ptr(y), im.row_bytes());
-    const size_t n = size_t(m.rows) * size_t(m.cols);
-    if (im.bits == 16)
-        detail::swap_red_blue(reinterpret_cast<uint16_t*>(im.data.data()), n, im.channels);
-    else
-        detail::swap_red_blue(im.data.data(), n, im.channels);
+    im.swap_red_blue();
     return im;
 }
 
@@ -53,11 +39,7 @@ inline void write_png(const std::string& path, const cv::Mat& m) {
 inline cv::Mat read_mat(const std::string& path) {
     StoredImage im = read_image_file(path);
     cv::Mat m(im.height, im.width, CV_MAKETYPE(im.bits == 16 ? CV_16U : CV_8U, im.channels));
-    const size_t n = size_t(im.height) * size_t(im.width);
-    if (im.bits == 16)
-        detail::swap_red_blue(reinterpret_cast<uint16_t*>(im.data.data()), n, im.channels);
-    else
-        detail::swap_red_blue(im.data.data(), n, im.channels);
+    im.swap_red_blue();
     for (int y = 0; y < m.rows; ++y) std::memcpy(m.ptr(y), &im.data[size_t(y) * im.row_bytes()], im.row_bytes());
     return m;
 }
