@@ -1,0 +1,11 @@
+# Read by ctest before it starts any test (TEST_INCLUDE_FILES); the tests inherit
+# ctest's environment.
+#
+# OpenBLAS is loaded by every test process (OpenCV's core links LAPACK) though the
+# engine never calls it, and at load it starts a thread per core that spins on
+# sched_yield for about 0.1 s: 0.14 s of CPU in each of ~500 processes, which the
+# README's command, two tests at a time on two cores, paid in wall time. One
+# thread starts none. A user's own setting is kept.
+if(NOT DEFINED ENV{OPENBLAS_NUM_THREADS})
+  set(ENV{OPENBLAS_NUM_THREADS} 1)
+endif()
