@@ -95,11 +95,12 @@ def calibrate_batchnorm(model, gen):
             h.remove()
 
 
-def random_model(cfg, seed):
+def random_model(cfg, seed, dtype=torch.float64):
     """A model with deterministic random weights.  Built and calibrated in
     float64 so the float32 weights do not depend on the machine's float32
-    kernels; returned in float32."""
-    model = model_mod.VTLoc(cfg).double()
+    kernels; returned in float32.  dtype float32 calibrates 2-3x faster, for
+    weights that are made and used on one machine (the paper-size goldens)."""
+    model = model_mod.VTLoc(cfg).to(dtype)
     gen = torch.Generator().manual_seed(int(seed))
     init_random(model, gen)
     calibrate_batchnorm(model, gen)
