@@ -4,6 +4,7 @@
 #include <catch2/catch.hpp>
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <random>
 
 #include "engine/ops/build.h"
@@ -73,6 +74,28 @@ std::vector<MaskInput> mask_inputs(int64_t H, int64_t W, uint32_t seed) {
 }
 
 }  // namespace
+
+TEST_CASE("the table cell of a colour change is the shader's floor and clamp", "[gel]") {
+    // cell_of avoids a call to floor; over a stride of all float bit patterns (the full sweep ran
+    // once: every finite float agrees for these n) and every grey-level difference.
+    int64_t checked = 0, wrong = 0;
+    for (int n : {2, 3, 64, 256}) {
+        auto check = [&](float v) {
+            const float q = std::floor((v + 256.0f) * float(n) / 512.0f);
+            wrong += vtloc::ops::gel::cell_of(v, n) != int(std::clamp(q, 0.0f, float(n - 1)));
+            ++checked;
+        };
+        for (uint64_t b = 0; b < (uint64_t(1) << 32); b += 9973) {
+            const uint32_t u = uint32_t(b);
+            float v = 0;
+            std::memcpy(&v, &u, sizeof v);
+            if (std::isfinite(v)) check(v);
+        }
+        for (int d = -600; d <= 600; ++d) check(float(d));
+    }
+    CHECK(checked > 1700000);
+    CHECK(wrong == 0);
+}
 
 TEST_CASE("gel_gradient matches the CPU reference", "[op][gel][gel_gradient]") {
     struct Case {

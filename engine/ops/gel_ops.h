@@ -9,10 +9,16 @@
 
 namespace vtloc::ops::gel {
 
-// The table cell of a colour change v (an integer grey-level difference, so exact in fp32).
+// The table cell of a colour change v (an integer grey-level difference, so exact in fp32):
+// floor((v + 256) n / 512) clamped to [0, n - 1], as the shader computes it. Without a call to
+// floor (x86-64's baseline SSE2 has no rounding instruction; building the gradient table
+// calls this 51 million times): the same cell for every finite v, checked over every finite
+// float for n = 2, 3, 64 and 256, and by a test on a stride of them.
 inline int cell_of(float v, int n) {
-    const float q = std::floor((v + 256.0f) * float(n) / 512.0f);
-    return int(std::clamp(q, 0.0f, float(n - 1)));
+    const float x = (v + 256.0f) * float(n) / 512.0f;
+    if (!(x >= 0.0f)) return 0;
+    if (x >= float(n - 1)) return n - 1;
+    return int(x);  // truncation is floor for x >= 0
 }
 
 // The gradient the tables give pixel (r, c) for colour change d[3]: the four nearest tiles'

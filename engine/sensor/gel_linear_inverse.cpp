@@ -1,6 +1,7 @@
 #include "engine/sensor/gel_linear_inverse.h"
 
 #include <cmath>
+#include <vector>
 
 #include "base/error.h"
 #include "engine/sensor/gel_shading.h"
@@ -20,6 +21,13 @@ std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) 
             out[ch] = s;
         }
     };
+    // The rings' slopes, the same at every pixel: computed once, not 216 sines and cosines a pixel.
+    std::vector<double> ring_gr, ring_gc;
+    for (int ring = 1; ring <= 6; ++ring)
+        for (int a = 0; a < 36; ++a) {
+            const double mag = max_slope * ring / 6.0, ph = a * M_PI / 18 + 0.01;  // off the bins' edges
+            ring_gr.push_back(mag * std::sin(ph)), ring_gc.push_back(mag * std::cos(ph));
+        }
     std::vector<float> L(size_t(H) * size_t(W) * 6);
     for (int r = 0; r < H; ++r)
         for (int col = 0; col < W; ++col) {
@@ -28,15 +36,13 @@ std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) 
             colour(br, bc, r, col, c0);
             // J from dc = J g over the rings: G = sum g g^T, Y[ch] = sum g dc_ch.
             double G[3] = {0, 0, 0}, Y[3][2] = {};
-            for (int ring = 1; ring <= 6; ++ring)
-                for (int a = 0; a < 36; ++a) {
-                    const double mag = max_slope * ring / 6.0, ph = a * M_PI / 18 + 0.01;  // off the bins' edges
-                    const double gr = mag * std::sin(ph), gc = mag * std::cos(ph);
-                    double c1[3];
-                    colour(br + gr, bc + gc, r, col, c1);
-                    G[0] += gr * gr, G[1] += gr * gc, G[2] += gc * gc;
-                    for (int ch = 0; ch < 3; ++ch) Y[ch][0] += gr * (c1[ch] - c0[ch]), Y[ch][1] += gc * (c1[ch] - c0[ch]);
-                }
+            for (size_t q = 0; q < ring_gr.size(); ++q) {
+                const double gr = ring_gr[q], gc = ring_gc[q];
+                double c1[3];
+                colour(br + gr, bc + gc, r, col, c1);
+                G[0] += gr * gr, G[1] += gr * gc, G[2] += gc * gc;
+                for (int ch = 0; ch < 3; ++ch) Y[ch][0] += gr * (c1[ch] - c0[ch]), Y[ch][1] += gc * (c1[ch] - c0[ch]);
+            }
             const double det = G[0] * G[2] - G[1] * G[1];
             double J[3][2];
             for (int ch = 0; ch < 3; ++ch)

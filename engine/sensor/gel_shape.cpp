@@ -14,29 +14,50 @@ namespace vtloc::sensor {
 
 namespace {
 
-// Empty cells (count 0) take the mean of their filled 6-neighbours, pass after pass.
-void fill_empty(std::vector<double>& val, std::vector<double>& cnt, int n) {
-    std::vector<uint8_t> filled(cnt.size());
-    for (size_t i = 0; i < cnt.size(); ++i) filled[i] = cnt[i] > 0;
-    for (bool any = true; any;) {
-        any = false;
-        std::vector<uint8_t> now = filled;
-        for (int a = 0; a < n; ++a)
-            for (int b = 0; b < n; ++b)
-                for (int c = 0; c < n; ++c) {
-                    const size_t i = (size_t(a) * n + size_t(b)) * n + size_t(c);
-                    if (filled[i]) continue;
-                    double s0 = 0, s1 = 0;
-                    int k = 0;
-                    const int nb[6][3] = {{a - 1, b, c}, {a + 1, b, c}, {a, b - 1, c}, {a, b + 1, c}, {a, b, c - 1}, {a, b, c + 1}};
-                    for (const auto& q : nb) {
-                        if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= n || q[1] >= n || q[2] >= n) continue;
-                        const size_t j = (size_t(q[0]) * n + size_t(q[1])) * n + size_t(q[2]);
-                        if (filled[j]) s0 += val[2 * j], s1 += val[2 * j + 1], ++k;
-                    }
-                    if (k) val[2 * i] = s0 / k, val[2 * i + 1] = s1 / k, now[i] = 1, any = true;
-                }
-        filled.swap(now);
+// Empty cells (count 0) take the mean of their filled 6-neighbours, pass after pass; a pass reads
+// only the cells filled before it. Each pass visits only its front (the empty cells next to a
+// filled one), not every cell: the same means in the same order, a fraction of the work (the
+// whole grid once a pass was most of building the table).
+void fill_empty(std::vector<double>& val, const std::vector<double>& cnt, int n) {
+    const size_t N = cnt.size();
+    std::vector<uint8_t> filled(N), queued(N);
+    for (size_t i = 0; i < N; ++i) filled[i] = cnt[i] > 0;
+    // fn(j) for each neighbour j of cell i inside the grid, in the order -a, +a, -b, +b, -c, +c.
+    auto each_neighbour = [n](size_t i, auto&& fn) {
+        const size_t nn = size_t(n), c = i % nn, b = i / nn % nn, a = i / (nn * nn);
+        if (a > 0) fn(i - nn * nn);
+        if (a + 1 < nn) fn(i + nn * nn);
+        if (b > 0) fn(i - nn);
+        if (b + 1 < nn) fn(i + nn);
+        if (c > 0) fn(i - 1);
+        if (c + 1 < nn) fn(i + 1);
+    };
+    std::vector<size_t> front, next;
+    for (size_t i = 0; i < N; ++i) {
+        if (filled[i]) continue;
+        bool touches = false;
+        each_neighbour(i, [&](size_t j) { touches = touches || filled[j]; });
+        if (touches) front.push_back(i), queued[i] = 1;
+    }
+    std::vector<double> mean;
+    while (!front.empty()) {
+        mean.assign(2 * front.size(), 0.0);
+        for (size_t f = 0; f < front.size(); ++f) {
+            double s0 = 0, s1 = 0;
+            int k = 0;
+            each_neighbour(front[f], [&](size_t j) {
+                if (filled[j]) s0 += val[2 * j], s1 += val[2 * j + 1], ++k;
+            });
+            mean[2 * f] = s0 / k, mean[2 * f + 1] = s1 / k;  // k >= 1: the front touches a filled cell
+        }
+        for (size_t f = 0; f < front.size(); ++f)
+            val[2 * front[f]] = mean[2 * f], val[2 * front[f] + 1] = mean[2 * f + 1], filled[front[f]] = 1;
+        next.clear();
+        for (size_t i : front)
+            each_neighbour(i, [&](size_t j) {
+                if (!filled[j] && !queued[j]) queued[j] = 1, next.push_back(j);
+            });
+        front.swap(next);
     }
 }
 
@@ -56,6 +77,20 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
             const double th = std::min((m + 0.5) * dm, M_PI / 2 - 1e-3), ph = (d + 0.5) * dd - M_PI;
             nr[size_t(m) * NB + d] = std::sin(th) * std::sin(ph), nc[size_t(m) * NB + d] = std::sin(th) * std::cos(ph);
         }
+    // The polynomials' coefficients as doubles, [channel][k][bin] over the NB x NB bins, so that
+    // a pixel's 3 x 6 multiply-adds per bin run as vectors across bins: the same products summed
+    // in the same order as one bin at a time, so the same table bit for bit (docs/gel_shape.md,
+    // "Building the tables").
+    const size_t nbin = size_t(NB) * size_t(NB);
+    std::vector<double> coef(3 * 6 * nbin);
+    for (int ch = 0; ch < 3; ++ch)
+        for (int m = 0; m < NB; ++m)
+            for (int d = 0; d < NB; ++d)
+                for (int k = 0; k < 6; ++k)
+                    coef[(size_t(ch) * 6 + size_t(k)) * nbin + size_t(m) * NB + size_t(d)] =
+                        double(c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6 + size_t(k)]);
+    std::vector<double> sum(nbin);
+    std::vector<uint32_t> cell(nbin);  // n <= 256: n^3 fits
     for (int a = 0; a < tiles_y; ++a)
         for (int b = 0; b < tiles_x; ++b) {
             std::vector<double> val(size_t(n) * n * n * 2, 0), cnt(size_t(n) * n * n, 0);
@@ -63,18 +98,22 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
                 for (int x = b * W / tiles_x + step / 2; x < (b + 1) * W / tiles_x; x += step) {
                     const double basis[6] = {double(x) * x, double(y) * y, double(x) * y, double(x), double(y), 1};
                     const float* f = &flat[(size_t(y) * W + size_t(x)) * 3];
-                    for (int m = 0; m < NB; ++m)
-                        for (int d = 0; d < NB; ++d) {
-                            int q[3];
-                            for (int ch = 0; ch < 3; ++ch) {
-                                const float* p = &c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6];
-                                double s = 0;
-                                for (int k = 0; k < 6; ++k) s += double(p[k]) * basis[k];
-                                q[ch] = ops::gel::cell_of(float(s - f[ch]), n);  // the cell the lookup reads
-                            }
-                            const size_t i = (size_t(q[0]) * n + size_t(q[1])) * n + size_t(q[2]);
-                            val[2 * i] += nr[size_t(m) * NB + d], val[2 * i + 1] += nc[size_t(m) * NB + d], cnt[i] += 1;
+                    for (int ch = 0; ch < 3; ++ch) {
+                        const double* p = &coef[size_t(ch) * 6 * nbin];
+                        for (size_t i = 0; i < nbin; ++i) {
+                            double s = 0;
+                            for (int k = 0; k < 6; ++k) s += p[size_t(k) * nbin + i] * basis[k];
+                            sum[i] = s;
                         }
+                        const float fc = f[ch];
+                        for (size_t i = 0; i < nbin; ++i) {  // the cell the lookup reads
+                            const uint32_t q = uint32_t(ops::gel::cell_of(float(sum[i] - fc), n));
+                            cell[i] = ch == 0 ? q : cell[i] * uint32_t(n) + q;
+                        }
+                    }
+                    for (size_t i = 0; i < nbin; ++i) {  // bins in the order (m, d), as before
+                        val[2 * size_t(cell[i])] += nr[i], val[2 * size_t(cell[i]) + 1] += nc[i], cnt[cell[i]] += 1;
+                    }
                 }
             for (size_t i = 0; i < cnt.size(); ++i)
                 if (cnt[i] > 0) val[2 * i] /= cnt[i], val[2 * i + 1] /= cnt[i];
