@@ -93,7 +93,9 @@ std::string point_cases_file() {
     const std::string cmd = "cd '" VTLOC_SOURCE_DIR "' && PYTHONDONTWRITEBYTECODE=1 '" + python +
                             "' tests/point_cases.py '" + path + "'";
     INFO("writing the PyTorch reference cases: " << cmd);
-    REQUIRE(std::system(cmd.c_str()) == 0);
+    const int rc = std::system(cmd.c_str());
+    if (rc != 0) fs::remove(path, ec);  // a failed run leaves no half-written file behind
+    REQUIRE(rc == 0);
     fs::rename(path, cached);
     return cached.string();
 }
