@@ -225,6 +225,37 @@ TEST_CASE("climbing from the nearest touches outward never loses fit and finds t
     test::require_no_validation_messages();
 }
 
+TEST_CASE("free space behind the gel tells a stud's head from its flipped image", "[track]") {
+    // A head (radius 13, 10 mm thick) with a post (radius 6) on top: three touches on the
+    // head's underside fit the top face's annulus as well once turned over, but there the
+    // post would pass through the sensor's pad (docs/multitouch.md, "Free space").
+    const io::TriangleMesh m = sim::mesh::revolve({{0, -10}, {13, -10}, {13, 0}, {6, 0}, {6, 30}, {0, 30}}, 96);
+    track::SurfaceOptions so;
+    so.target_hypotheses = 20000;
+    const track::Surface s = track::build_surface(io::sample_surface(m, 60000, 5, "stud"), true, so, "stud");
+    track::FilterOptions off, on;  // on: the default clearance
+    off.free_space_mm = 0;
+    const track::Tracker a(nullptr, s, off), b(nullptr, s, on);
+    const float under[3][6] = {{9, 1, -10, 0, 0, -1}, {2, 9.5f, -10, 0, 0, -1}, {-6, -7, -10, 0, 0, -1}};
+    std::vector<Rigid> poses;
+    for (int k = 0; k < 3; ++k) poses.push_back(pose_at(under[k], 0.4 + k, 0.8));
+    const std::vector<Rigid> motions{track::compose(track::inverse(poses[0]), poses[1]),
+                                     track::compose(track::inverse(poses[1]), poses[2])};
+    Rigid flip;  // half a turn about the x axis through z = -5: underside onto the top face
+    flip.R = {1, 0, 0, 0, -1, 0, 0, 0, -1};
+    flip.t = {0, 0, -10};
+    const Rigid flipped = track::compose(flip, poses.back());
+    const double truth_off = a.window_fit(motions, poses.back()), flip_off = a.window_fit(motions, flipped);
+    const double truth_on = b.window_fit(motions, poses.back()), flip_on = b.window_fit(motions, flipped);
+    INFO("without free space: truth " << truth_off << ", flipped " << flip_off << "; with: " << truth_on << ", " << flip_on);
+    CHECK(std::abs(flip_off - truth_off) < 1);  // the contacts alone cannot tell them apart
+    CHECK(truth_on == truth_off);               // under the true poses the pad is clear
+    CHECK(flip_on < truth_on - 3);              // the post inside the pad costs several nats
+    track::FilterOptions bad;
+    bad.free_space_mm = -1;
+    CHECK_THROWS_WITH(track::Tracker(nullptr, s, bad), Catch::Contains("free_space_mm"));
+}
+
 TEST_CASE("the tracker is deterministic and its single touch is spread", "[track]") {
     track::Tracker a(test::gpu(), prism_surface());
     a.add_touch(std::nullopt);

@@ -16,6 +16,8 @@ With --reach, the knob is the lever arm (mm) from which the refinement also clim
 (refine_reach; 0: the direct climb alone): the window's touches within it first, then twice
 it, ..., the better fit kept (docs/multitouch.md, "Climbing from the nearest touches").
 
+With --free-space, the knob is how far behind the gel plane the sensor's pad must be clear of
+the object (free_space, mm; 0: off), scored on each refined mode (docs/multitouch.md, "Free space").
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
 and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
 render_quadratic, was fitted before on the same windows, and the press percentile
@@ -25,7 +27,8 @@ read from the frame as a robot would. With --oracle, the same knob for the oracl
 renderer's true indentation maps: what a perfect gel-shape reader would allow), reported
 beside the shipped weight, never shipped.
 
-    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR [--refine | --reach | --rescue | --render | --oracle]
+    python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR
+        [--refine | --reach | --free-space | --rescue | --render | --oracle]
         [--sequence 4,8] [--out fit.json]
 """
 import argparse
@@ -44,6 +47,7 @@ GRID = {
 
 GRID_REFINE = {"refine_widen": [0, 2, 4, 8, 16]}
 GRID_REACH = {"refine_reach": [0, 10, 15, 20, 30, 45, 60]}
+GRID_FREE = {"free_space": [0, 0.5, 1, 1.5, 2, 3, 4, 6]}
 # Refining more modes where the best refined one fits the window poorly (rescue_fit: the
 # threshold, log; -1e9: never; 0: always, since a fit is at most 0).
 GRID_RESCUE = {"rescue_fit": [0, -1, -1e9], "rescue_modes": [24]}
@@ -71,13 +75,14 @@ def main():
     ap.add_argument("--objects", default="known", help="known (the seen objects) or all")
     ap.add_argument("--refine", action="store_true", help="fit refine_widen (the refinement's first, wider climb)")
     ap.add_argument("--reach", action="store_true", help="fit refine_reach (the refinement's climb from the nearest touches)")
+    ap.add_argument("--free-space", action="store_true", help="fit free_space (the pad's clearance behind the gel)")
     ap.add_argument("--rescue", action="store_true", help="fit rescue_fit and rescue_modes (more modes refined where none fits)")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
     ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_RESCUE if a.rescue else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_FREE if a.free_space else GRID_RESCUE if a.rescue else GRID
     row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):

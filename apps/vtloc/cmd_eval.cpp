@@ -48,7 +48,7 @@ const char* kHelp =
     "                            render, oracle (default: every row the other options ask for)\n"
     "  --odometry-noise MM,DEG   with --sequence: also rows with seeded Gaussian noise on every motion\n"
     "  --filter K=V,...          with --sequence: the filter's knobs (press, sigma_d, sigma_a, allowance,\n"
-    "                            refine_widen, refine_reach, rescue_fit, rescue_modes,\n"
+    "                            refine_widen, refine_reach, rescue_fit, rescue_modes, free_space,\n"
     "                            network_weight, render_weight, render_quadratic,\n"
     "                            render_press_percentile, render_cell_mm, hypotheses, n_spin;\n"
     "                            online_window=W: the online form, touch by touch); fit them with\n"

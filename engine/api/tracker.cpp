@@ -55,6 +55,9 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.refine_reach_mm = o.refine_reach_mm;
     f.rescue_fit = o.rescue_fit;
     f.rescue_modes = o.rescue_modes;
+    f.free_space_mm = o.free_space_mm;
+    f.free_space_w_mm = o.free_space_w_mm;
+    f.free_space_h_mm = o.free_space_h_mm;
     f.threads = o.threads;
     if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))
         throw Error("tracker: widths must be > 0, grid_allowance >= 0 and press_mm finite");

@@ -47,6 +47,8 @@ void Tracker::check_options(const FilterOptions& opt_) {
         throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
     if (!(opt_.refine_reach_mm >= 0))
         throw Error("filter options: refine_reach_mm must be >= 0 (0: off), got " + std::to_string(opt_.refine_reach_mm));
+    if (!(opt_.free_space_mm >= 0) || !(opt_.free_space_w_mm > 0) || !(opt_.free_space_h_mm > 0))
+        throw Error("filter options: free_space_mm must be >= 0 (0: off) and the pad's size positive");
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
@@ -178,6 +180,28 @@ std::vector<ops::pose::Term> fit_terms(const std::vector<Rigid>& to_window, cons
     return terms;
 }
 
+// FilterOptions::free_space_mm: a 5 x 4 grid of pad points that far behind the gel plane; each
+// one the grid finds inside the object (behind its nearest dense point's tangent plane) costs
+// the robust Gaussian of that depth, zero when outside. Points the grid holds nothing for (far
+// from the surface, or off the grid) cost nothing: the band is a few millimetres wide.
+double free_space_log(const ops::pose::Grid& g, const ops::pose::Frame& f, const FilterOptions& o) {
+    using namespace ops::pose;
+    const float floor = float(o.log_floor), s = float(o.sigma_d_mm);
+    const float zero = std::log(1.0f + std::exp(floor));
+    double v = 0;
+    for (int i = 0; i < 5; ++i)
+        for (int j = 0; j < 4; ++j) {
+            const float u = float(o.free_space_w_mm) * (float(i) / 4 - 0.5f), w = float(o.free_space_h_mm) * (float(j) / 3 - 0.5f);
+            const V3 p = add(add(add(f.t, mul(f.x, u)), mul(f.y, w)), mul(f.z, -float(o.free_space_mm)));
+            const int64_t c = cell_of(g, p);
+            if (c < 0 || g.cells[c * 2] < 0) continue;
+            const float* q = g.dense + int64_t(g.cells[c * 2]) * 6;
+            const float depth = -dot(sub(p, load3(q)), load3(q + 3));
+            if (depth > 0) v += std::log(std::exp(-0.5f * (depth / s) * (depth / s)) + std::exp(floor)) - zero;
+        }
+    return v;
+}
+
 double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, const Rigid& x) {
     const ops::pose::Frame f = frame_of(x);
     const float press = float(o.press_mm), floor = float(o.log_floor);
@@ -235,15 +259,28 @@ struct Refiner {
             }
     }
     double fit(const Rigid& x) const { return pose_fit(grid, tight, o, x); }
-    // x refined (when o.refine > 0); fx: its tight fit.
+    // Free space behind every touch of the window, scored once a climb has ended: the climbs
+    // find where the contacts fit, this tells apart places that fit alike.
+    double free_space(const Rigid& x) const {
+        if (!(o.free_space_mm > 0)) return 0;
+        const ops::pose::Frame f = frame_of(x);
+        double v = free_space_log(grid, f, o);
+        for (const ops::pose::Term& t : tight) v += free_space_log(grid, ops::pose::moved(f, t), o);
+        return v;
+    }
+    // x refined (when o.refine > 0); fx: its tight fit plus its free space.
     Rigid refine(Rigid x, double& fx) const {
         if (o.refine > 0 && o.refine_widen > 0) {
             double fw = pose_fit(grid, wide, o, x);
             x = climb(grid, wide, o, x, fw);
         }
         fx = fit(x);
-        if (o.refine == 0) return x;
+        if (o.refine == 0) {
+            fx += free_space(x);
+            return x;
+        }
         Rigid direct = climb(grid, tight, o, x, fx);
+        fx += free_space(direct);
         if (stages.empty()) return direct;
         // From the nearest touches outward: a pose a spin step off puts the far touches of a
         // long lever arm outside the tight basin, where the direct climb finds no slope; the
@@ -256,6 +293,7 @@ struct Refiner {
         }
         double fc = fit(x);
         x = climb(grid, tight, o, x, fc);
+        fc += free_space(x);
         if (fc > fx) {
             fx = fc;
             return x;

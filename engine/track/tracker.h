@@ -54,6 +54,15 @@ struct FilterOptions {
     // (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -1;
     int rescue_modes = 24;
+    // > 0: the refinement's fit also asks for free space behind the gel. The sensor sits where
+    // its gel first touches the object over its window grown by a margin (free_space_w_mm x
+    // free_space_h_mm), so points of that pad this far behind the gel plane lie outside the
+    // object; one inside costs what a touch that far off the surface would (the robust
+    // Gaussian at sigma_d). Tells a bolt's head from its flipped image (the shank would pass
+    // through the sensor), which the touches' own contacts cannot. 1.5 fitted on train windows
+    // (docs/multitouch.md, "Free space"); 0: off.
+    double free_space_mm = 1.5;
+    double free_space_w_mm = 24, free_space_h_mm = 19;  // the dataset sensor's 19.9 x 14.9 mm window, + 2 mm a side
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
     // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
     // fewer); n, at most n (a robot process with its own thread budget). The outputs do not

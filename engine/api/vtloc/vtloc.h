@@ -397,6 +397,12 @@ struct TrackerOptions {
     // about 2.7 ms more on one thread, 1 ms on two (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -1;
     int rescue_modes = 24;
+    // > 0: the refinement also asks that the sensor's pad (free_space_w_mm x free_space_h_mm,
+    // its window and a margin) be clear of the object this far behind the gel plane (the
+    // sensor cannot pass through the object; docs/multitouch.md, "Free space"). 1.5 fitted on
+    // train windows; 0: off.
+    double free_space_mm = 1.5;
+    double free_space_w_mm = 24, free_space_h_mm = 19;
     // Host threads an estimate climbs its modes on, and the object's lookup grid is built on:
     // 0, up to 4; n, at most n. Outputs do not depend on it.
     int threads = 0;
