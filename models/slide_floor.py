@@ -22,10 +22,9 @@ import numpy as np
 REACH_MM = 8  # the slides window_fit's climb returns from (4-7 mm on the cylinders)
 
 
-def pose(x, r="r", t=("tx", "ty", "tz")):
+def rigid(R, t):
     P = np.eye(4)
-    P[:3, :3] = np.array([[float(x[f"{r}{i}{j}"]) for j in range(3)] for i in range(3)])
-    P[:3, 3] = [float(x[k]) for k in t]
+    P[:3, :3], P[:3, 3] = R, t
     return P
 
 
@@ -41,19 +40,22 @@ def main():
     ctx = vtloc.Context()
     windows = [r for r in csv.DictReader(open(a.per_touch))
                if r["T"] == "8" and r["method"] == "Geometry" and r["odometry_noise"] == "no"]
+    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+    from weights_tools.dataset import read_dataset
+    data = read_dataset(a.data, check_images=False)
     for obj in a.objects or sorted({w["object"] for w in windows}):
-        d = os.path.join(a.data, "objects", obj)
-        meta = json.load(open(os.path.join(d, "object.json")))
+        o = data.object(obj)
+        meta = json.load(open(os.path.join(o.folder, "object.json")))
         if not meta.get("symmetry"):
             continue
-        axis, diam = np.array(meta["symmetry"]["axis"], float), meta["diameter_mm"]
-        by_order = {int(x["order"]): x for x in csv.DictReader(open(os.path.join(d, "touches.csv"))) if int(x["order"]) >= 0}
-        tracker = vtloc.Tracker(ctx, os.path.join(d, "mesh.ply"))
+        axis, diam = np.array(meta["symmetry"]["axis"], float), o.diameter_mm
+        by_order = {t.order: t for t in o.touches if t.order >= 0}
+        tracker = vtloc.Tracker(ctx, os.path.join(o.folder, "mesh.ply"))
         floors, got = [], []
         for w in (w for w in windows if w["object"] == obj):
             end = int(w["order"])
-            motions = [pose(by_order[o], "q", ("qx", "qy", "qz")) for o in range(end - 6, end + 1)]
-            truth = pose(by_order[end])
+            motions = [rigid(by_order[k].rel_R, by_order[k].rel_t) for k in range(end - 6, end + 1)]
+            truth = rigid(by_order[end].R, by_order[end].t)
             fit = tracker.window_fit(motions, truth)
             alike = []
             for s in np.arange(-100, 100.5, 1.0):
