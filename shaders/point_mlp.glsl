@@ -152,50 +152,13 @@ void fma_rows(vec4 a[TM], uint k0) {
 }
 
 // acc = A[rows] W for the TM rows m0 .. m0 + TM - 1 (rows past `mend` read row mend - 1).
-// One loop of 4-channel steps with one fma_rows in it, whatever the mode: a CPU
-// driver compiles every copy of an inlined call before it drops the modes a
-// specialization leaves dead: seven copies took a third more compile time on
-// lavapipe (the 551 distinct point-MLP pipelines of the point-op tests: 58 -> 43 s).
 void block(uint m0, uint mend) {
     [[unroll]] for (uint i = 0; i < TM * TN; ++i) acc[i] = 0.0;
     uint rows[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) rows[i] = min(m0 + i, mend - 1u);
     vec4 a[TM];
-    // MODE 1 / 2 / 3: each row's source point, and for MODE 1 its offset from the centre.
-    uint q[TM];
-    vec3 xyz[TM];
-    vec4 f[TM];  // HIDDEN 1: the row's features (CF <= 4; zeros past CF), in registers through every step
-    if (MODE != 0u) {
-        [[unroll]] for (uint i = 0; i < TM; ++i) {
-            if (MODE == 1u) {
-                q[i] = min(uint(LOAD_I(rows[i])), p.P - 1u);  // in range whatever the indices hold
-                uint c = 3u * (rows[i] / p.NS);
-                if (HIDDEN == 2u)  // the centre itself
-                    xyz[i] = vec3(LOAD_C(c), LOAD_C(c + 1u), LOAD_C(c + 2u));
-                else
-                    xyz[i] = vec3(LOAD_A(q[i] * p.D) - LOAD_C(c), LOAD_A(q[i] * p.D + 1u) - LOAD_C(c + 1u),
-                                  LOAD_A(q[i] * p.D + 2u) - LOAD_C(c + 2u));
-            } else {
-                q[i] = rows[i];
-                const uint d = MODE == 3u ? p.D : 3u;
-                xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
-            }
-        }
-    }
-    if (HIDDEN == 1u)
-        [[unroll]] for (uint i = 0; i < TM; ++i)
-            [[unroll]] for (uint u = 0; u < 4; ++u)
-                f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
-    // Steps of 4 input channels: K of them for MODE 0 and HIDDEN; else the features'
-    // and one of the 3 xyz columns whose last channel is 0 (first for MODE 2, last
-    // for MODE 1 and 3).
-    const bool channels = MODE == 0u || HIDDEN != 0u;
-    const uint steps = channels ? (p.K + 3u) / 4u : (p.CF + 3u) / 4u + 1u;
-    const uint xyz_step = MODE == 2u ? 0u : steps - 1u;
-    const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
-    for (uint s = 0; s < steps; ++s) {
-        uint k0 = 4u * s;  // the step's first weight row
-        if (MODE == 0u) {
+    if (MODE == 0u) {
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             [[unroll]] for (uint u = 0; u < 4; ++u) {
                 const uint k = min(k0 + u, p.K - 1u);
                 const bool live = k0 + u < p.K;
@@ -212,14 +175,47 @@ void block(uint m0, uint mend) {
                     [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_A(k * p.M + rows[i]) : 0.0;
                 }
             }
-        } else if (HIDDEN == 2u) {
+            fma_rows(a, k0);
+        }
+        return;
+    }
+    // MODE 1 / 2 / 3: each row's source point, and for MODE 1 its offset from the centre.
+    uint q[TM];
+    vec3 xyz[TM];
+    [[unroll]] for (uint i = 0; i < TM; ++i) {
+        if (MODE == 1u) {
+            q[i] = min(uint(LOAD_I(rows[i])), p.P - 1u);  // in range whatever the indices hold
+            uint c = 3u * (rows[i] / p.NS);
+            if (HIDDEN == 2u)  // the centre itself
+                xyz[i] = vec3(LOAD_C(c), LOAD_C(c + 1u), LOAD_C(c + 2u));
+            else
+                xyz[i] = vec3(LOAD_A(q[i] * p.D) - LOAD_C(c), LOAD_A(q[i] * p.D + 1u) - LOAD_C(c + 1u),
+                              LOAD_A(q[i] * p.D + 2u) - LOAD_C(c + 2u));
+        } else {
+            q[i] = rows[i];
+            const uint d = MODE == 3u ? p.D : 3u;
+            xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
+        }
+    }
+    if (HIDDEN == 2u) {
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             vec4 wx[3];
             [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = LOAD_H4(((p.CF + j) * p.K + k0) / 4u);
             [[unroll]] for (uint i = 0; i < TM; ++i) {
                 const vec4 h = LOAD_A4((q[i] * p.K + k0) / 4u) - (xyz[i].x * wx[0] + xyz[i].y * wx[1] + xyz[i].z * wx[2]);
                 [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
             }
-        } else if (HIDDEN == 1u) {
+            fma_rows(a, k0);
+        }
+        return;
+    }
+    if (HIDDEN == 1u) {
+        // The row's features (CF <= 4; zeros past CF) stay in registers through every step.
+        vec4 f[TM];
+        [[unroll]] for (uint i = 0; i < TM; ++i)
+            [[unroll]] for (uint u = 0; u < 4; ++u)
+                f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
+        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             vec4 wf[4], wx[3];  // W0 rows of the features and of xyz, channels k0 .. k0 + 3
 #ifdef WEIGHTS_SHUFFLE
             // Lane l fetches row l of the 7 (wf, then wx) and the lanes share them by
@@ -245,23 +241,35 @@ void block(uint m0, uint mend) {
                 [[unroll]] for (uint j = 0; j < 3; ++j) h = fma(vec4(xyz[i][j]), wx[j], h);
                 [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
             }
-        } else if (s == xyz_step) {
-            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
-            k0 = MODE == 2u ? 0u : p.CF;
-        } else {
-            const uint k = 4u * (MODE == 2u ? s - 1u : s);  // the step's first feature column
-            if (FVEC4) {  // CF % 4 == 0 here
-                [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
-            } else {
-                [[unroll]] for (uint u = 0; u < 4; ++u) {
-                    const bool live = k + u < p.CF;
-                    const uint c = min(k + u, p.CF - 1u);
-                    [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_F(q[i] * p.DF + p.FB + c) : 0.0;
-                }
-            }
-            k0 = kf + k;
+            fma_rows(a, k0);
         }
-        fma_rows(a, k0);
+        return;
+    }
+    // The 3 xyz columns, as one step of 4 whose last channel is 0: first for MODE 2,
+    // after the features for MODE 1 and 3.
+    if (MODE == 2u) {
+        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
+        fma_rows(a, 0u);
+    }
+    const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
+    if (FVEC4) {
+        for (uint k = 0; k < p.CF; k += 4u) {  // CF % 4 == 0 here
+            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
+            fma_rows(a, kf + k);
+        }
+    } else {
+        for (uint k = 0; k < p.CF; k += 4u) {
+            [[unroll]] for (uint u = 0; u < 4; ++u) {
+                const bool live = k + u < p.CF;
+                const uint c = min(k + u, p.CF - 1u);
+                [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_F(q[i] * p.DF + p.FB + c) : 0.0;
+            }
+            fma_rows(a, kf + k);
+        }
+    }
+    if (MODE != 2u) {
+        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
+        fma_rows(a, p.CF);
     }
 }
 
