@@ -19,6 +19,9 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from weights_tools.dataset import read_dataset  # noqa: E402 (the repository root, put on the path above)
+
 REACH_MM = 8  # the slides window_fit's climb returns from (4-7 mm on the cylinders)
 
 
@@ -40,8 +43,6 @@ def main():
     ctx = vtloc.Context()
     windows = [r for r in csv.DictReader(open(a.per_touch))
                if r["T"] == "8" and r["method"] == "Geometry" and r["odometry_noise"] == "no"]
-    sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
-    from weights_tools.dataset import read_dataset
     data = read_dataset(a.data, check_images=False)
     for obj in a.objects or sorted({w["object"] for w in windows}):
         o = data.object(obj)
