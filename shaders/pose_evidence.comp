@@ -18,7 +18,10 @@ layout(std430, binding = 0) readonly buffer Samples_ { vec4 smp4[]; };  // [S, 1
 layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, sample, normal, 0
 layout(std430, binding = 2) readonly buffer Cells_ { ivec2 cells[]; };  // [V, 2]
 layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
-layout(std430, binding = 4) readonly buffer Terms_ { float terms[]; };  // [K, 16]
+// [K, 16] as 4 RGBA32F texels a term: a texel fetch is a branch-free gather on a CPU
+// driver, where a storage-buffer read at the loop's offset was a loop over the lanes
+// for each of a term's 16 floats (the term's rows took ~10 of the potato's 23 ms).
+layout(binding = 4) uniform samplerBuffer Terms;
 layout(std430, binding = 5) readonly buffer Fields_ { float fields[]; }; // [F, H]
 layout(std430, binding = 6) writeonly buffer Out_ { float outv[]; };    // [H]
 layout(push_constant) uniform Push {
@@ -103,14 +106,16 @@ void main() {
             uint k = 0u;
             do {
                 uint kf = k;  // the segment's last term: the next one with a field, or the last
-                while (kf + 1u < p.K && int(round(terms[kf * 16u + 14u])) < 0) ++kf;
+                while (kf + 1u < p.K && int(round(texelFetch(Terms, int(kf * 4u + 3u)).z)) < 0) ++kf;
                 vec3 xf = vec3(0.0);
                 int sf = -1;  // the segment's last term: its x axis and the sample it reads
                 do {
-                    const uint b = k * 16u;
-                    precise vec3 zk = x * terms[b + 2u] + y * terms[b + 5u] + z * terms[b + 8u];
-                    precise vec3 xk = x * terms[b] + y * terms[b + 3u] + z * terms[b + 6u];
-                    precise vec3 tk = t + x * terms[b + 9u] + y * terms[b + 10u] + z * terms[b + 11u];
+                    // Row k: R (row-major, 9), t (3), sigma_d, sigma_a, field, weight.
+                    const vec4 r0 = texelFetch(Terms, int(k * 4u)), r1 = texelFetch(Terms, int(k * 4u + 1u));
+                    const vec4 r2 = texelFetch(Terms, int(k * 4u + 2u)), r3 = texelFetch(Terms, int(k * 4u + 3u));
+                    precise vec3 zk = x * r0.z + y * r1.y + z * r2.x;
+                    precise vec3 xk = x * r0.x + y * r0.w + z * r1.z;
+                    precise vec3 tk = t + x * r2.y + y * r2.z + z * r2.w;
                     const int cell = cell_of(tk);
                     ivec2 near = ivec2(-1);  // the cell's dense point and its far-face counterpart
                     if (cell >= 0) near = cells[cell];
@@ -120,17 +125,17 @@ void main() {
                     const int i = near.x >= 0 && near.y >= 0 && dot3(zk, dense4[uint(max(near.x, 0)) * 2u + 1u].xyz) > 0.0 ? near.y : near.x;
                     const vec4 q = dense4[uint(max(i, 0)) * 2u];
                     const vec3 n = dense4[uint(max(i, 0)) * 2u + 1u].xyz;
-                    const float sd = terms[b + 12u], sa = terms[b + 13u];
+                    const float sd = r3.x, sa = r3.y;
                     if (sd > 0.0) acc += i < 0 ? p.log_floor : geometry_log(q.xyz, n, tk, zk, sd, sa);
                     xf = xk;
                     sf = i < 0 ? -1 : int(q.w);
                     ++k;
                 } while (k <= kf);
-                const uint b = kf * 16u;
-                const int field = int(round(terms[b + 14u]));
+                const vec2 fw = texelFetch(Terms, int(kf * 4u + 3u)).zw;  // field, weight
+                const int field = int(round(fw.x));
                 if (field >= 0 && uint(field) < p.F) {  // a field past F (refused on the CPU) reads nothing
                     const int hk = nearest_hypothesis(sf, xf);
-                    acc += terms[b + 15u] * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
+                    acc += fw.y * (hk < 0 ? p.field_floor : fields[uint(field) * p.H + uint(hk)]);
                 }
             } while (k < p.K);
         }

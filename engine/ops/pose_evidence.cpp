@@ -155,9 +155,11 @@ void gpu(const GpuOpArgs& a) {
     const rt::BufferView& terms = K ? a.in[4].view : a.in[0].view;
     const rt::BufferView& fields = F ? a.in[5].view : a.in[0].view;
     // NS specialises the shader (shaders/pose_evidence.comp).
-    a.seq.dispatch(pipeline(a.ctx, "pose_evidence", 7, sizeof(push), {local, NS}),
+    // The terms are a texel buffer (binding 4, RGBA32F: a term's 16 floats in 4 texels).
+    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"pose_evidence", 7, uint32_t(sizeof(push)), {local, NS}, 1u << 4}),
                    {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.in[3].view, rt::Access::Read}, {terms, rt::Access::Read}, {fields, rt::Access::Read},
+                    {a.in[3].view, rt::Access::Read}, {terms, rt::Access::Read, VK_FORMAT_R32G32B32A32_SFLOAT},
+                    {fields, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
