@@ -11,7 +11,10 @@ root="$(cd "$(dirname "$0")/../.." && pwd)"
 seconds="${1:-30}"
 shift || true
 targets=("$@")
-[ ${#targets[@]} -gt 0 ] || targets=(safetensors config mesh points image dataset touches codebook calibration device_profile)
+# Every target tests/fuzz/CMakeLists.txt declares (one list: a new target runs here by itself).
+[ ${#targets[@]} -gt 0 ] ||
+  mapfile -t targets < <(sed -n 's/^fuzz_target(\([a-z_0-9]*\)[ )].*/\1/p' "$root/tests/fuzz/CMakeLists.txt")
+[ ${#targets[@]} -gt 0 ] || { echo "tests/fuzz/run.sh: no fuzz_target() in tests/fuzz/CMakeLists.txt" >&2; exit 1; }
 build="$root/build-asan"
 . "$root/tests/sanitize/asan_build.sh"
 sanitizer_build "$root" "$build" "address,undefined" "${targets[@]/#/fuzz_}"
