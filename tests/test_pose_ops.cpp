@@ -240,13 +240,15 @@ TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU refere
             std::vector<int> lp = ops::log_softmax(g, score);
             int m = ops::spin_marginal(g, lp[1], NS);
             const int pts = g.input("pts", {S, 3});
-            int e = ops::expected_distance(g, pts, m, pts);  // every sample an answer
-            int e2 = ops::expected_distance(g, pts, m, g.input("ans", {(S + 6) / 7, 3}));
+            const int ans = g.input("ans", {(S + 6) / 7, 3});
             g.output(lp[0], "log");
             g.output(lp[1], "prob");
             g.output(m, "marginal");
-            g.output(e, "cost");
-            g.output(e2, "cost_answers");
+            for (bool sub : {true, false}) {  // shuffled rows (where the device has them) and shared-memory tiles
+                const std::string on = sub ? "" : ".tiles";
+                g.output(ops::expected_distance(g, pts, m, pts, "", sub), "cost" + on);  // every sample an answer
+                g.output(ops::expected_distance(g, pts, m, ans, "", sub), "cost_answers" + on);
+            }
             TensorMap in{{"score", test::random_tensor({S * NS}, uint32_t(S + NS), -30.0f, 5.0f)},
                          {"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)},
                          {"ans", test::random_tensor({(S + 6) / 7, 3}, uint32_t(S) + 3, -60.0f, 60.0f)}};
@@ -265,7 +267,9 @@ TEST_CASE("expected_distance skips zero weights without changing the sum", "[op]
         INFO("S " << S);
         Graph g;
         const int pts = g.input("pts", {S, 3});
-        g.output(ops::expected_distance(g, pts, g.input("w", {S}), g.input("ans", {13, 3})), "cost");
+        const int w_in = g.input("w", {S}), ans = g.input("ans", {13, 3});
+        g.output(ops::expected_distance(g, pts, w_in, ans), "cost");
+        g.output(ops::expected_distance(g, pts, w_in, ans, "", false), "cost.tiles");
         HostTensor w = test::random_tensor({S}, uint32_t(S) + 1, 0.0f, 1.0f);
         for (int64_t s = 0; s < S; ++s)
             if (s % 7 != 3 || (s > 300 && s < 900)) w.data[size_t(s)] = s % 2 ? 0.0f : -0.0f;

@@ -193,8 +193,10 @@ int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {
     return g.add1("spin_marginal", {prob}, {{"n_spin", d(n_spin)}}, name);
 }
 
-int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name) {
-    return g.add1("expected_distance", {points, weights, answers}, {}, name);
+int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name, bool subgroup) {
+    Params p;
+    if (!subgroup) p.set("subgroup", 0);
+    return g.add1("expected_distance", {points, weights, answers}, p, name);
 }
 
 std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace, bool force_tree) {

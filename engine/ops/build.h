@@ -123,7 +123,8 @@ std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
 // prob [S * n_spin] -> [S].
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
 // points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
-int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "");
+// subgroup = false: the shared-memory tiles even where the device has shuffles.
+int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "", bool subgroup = true);
 // Render-and-compare (SPEC 9; engine/ops/codebook_math.h says how). The binning of the
 // dense points: origin, cell size `coarse`, dims, and the largest bin's count.
 struct CodebookRender {

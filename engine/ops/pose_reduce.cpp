@@ -3,7 +3,10 @@
 // expected_distance: points [S, 3], weights [S], answers [A, 3] -> cost [A],
 // cost_j = sum_s w_s ||p_s - a_j||, whose argmin is the Bayes estimate of the contact
 // for the distance error (the tracker asks it of a strided subset of its samples).
-// -> shaders/spin_marginal.comp, shaders/expected_distance.comp
+// -> shaders/spin_marginal.comp, shaders/expected_distance_subgroup.comp (rows passed by
+// subgroup shuffles) or shaders/expected_distance.comp (shared-memory tiles: devices
+// without shuffles, or param subgroup = 0)
+#include <algorithm>
 #include <cmath>
 
 #include "base/error.h"
@@ -74,9 +77,30 @@ void expect_cpu(const std::vector<const HostTensor*>& in, const std::vector<Host
     }
 }
 
+// The shuffle shader: Q answers a thread (4 on a CPU driver, where a shuffle costs
+// more than the distances it serves; 1 on a GPU), and workgroups of whole subgroups
+// small enough that the answers make at least 8 of them (the tracker asks for <= 512).
+void expect_gpu_subgroup(const GpuOpArgs& a, uint32_t S, uint32_t A) {
+    const rt::DeviceInfo& d = a.ctx.info();
+    const uint32_t Q = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 4 : 1, sg = d.subgroup_size;
+    const uint32_t want = (A + Q * 8 - 1) / (Q * 8);
+    const uint32_t local = std::clamp((want + sg - 1) / sg * sg, sg, elementwise_local_size(d));
+    const uint64_t groups = (uint64_t(A) + uint64_t(Q) * local - 1) / (uint64_t(Q) * local);
+    if (groups > d.max_workgroup_count[0])
+        throw Error("expected_distance: " + std::to_string(A) + " answers need more workgroups than the device's " +
+                    std::to_string(d.max_workgroup_count[0]));
+    check_loop_budget(d, uint64_t(S) + 2 * ((uint64_t(S) + sg - 1) / sg) + 8, "expected_distance over " + std::to_string(S) + " points");
+    struct { uint32_t S, A; } push{S, A};
+    a.seq.dispatch(pipeline(a.ctx, "expected_distance_subgroup", 4, sizeof(push), {local, Q}),
+                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), uint32_t(groups));
+}
+
 void expect_gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     struct { uint32_t S, A; } push{uint32_t(a.in[0].shape[0]), uint32_t(a.in[2].shape[0])};
+    if (shuffles_allowed(a)) return expect_gpu_subgroup(a, push.S, push.A);
     uint32_t local = elementwise_local_size(d);
     while (local > 1 && local * 16 + 4 > d.max_shared_memory) local /= 2;  // the tile and its count
     const uint64_t groups = (uint64_t(push.A) + local - 1) / local, tiles = (uint64_t(push.S) + local - 1) / local;
@@ -93,6 +117,6 @@ void expect_gpu(const GpuOpArgs& a) {
 }  // namespace
 
 const OpDef op_spin_marginal{"spin_marginal", marginal_infer, marginal_cpu, marginal_gpu, 0, {"n_spin"}};
-const OpDef op_expected_distance{"expected_distance", expect_infer, expect_cpu, expect_gpu, 0, {}};
+const OpDef op_expected_distance{"expected_distance", expect_infer, expect_cpu, expect_gpu, 0, {"subgroup"}};
 
 }  // namespace vtloc::ops
