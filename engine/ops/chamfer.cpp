@@ -107,13 +107,11 @@ void gpu(const GpuOpArgs& a) {
     const bool shuffle = shuffles_allowed(a);
     uint32_t local = shuffle ? subgroup_group_size(d) : elementwise_local_size(d);
     while (!shuffle && local > 1 && local * (D / 3) * 16 > d.max_shared_memory) local /= 2;
-    // Queries per thread of the shuffle shader. On lavapipe (AVX2) a shuffle cost
-    // more than the distance it fed, so on CPU devices each shuffled target serves
-    // 4 queries: 2.6-2.9 -> 1.0-1.1 ms for vtloc-lite's 256 x 1024 rows of 6. GPUs
-    // shuffle in about one instruction and want the threads: one query each.
+    // Queries per thread of the shuffle shader (param queries, 0: the device's choice,
+    // measured here on vtloc-lite's 256 x 1024 rows of 6: ops/common.h).
     uint32_t Q = uint32_t(a.params.get("queries", 0));
     if (!shuffle) Q = 1;
-    else if (Q == 0) Q = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 4 : 1;
+    else if (Q == 0) Q = answers_per_shuffle(d);
     const uint32_t per_group = shuffle ? Q * local : 2 * local;
     const uint64_t ga = (Na + per_group - 1) / per_group, gb = (Nb + per_group - 1) / per_group;
     if (ga + gb > d.max_workgroup_count[0])

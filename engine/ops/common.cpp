@@ -57,6 +57,8 @@ uint32_t subgroup_group_size(const rt::DeviceInfo& d) {
     return std::max(sg, std::min(64u, elementwise_local_size(d)) / sg * sg);
 }
 
+uint32_t answers_per_shuffle(const rt::DeviceInfo& d) { return d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 4 : 1; }
+
 void check_loop_budget(const rt::DeviceInfo& d, uint64_t iterations, const std::string& what) {
     if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && iterations > kLoopIterationBudget)
         throw Error(what + " would loop up to " + std::to_string(iterations) + " times in one invocation; '" + d.name +

@@ -41,6 +41,11 @@ uint32_t row_span_local_size(const rt::DeviceInfo& d, uint64_t n);
 // invocations in whole subgroups (at least one), so a few hundred rows still
 // reach every core of a CPU driver.
 uint32_t subgroup_group_size(const rt::DeviceInfo& d);
+// Answers (queries) each thread of such a shader serves per shuffled row: 4 on a CPU
+// driver, where a shuffle cost more than the arithmetic it fed (lavapipe, chamfer's
+// search: 2.6-2.9 -> 1.0-1.1 ms), 1 on a GPU, which shuffles in about one
+// instruction and wants the threads.
+uint32_t answers_per_shuffle(const rt::DeviceInfo& d);
 // Lavapipe (llvmpipe) ends every loop of a shader once the loops of one
 // invocation have taken 65535 back-edges in all (a limiter shared by all the
 // shader's loops), silently. Shaders that put a long scan in one invocation (one

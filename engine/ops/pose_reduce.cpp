@@ -77,14 +77,10 @@ void expect_cpu(const std::vector<const HostTensor*>& in, const std::vector<Host
     }
 }
 
-// The shuffle shader: Q answers a thread (4 on a CPU driver, where a shuffle costs
-// more than the distances it serves; 1 on a GPU), and workgroups of whole subgroups
-// small enough that the answers make at least 8 of them (the tracker asks for <= 512).
+// The shuffle shader: chamfer's workgroup size and answers per thread (ops/common.h).
 void expect_gpu_subgroup(const GpuOpArgs& a, uint32_t S, uint32_t A) {
     const rt::DeviceInfo& d = a.ctx.info();
-    const uint32_t Q = d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 4 : 1, sg = d.subgroup_size;
-    const uint32_t want = (A + Q * 8 - 1) / (Q * 8);
-    const uint32_t local = std::clamp((want + sg - 1) / sg * sg, sg, elementwise_local_size(d));
+    const uint32_t Q = answers_per_shuffle(d), sg = std::max(1u, d.subgroup_size), local = subgroup_group_size(d);
     const uint64_t groups = (uint64_t(A) + uint64_t(Q) * local - 1) / (uint64_t(Q) * local);
     if (groups > d.max_workgroup_count[0])
         throw Error("expected_distance: " + std::to_string(A) + " answers need more workgroups than the device's " +
