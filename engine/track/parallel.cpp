@@ -1,6 +1,7 @@
 #include "engine/track/parallel.h"
 
 #include <algorithm>
+#include <atomic>
 #include <exception>
 #include <thread>
 #include <vector>
@@ -11,9 +12,13 @@ void parallel_for(size_t n, int most, const std::function<void(size_t)>& body) {
     const size_t cap = most > 0 ? size_t(most) : std::min<size_t>(4, std::max(1u, std::thread::hardware_concurrency()));
     const size_t workers = std::min(n, cap);
     std::vector<std::exception_ptr> errors(workers);
+    // Each worker takes the next item when it is done with one: the tracker's modes climb
+    // for very different times, and a fixed share left one core idle while the other ran
+    // two long climbs. The order items run in changes nothing (each writes its own slot).
+    std::atomic<size_t> next{0};
     auto work = [&](size_t w) {
         try {
-            for (size_t i = w; i < n; i += workers) body(i);
+            for (size_t i; (i = next.fetch_add(1)) < n;) body(i);
         } catch (...) {
             errors[w] = std::current_exception();
         }
