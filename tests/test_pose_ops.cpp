@@ -107,6 +107,28 @@ Graph evidence_graph(const Scene& sc) {
 
 }  // namespace
 
+TEST_CASE("the mirror's floor_of is std::floor, bit for bit", "[pose]") {
+    // cell_of's floor without the library call: every float near the grid's range (both
+    // signs, integers, halves, the neighbours of integers, the 2^22 edge where the integer
+    // path stops) and the values it hands to std::floor.
+    std::vector<float> v{0.0f, -0.0f, 0.5f, -0.5f, 1.0f, -1.0f, 1e-30f, -1e-30f, 4194303.5f, -4194303.5f, 4194304.0f,
+                         -4194304.0f, 8388609.0f, -8388609.0f, 3e9f, -3e9f, INFINITY, -INFINITY};
+    for (float x = -70.0f; x <= 70.0f; x += 0.25f) {
+        v.push_back(x);
+        v.push_back(std::nextafter(x, -INFINITY));
+        v.push_back(std::nextafter(x, INFINITY));
+    }
+    std::mt19937 rng(5);
+    std::uniform_real_distribution<float> u(-5e6f, 5e6f);
+    for (int i = 0; i < 20000; ++i) v.push_back(u(rng));
+    for (float x : v) {
+        INFO(x);
+        const float a = ops::pose::floor_of(x), b = std::floor(x);
+        CHECK((a == b && (a != 0.0f || x != 0.0f || std::signbit(a) == std::signbit(b))));
+    }
+    CHECK(std::isnan(ops::pose::floor_of(NAN)));
+}
+
 TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose][pose_evidence]") {
     struct Case { int64_t S, D, NS, K, F; };
     for (Case c : {Case{1, 1, 1, 1, 0}, Case{13, 29, 7, 3, 2}, Case{61, 17, 36, 8, 3}, Case{257, 101, 12, 0, 1},

@@ -119,13 +119,14 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
             throw Error("spin " + std::to_string(j) + " is not (cos, sin) of 2 pi * " + std::to_string(j) + " / " + std::to_string(NS));
     }
     const float* fields = in[5]->data.data();
+    const float exp_floor = std::exp(st.log_floor);
     for (int64_t h = 0; h < H; ++h) {
         const pose::Frame f = pose::hypothesis_frame(g, h, st.press);
         float acc = st.own_field >= 0 ? st.own_weight * fields[int64_t(st.own_field) * H + h] : 0.0f;
         for (const pose::Term& t : terms) {
             const pose::Frame m = pose::moved(f, t);
             const int64_t cell = pose::cell_of(g, m.t);
-            if (t.sigma_d > 0) acc += pose::geometry_log(g, cell, m, st.press, t.sigma_d, t.sigma_a, st.log_floor);
+            if (t.sigma_d > 0) acc += pose::geometry_log(g, cell, m, st.press, t.sigma_d, t.sigma_a, st.log_floor, exp_floor);
             if (t.field >= 0) {
                 const int64_t hk = pose::nearest_hypothesis(g, cell, m.x, m.z);
                 acc += t.weight * (hk < 0 ? st.field_floor : fields[int64_t(t.field) * H + hk]);

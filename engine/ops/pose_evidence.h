@@ -83,10 +83,20 @@ inline Frame moved(const Frame& f, const Term& k) {
     return o;
 }
 
+// std::floor, without the library call baseline x86-64 (no SSE4.1) makes of it: below
+// 2^22 in size a float converts to an integer exactly (truncating toward zero), one step
+// down where that rounded a negative up, v itself where it was whole (-0 keeps its sign);
+// larger, infinite or NaN: std::floor itself.
+inline float floor_of(float v) {
+    if (!(v > -4194304.0f && v < 4194304.0f)) return std::floor(v);
+    const float t = float(int32_t(v));
+    return t > v ? t - 1.0f : t < v ? t : v;
+}
+
 // The grid cell holding point q, or -1 outside the grid.
 inline int64_t cell_of(const Grid& g, V3 q) {
     V3 u = mul(sub(q, g.origin), 1.0f / g.voxel);
-    float fx = std::floor(u.x), fy = std::floor(u.y), fz = std::floor(u.z);
+    float fx = floor_of(u.x), fy = floor_of(u.y), fz = floor_of(u.z);
     if (!(fx >= 0 && fy >= 0 && fz >= 0 && fx < float(g.nx) && fy < float(g.ny) && fz < float(g.nz))) return -1;
     return (int64_t(fz) * g.ny + int64_t(fy)) * g.nx + int64_t(fx);
 }
@@ -121,10 +131,11 @@ inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
 }
 
 // Geometry: the pose's gel centre should sit `press` inside the surface and its
-// axis along the inward normal; a robust Gaussian (floor exp(log_floor)).
+// axis along the inward normal; a robust Gaussian (floor exp_floor = exp(log_floor), from
+// the caller: one exp a term less, as the shader's push constant).
 // The distance is to the tangent plane of the dense point the pose presses.
 inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float press, float sigma_d, float sigma_a,
-                          float log_floor) {
+                          float log_floor, float exp_floor) {
     const int32_t i = pressed_point(g, cell, f.z);
     if (i < 0) return log_floor;
     V3 p = load3(g.dense + int64_t(i) * 6), n = load3(g.dense + int64_t(i) * 6 + 3);
@@ -134,7 +145,7 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
     V3 w = cross(f.z, n);
     float e_a = std::atan2(std::sqrt(dot(w, w)), -dot(f.z, n));
     float q = (e_d / sigma_d) * (e_d / sigma_d) + (e_a / sigma_a) * (e_a / sigma_a);
-    return std::log(std::exp(-0.5f * q) + std::exp(log_floor));
+    return std::log(std::exp(-0.5f * q) + exp_floor);
 }
 
 // pose_evidence's input rows, padded to vec4s (on a CPU driver every read at a varying

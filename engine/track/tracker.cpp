@@ -204,14 +204,14 @@ double free_space_log(const ops::pose::Grid& g, const ops::pose::Frame& f, const
 
 double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, const Rigid& x) {
     const ops::pose::Frame f = frame_of(x);
-    const float press = float(o.press_mm), floor = float(o.log_floor);
+    const float press = float(o.press_mm), floor = float(o.log_floor), exp_floor = std::exp(floor);
     double v = 0;
     for (const ops::pose::Term& t : terms) {
         const ops::pose::Frame m = ops::pose::moved(f, t);
-        v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, press, t.sigma_d, t.sigma_a, floor);
+        v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, press, t.sigma_d, t.sigma_a, floor, exp_floor);
     }
     return v + double(ops::pose::geometry_log(grid, ops::pose::cell_of(grid, f.t), f, press, float(o.sigma_d_mm),
-                                              float(o.sigma_a_deg * M_PI / 180), floor));
+                                              float(o.sigma_a_deg * M_PI / 180), floor, exp_floor));
 }
 
 // Pattern search over six degrees of freedom from x (rotations about the pose's
@@ -564,18 +564,26 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::vector<int64_t> held_at;
     for (int64_t i = 0; i < S; ++i)
         if (w[size_t(i)] != 0) held_at.push_back(i);
-    // A candidate stops once its partial risk reaches the best so far: the terms left are
-    // non-negative and a rounded sum never drops, so it could not have won (the same order
-    // of summation, so the same bits for those that run to the end).
+    // Four candidates go over the samples together (one read of a sample for four sums, each
+    // in the order it would have alone, so the same bits). A block stops once all four
+    // partial risks have reached the best before it: the terms left are non-negative and a
+    // rounded sum never drops, so none of them could have won.
+    constexpr size_t B = 4;
     double best_risk = INFINITY;
-    for (const auto& c : cand) {
-        double r = 0;
+    for (size_t c0 = 0; c0 < cand.size(); c0 += B) {
+        const size_t nb = std::min(B, cand.size() - c0);
+        std::array<double, 3> cb[B];
+        for (size_t b = 0; b < B; ++b) cb[b] = cand[c0 + std::min(b, nb - 1)];  // a short block repeats its last
+        double r[B] = {0, 0, 0, 0};
         for (size_t q = 0; q < held_at.size(); ++q) {
             const int64_t i = held_at[q];
-            r += w[size_t(i)] * dist(at[size_t(i)], c);
-            if ((q & 63) == 63 && r >= best_risk) break;
+            const double wi = w[size_t(i)];
+            const std::array<double, 3>& a = at[size_t(i)];
+            for (size_t b = 0; b < B; ++b) r[b] += wi * dist(a, cb[b]);
+            if ((q & 63) == 63 && std::min(std::min(r[0], r[1]), std::min(r[2], r[3])) >= best_risk) break;
         }
-        if (r < best_risk) best_risk = r, e.contact = c;
+        for (size_t b = 0; b < nb; ++b)
+            if (r[b] < best_risk) best_risk = r[b], e.contact = cb[b];
     }
     e.mass_within_5mm = 0;
     for (int64_t i = 0; i < S; ++i)
