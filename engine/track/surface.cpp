@@ -149,15 +149,7 @@ D3 tangent_of(const D3& a) {
     return {t[0] / n, t[1] / n, t[2] / n};
 }
 
-int64_t Surface::cell_of(const float* q) const {
-    int64_t c[3];
-    for (int k = 0; k < 3; ++k) {
-        const float f = std::floor((q[k] - origin[size_t(k)]) * (1.0f / voxel));
-        if (!(f >= 0 && f < float(dims[size_t(k)]))) return -1;
-        c[k] = int64_t(f);
-    }
-    return (c[2] * dims[1] + c[1]) * dims[0] + c[0];
-}
+int64_t Surface::cell_of(const float* q) const { return ops::pose::cell_of(grid(), {q[0], q[1], q[2]}); }
 
 Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOptions& o, const std::string& source) {
     if (dense.shape.size() != 2 || dense.shape[1] != 6 || dense.shape[0] == 0)

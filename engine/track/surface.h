@@ -55,7 +55,8 @@ struct Surface {
     uint64_t device_bytes() const {
         return 4 * (8 * dense.size() / 6 + 12 * samples.size() / 9 + spins.size() + cells.size());
     }
-    // The grid cell holding q (-1 outside).
+    // The grid cell holding q (-1 outside): the mirror's lookup (ops::pose::cell_of), so the
+    // host and the evidence agree on every cell.
     int64_t cell_of(const float* q) const;
     // These tables as the CPU mirror's grid (engine/ops/pose_evidence.h); it points into them.
     ops::pose::Grid grid() const {
