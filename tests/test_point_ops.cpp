@@ -436,7 +436,7 @@ TEST_CASE("group_linear's tiles shrunk as a big GPU's are (forced) match the CPU
         }
 }
 
-TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear]") {
+TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear][sweep]") {
     // Every path but the 16 x 32 tile (above) on two shapes: groups of 128 with vec4
     // rows, and odd sizes with a group not a multiple of 4 (scalar loads, partial
     // blocks), each path's maxes on one and its plain outputs on the other, by turns
@@ -613,7 +613,7 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
 
 }  // namespace
 
-TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear]") {
+TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear][sweep]") {
     // Every path but the 16 x 32 tile (Sweep) on two shapes: 4 feature columns from a
     // wider tensor with balls of 128 (around 3 centres; 16 in the long suite, with
     // every tile), and the normals with an odd output width. No feature columns on

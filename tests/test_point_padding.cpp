@@ -261,7 +261,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
 
 }  // namespace
 
-TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear]") {
+TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear][sweep]") {
     // Every path and layout on a shape that is mostly padding, with odd widths and a
     // ball length that is not a multiple of the row tiles; balls of 128 around 6
     // centres on each buffer path's default, one row layout each (64 in the long
