@@ -9,6 +9,10 @@
 # A ',' in SPEC is Catch's "or": each alternative is listed on its own, and a
 # file's test runs only the alternatives that match there (-w NoTests fails a run
 # in which any one of them matches nothing).
+# Specs here are tags only: a test name's escaped ',' or quotes would split wrongly.
+if(SPEC MATCHES "[\\\"]")
+  message(FATAL_ERROR "shards.cmake takes tag specs only, not \"${SPEC}\"")
+endif()
 string(REPLACE "," ";" alternatives "${SPEC}")
 set(files "")
 foreach(alt IN LISTS alternatives)
