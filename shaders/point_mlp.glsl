@@ -152,12 +152,17 @@ void fma_rows(vec4 a[TM], uint k0) {
 }
 
 // acc = A[rows] W for the TM rows m0 .. m0 + TM - 1 (rows past `mend` read row mend - 1).
+// Two fma_rows calls, not seven: MODE 0's loop, and one loop of 4-channel steps for
+// the other modes. Lavapipe runs NIR's passes over every inlined copy of a call before
+// it drops those a specialization leaves dead, in every process that creates the
+// pipeline (docs/performance.md, "Pipeline compile time"). MODE 0 keeps its own
+// loop: in the shared one the max layers ran about 3 % slower.
 void block(uint m0, uint mend) {
     [[unroll]] for (uint i = 0; i < TM * TN; ++i) acc[i] = 0.0;
     uint rows[TM];
     [[unroll]] for (uint i = 0; i < TM; ++i) rows[i] = min(m0 + i, mend - 1u);
     vec4 a[TM];
-    if (MODE == 0u) {
+    if (MODE == 0u) {  // its own loop and call: in the one loop below the max layers ran ~3 % slower
         for (uint k0 = 0; k0 < p.K; k0 += 4u) {
             [[unroll]] for (uint u = 0; u < 4; ++u) {
                 const uint k = min(k0 + u, p.K - 1u);
@@ -182,6 +187,7 @@ void block(uint m0, uint mend) {
     // MODE 1 / 2 / 3: each row's source point, and for MODE 1 its offset from the centre.
     uint q[TM];
     vec3 xyz[TM];
+    vec4 f[TM];  // HIDDEN 1: the row's features (CF <= 4; zeros past CF), in registers through every step
     [[unroll]] for (uint i = 0; i < TM; ++i) {
         if (MODE == 1u) {
             q[i] = min(uint(LOAD_I(rows[i])), p.P - 1u);  // in range whatever the indices hold
@@ -197,25 +203,25 @@ void block(uint m0, uint mend) {
             xyz[i] = vec3(LOAD_A(d * q[i]), LOAD_A(d * q[i] + 1u), LOAD_A(d * q[i] + 2u));
         }
     }
-    if (HIDDEN == 2u) {
-        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+    if (HIDDEN == 1u)
+        [[unroll]] for (uint i = 0; i < TM; ++i)
+            [[unroll]] for (uint u = 0; u < 4; ++u)
+                f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
+    // Steps of 4 input channels: K of them for HIDDEN; else the features' and one
+    // of the 3 xyz columns whose last channel is 0 (first for MODE 2, last for MODE 1 and 3).
+    const uint steps = HIDDEN != 0u ? (p.K + 3u) / 4u : (p.CF + 3u) / 4u + 1u;
+    const uint xyz_step = MODE == 2u ? 0u : steps - 1u;
+    const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
+    for (uint s = 0; s < steps; ++s) {
+        uint k0 = 4u * s;  // the step's first weight row
+        if (HIDDEN == 2u) {
             vec4 wx[3];
             [[unroll]] for (uint j = 0; j < 3; ++j) wx[j] = LOAD_H4(((p.CF + j) * p.K + k0) / 4u);
             [[unroll]] for (uint i = 0; i < TM; ++i) {
                 const vec4 h = LOAD_A4((q[i] * p.K + k0) / 4u) - (xyz[i].x * wx[0] + xyz[i].y * wx[1] + xyz[i].z * wx[2]);
                 [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
             }
-            fma_rows(a, k0);
-        }
-        return;
-    }
-    if (HIDDEN == 1u) {
-        // The row's features (CF <= 4; zeros past CF) stay in registers through every step.
-        vec4 f[TM];
-        [[unroll]] for (uint i = 0; i < TM; ++i)
-            [[unroll]] for (uint u = 0; u < 4; ++u)
-                f[i][u] = u < p.CF ? LOAD_F(q[i] * p.DF + p.FB + min(u, max(p.CF, 1u) - 1u)) : 0.0;
-        for (uint k0 = 0; k0 < p.K; k0 += 4u) {
+        } else if (HIDDEN == 1u) {
             vec4 wf[4], wx[3];  // W0 rows of the features and of xyz, channels k0 .. k0 + 3
 #ifdef WEIGHTS_SHUFFLE
             // Lane l fetches row l of the 7 (wf, then wx) and the lanes share them by
@@ -241,35 +247,23 @@ void block(uint m0, uint mend) {
                 [[unroll]] for (uint j = 0; j < 3; ++j) h = fma(vec4(xyz[i][j]), wx[j], h);
                 [[unroll]] for (uint u = 0; u < 4; ++u) a[i][u] = apply_act(h[u], ACT, p.slope);
             }
-            fma_rows(a, k0);
-        }
-        return;
-    }
-    // The 3 xyz columns, as one step of 4 whose last channel is 0: first for MODE 2,
-    // after the features for MODE 1 and 3.
-    if (MODE == 2u) {
-        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
-        fma_rows(a, 0u);
-    }
-    const uint kf = MODE == 2u ? 3u : 0u;  // first feature column of the row
-    if (FVEC4) {
-        for (uint k = 0; k < p.CF; k += 4u) {  // CF % 4 == 0 here
-            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
-            fma_rows(a, kf + k);
-        }
-    } else {
-        for (uint k = 0; k < p.CF; k += 4u) {
-            [[unroll]] for (uint u = 0; u < 4; ++u) {
-                const bool live = k + u < p.CF;
-                const uint c = min(k + u, p.CF - 1u);
-                [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_F(q[i] * p.DF + p.FB + c) : 0.0;
+        } else if (s == xyz_step) {
+            [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
+            k0 = MODE == 2u ? 0u : p.CF;
+        } else {
+            const uint k = 4u * (MODE == 2u ? s - 1u : s);  // the step's first feature column
+            if (FVEC4) {  // CF % 4 == 0 here
+                [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = LOAD_F4((q[i] * p.DF + p.FB + k) / 4u);
+            } else {
+                [[unroll]] for (uint u = 0; u < 4; ++u) {
+                    const bool live = k + u < p.CF;
+                    const uint c = min(k + u, p.CF - 1u);
+                    [[unroll]] for (uint i = 0; i < TM; ++i) a[i][u] = live ? LOAD_F(q[i] * p.DF + p.FB + c) : 0.0;
+                }
             }
-            fma_rows(a, kf + k);
+            k0 = kf + k;
         }
-    }
-    if (MODE != 2u) {
-        [[unroll]] for (uint i = 0; i < TM; ++i) a[i] = vec4(xyz[i], 0.0);
-        fma_rows(a, p.CF);
+        fma_rows(a, k0);
     }
 }
 
@@ -417,44 +411,55 @@ void main() {
     // channel, the rounds about 3 SG operations more: much for narrow layers on
     // wide subgroups (K = 32, SG = 32: a third more).
     const Pool pl = PAD ? pool_of(g0, live) : Pool(0u, 0u, 0u, 0u);
-    if ((pl.total + SG - 1u) / SG * (TM * p.K + 3u * SG) < pl.most * TM * p.K) {  // subgroup-uniform
-        for (uint s = 0u; s < pl.total; s += SG) {
-            const uvec3 c = pool_chunk(pl, s, t);
-            bool pad[TM];
+    const bool pooled = (pl.total + SG - 1u) / SG * (TM * p.K + 3u * SG) < pl.most * TM * p.K;  // subgroup-uniform
+    const uint steps = pooled ? (pl.total + SG - 1u) / SG : p.chunks;
+#else
+    const uint steps = p.chunks;
+#endif
+    // One loop and one block() call for both forms: each inlined copy of block()
+    // is compiled in full (docs/performance.md, "Pipeline compile time").
+    for (uint s = 0u; s < steps; ++s) {
+        uint m0 = g0 + s * TM, mend = gend, owner = 0u;
+        bool pad[TM];
+#ifdef SUBGROUP_VOTE
+        if (pooled) {
+            const uvec3 c = pool_chunk(pl, s * SG, t);
+            m0 = c.z, mend = c.y + p.NS, owner = c.x;
             [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = c.x == SG || padding_row(min(c.z + i, c.y + p.NS - 1u));
-            block(c.z, c.y + p.NS);
-            float cm[TN];
-            [[unroll]] for (uint j = 0; j < TN; ++j) {
-                cm[j] = uintBitsToFloat(0xFF800000u);
-                [[unroll]] for (uint i = 0; i < TM; ++i)
-                    if (!pad[i]) cm[j] = max(cm[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
+        } else
+#endif
+        {
+            [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = false;
+            if (PAD) {  // padding rows may hold anything (PAD's plain output): left out, never used
+                bool need = false;
+                [[unroll]] for (uint i = 0; i < TM; ++i) {
+                    pad[i] = padding_row(min(m0 + i, gend - 1u));
+                    need = need || !pad[i];
+                }
+                if (!ANY_LANE(need)) continue;  // subgroup-uniform, as the return above
             }
+        }
+        block(m0, mend);
+        // Rows past the group's end repeat its last row: harmless for a max.
+        float cm[TN];
+        [[unroll]] for (uint j = 0; j < TN; ++j) {
+            cm[j] = uintBitsToFloat(0xFF800000u);
+            [[unroll]] for (uint i = 0; i < TM; ++i)
+                if (!pad[i]) cm[j] = max(cm[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
+        }
+#ifdef SUBGROUP_VOTE
+        if (pooled) {
             for (uint l = 0u; l < SG; ++l) {
-                const bool to_me = subgroupShuffle(c.x, l) == gl_SubgroupInvocationID;
+                const bool to_me = subgroupShuffle(owner, l) == gl_SubgroupInvocationID;
                 [[unroll]] for (uint j = 0; j < TN; ++j) {
                     const float v = subgroupShuffle(cm[j], l);
                     if (to_me) mx[j] = max(mx[j], v);
                 }
             }
+            continue;
         }
-    } else
 #endif
-    for (uint c = 0; c < p.chunks; ++c) {
-        bool pad[TM];
-        [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = false;
-        if (PAD) {  // padding rows may hold anything (PAD's plain output): left out, never used
-            bool need = false;
-            [[unroll]] for (uint i = 0; i < TM; ++i) {
-                pad[i] = padding_row(min(g0 + c * TM + i, gend - 1u));
-                need = need || !pad[i];
-            }
-            if (!ANY_LANE(need)) continue;  // subgroup-uniform, as the return above
-        }
-        block(g0 + c * TM, gend);
-        // Rows past the group's end repeat its last row: harmless for a max.
-        [[unroll]] for (uint i = 0; i < TM; ++i)
-            [[unroll]] for (uint j = 0; j < TN; ++j)
-                if (!pad[i]) mx[j] = max(mx[j], apply_act(acc[i * TN + j] + b[j], ACT, p.slope));
+        [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], cm[j]);
     }
     [[unroll]] for (uint j = 0; j < TN; ++j)
         if (live && n0 + j < p.N) outv[(t * p.N + n0 + j) / 4u][(t * p.N + n0 + j) % 4u] = mx[j];
