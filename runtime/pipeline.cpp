@@ -1,6 +1,9 @@
 #include "runtime/pipeline.h"
 
 #include <bit>
+#include <chrono>
+#include <cstdio>
+#include <cstdlib>
 #include <tuple>
 
 #include "base/error.h"
@@ -38,6 +41,23 @@ void check_interface(const PipelineDesc& desc, const ShaderInterface& iface) {
                     std::to_string(desc.push_bytes));
 }
 
+// VTLOC_TRACE_PIPELINES set (any value): a line on stderr per pipeline created, so
+// that a developer sees what a run compiles. On a CPU driver (lavapipe) most of a cold
+// pipeline's cost comes at its first dispatch, which this time does not include.
+bool trace_pipelines() {
+    static const bool on = std::getenv("VTLOC_TRACE_PIPELINES") != nullptr;
+    return on;
+}
+
+void trace(const PipelineDesc& desc, std::chrono::steady_clock::time_point t0) {
+    std::string line = "vtloc: pipeline ";  // appended, not "..." + s: GCC 12 warns falsely (-Wrestrict) there
+    line += desc.shader;
+    line += ", spec";
+    for (uint32_t v : desc.spec) line += ' ' + std::to_string(v);
+    const double ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+    std::fprintf(stderr, "%s, created in %.1f ms\n", line.c_str(), ms);
+}
+
 }  // namespace
 
 bool PipelineDesc::operator<(const PipelineDesc& o) const {
@@ -55,6 +75,7 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     auto it = pipelines_.find(desc);
     if (it != pipelines_.end()) return *it->second;
 
+    const auto t0 = std::chrono::steady_clock::now();
     const DeviceInfo& info = ctx_.info();
     auto spirv = find_spirv(desc.shader);
     if (spirv.empty()) throw Error("no embedded shader named '" + desc.shader + "'");
@@ -131,6 +152,7 @@ const Pipeline& PipelineCache::get(const PipelineDesc& desc) {
     ci.layout = p->layout.get();
     check_vk(vkCreateComputePipelines(dev, VK_NULL_HANDLE, 1, &ci, nullptr, p->pipeline.out(dev)),
              ("vkCreateComputePipelines for shader " + desc.shader).c_str());
+    if (trace_pipelines()) trace(desc, t0);
     return *(pipelines_[desc] = std::move(p));
 }
 
