@@ -8,6 +8,7 @@
 #include <thread>
 #include <utility>
 
+#include "base/env.h"
 #include "base/error.h"
 #include "runtime/pipeline.h"
 
@@ -48,14 +49,6 @@ const char* device_type_name(VkPhysicalDeviceType t) {
 }
 
 namespace {
-
-bool env_flag(const char* name) {
-    const char* v = std::getenv(name);
-    if (!v) return false;
-    std::string s(v);
-    std::transform(s.begin(), s.end(), s.begin(), ::tolower);
-    return s == "1" || s == "on" || s == "true" || s == "yes";
-}
 
 VKAPI_ATTR VkBool32 VKAPI_CALL debug_callback(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                               VkDebugUtilsMessageTypeFlagsEXT,

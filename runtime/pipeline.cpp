@@ -3,9 +3,9 @@
 #include <bit>
 #include <chrono>
 #include <cstdio>
-#include <cstdlib>
 #include <tuple>
 
+#include "base/env.h"
 #include "base/error.h"
 #include "runtime/context.h"
 #include "runtime/spirv_reflect.h"
@@ -41,11 +41,11 @@ void check_interface(const PipelineDesc& desc, const ShaderInterface& iface) {
                     std::to_string(desc.push_bytes));
 }
 
-// VTLOC_TRACE_PIPELINES set (any value): a line on stderr per pipeline created, so
+// VTLOC_TRACE_PIPELINES=1 (as VTLOC_VALIDATION): a line on stderr per pipeline created, so
 // that a developer sees what a run compiles. On a CPU driver (lavapipe) most of a cold
 // pipeline's cost comes at its first dispatch, which this time does not include.
 bool trace_pipelines() {
-    static const bool on = std::getenv("VTLOC_TRACE_PIPELINES") != nullptr;
+    static const bool on = env_flag("VTLOC_TRACE_PIPELINES");
     return on;
 }
 

@@ -164,9 +164,7 @@ std::vector<ObjectRecord> build_all(const std::vector<Job>& jobs, Shared& sh, in
                 } else {
                     built[size_t(i)] = build_object(jobs[size_t(i)], sh);
                 }
-                // Two files written after the folder is in place: a kill between them
-                // leaves view.xyz alone (and view.json.tmp, which the rewrite renames).
-                if (opt.view && !(fs::exists(dir / "view.xyz") && fs::exists(dir / "view.json"))) {
+                if (opt.view && !has_partial_view(dir)) {  // written after the folder is in place
                     // Seeded by the dataset seed and the object's name: the same view on any thread count.
                     uint64_t h = opt.seed ^ 0x7669657700000000ull;
                     for (char ch : jobs[size_t(i)].name) h = (h ^ uint8_t(ch)) * 0x100000001B3ull;

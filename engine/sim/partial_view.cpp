@@ -88,4 +88,8 @@ void write_partial_view(const std::filesystem::path& dir, const PartialView& v) 
     io::write_file_atomic((dir / "view.json").string(), meta.data(), meta.size());
 }
 
+bool has_partial_view(const std::filesystem::path& dir) {
+    return std::filesystem::exists(dir / "view.xyz") && std::filesystem::exists(dir / "view.json");
+}
+
 }  // namespace vtloc::sim

@@ -26,4 +26,8 @@ PartialView render_partial_view(const io::TriangleMesh& mesh, uint64_t seed, int
 // each written to a temporary name and renamed.
 void write_partial_view(const std::filesystem::path& dir, const PartialView& view);
 
+// Both files in place: a run killed between the two renames leaves view.xyz alone
+// (and view.json.tmp, which the next write_partial_view renames).
+bool has_partial_view(const std::filesystem::path& dir);
+
 }  // namespace vtloc::sim
