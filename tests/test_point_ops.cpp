@@ -239,6 +239,7 @@ struct Sweep {
     std::vector<Tile> tiles{Tile::Auto, Tile::Big8x32};
     std::vector<Weights> weights{std::begin(kWeightPaths), std::end(kWeightPaths)};
     bool pairs = true;
+    std::vector<ops::BufferPath> paths{std::begin(ops::kBufferPaths), std::end(ops::kBufferPaths)};
     // With pairs, mode set `set` (0 or 1) runs on variant v of case k when they alternate.
     bool runs(size_t v, size_t k, int set) const { return !pairs || (v + k) % 2 == size_t(set); }
 };
@@ -253,6 +254,12 @@ void require_both_sets(const std::map<std::string, int>& sets_run, size_t cases)
 }
 
 const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {std::begin(kWeightPaths), std::end(kWeightPaths)}, false};
+// The variants whose shader depends on the subgroup size (point_mlp_shfl: weights
+// shared by shuffles, ball padding skipped by votes and pooled chunks): texel
+// buffers, shuffled weights, each tile. The README's subgroup-4 run sweeps these
+// only; the other shaders hold no subgroup operation, and their subgroup-4 sweep
+// is the long suite's.
+const Sweep kSubgroupShader{{Tile::Auto, Tile::Big8x32}, {Weights::Shuffle}, true, {ops::BufferPath::Texel}};
 
 // the fused MLP layer handles wide layers, large groups and ragged shapes: the cases given.
 void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep = {}) {
@@ -275,7 +282,7 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
         };
         std::vector<Same> same;  // outputs that must equal others bit for bit
         size_t variants = 0;
-        for (ops::BufferPath path : ops::kBufferPaths)
+        for (ops::BufferPath path : sweep.paths)
             for (Weights ubo : sweep.weights)
                 // The device's tile for this size, and CPU devices' big-layer tiles.
                 for (Tile tile : sweep.tiles) {
@@ -341,7 +348,8 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
                      U = asked(sweep.weights, Weights::Uniform);
         const size_t t16 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big16x32) : 0,
                      t8 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big8x32) : 0;
-        CHECK(variants == W + t16 * (W - U) + t8 * S + S * (1 + t16 + t8));
+        const size_t texel = asked(sweep.paths, ops::BufferPath::Texel), storage = asked(sweep.paths, ops::BufferPath::Storage);
+        CHECK(variants == texel * (W + t16 * (W - U) + t8 * S) + storage * S * (1 + t16 + t8));
         const size_t max_sets = sweep.pairs ? (variants + 1 - k % 2) / 2 : variants,
                      plain_sets = sweep.pairs ? variants - max_sets : variants;
         CHECK(same.size() == max_sets + 3 * plain_sets);
@@ -447,6 +455,13 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
     fused_mlp_cases({FusedCase{48, 128, 160, 16}}, Sweep{{Tile::Auto}, {Weights::Uniform}, false});
 }
 
+TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large groups and ragged shapes",
+          "[op][group_linear][subgroup_sweep]") {
+    // The sweep above on the variants that depend on the subgroup size (kSubgroupShader),
+    // for the README's subgroup-4 run.
+    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}}, kSubgroupShader);
+}
+
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
     fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
                      FusedCase{640, 128, 160, 16}},
@@ -538,7 +553,7 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
         int64_t fb = 0;
         if (c.cf == 3) gin.push_back(x), fb = 3;  // the normals
         if (c.cf == 4) gin.push_back(feat), fb = 6;
-        for (ops::BufferPath path : ops::kBufferPaths)
+        for (ops::BufferPath path : sweep.paths)
             for (Weights ubo : sweep.weights)
                 for (Tile tile : sweep.tiles) {
                     if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
@@ -622,6 +637,14 @@ TEST_CASE("a first layer computed in registers (hidden) equals the two layers", 
     // third shape, over the two paths), layer one per point runs on every shape.
     hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}});
+}
+
+TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader equals the two layers",
+          "[op][group_linear][subgroup_sweep]") {
+    // The sweep above on the variants that depend on the subgroup size (kSubgroupShader),
+    // for the README's subgroup-4 run; the third shape's plain and max both on that path.
+    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}}, kSubgroupShader);
+    hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}, false, {ops::BufferPath::Texel}});
 }
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {

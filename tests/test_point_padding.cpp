@@ -68,13 +68,16 @@ struct Variant {
     std::vector<bool> layouts;
 };
 // all_weights false: each buffer path's default only (shuffled weights, the
-// device's tile), for a second shape on the paths' code.
-std::vector<Variant> variants(bool all_weights) {
+// device's tile), for a second shape on the paths' code. subgroup_shader: only the
+// variants whose shader depends on the subgroup size (texel buffers, shuffled
+// weights: point_mlp_shfl), for the README's subgroup-4 run.
+std::vector<Variant> variants(bool all_weights, bool subgroup_shader) {
     std::vector<Variant> v;
     bool turn = false;
     for (ops::BufferPath path : ops::kBufferPaths)
         for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
             for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
+                if (subgroup_shader && (path != ops::BufferPath::Texel || wp != Weights::Shuffle)) continue;
                 if ((path == ops::BufferPath::Storage || !all_weights) && wp != Weights::Shuffle) continue;
                 if (tile != Tile::Auto && (wp != Weights::Shuffle || !test::big_tiles_apply() || !all_weights)) continue;
                 const bool both = all_weights && wp == Weights::Shuffle && tile == Tile::Auto;
@@ -107,7 +110,7 @@ struct PadCase {
 };
 
 // ball padding skipped (pad) leaves every max exact: the cases given.
-void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true) {
+void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true, bool subgroup_shader = false) {
     // Balls of 16 .. 128 around 8 .. 64 centres of 300 points: a small radius pads
     // most slots (whole subgroups of rows are padding), a large one few. Three
     // layers (the paper's shape), as the point encoder builds them: a gathered
@@ -130,7 +133,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
         const int w0 = g.weight("w0", {K0, c.C1}), b0 = g.weight("b0", {c.C1}), w1 = g.weight("w1", {c.C1, c.C2}),
                   b1 = g.weight("b1", {c.C2}), w2 = g.weight("w2", {c.C2, c.C3}), b2 = g.weight("b2", {c.C3});
         std::vector<std::string> plain_names;
-        for (const Variant& v : variants(all_weights)) {
+        for (const Variant& v : variants(all_weights, subgroup_shader)) {
             const ops::BufferPath path = v.path;
             const Weights wp = v.weights;
             const Tile tile = v.tile;
@@ -200,13 +203,15 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
             ++maxes;
         }
         // texel: 3 weight paths (+ the big tile on CPU devices); storage: the auto tile (+ the big one);
-        // or the two defaults alone. 3 hidden x each variant's row layouts + one
-        const int64_t nv = all_weights ? 3 + 1 + (test::big_tiles_apply() ? 2 : 0) : 2;
-        CHECK(int64_t(variants(all_weights).size()) == nv);
-        // Both layouts on the two defaults with every weight path, one elsewhere and on the defaults alone.
-        const int64_t layouts = all_weights ? 2 * 2 + (nv - 2) : nv;
+        // or the two defaults alone; the subgroup shader's: texel, shuffled weights, each tile
+        // or the default. 3 hidden x each variant's row layouts + one
+        const int64_t big = test::big_tiles_apply() ? 1 : 0,
+                      nv = subgroup_shader ? (all_weights ? 1 + big : 1) : (all_weights ? 3 + 1 + 2 * big : 2);
+        CHECK(int64_t(variants(all_weights, subgroup_shader).size()) == nv);
+        // Both layouts on the defaults with every weight path, one elsewhere and on the defaults alone.
+        const int64_t both = all_weights ? (subgroup_shader ? 1 : 2) : 0, layouts = nv + both;
         CHECK(maxes == 3 * layouts + nv);
-        CHECK(layout_twins == (all_weights ? 3 * 2 : 0));  // 3 hidden kinds on the variants that run both layouts
+        CHECK(layout_twins == 3 * both);  // 3 hidden kinds on the variants that run both layouts
         for (const std::string& name : plain_names)  // [C2, M], or [M, C2] (.pm)
             require_real_rows_close(r.gpu.at(name), r.cpu.at(name), pad, name.find(".pm") != std::string::npos, name);
         CHECK(int64_t(plain_names.size()) == 2 * layouts);
@@ -231,7 +236,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
                   bi = pg.input("ball", ball_t.shape, ElemType::I32);
         const int xc_pm = pg.input("clean_pm", {M, c.C2}), xp_pm = pg.input("poisoned_pm", {M, c.C2});
         const int pw = pg.weight("w2", {c.C2, c.C3}), pb = pg.weight("b2", {c.C3});
-        for (const Variant& v : variants(all_weights)) {
+        for (const Variant& v : variants(all_weights, subgroup_shader)) {
             const ops::BufferPath path = v.path;
             const Weights wp = v.weights;
             const Tile tile = v.tile;
@@ -255,7 +260,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
             test::require_close(t, pr.cpu.at(name), {}, name + " against the CPU reference");
             ++poisoned_maxes;
         }
-        CHECK(poisoned_maxes == int64_t(variants(all_weights).size()) * 2);
+        CHECK(poisoned_maxes == int64_t(variants(all_weights, subgroup_shader).size()) * 2);
     }
 }
 
@@ -268,6 +273,13 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
     // suite, every path and both layouts).
     padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}});
     padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, false);
+}
+
+TEST_CASE("ball padding skipped (pad) by the subgroup shader leaves every max exact", "[op][group_linear][subgroup_sweep]") {
+    // The sweep above on the variants whose shader depends on the subgroup size (votes,
+    // pooled chunks: texel buffers, shuffled weights), for the README's subgroup-4 run.
+    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}}, true, true);
+    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, false, true);
 }
 
 TEST_CASE("ball padding skipped (pad) leaves every max exact, at full size", "[long][group_linear]") {
