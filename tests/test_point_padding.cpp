@@ -67,17 +67,26 @@ struct Variant {
     std::string suffix;  // of output names
     std::vector<bool> layouts;
 };
-// all_weights false: each buffer path's default only (shuffled weights, the
-// device's tile), for a second shape on the paths' code. subgroup_shader: only the
-// variants whose shader depends on the subgroup size (texel buffers, shuffled
-// weights: point_mlp_shfl), for the README's subgroup-4 run.
-std::vector<Variant> variants(bool all_weights, bool subgroup_shader) {
+struct PadSweep {
+    // false: each buffer path's default only (shuffled weights, the device's tile),
+    // for a second shape on the paths' code.
+    bool all_weights = true;
+    // Only the variants whose shader depends on the subgroup size (texel buffers,
+    // shuffled weights: point_mlp_shfl), for the README's subgroup-4 run.
+    bool subgroup_shader = false;
+    // The big-layer tile on storage buffers too (the long suite; a CPU device
+    // reads texel buffers, and these pipelines are the slowest to compile).
+    bool big_on_storage = false;
+};
+std::vector<Variant> variants(const PadSweep& sweep) {
+    const bool all_weights = sweep.all_weights;
     std::vector<Variant> v;
     bool turn = false;
     for (ops::BufferPath path : ops::kBufferPaths)
         for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
             for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
-                if (subgroup_shader && (path != ops::BufferPath::Texel || wp != Weights::Shuffle)) continue;
+                if (sweep.subgroup_shader && (path != ops::BufferPath::Texel || wp != Weights::Shuffle)) continue;
+                if (tile != Tile::Auto && path == ops::BufferPath::Storage && !sweep.big_on_storage) continue;
                 if ((path == ops::BufferPath::Storage || !all_weights) && wp != Weights::Shuffle) continue;
                 if (tile != Tile::Auto && (wp != Weights::Shuffle || !test::big_tiles_apply() || !all_weights)) continue;
                 const bool both = all_weights && wp == Weights::Shuffle && tile == Tile::Auto;
@@ -110,7 +119,8 @@ struct PadCase {
 };
 
 // ball padding skipped (pad) leaves every max exact: the cases given.
-void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true, bool subgroup_shader = false) {
+void padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep = {}) {
+    const bool all_weights = sweep.all_weights, subgroup_shader = sweep.subgroup_shader;
     // Balls of 16 .. 128 around 8 .. 64 centres of 300 points: a small radius pads
     // most slots (whole subgroups of rows are padding), a large one few. Three
     // layers (the paper's shape), as the point encoder builds them: a gathered
@@ -133,7 +143,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
         const int w0 = g.weight("w0", {K0, c.C1}), b0 = g.weight("b0", {c.C1}), w1 = g.weight("w1", {c.C1, c.C2}),
                   b1 = g.weight("b1", {c.C2}), w2 = g.weight("w2", {c.C2, c.C3}), b2 = g.weight("b2", {c.C3});
         std::vector<std::string> plain_names;
-        for (const Variant& v : variants(all_weights, subgroup_shader)) {
+        for (const Variant& v : variants(sweep)) {
             const ops::BufferPath path = v.path;
             const Weights wp = v.weights;
             const Tile tile = v.tile;
@@ -202,12 +212,13 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
             }
             ++maxes;
         }
-        // texel: 3 weight paths (+ the big tile on CPU devices); storage: the auto tile (+ the big one);
+        // texel: 3 weight paths (+ the big tile on CPU devices); storage: the auto tile (+ the big one, long suite);
         // or the two defaults alone; the subgroup shader's: texel, shuffled weights, each tile
         // or the default. 3 hidden x each variant's row layouts + one
         const int64_t big = test::big_tiles_apply() ? 1 : 0,
-                      nv = subgroup_shader ? (all_weights ? 1 + big : 1) : (all_weights ? 3 + 1 + 2 * big : 2);
-        CHECK(int64_t(variants(all_weights, subgroup_shader).size()) == nv);
+                      big_storage = sweep.big_on_storage ? big : 0,
+                      nv = subgroup_shader ? (all_weights ? 1 + big : 1) : (all_weights ? 3 + 1 + big + big_storage : 2);
+        CHECK(int64_t(variants(sweep).size()) == nv);
         // Both layouts on the defaults with every weight path, one elsewhere and on the defaults alone.
         const int64_t both = all_weights ? (subgroup_shader ? 1 : 2) : 0, layouts = nv + both;
         CHECK(maxes == 3 * layouts + nv);
@@ -236,7 +247,7 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
                   bi = pg.input("ball", ball_t.shape, ElemType::I32);
         const int xc_pm = pg.input("clean_pm", {M, c.C2}), xp_pm = pg.input("poisoned_pm", {M, c.C2});
         const int pw = pg.weight("w2", {c.C2, c.C3}), pb = pg.weight("b2", {c.C3});
-        for (const Variant& v : variants(all_weights, subgroup_shader)) {
+        for (const Variant& v : variants(sweep)) {
             const ops::BufferPath path = v.path;
             const Weights wp = v.weights;
             const Tile tile = v.tile;
@@ -260,31 +271,33 @@ void padding_cases(std::initializer_list<PadCase> cases, bool all_weights = true
             test::require_close(t, pr.cpu.at(name), {}, name + " against the CPU reference");
             ++poisoned_maxes;
         }
-        CHECK(poisoned_maxes == int64_t(variants(all_weights, subgroup_shader).size()) * 2);
+        CHECK(poisoned_maxes == int64_t(variants(sweep).size()) * 2);
     }
 }
 
 }  // namespace
 
 TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linear][sweep]") {
-    // Every path and layout on a shape that is mostly padding, with odd widths and a
+    // Every path and layout (the big tile on texel buffers; on storage buffers in the
+    // long suite) on a shape that is mostly padding, with odd widths and a
     // ball length that is not a multiple of the row tiles; balls of 128 around 6
     // centres on each buffer path's default, one row layout each (64 in the long
     // suite, every path and both layouts).
     padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}});
-    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, false);
+    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false});
 }
 
 TEST_CASE("ball padding skipped (pad) by the subgroup shader leaves every max exact", "[op][group_linear][subgroup_sweep]") {
     // The sweep above on the variants whose shader depends on the subgroup size (votes,
     // pooled chunks: texel buffers, shuffled weights), for the README's subgroup-4 run.
-    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}}, true, true);
-    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, false, true);
+    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}}, PadSweep{true, true});
+    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false, true});
 }
 
 TEST_CASE("ball padding skipped (pad) leaves every max exact, at full size", "[long][group_linear]") {
     padding_cases({PadCase{37, 32, 0.25, 16, 20, 33}, PadCase{64, 128, 0.4, 64, 96, 128}, PadCase{8, 16, 1.5, 8, 12, 8},
-                   PadCase{19, 40, 0.3, 12, 37, 16}, PadCase{23, 20, 0.3, 12, 20, 16}});
+                   PadCase{19, 40, 0.3, 12, 37, 16}, PadCase{23, 20, 0.3, 12, 20, 16}},
+                  PadSweep{true, false, true});
 }
 
 TEST_CASE("pad = 1 and x_point_major = 1 name what they need", "[op][group_linear]") {
