@@ -13,6 +13,7 @@
 #include <map>
 #include <unistd.h>
 #include <random>
+#include <span>
 
 #include "base/error.h"
 #include "base/python.h"
@@ -20,6 +21,7 @@
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 #include "engine/safetensors.h"
+#include "shaders/shader_registry.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
 
@@ -472,6 +474,52 @@ TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large grou
     // The sweep above on the variants that depend on the subgroup size (kSubgroupShader),
     // for the README's subgroup-4 run.
     fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}}, kSubgroupShader);
+}
+
+TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subgroup operations", "[op][group_linear]") {
+    // The README's subgroup-4 run sweeps kSubgroupShader's variants only, on the
+    // premise that no other variant's shader depends on the subgroup size. The
+    // SPIR-V of every variant the sweeps take says whether it does:
+    // OpCapability GroupNonUniform* (capabilities 61-68).
+    const auto subgroup_ops = [](const std::string& shader) {
+        const std::span<const uint32_t> w = rt::find_spirv(shader);
+        REQUIRE(w.size() > 5);
+        for (size_t i = 5; i < w.size();) {
+            const uint32_t op = w[i] & 0xffffu, n = w[i] >> 16;
+            if (n == 0) break;
+            if (op == 17 && n == 2 && i + 1 < w.size() && w[i + 1] >= 61 && w[i + 1] <= 68) return true;
+            i += n;
+        }
+        return false;
+    };
+    WeightStore w;
+    w.add("w", test::random_tensor({20, 24}, 91));
+    w.add("b", test::random_tensor({24}, 92));
+    Graph g;
+    const int x = g.input("x", {20, 64});
+    const int wv = g.weight("w", {20, 24}), bv = g.weight("b", {24});
+    using In = ops::GroupLinear::Input;
+    std::map<std::string, bool> swept_at_4;  // node -> in kSubgroupShader
+    for (ops::BufferPath path : ops::kBufferPaths)
+        for (Weights ubo : kWeightPaths)
+            for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
+                if (path == ops::BufferPath::Storage && ubo != Weights::Shuffle) continue;
+                if (tile != Tile::Auto && (ubo != Weights::Shuffle || !test::big_tiles_apply())) continue;
+                if (path == ops::BufferPath::Texel) require_weight_path(ubo);
+                const std::string node = std::string(ops::path_name(path)) + "." + weights_name(ubo) + (tile == Tile::Auto ? "" : ".big8");
+                const auto& p = kSubgroupShader.paths;
+                swept_at_4[node] = std::count(p.begin(), p.end(), path) > 0 && ubo == Weights::Shuffle;
+                g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, 8, ops::kActRelu, 0.01, path, ubo, tile}, node), node);
+            }
+    GpuExecutor ex(test::gpu(), g, w);
+    size_t seen = 0;
+    for (const auto& r : ex.sequence().dispatch_log()) {
+        if (!swept_at_4.count(r.node)) continue;
+        ++seen;
+        INFO(r.node << ": " << r.shader);
+        CHECK(subgroup_ops(r.shader) == swept_at_4.at(r.node));
+    }
+    CHECK(seen == swept_at_4.size());
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
