@@ -5,6 +5,7 @@
 
 #include "engine/executor.h"
 #include "engine/graph.h"
+#include "engine/ops/build.h"
 #include "engine/tensor.h"
 #include "engine/weights.h"
 #include "runtime/context.h"
@@ -24,6 +25,13 @@ void release_gpu();
 // CPU devices take them. A GPU never runs them, and NVIDIA's compiler spent minutes
 // on their unrolled shaders (an H200, 2026-11-30: tests stalled past 290 s).
 bool big_tiles_apply();
+
+// Whether a group_linear variant's shader uses subgroup operations (point_mlp_shfl:
+// texel buffers, shuffled weights). The README's subgroup-4 run sweeps these variants
+// only ([subgroup_sweep]); a test checks the claim against each shader's SPIR-V.
+inline bool subgroup_shader_variant(ops::BufferPath path, ops::GroupLinear::Weights w) {
+    return path == ops::BufferPath::Texel && w == ops::GroupLinear::Weights::Shuffle;
+}
 
 // Fails the current test (CHECK) if the validation layer said anything since the last call.
 void require_no_validation_messages();

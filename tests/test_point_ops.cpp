@@ -267,11 +267,10 @@ const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32},
                        false,
                        {std::begin(ops::kBufferPaths), std::end(ops::kBufferPaths)},
                        true};
-// The variants whose shader depends on the subgroup size (point_mlp_shfl: weights
-// shared by shuffles, ball padding skipped by votes and pooled chunks): texel
-// buffers, shuffled weights, each tile. The README's subgroup-4 run sweeps these
-// only; the other shaders hold no subgroup operation, and their subgroup-4 sweep
-// is the long suite's.
+// The variants whose shader depends on the subgroup size (test::subgroup_shader_variant;
+// point_mlp_shfl: weights shared by shuffles, ball padding skipped by votes and pooled
+// chunks), each tile. The README's subgroup-4 run sweeps these only; the other shaders
+// hold no subgroup operation, and their subgroup-4 sweep is the long suite's.
 const Sweep kSubgroupShader{{Tile::Auto, Tile::Big8x32}, {Weights::Shuffle}, true, {ops::BufferPath::Texel}};
 
 // the fused MLP layer handles wide layers, large groups and ragged shapes: the cases given.
@@ -477,8 +476,8 @@ TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large grou
 }
 
 TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subgroup operations", "[op][group_linear]") {
-    // The README's subgroup-4 run sweeps kSubgroupShader's variants only, on the
-    // premise that no other variant's shader depends on the subgroup size. The
+    // The README's subgroup-4 run sweeps test::subgroup_shader_variant's variants only,
+    // on the premise that no other variant's shader depends on the subgroup size. The
     // SPIR-V of every variant the sweeps take says whether it does:
     // OpCapability GroupNonUniform* (capabilities 61-68).
     const auto subgroup_ops = [](const std::string& shader) {
@@ -499,7 +498,7 @@ TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subg
     const int x = g.input("x", {20, 64});
     const int wv = g.weight("w", {20, 24}), bv = g.weight("b", {24});
     using In = ops::GroupLinear::Input;
-    std::map<std::string, bool> swept_at_4;  // node -> in kSubgroupShader
+    std::map<std::string, bool> swept_at_4;  // node -> test::subgroup_shader_variant
     for (ops::BufferPath path : ops::kBufferPaths)
         for (Weights ubo : kWeightPaths)
             for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
@@ -507,8 +506,11 @@ TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subg
                 if (tile != Tile::Auto && (ubo != Weights::Shuffle || !test::big_tiles_apply())) continue;
                 if (path == ops::BufferPath::Texel) require_weight_path(ubo);
                 const std::string node = std::string(ops::path_name(path)) + "." + weights_name(ubo) + (tile == Tile::Auto ? "" : ".big8");
+                swept_at_4[node] = test::subgroup_shader_variant(path, ubo);
+                // kSubgroupShader, which the fused and hidden sweeps take, names the same variants.
                 const auto& p = kSubgroupShader.paths;
-                swept_at_4[node] = std::count(p.begin(), p.end(), path) > 0 && ubo == Weights::Shuffle;
+                const auto& ws = kSubgroupShader.weights;
+                CHECK((std::count(p.begin(), p.end(), path) > 0 && std::count(ws.begin(), ws.end(), ubo) > 0) == swept_at_4[node]);
                 g.output(ops::group_linear(g, {x, wv, bv}, {In::Rows, 0, true, 8, ops::kActRelu, 0.01, path, ubo, tile}, node), node);
             }
     GpuExecutor ex(test::gpu(), g, w);

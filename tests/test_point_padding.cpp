@@ -71,8 +71,8 @@ struct PadSweep {
     // false: each buffer path's default only (shuffled weights, the device's tile),
     // for a second shape on the paths' code.
     bool all_weights = true;
-    // Only the variants whose shader depends on the subgroup size (texel buffers,
-    // shuffled weights: point_mlp_shfl), for the README's subgroup-4 run.
+    // Only the variants whose shader depends on the subgroup size
+    // (test::subgroup_shader_variant), for the README's subgroup-4 run.
     bool subgroup_shader = false;
     // The big-layer tile on storage buffers too (the long suite; a CPU device
     // reads texel buffers, and these pipelines are the slowest to compile).
@@ -85,7 +85,7 @@ std::vector<Variant> variants(const PadSweep& sweep) {
     for (ops::BufferPath path : ops::kBufferPaths)
         for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
             for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
-                if (sweep.subgroup_shader && (path != ops::BufferPath::Texel || wp != Weights::Shuffle)) continue;
+                if (sweep.subgroup_shader && !test::subgroup_shader_variant(path, wp)) continue;
                 if (tile != Tile::Auto && path == ops::BufferPath::Storage && !sweep.big_on_storage) continue;
                 if ((path == ops::BufferPath::Storage || !all_weights) && wp != Weights::Shuffle) continue;
                 if (tile != Tile::Auto && (wp != Weights::Shuffle || !test::big_tiles_apply() || !all_weights)) continue;
