@@ -130,6 +130,9 @@ inline int64_t nearest_hypothesis(const Grid& g, int64_t cell, V3 x, V3 z) {
     return int64_t(s) * g.n_spin + best;
 }
 
+// The robust Gaussian of a squared, width-scaled error q: log(exp(-q / 2) + exp_floor).
+inline float robust_log(float q, float exp_floor) { return std::log(std::exp(-0.5f * q) + exp_floor); }
+
 // Geometry: the pose's gel centre should sit `press` inside the surface and its
 // axis along the inward normal; a robust Gaussian (floor exp_floor = exp(log_floor), from
 // the caller: one exp a term less, as the shader's push constant).
@@ -145,7 +148,7 @@ inline float geometry_log(const Grid& g, int64_t cell, const Frame& f, float pre
     V3 w = cross(f.z, n);
     float e_a = std::atan2(std::sqrt(dot(w, w)), -dot(f.z, n));
     float q = (e_d / sigma_d) * (e_d / sigma_d) + (e_a / sigma_a) * (e_a / sigma_a);
-    return std::log(std::exp(-0.5f * q) + exp_floor);
+    return robust_log(q, exp_floor);
 }
 
 // pose_evidence's input rows, padded to vec4s (on a CPU driver every read at a varying

@@ -187,7 +187,7 @@ std::vector<ops::pose::Term> fit_terms(const std::vector<Rigid>& to_window, cons
 double free_space_log(const ops::pose::Grid& g, const ops::pose::Frame& f, const FilterOptions& o) {
     using namespace ops::pose;
     const float floor = float(o.log_floor), s = float(o.sigma_d_mm);
-    const float zero = std::log(1.0f + std::exp(floor));
+    const float exp_floor = std::exp(floor), zero = robust_log(0, exp_floor);
     double v = 0;
     for (int i = 0; i < 5; ++i)
         for (int j = 0; j < 4; ++j) {
@@ -197,7 +197,7 @@ double free_space_log(const ops::pose::Grid& g, const ops::pose::Frame& f, const
             if (c < 0 || g.cells[c * 2] < 0) continue;
             const float* q = g.dense + int64_t(g.cells[c * 2]) * 6;
             const float depth = -dot(sub(p, load3(q)), load3(q + 3));
-            if (depth > 0) v += std::log(std::exp(-0.5f * (depth / s) * (depth / s)) + std::exp(floor)) - zero;
+            if (depth > 0) v += robust_log((depth / s) * (depth / s), exp_floor) - zero;
         }
     return v;
 }
