@@ -33,6 +33,13 @@ inline bool subgroup_shader_variant(ops::BufferPath path, ops::GroupLinear::Weig
     return path == ops::BufferPath::Texel && w == ops::GroupLinear::Weights::Shuffle;
 }
 
+// Whether a point-MLP sweep runs a tile on a buffer path: a CPU device reads its layers
+// as texel buffers, so the big-layer tiles on storage buffers (the slowest pipelines to
+// compile) run only where a sweep asks (the long suite: big_on_storage).
+inline bool sweep_takes_tile(ops::BufferPath path, ops::GroupLinear::Tile tile, bool big_on_storage) {
+    return tile == ops::GroupLinear::Tile::Auto || path != ops::BufferPath::Storage || big_on_storage;
+}
+
 // Fails the current test (CHECK) if the validation layer said anything since the last call.
 void require_no_validation_messages();
 

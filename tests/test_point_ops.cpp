@@ -247,7 +247,7 @@ struct Sweep {
     std::vector<ops::BufferPath> paths{std::begin(ops::kBufferPaths), std::end(ops::kBufferPaths)};
     bool big_on_storage = false;  // the tiles asked on storage buffers too (else Auto there)
     bool takes(ops::BufferPath path, Tile tile) const {
-        return tile == Tile::Auto || path != ops::BufferPath::Storage || big_on_storage;
+        return test::sweep_takes_tile(path, tile, big_on_storage);
     }
     // With pairs, mode set `set` (0 or 1) runs on variant v of case k when they alternate.
     bool runs(size_t v, size_t k, int set) const { return !pairs || (v + k) % 2 == size_t(set); }

@@ -86,7 +86,7 @@ std::vector<Variant> variants(const PadSweep& sweep) {
         for (Weights wp : {Weights::Shuffle, Weights::Uniform, Weights::Storage})
             for (Tile tile : {Tile::Auto, Tile::Big8x32}) {
                 if (sweep.subgroup_shader && !test::subgroup_shader_variant(path, wp)) continue;
-                if (tile != Tile::Auto && path == ops::BufferPath::Storage && !sweep.big_on_storage) continue;
+                if (!test::sweep_takes_tile(path, tile, sweep.big_on_storage)) continue;
                 if ((path == ops::BufferPath::Storage || !all_weights) && wp != Weights::Shuffle) continue;
                 if (tile != Tile::Auto && (wp != Weights::Shuffle || !test::big_tiles_apply() || !all_weights)) continue;
                 const bool both = all_weights && wp == Weights::Shuffle && tile == Tile::Auto;
