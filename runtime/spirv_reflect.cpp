@@ -12,13 +12,15 @@ namespace {
 
 // SPIR-V opcodes, decorations and storage classes used here (SPIR-V spec, section 3).
 enum : uint32_t {
-    OpTypeInt = 21, OpTypeFloat = 22, OpTypeVector = 23, OpTypeMatrix = 24, OpTypeImage = 25,
+    OpCapability = 17, OpTypeInt = 21, OpTypeFloat = 22, OpTypeVector = 23, OpTypeMatrix = 24, OpTypeImage = 25,
     OpTypeSampledImage = 27, OpTypeArray = 28, OpTypeStruct = 30, OpTypePointer = 32,
     OpConstant = 43, OpVariable = 59, OpDecorate = 71, OpMemberDecorate = 72,
 };
 enum : uint32_t { DecBlock = 2, DecArrayStride = 6, DecBinding = 33, DecDescriptorSet = 34, DecOffset = 35 };
 enum : uint32_t { ScUniformConstant = 0, ScUniform = 2, ScPushConstant = 9, ScStorageBuffer = 12 };
 constexpr uint32_t kMagic = 0x07230203, kDimBuffer = 5;
+// Capabilities GroupNonUniform (61) .. GroupNonUniformQuad (68): subgroup operations.
+constexpr uint32_t kCapSubgroupFirst = 61, kCapSubgroupLast = 68;
 
 struct Type {
     uint32_t op = 0;
@@ -32,6 +34,7 @@ struct Module {
     std::map<uint32_t, uint32_t> binding, set, array_stride;
     std::set<uint32_t> block;  // struct types decorated Block (uniform blocks in the Uniform class)
     std::map<std::pair<uint32_t, uint32_t>, uint32_t> member_offset;
+    bool subgroup_ops = false;
 };
 
 Module parse(std::span<const uint32_t> w, const std::string& shader) {
@@ -43,6 +46,9 @@ Module parse(std::span<const uint32_t> w, const std::string& shader) {
         const uint32_t* a = &w[i + 1];
         const uint32_t n = count - 1;
         switch (op) {
+        case OpCapability:
+            if (n >= 1 && a[0] >= kCapSubgroupFirst && a[0] <= kCapSubgroupLast) m.subgroup_ops = true;
+            break;
         case OpTypeInt: case OpTypeFloat: case OpTypeVector: case OpTypeMatrix: case OpTypeImage:
         case OpTypeSampledImage: case OpTypeArray: case OpTypeStruct: case OpTypePointer:
             if (n >= 1) m.types[a[0]] = Type{op, std::vector<uint32_t>(a + 1, a + n)};
@@ -117,6 +123,7 @@ BindingKind kind_of(const Module& m, uint32_t pointee, uint32_t storage) {
 ShaderInterface reflect_spirv(std::span<const uint32_t> words, const std::string& shader) {
     const Module m = parse(words, shader);
     ShaderInterface out;
+    out.subgroup_ops = m.subgroup_ops;
     for (const auto& [id, var] : m.vars) {
         const auto ptr = m.types.find(var.first);
         if (ptr == m.types.end() || ptr->second.op != OpTypePointer || ptr->second.args.size() < 2) continue;

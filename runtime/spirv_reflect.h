@@ -14,6 +14,7 @@ enum class BindingKind { StorageBuffer, TexelBuffer, UniformBuffer, Other };
 struct ShaderInterface {
     std::vector<BindingKind> bindings;  // index = binding number in set 0; gaps are Other
     uint32_t push_bytes = 0;            // size of the push-constant block (0: none)
+    bool subgroup_ops = false;          // declares a GroupNonUniform* capability
 };
 
 // Throws vtloc::Error naming `shader` when the words are not a SPIR-V module this

@@ -13,7 +13,6 @@
 #include <map>
 #include <unistd.h>
 #include <random>
-#include <span>
 
 #include "base/error.h"
 #include "base/python.h"
@@ -21,6 +20,7 @@
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
 #include "engine/safetensors.h"
+#include "runtime/spirv_reflect.h"
 #include "shaders/shader_registry.h"
 #include "tests/golden.h"
 #include "tests/run_both.h"
@@ -478,18 +478,10 @@ TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large grou
 TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subgroup operations", "[op][group_linear]") {
     // The README's subgroup-4 run sweeps test::subgroup_shader_variant's variants only,
     // on the premise that no other variant's shader depends on the subgroup size. The
-    // SPIR-V of every variant the sweeps take says whether it does:
-    // OpCapability GroupNonUniform* (capabilities 61-68).
+    // SPIR-V of every variant the sweeps take says whether it does (a GroupNonUniform*
+    // capability, rt::reflect_spirv).
     const auto subgroup_ops = [](const std::string& shader) {
-        const std::span<const uint32_t> w = rt::find_spirv(shader);
-        REQUIRE(w.size() > 5);
-        for (size_t i = 5; i < w.size();) {
-            const uint32_t op = w[i] & 0xffffu, n = w[i] >> 16;
-            if (n == 0) break;
-            if (op == 17 && n == 2 && i + 1 < w.size() && w[i + 1] >= 61 && w[i + 1] <= 68) return true;
-            i += n;
-        }
-        return false;
+        return rt::reflect_spirv(rt::find_spirv(shader), shader).subgroup_ops;
     };
     WeightStore w;
     w.add("w", test::random_tensor({20, 24}, 91));

@@ -195,6 +195,11 @@ TEST_CASE("pipelines are checked against the shader's own bindings and push cons
     const rt::ShaderInterface act = rt::reflect_spirv(rt::find_spirv("activation"), "activation");
     CHECK(act.bindings.size() == 2);
     CHECK(act.push_bytes == 8);
+    // Subgroup operations, from the module's GroupNonUniform* capabilities.
+    CHECK(shfl.subgroup_ops);
+    CHECK(rt::reflect_spirv(rt::find_spirv("fps_subgroup"), "fps_subgroup").subgroup_ops);
+    CHECK_FALSE(act.subgroup_ops);
+    CHECK_FALSE(ubo.subgroup_ops);
     // A description that disagrees with the shader is refused by name.
     rt::Context& ctx = test::gpu();
     REQUIRE_THROWS_WITH(ops::pipeline(ctx, "activation", 1, 8, {32, ops::kActRelu}),
