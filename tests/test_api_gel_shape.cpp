@@ -110,13 +110,24 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     const api::Motion m{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {3, 0, 0}};
     const api::TrackerEstimate direct = t.evaluate_window({m}, {}, nullptr, {&a, &b});
     const std::vector<std::vector<float>> terms{t.touch_term(nullptr, nullptr, &a), t.touch_term(nullptr, nullptr, &b)};
-    const api::TrackerEstimate reused = t.evaluate_window_terms({m}, terms);
+    // The shapes go along for render-and-compare at the refined poses (render_refined_weight).
+    const api::TrackerEstimate reused = t.evaluate_window_terms({m}, terms, {&a, &b});
     CHECK(terms[0] == t.shape_term(a));
     CHECK(reused.sample_belief == direct.sample_belief);
     CHECK(reused.contact == direct.contact);
     CHECK(t.touch_term(nullptr, nullptr, nullptr).empty());  // no network, no shape: no term
     CHECK(t.evaluate_window_terms({m}, {{}, {}}).sample_belief == t.evaluate_window({m}).sample_belief);
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0]}), Catch::Contains("1 touch terms for 2 touches"));
+    CHECK_THROWS_WITH(t.evaluate_window_terms({m}, terms, {&a}), Catch::Contains("1 gel shapes for 2 touches"));
+    {  // At weight 0 the shapes only enter through the grid's term; the default scores them at the refined poses.
+        api::TrackerOptions off = o;
+        off.render_refined_weight = 0;
+        api::Tracker t0 = t.with_options(off);
+        CHECK(t0.evaluate_window_terms({m}, terms, {&a, &b}).sample_belief == t0.evaluate_window_terms({m}, terms).sample_belief);
+        CHECK(t.evaluate_window_terms({m}, terms, {&a, &b}).sample_belief != t.evaluate_window_terms({m}, terms).sample_belief);
+        off.render_refined_weight = -1;
+        CHECK_THROWS_WITH(t.with_options(off), Catch::Contains("render_refined_weight"));
+    }
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0], std::vector<float>(7)}), Catch::Contains("7"));
     // Online with the same terms: add_touch_term is add_touch with the shape, and reset starts over.
     t.add_touch(std::nullopt, nullptr, nullptr, &a);
@@ -124,8 +135,8 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     const std::vector<float> online = t.belief();
     t.reset();
     CHECK(t.touches() == 0);
-    t.add_touch_term(std::nullopt, terms[0]);
-    t.add_touch_term(m, terms[1]);
+    t.add_touch_term(std::nullopt, terms[0], &a);
+    t.add_touch_term(m, terms[1], &b);
     CHECK(t.touches() == 2);
     CHECK(t.belief() == online);
     CHECK(t.estimate().sample_belief == direct.sample_belief);  // two touches: the online form is the windowed one

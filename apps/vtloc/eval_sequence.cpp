@@ -183,6 +183,7 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "render_weight") to.render_weight = v;
             else if (k == "render_press_percentile") to.render_press_percentile = v;
             else if (k == "render_cell_mm") to.render_cell_mm = v;
+            else if (k == "render_refined_weight") to.render_refined_weight = v;
             else if (k == "render_quadratic") {
                 if (v != 0 && v != 1) throw UsageError("--filter: render_quadratic is 0 or 1");
                 to.render_quadratic = v == 1;
@@ -193,7 +194,7 @@ int run_sequence(Session& s, const Args& a) {
                 if (!(v >= 1 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: online_window is an integer in [1, 64]");
                 online_window = int(v), to.window = int(v);
             }
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, hypotheses, n_spin, online_window)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, hypotheses, n_spin, online_window)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");
@@ -313,23 +314,27 @@ int run_sequence(Session& s, const Args& a) {
                         if (!rows_wanted.count(row_name)) continue;
                         // Each touch's term once per row and hypothesis set (the clean and the noisy filter
                         // share theirs): a touch sits in up to 8 windows.
+                        // The touch's gel shape in the render-and-compare rows (read once), else null.
+                        auto shape_of = [&](size_t i) -> const api::GelShape* {
+                            if (!rc && !orc) return nullptr;
+                            auto& cache = rc ? measured : oracle;
+                            if (!cache.count(i)) {
+                                const std::string img = image_path(o, *tour[i]);
+                                cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
+                                              : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(), d.sensor.mm_per_px);
+                            }
+                            return &cache[i];
+                        };
+                        std::vector<const api::GelShape*> shapes;
+                        if (rc || orc)
+                            for (size_t i = end + 1 - size_t(T); i <= end; ++i) shapes.push_back(shape_of(i));
                         auto window_terms = [&](api::Tracker& scorer, int set) {
                             std::vector<std::vector<float>> terms;
                             for (size_t i = end + 1 - size_t(T); i <= end; ++i) {
                                 const auto key = std::make_tuple(set, row_name, i);
                                 auto it = term_cache.find(key);
                                 if (it == term_cache.end()) {
-                                    const api::GelShape* g = nullptr;
-                                    if (rc || orc) {
-                                        auto& cache = rc ? measured : oracle;
-                                        if (!cache.count(i)) {
-                                            const std::string img = image_path(o, *tour[i]);
-                                            cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
-                                                          : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(),
-                                                                                  d.sensor.mm_per_px);
-                                        }
-                                        g = &cache[i];
-                                    }
+                                    const api::GelShape* g = shape_of(i);
                                     const api::TouchResult* r = nullptr;
                                     if (net && !(test_only && tour[i]->split != "test")) {
                                         if (!results.count(i))
@@ -344,10 +349,11 @@ int run_sequence(Session& s, const Args& a) {
                         };
                         // The windowed form, or the online one touch by touch.
                         auto run = [&](api::Tracker& t, const std::vector<std::vector<float>>& terms) {
-                            if (!online_window) return t.evaluate_window_terms(motions, terms);
+                            if (!online_window) return t.evaluate_window_terms(motions, terms, shapes);
                             t.reset();
                             for (size_t i = 0; i < terms.size(); ++i)
-                                t.add_touch_term(i ? std::optional<api::Motion>(motions[i - 1]) : std::nullopt, terms[i]);
+                                t.add_touch_term(i ? std::optional<api::Motion>(motions[i - 1]) : std::nullopt, terms[i],
+                                                 shapes.empty() ? nullptr : shapes[i]);
                             return t.estimate();
                         };
                         const api::TrackerEstimate e = run(tracker, window_terms(clean, 0));

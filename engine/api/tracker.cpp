@@ -10,6 +10,7 @@
 #include "engine/io/mesh_formats.h"
 #include "engine/io/render.h"
 #include "engine/track/codebook.h"
+#include "engine/track/pose_shape.h"
 #include "engine/track/tracker.h"
 
 namespace vtloc::api {
@@ -41,6 +42,8 @@ track::ScoreOptions score_options(const TrackerOptions& o) {
 track::FilterOptions filter_options(const TrackerOptions& o) {
     if (o.window < 1 || o.window > 64) throw Error("tracker: window must be 1..64, got " + std::to_string(o.window));
     if (!(o.network_weight >= 0) || !std::isfinite(o.network_weight)) throw Error("tracker: network_weight must be >= 0");
+    if (!(o.render_refined_weight >= 0) || !std::isfinite(o.render_refined_weight))
+        throw Error("tracker: render_refined_weight must be >= 0 (0: off)");
     track::FilterOptions f;
     f.press_mm = o.press_mm;
     f.sigma_d_mm = o.sigma_d_mm;
@@ -77,6 +80,7 @@ struct Tracker::Impl {
     track::ScoreOptions score;  // render-and-compare's, checked with the others (check_options): the scorer is made at the first gel shape
     std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
+    std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
           object_units(o.object_units), options(o), score(score_options(o)), codebook_cache(o.codebook_cache) {
@@ -102,6 +106,24 @@ struct Tracker::Impl {
         }
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
         return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px);
+    }
+
+    // Render-and-compare at the refined poses for one touch's gel shape, or none.
+    track::PoseTerm pose_term(const GelShape* g, size_t touch) {
+        if (!g || !(options.render_refined_weight > 0)) return {};
+        if (g->height < 1 || g->width < 1 || g->depth_mm.size() != size_t(g->height) * size_t(g->width))
+            throw Error("touch " + std::to_string(touch) + ": its gel shape has " + std::to_string(g->depth_mm.size()) + " heights for " +
+                        std::to_string(g->height) + " x " + std::to_string(g->width) + " pixels");
+        if (!pose_scorer) pose_scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
+        auto win = std::make_shared<const track::ShapeWindow>(track::shape_window(g->depth_mm, g->height, g->width, g->mm_per_px, score));
+        return [sc = pose_scorer, win, w = options.render_refined_weight, q = score.quadratic](const track::Rigid& x) {
+            return sc->score(x, *win, w, q);
+        };
+    }
+    std::vector<track::PoseTerm> pose_terms(const std::vector<const GelShape*>& shapes) {
+        std::vector<track::PoseTerm> t;
+        for (size_t i = 0; i < shapes.size(); ++i) t.push_back(pose_term(shapes[i], i + 1));
+        return t;
     }
 
     // Every term a touch has, summed (log fields multiply).
@@ -253,13 +275,17 @@ Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 
 void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* network, const Object* object, const GelShape* shape) {
     guarded([&] {
-        std::vector<float> f = impl_->touch_field(network, object, shape, size_t(impl_->tracker.touches() + 1));
-        impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, f);
+        const size_t n = size_t(impl_->tracker.touches() + 1);
+        std::vector<float> f = impl_->touch_field(network, object, shape, n);
+        impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, f, impl_->pose_term(shape, n));
     });
 }
 
-void Tracker::add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term) {
-    guarded([&] { impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, term); });
+void Tracker::add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term, const GelShape* shape) {
+    guarded([&] {
+        track::PoseTerm p = impl_->pose_term(shape, size_t(impl_->tracker.touches() + 1));
+        impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, term, std::move(p));
+    });
 }
 
 int Tracker::touches() const { return impl_->tracker.touches(); }
@@ -289,7 +315,7 @@ TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, con
             any = any || r || g;
         }
         if (!any) terms.clear();
-        return impl_->convert(impl_->tracker.evaluate_window(m, terms), int(motions.size() + 1));
+        return impl_->convert(impl_->tracker.evaluate_window(m, terms, impl_->pose_terms(shapes)), int(motions.size() + 1));
     });
 }
 
@@ -297,14 +323,18 @@ std::vector<float> Tracker::touch_term(const TouchResult* network, const Object*
     return guarded([&] { return impl_->touch_field(network, object, shape, 1); });
 }
 
-TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms) {
+TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms,
+                                               const std::vector<const GelShape*>& shapes) {
     return guarded([&] {
         std::vector<track::Rigid> m;
         for (const Motion& x : motions) m.push_back(to_rigid(x));
         if (!terms.empty() && terms.size() != motions.size() + 1)
             throw Error("window: " + std::to_string(terms.size()) + " touch terms for " + std::to_string(motions.size() + 1) + " touches");
+        if (!shapes.empty() && shapes.size() != motions.size() + 1)
+            throw Error("window: " + std::to_string(shapes.size()) + " gel shapes for " + std::to_string(motions.size() + 1) + " touches");
         const bool any = std::any_of(terms.begin(), terms.end(), [](const std::vector<float>& t) { return !t.empty(); });
-        return impl_->convert(impl_->tracker.evaluate_window(m, any ? terms : std::vector<std::vector<float>>{}), int(motions.size() + 1));
+        return impl_->convert(impl_->tracker.evaluate_window(m, any ? terms : std::vector<std::vector<float>>{}, impl_->pose_terms(shapes)),
+                              int(motions.size() + 1));
     });
 }
 

@@ -233,6 +233,24 @@ Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& ter
     return x;
 }
 
+// The same pattern search on any objective f, from (step_r, step_t) halved `rounds` times.
+template <class F>
+Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, double step_t) {
+    for (int round = 0; round < rounds; ++round, step_r /= 2, step_t /= 2)
+        for (bool moved = true; moved;) {
+            moved = false;
+            for (int k = 0; k < 6; ++k)
+                for (double sign : {1.0, -1.0}) {
+                    double d[6] = {0, 0, 0, 0, 0, 0};
+                    d[k] = sign * (k < 3 ? step_r : step_t);
+                    Rigid y = perturb(x, d);
+                    double fy = f(y);
+                    if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
+                }
+        }
+    return x;
+}
+
 // The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
 // smoother landscape, which a pose several degrees off can climb: at long lever arms
 // the tight one's basin is a degree or two wide), then at the tight widths. With
@@ -364,7 +382,7 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
     return st;
 }
 
-void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term) {
+void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term, PoseTerm pose_term) {
     const size_t n = size_t(touches_) + 1;
     if (touches_ == 0 && motion) throw Error("touch 1: the first touch has no previous one to move from");
     if (touches_ > 0 && !motion) throw Error("touch " + std::to_string(n) + ": needs the motion from the previous touch");
@@ -374,12 +392,14 @@ void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<fl
     // the touch before it (when there is one) enters as a prior.
     if (motion) motions_.push_back(*motion);
     terms_.push_back(term);
+    pose_terms_.push_back(std::move(pose_term));
     const size_t W = size_t(std::max(1, opt_.online_window));
     std::optional<Rigid> prior_motion;
     if (terms_.size() > W) {
         prior_motion = motions_.front();
         motions_.erase(motions_.begin());
         terms_.erase(terms_.begin());
+        pose_terms_.erase(pose_terms_.begin());
     }
     std::vector<const std::vector<float>*> tp;
     for (const auto& t : terms_) tp.push_back(&t);
@@ -397,6 +417,7 @@ void Tracker::reset() {
     last_ = Step{};
     motions_.clear();
     terms_.clear();
+    pose_terms_.clear();
     beliefs_.clear();
     prior_log_.clear();
 }
@@ -409,18 +430,21 @@ uint64_t Tracker::device_bytes() const {
 
 Estimate Tracker::estimate() const {
     if (touches_ == 0) throw Error("the tracker has no touch yet");
-    return finish(last_.log, last_.marginal, last_.cost, last_.to_window);
+    return finish(last_.log, last_.marginal, last_.cost, last_.to_window, pose_terms_);
 }
 
-Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms) {
+Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms,
+                                  const std::vector<PoseTerm>& pose_terms) {
     const size_t W = motions.size() + 1;
     if (!terms.empty() && terms.size() != W)
         throw Error("window: " + std::to_string(terms.size()) + " touch terms for " + std::to_string(W) + " touches");
+    if (!pose_terms.empty() && pose_terms.size() != W)
+        throw Error("window: " + std::to_string(pose_terms.size()) + " pose terms for " + std::to_string(W) + " touches");
     for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
     std::vector<const std::vector<float>*> tp(W, nullptr);
     for (size_t i = 0; i < terms.size(); ++i) check_term(terms[i], i + 1), tp[i] = &terms[i];
     Step st = run_step(motions, tp, nullptr, nullptr);
-    return finish(st.log, st.marginal, st.cost, st.to_window);
+    return finish(st.log, st.marginal, st.cost, st.to_window, pose_terms);
 }
 
 double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const {
@@ -432,8 +456,8 @@ double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose)
     return f;
 }
 
-Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& marginal,
-                         const std::vector<float>& cost, const std::vector<Rigid>& to_window) const {
+Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& marginal, const std::vector<float>& cost,
+                         const std::vector<Rigid>& to_window, const std::vector<PoseTerm>& pose_terms) const {
     const Surface& s = surface_;
     const int64_t S = s.n_samples(), NS = s.n_spin();
     const ops::pose::Grid grid = s.grid();
@@ -479,12 +503,16 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
     // near miss. Samples outside the refined modes keep their grid mass.
-    std::vector<double> fit;
+    // shape[m]: the window's pose terms at refined mode m's poses (render-and-compare there),
+    // added to its fit where the refined modes share the mass.
+    std::vector<double> fit, shape;
     std::vector<Rigid> refined;
     std::vector<std::array<double, 3>> refined_contact;
+    const bool any_pose_term = std::any_of(pose_terms.begin(), pose_terms.end(), [](const PoseTerm& t) { return bool(t); });
     auto refine_modes = [&](int upto) {
         const size_t from = fit.size(), n = size_t(std::max<int>(0, upto - int(from)));
         fit.resize(from + n);
+        shape.resize(from + n);
         refined.resize(from + n);
         refined_contact.resize(from + n);
         // Each mode's climb is independent and pure, so the modes are spread over the host's
@@ -507,6 +535,35 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         refine_modes(int(mode_sample.size()));
     }
     const int n_refine = int(fit.size());
+    if (any_pose_term) {
+        auto shape_at = [&](const Rigid& x) {
+            double v = 0;
+            for (size_t k = 0; k < pose_terms.size(); ++k)
+                if (pose_terms[k]) v += pose_terms[k](k < to_window.size() ? compose(x, to_window[k]) : x);
+            return v;
+        };
+        parallel_for(size_t(n_refine), opt_.threads, [&](size_t m) { shape[m] = shape_at(refined[m]); });
+        // Where the geometry leaves directions flat (touches on one face slide along it), the
+        // climb stopped wherever the grid's pose lay; the gel's shapes tell along them. So the
+        // best few modes by geometry + shapes climb on both (a render per touch per step: the
+        // rest only score), each keeping what it finds where that, with free space, is better.
+        std::vector<size_t> by_total(static_cast<size_t>(n_refine));
+        std::iota(by_total.begin(), by_total.end(), size_t(0));
+        std::stable_sort(by_total.begin(), by_total.end(), [&](size_t a, size_t b) { return fit[a] + shape[a] > fit[b] + shape[b]; });
+        by_total.resize(std::min(by_total.size(), size_t(std::max(0, opt_.shape_climb_modes))));
+        if (opt_.refine > 0 && opt_.shape_climb_rounds > 0)
+            parallel_for(by_total.size(), opt_.threads, [&](size_t i) {
+                const size_t m = by_total[i];
+                double fb = refiner.fit(refined[m]) + shape[m];
+                const Rigid y = climb_on([&](const Rigid& x) { return refiner.fit(x) + shape_at(x); }, refined[m], fb,
+                                         opt_.shape_climb_rounds, 2.0 * M_PI / 180, 0.8);
+                const double fy = refiner.fit(y) + refiner.free_space(y), sy = shape_at(y);
+                if (fy + sy > fit[m] + shape[m]) {
+                    refined[m] = y, fit[m] = fy, shape[m] = sy;
+                    refined_contact[m] = axis_contact(s, grid, y, opt_.press_mm);
+                }
+            });
+    }
     // A rescued mode is credited with its refined fit only while its pose stays within the
     // suppression radius of its own sample: else it would lend another place's fit to its own.
     std::vector<char> ok(static_cast<size_t>(n_refine), 1);
@@ -522,19 +579,21 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::vector<double> grid_mass(static_cast<size_t>(n_refine), 0.0);
     for (int64_t i = 0; i < S; ++i)
         if (refined_mode(i) >= 0) grid_mass[size_t(refined_mode(i))] += marginal[size_t(i)];
+    std::vector<double> share(static_cast<size_t>(n_refine));
+    for (int m = 0; m < n_refine; ++m) share[size_t(m)] = fit[size_t(m)] + shape[size_t(m)];
     double fmax = -INFINITY;
     for (int m = 0; m < n_refine; ++m)
-        if (ok[size_t(m)]) fmax = std::max(fmax, fit[size_t(m)]);
+        if (ok[size_t(m)]) fmax = std::max(fmax, share[size_t(m)]);
     double held = 0, z = 0;
     for (int m = 0; m < n_refine; ++m)
-        if (ok[size_t(m)]) held += grid_mass[size_t(m)], z += std::exp(fit[size_t(m)] - fmax);
+        if (ok[size_t(m)]) held += grid_mass[size_t(m)], z += std::exp(share[size_t(m)] - fmax);
     std::vector<double> w(static_cast<size_t>(S));
     double total = 0;
     for (int64_t i = 0; i < S; ++i) {
         const int m = refined_mode(i);
         w[size_t(i)] = m < 0 || grid_mass[size_t(m)] <= 0
                            ? double(marginal[size_t(i)])
-                           : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(fit[size_t(m)] - fmax) / z;
+                           : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(share[size_t(m)] - fmax) / z;
         total += w[size_t(i)];
     }
     for (double& v : w) v /= total;
@@ -546,6 +605,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         if (ok[size_t(m)] && e.modes[size_t(m)].probability > e.modes[size_t(best_mode)].probability) best_mode = m;
     e.pose = refined[size_t(best_mode)];
     e.fit = fit[size_t(best_mode)];
+    e.pose_terms = shape[size_t(best_mode)];
     // The Bayes contact under the re-weighted belief, each refined mode's mass at
     // its refined contact (its peak; the grid spreads it over the spacing), among
     // those contacts and the samples the GPU's risk ranked best.

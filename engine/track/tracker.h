@@ -11,6 +11,7 @@
 // references are the oracle (tests/test_tracker.cpp).
 #include <array>
 #include <cmath>
+#include <functional>
 #include <memory>
 #include <optional>
 #include <vector>
@@ -63,12 +64,23 @@ struct FilterOptions {
     // (docs/multitouch.md, "Free space"); 0: off.
     double free_space_mm = 1.5;
     double free_space_w_mm = 24, free_space_h_mm = 19;  // the dataset sensor's 19.9 x 14.9 mm window, + 2 mm a side
+    // Rounds of the climb on geometry + the touches' pose terms after the geometry's own
+    // (steps from 2 degrees and 0.8 mm, halved each round); 0: the pose terms only score.
+    int shape_climb_rounds = 3;
+    int shape_climb_modes = 4;   // the refined modes best by geometry + pose terms that climb so
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
     // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
     // fewer); n, at most n (a robot process with its own thread budget). The outputs do not
     // depend on it: each mode's climb writes its own slot.
     int threads = 0;
 };
+
+// A touch's own evidence (log) at an exact pose of that touch, asked of every refined mode
+// once its climb has ended and added to its fit where the refined modes share the grid's
+// mass: render-and-compare at the refined poses (engine/track/pose_shape.h), which the
+// grid's hypotheses, up to half a spacing and a spin step off, cannot tell. Empty: none.
+// Called from several threads at once: it must not change shared state.
+using PoseTerm = std::function<double(const Rigid&)>;
 
 struct Mode {
     std::array<double, 3> contact{};
@@ -83,6 +95,7 @@ struct Estimate {
     std::vector<Mode> modes;                 // best first
     double mass_within_5mm = 0;              // the belief's mass within 5 mm of `contact`
     double fit = 0;                          // `pose`'s refined geometry fit (log; window_fit's measure)
+    double pose_terms = 0;                   // the window's PoseTerms at `pose` and its window_poses (log; 0: none)
     std::vector<float> sample_belief;        // [S] summed over spins
 };
 
@@ -98,8 +111,9 @@ public:
     Tracker& operator=(const Tracker&) = delete;
 
     // Online: the first touch takes no motion; each later one the motion from
-    // the previous touch. term: a log field over the hypotheses [S * NS], or empty.
-    void add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term = {});
+    // the previous touch. term: a log field over the hypotheses [S * NS], or empty;
+    // pose_term: the touch's evidence at the refined poses, or empty.
+    void add_touch(const std::optional<Rigid>& motion, const std::vector<float>& term = {}, PoseTerm pose_term = {});
     // Forgets every touch (the object moved, a new grasp); the surface and the step graphs stay.
     void reset();
     int touches() const { return touches_; }
@@ -107,8 +121,9 @@ public:
     Estimate estimate() const;
 
     // Windowed (stateless): motions[i] from touch i to i + 1 (W - 1 of them),
-    // terms[i] for touch i (empty vectors: none; or no terms at all).
-    Estimate evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms = {});
+    // terms[i] for touch i (empty vectors: none; or no terms at all); pose_terms likewise.
+    Estimate evaluate_window(const std::vector<Rigid>& motions, const std::vector<std::vector<float>>& terms = {},
+                             const std::vector<PoseTerm>& pose_terms = {});
 
     // The geometry fit (log) of a pose of the current touch given the window's
     // motions, refined from it as the estimate's modes are: the window's touches at
@@ -139,8 +154,8 @@ private:
     Step run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
                   const Rigid* prior_motion, const std::vector<float>* prior);
     void check_term(const std::vector<float>& term, size_t touch) const;
-    Estimate finish(const std::vector<float>& log, const std::vector<float>& marginal,
-                    const std::vector<float>& cost, const std::vector<Rigid>& to_window) const;
+    Estimate finish(const std::vector<float>& log, const std::vector<float>& marginal, const std::vector<float>& cost,
+                    const std::vector<Rigid>& to_window, const std::vector<PoseTerm>& pose_terms) const;
     Surface surface_;
     FilterOptions opt_;
     std::unique_ptr<Impl> impl_;
@@ -148,6 +163,7 @@ private:
     Step last_;
     std::vector<Rigid> motions_;              // between the window's touches
     std::vector<std::vector<float>> terms_;   // the window's touch terms
+    std::vector<PoseTerm> pose_terms_;        // and their pose terms
     std::vector<std::vector<float>> beliefs_; // log beliefs of the last W touches
     std::vector<float> prior_log_;
 };

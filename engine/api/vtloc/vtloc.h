@@ -376,6 +376,13 @@ struct TrackerOptions {
     // hypothesis' map read at their centres; larger cells, fewer reads (fitted on train
     // windows: 3 mm scored as well as 1 mm, with a ninth of the reads).
     double render_cell_mm = 3.0;
+    // Render-and-compare again at the refined poses (0: off): once the filter has climbed its
+    // best modes to continuous poses, each touch's gel shape is compared with what the object
+    // presses at that very pose (not at the grid's nearest hypothesis, up to half a spacing
+    // and a spin step away), and this inverse temperature times that score joins the mode's
+    // fit where the modes share the belief; the best 4 modes also climb on it. Fitted on train
+    // windows (docs/render_compare.md, "At the refined poses").
+    double render_refined_weight = 16;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
@@ -458,8 +465,9 @@ public:
     // or load_indentation), scored by render-and-compare; null = geometry only.
     void add_touch(const std::optional<Motion>& motion, const TouchResult* network = nullptr,
                    const Object* object = nullptr, const GelShape* shape = nullptr);
-    // add_touch with a precomputed touch_term() (empty: geometry only).
-    void add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term);
+    // add_touch with a precomputed touch_term() (empty: geometry only); shape: the touch's gel
+    // shape for render-and-compare at the refined poses (render_refined_weight), or null.
+    void add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term, const GelShape* shape = nullptr);
     int touches() const;
     // Forgets every touch (a new grasp, the object moved); the object's tables stay.
     void reset();
@@ -474,8 +482,11 @@ public:
     // its gel shape; empty: neither), to be reused: the windows of an evaluation share touches,
     // and evaluate_window_terms scores none of them again.
     std::vector<float> touch_term(const TouchResult* network, const Object* object, const GelShape* shape);
-    // The windowed form over precomputed touch_term()s (one per touch; empty vectors: none).
-    TrackerEstimate evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms);
+    // The windowed form over precomputed touch_term()s (one per touch; empty vectors: none),
+    // and the touches' gel shapes for render-and-compare at the refined poses (empty, or one
+    // per touch, null: none).
+    TrackerEstimate evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms,
+                                          const std::vector<const GelShape*>& shapes = {});
     // The geometry fit (log) of a pose of a window's last touch, refined from it as the
     // estimate's modes are. With the true pose known (evaluation), a fit above the
     // estimate's `fit` means the search missed the truth; at or below, a wrong pose

@@ -1,0 +1,50 @@
+#pragma once
+// Render-and-compare at an exact pose (SPEC 9; docs/render_compare.md, "At the refined
+// poses"). The codebook scores a touch at the grid's hypotheses, which sit up to half a
+// sample spacing and half a spin step from any true pose: on a toothed or edged patch
+// that offset changes what the gel would feel more than the place does. Once the filter
+// has climbed its best modes to continuous poses, each is scored again here: the object
+// rendered under the comparison window at that very pose, against the touch's measured
+// map, in the codebook score's form. The filter adds it to the refined modes' fits when
+// they share the grid's mass (FilterOptions; Tracker::PoseTerm), so it breaks ties the
+// geometry leaves: places where the contacts fit alike but the gel would feel otherwise.
+#include <cstdint>
+#include <vector>
+
+#include "engine/ops/codebook_bins.h"
+#include "engine/rigid.h"
+#include "engine/tensor.h"
+#include "engine/track/codebook.h"
+#include "engine/track/surface.h"
+
+namespace vtloc::track {
+
+// One touch's measured indentation on the comparison window: [R, C] cells of win_mm
+// (window_map), and its press (the codebook's measured_press at o.press_percentile).
+struct ShapeWindow {
+    HostTensor measured;
+    double win_mm = 0;
+    float press = 0;
+};
+ShapeWindow shape_window(const std::vector<float>& depth_mm, int H, int W, double mm_per_px, const ScoreOptions& o);
+
+class PoseShapeScorer {
+public:
+    // The surface's dense points binned once (a cloud too sparse to render is refused
+    // as render_codebook refuses it). `o` the codebook's rendering options (splat, cap, facing).
+    explicit PoseShapeScorer(const Surface& s, const CodebookOptions& o = {});
+    // The depth along the pose's axis z (from its origin) of the shallowest dense point facing
+    // the sensor whose splat disc covers each window cell's centre (row r at v along y, column
+    // c at u along x, as the codebook's score reads a measured map); cap where none.
+    std::vector<float> render(const Rigid& pose, int R, int C, double win_mm) const;
+    // The codebook score at this pose: -weight * sum (e - fit)^2 / (R C press^2), e the measured
+    // map less the rendered one pressed `press` past its shallowest cell, fit its least-squares
+    // plane (and bowl with `quadratic`); 0 for a touch with no press.
+    double score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic) const;
+
+private:
+    ops::book::BinnedPoints bins_;
+    CodebookOptions o_;
+};
+
+}  // namespace vtloc::track
