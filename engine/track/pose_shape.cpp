@@ -16,9 +16,10 @@ ShapeWindow shape_window(const std::vector<float>& depth_mm, int H, int W, doubl
     return m;
 }
 
-// Bins of 4 mm (larger on big objects: bin_points caps them at 64 a side); a window reads
-// the bins around its bounding sphere.
-PoseShapeScorer::PoseShapeScorer(const Surface& s, const CodebookOptions& o) : bins_(ops::book::bin_points(s.dense, 4.0)), o_(o) {}
+// Bins of 2 mm (larger on big objects: bin_points caps them at 64 a side); a window reads
+// the bins of its bounding sphere's box that its own oriented box (the window's cells and
+// splat across, the cap deep) can reach: about a fifth of them.
+PoseShapeScorer::PoseShapeScorer(const Surface& s, const CodebookOptions& o) : bins_(ops::book::bin_points(s.dense, 2.0)), o_(o) {}
 
 std::vector<float> PoseShapeScorer::render(const Rigid& pose, int R, int C, double win_mm) const {
     if (R < 1 || C < 1 || !(win_mm > 0)) throw Error("render-and-compare: a window of " + std::to_string(R) + " x " + std::to_string(C) + " cells");
@@ -34,11 +35,22 @@ std::vector<float> PoseShapeScorer::render(const Rigid& pose, int R, int C, doub
     bins_.cell_of(hi_p, hi);
     std::vector<float> depth(size_t(R) * size_t(C), float(cap));
     const double inv = 1.0 / win_mm, rc = splat * inv;
+    const double co = bins_.coarse, hb = co * std::sqrt(3.0) / 2;  // a bin's centre and its points are within hb
     for (int64_t bz = lo[2]; bz <= hi[2]; ++bz)
         for (int64_t by = lo[1]; by <= hi[1]; ++by)
             for (int64_t bx = lo[0]; bx <= hi[0]; ++bx) {
                 const int64_t at[3] = {bx, by, bz}, b = bins_.index_of(at);
                 const int32_t first = bins_.bins[size_t(2 * b)], n = bins_.bins[size_t(2 * b + 1)];
+                if (n == 0) continue;
+                // Edge bins also hold the points clamped into them: test those bins by their points.
+                const bool edge = bx == 0 || by == 0 || bz == 0 || bx == bins_.dims[0] - 1 || by == bins_.dims[1] - 1 || bz == bins_.dims[2] - 1;
+                if (!edge) {
+                    const double c[3] = {bins_.origin[0] + (bx + 0.5) * co - t[0], bins_.origin[1] + (by + 0.5) * co - t[1],
+                                         bins_.origin[2] + (bz + 0.5) * co - t[2]};
+                    if (std::fabs(c[0] * z[0] + c[1] * z[1] + c[2] * z[2]) > cap + hb || std::fabs(c[0] * x[0] + c[1] * x[1] + c[2] * x[2]) > half_u + hb ||
+                        std::fabs(c[0] * y[0] + c[1] * y[1] + c[2] * y[2]) > half_v + hb)
+                        continue;
+                }
                 for (int32_t k = first; k < first + n; ++k) {
                     const float* q = &bins_.points[size_t(6 * k)];
                     const double d[3] = {q[0] - t[0], q[1] - t[1], q[2] - t[2]};
