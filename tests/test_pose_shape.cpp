@@ -166,4 +166,9 @@ TEST_CASE("the tracker climbs its refined modes on the touches' pose terms: rend
     for (size_t k = 0; k < 3; ++k) on.add_touch(k ? std::optional<Rigid>(motions[k - 1]) : std::nullopt, {}, terms[k]);
     CHECK(on.estimate().contact == with.contact);
     CHECK_THROWS_WITH(b.evaluate_window(motions, {}, {terms[0]}), Catch::Contains("1 pose terms for 3 touches"));
+    track::FilterOptions bad = o;
+    bad.shape_climb_rounds = -1;
+    CHECK_THROWS_WITH(track::Tracker(nullptr, s, bad), Catch::Contains("shape_climb_rounds must be 0..8"));
+    bad = o, bad.shape_climb_modes = 1000;
+    CHECK_THROWS_WITH(track::Tracker(nullptr, s, bad), Catch::Contains("1000"));
 }

@@ -6,7 +6,7 @@
 // has climbed its best modes to continuous poses, each is scored again here: the object
 // rendered under the comparison window at that very pose, against the touch's measured
 // map, in the codebook score's form. The filter adds it to the refined modes' fits when
-// they share the grid's mass (FilterOptions; Tracker::PoseTerm), so it breaks ties the
+// they share the grid's mass (track::PoseTerm, engine/track/tracker.h), so it breaks ties the
 // geometry leaves: places where the contacts fit alike but the gel would feel otherwise.
 #include <cstdint>
 #include <vector>

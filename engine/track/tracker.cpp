@@ -49,6 +49,9 @@ void Tracker::check_options(const FilterOptions& opt_) {
         throw Error("filter options: refine_reach_mm must be >= 0 (0: off), got " + std::to_string(opt_.refine_reach_mm));
     if (!(opt_.free_space_mm >= 0) || !(opt_.free_space_w_mm > 0) || !(opt_.free_space_h_mm > 0))
         throw Error("filter options: free_space_mm must be >= 0 (0: off) and the pad's size positive");
+    if (opt_.shape_climb_rounds < 0 || opt_.shape_climb_rounds > 8 || opt_.shape_climb_modes < 0 || opt_.shape_climb_modes > 256)
+        throw Error("filter options: shape_climb_rounds must be 0..8 and shape_climb_modes 0..256, got " +
+                    std::to_string(opt_.shape_climb_rounds) + " and " + std::to_string(opt_.shape_climb_modes));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
