@@ -10,25 +10,17 @@
 #include "engine/sim/mesh_builder.h"
 #include "engine/track/pose_shape.h"
 #include "engine/track/tracker.h"
+#include "tests/track_poses.h"
 
 using namespace vtloc;
 using track::Rigid;
 
 namespace {
 
-// The pose pressing `press` mm into the surface at point p (normal n), spun by `spin`
-// about its axis z = -n (the tests' own frame; any tangent serves).
+// The pose pressing `press` mm into the surface at point p (normal n), spun by `spin`.
 Rigid pose_at(const std::array<double, 3>& p, const std::array<double, 3>& n, double spin, double press) {
-    const std::array<double, 3> z{-n[0], -n[1], -n[2]};
-    const std::array<double, 3> t1 = track::tangent_of(z);
-    const std::array<double, 3> t2{z[1] * t1[2] - z[2] * t1[1], z[2] * t1[0] - z[0] * t1[2], z[0] * t1[1] - z[1] * t1[0]};
-    std::array<double, 3> x, y;
-    for (int k = 0; k < 3; ++k) x[size_t(k)] = std::cos(spin) * t1[size_t(k)] + std::sin(spin) * t2[size_t(k)];
-    y = {z[1] * x[2] - z[2] * x[1], z[2] * x[0] - z[0] * x[2], z[0] * x[1] - z[1] * x[0]};
-    Rigid r;
-    r.R = {x[0], y[0], z[0], x[1], y[1], z[1], x[2], y[2], z[2]};
-    for (int k = 0; k < 3; ++k) r.t[size_t(k)] = p[size_t(k)] + press * z[size_t(k)];
-    return r;
+    const float pn[6] = {float(p[0]), float(p[1]), float(p[2]), float(n[0]), float(n[1]), float(n[2])};
+    return test::pose_at(pn, spin, press);
 }
 
 // A stud: a head (radius 13, 10 mm thick) with a post (radius 6, 30 mm) on its top face.

@@ -217,26 +217,8 @@ double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>&
                                               float(o.sigma_a_deg * M_PI / 180), floor, exp_floor));
 }
 
-// Pattern search over six degrees of freedom from x (rotations about the pose's
-// axes from 4 degrees, shifts from 0.8 mm, halved six times); fx: x's fit, then the result's.
-Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx) {
-    double step_r = 4.0 * M_PI / 180, step_t = 0.8;
-    for (int round = 0; round < 6; ++round, step_r /= 2, step_t /= 2)
-        for (bool moved = true; moved;) {
-            moved = false;
-            for (int k = 0; k < 6; ++k)
-                for (double sign : {1.0, -1.0}) {
-                    double d[6] = {0, 0, 0, 0, 0, 0};
-                    d[k] = sign * (k < 3 ? step_r : step_t);
-                    Rigid y = perturb(x, d);
-                    double fy = pose_fit(grid, terms, o, y);
-                    if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
-                }
-        }
-    return x;
-}
-
-// The same pattern search on any objective f, from (step_r, step_t) halved `rounds` times.
+// Pattern search over six degrees of freedom from x on objective f (rotations about the
+// pose's axes from step_r, shifts from step_t, halved `rounds` times); fx: x's value, then the result's.
 template <class F>
 Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, double step_t) {
     for (int round = 0; round < rounds; ++round, step_r /= 2, step_t /= 2)
@@ -252,6 +234,11 @@ Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, doubl
                 }
         }
     return x;
+}
+
+// The geometry's climb: from 4 degrees and 0.8 mm, halved six times.
+Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx) {
+    return climb_on([&](const Rigid& y) { return pose_fit(grid, terms, o, y); }, x, fx, 6, 4.0 * M_PI / 180, 0.8);
 }
 
 // The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
