@@ -135,7 +135,7 @@ void bind_tracker(py::module_& m) {
             py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr, py::arg("shape") = py::none())
         .def(
             "add_touch_term",
-            [](api::Tracker& t, const py::object& motion, const py::object& term) {
+            [](api::Tracker& t, const py::object& motion, const py::object& term, const py::object& shape) {
                 std::optional<api::Motion> mo;
                 if (!motion.is_none()) mo = to_motion(motion, "motion");
                 std::vector<float> v;
@@ -143,11 +143,14 @@ void bind_tracker(py::module_& m) {
                     const auto a = term.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
                     v.assign(a.data(), a.data() + a.size());
                 }
+                std::optional<api::GelShape> g;
+                if (!shape.is_none()) g = to_shape(shape);
                 py::gil_scoped_release release;
-                t.add_touch_term(mo, v);
+                t.add_touch_term(mo, v, g ? &*g : nullptr);
             },
-            py::arg("motion") = py::none(), py::arg("term") = py::none(),
-            "add_touch with a precomputed log term (shape_term's, or None: geometry only).")
+            py::arg("motion") = py::none(), py::arg("term") = py::none(), py::arg("shape") = py::none(),
+            "add_touch with a precomputed log term (shape_term's, or None: geometry only); shape: the touch's gel "
+            "shape for render-and-compare at the refined poses (render_refined_weight), or None.")
         .def(
             "shape_term",
             [](api::Tracker& t, const py::object& shape) {
@@ -163,24 +166,31 @@ void bind_tracker(py::module_& m) {
         .def("estimate", [](const api::Tracker& t) { return estimate_dict(t.estimate()); })
         .def(
             "evaluate_window",
-            [](api::Tracker& t, const py::list& motions, const py::object& terms) {
+            [](api::Tracker& t, const py::list& motions, const py::object& terms, const py::object& shapes) {
                 std::vector<api::Motion> ms;
                 for (size_t i = 0; i < motions.size(); ++i) ms.push_back(to_motion(motions[i], "motions[" + std::to_string(i) + "]"));
-                if (terms.is_none()) return estimate_dict(t.evaluate_window(ms));
+                if (terms.is_none() && shapes.is_none()) return estimate_dict(t.evaluate_window(ms));
                 std::vector<std::vector<float>> ts;
-                for (const py::handle& h : terms.cast<py::list>()) {
-                    if (h.is_none()) {
-                        ts.emplace_back();
-                        continue;
+                if (!terms.is_none())
+                    for (const py::handle& h : terms.cast<py::list>()) {
+                        if (h.is_none()) {
+                            ts.emplace_back();
+                            continue;
+                        }
+                        const auto a = h.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
+                        ts.emplace_back(a.data(), a.data() + a.size());
                     }
-                    const auto a = h.cast<py::array_t<float, py::array::c_style | py::array::forcecast>>();
-                    ts.emplace_back(a.data(), a.data() + a.size());
-                }
-                return estimate_dict(t.evaluate_window_terms(ms, ts));
+                std::vector<std::optional<api::GelShape>> gs;
+                if (!shapes.is_none())
+                    for (const py::handle& h : shapes.cast<py::list>()) gs.push_back(h.is_none() ? std::nullopt : std::optional(to_shape(py::reinterpret_borrow<py::object>(h))));
+                std::vector<const api::GelShape*> gp;
+                for (const auto& g : gs) gp.push_back(g ? &*g : nullptr);
+                return estimate_dict(t.evaluate_window_terms(ms, ts, gp));
             },
-            py::arg("motions"), py::arg("terms") = py::none(),
+            py::arg("motions"), py::arg("terms") = py::none(), py::arg("shapes") = py::none(),
             "The windowed form: a list of the W - 1 motions between W touches; terms: one log term per touch "
-            "(shape_term's, or None), computed once and reused across windows.")
+            "(shape_term's, or None), computed once and reused across windows; shapes: one gel shape per touch "
+            "(or None) for render-and-compare at the refined poses.")
         .def(
             "window_fit",
             [](const api::Tracker& t, const py::list& motions, const py::object& pose) {

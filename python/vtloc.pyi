@@ -95,11 +95,13 @@ class Tracker:
     def shape_term(self, shape: Dict[str, Any]) -> npt.NDArray[np.float32]: ...  # render-and-compare, belief order
     def estimate(self) -> Dict[str, Any]: ...   # contact, pose (4x4), pose_contact, window_poses, modes, ...
     def evaluate_window(self, motions: List[npt.NDArray[np.floating]],
-                        terms: Optional[List[Optional[npt.NDArray[np.float32]]]] = None) -> Dict[str, Any]: ...
+                        terms: Optional[List[Optional[npt.NDArray[np.float32]]]] = None,
+                        shapes: Optional[List[Optional[Dict[str, Any]]]] = None) -> Dict[str, Any]: ...
     def window_fit(self, motions: List[npt.NDArray[np.floating]],
                    pose: npt.NDArray[np.floating]) -> float: ...  # against estimate()['fit']: search or ambiguity
     def add_touch_term(self, motion: Optional[npt.NDArray[np.floating]] = None,
-                       term: Optional[npt.NDArray[np.float32]] = None) -> None: ...  # a precomputed shape_term
+                       term: Optional[npt.NDArray[np.float32]] = None,  # a precomputed shape_term
+                       shape: Optional[Dict[str, Any]] = None) -> None: ...  # and the shape, for the refined poses
     def reset(self) -> None: ...  # forgets every touch; the object's tables stay
     def with_options(self, **options: Any) -> "Tracker": ...  # the constructor's names; the surface reused
     @property

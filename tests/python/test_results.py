@@ -266,8 +266,9 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     assert np.array_equal(t.estimate()["contact"], e["contact"])
     belief = t.belief
     t.reset()
-    t.add_touch_term(term=term)  # the same touch through its precomputed term
+    t.add_touch_term(term=term, shape=shape)  # the same touch through its precomputed term (and its shape)
     assert np.array_equal(t.belief, belief)
+    assert np.array_equal(t.estimate()["contact"], e["contact"])
     with pytest.raises(vtloc.Error, match="7 values"):
         t.add_touch_term(np.eye(4), np.zeros(7, np.float32))
     # A second tracker reads the cache and scores the same.
@@ -286,6 +287,12 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     # counts when given.
     step = np.eye(4)
     step[0, 3] = 3.0
+    # The shapes also score the refined poses (render_refined_weight; at 0 they only enter through the terms).
+    t0 = t.with_options(render_refined_weight=0.0)
+    assert np.array_equal(t0.evaluate_window([step], terms=[term, term], shapes=[shape, shape])["sample_belief"],
+                          t0.evaluate_window([step], terms=[term, term])["sample_belief"])
+    with pytest.raises(vtloc.Error, match="1 gel shapes for 2 touches"):
+        t.evaluate_window([step], terms=[term, term], shapes=[shape])
     geo = t.evaluate_window([step])
     assert np.array_equal(t.evaluate_window([step], terms=[None, None])["sample_belief"], geo["sample_belief"])
     both = t.evaluate_window([step], terms=[term, term])
