@@ -108,6 +108,12 @@ TEST_CASE("render-and-compare at a pose: a touch's own pose scores 0, a pose bes
     CHECK(sw.press == 0.5f);
     CHECK(sw.win_mm == Approx(3.0));
     CHECK_THROWS_WITH(track::shape_window(depth, 30, 41, 0.5, {}), Catch::Contains("1200 values for 30 x 41"));
+    // A cloud too sparse to splat is refused as the codebook refuses it (gaps would read as no surface).
+    const io::TriangleMesh mesh = sim::mesh::revolve({{0, -10}, {13, -10}, {13, 0}, {6, 0}, {6, 30}, {0, 30}}, 96);
+    track::SurfaceOptions so;
+    so.target_hypotheses = 2000;
+    const track::Surface sparse = track::build_surface(io::sample_surface(mesh, 300, 5, "sparse"), false, so, "sparse");
+    CHECK_THROWS_WITH(track::PoseShapeScorer(sparse), Catch::Contains("needs a dense cloud") && Catch::Contains("300 points"));
 }
 
 TEST_CASE("the tracker climbs its refined modes on the touches' pose terms: render-and-compare finds the radius on a flat face", "[track]") {

@@ -94,12 +94,16 @@ struct Tracker::Impl {
         display_tensor = HostTensor({int64_t(display.size()), n ? 6 : 3}, std::move(rows));
     }
 
+    static void check_shape(const GelShape& g, size_t touch) {
+        if (g.height < 1 || g.width < 1 || g.depth_mm.size() != size_t(g.height) * size_t(g.width))
+            throw Error("touch " + std::to_string(touch) + ": its gel shape has " + std::to_string(g.depth_mm.size()) + " heights for " +
+                        std::to_string(g.height) + " x " + std::to_string(g.width) + " pixels");
+    }
+
     // Render-and-compare's term for one touch's gel shape (SPEC 9), or none.
     std::vector<float> shape_field(const GelShape* g, size_t touch) {
         if (!g) return {};
-        if (g->height < 1 || g->width < 1 || g->depth_mm.size() != size_t(g->height) * size_t(g->width))
-            throw Error("touch " + std::to_string(touch) + ": its gel shape has " + std::to_string(g->depth_mm.size()) + " heights for " +
-                        std::to_string(g->height) + " x " + std::to_string(g->width) + " pixels");
+        check_shape(*g, touch);
         if (!scorer) {
             const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, codebook_cache);
             scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), score);
@@ -111,9 +115,7 @@ struct Tracker::Impl {
     // Render-and-compare at the refined poses for one touch's gel shape, or none.
     track::PoseTerm pose_term(const GelShape* g, size_t touch) {
         if (!g || !(options.render_refined_weight > 0)) return {};
-        if (g->height < 1 || g->width < 1 || g->depth_mm.size() != size_t(g->height) * size_t(g->width))
-            throw Error("touch " + std::to_string(touch) + ": its gel shape has " + std::to_string(g->depth_mm.size()) + " heights for " +
-                        std::to_string(g->height) + " x " + std::to_string(g->width) + " pixels");
+        check_shape(*g, touch);
         if (!pose_scorer) pose_scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
         auto win = std::make_shared<const track::ShapeWindow>(track::shape_window(g->depth_mm, g->height, g->width, g->mm_per_px, score));
         return [sc = pose_scorer, win, w = options.render_refined_weight, q = score.quadratic](const track::Rigid& x) {

@@ -72,11 +72,17 @@ double cloud_density(const Surface& s) {
 }
 }  // namespace
 
+void check_render_density(const Surface& s, const CodebookOptions& o) {
+    if (s.from_mesh) return;
+    const double density = cloud_density(s);
+    if (density < o.min_density)
+        throw Error("render-and-compare needs a dense cloud (about " + num(o.min_density) + " point per mm^2 or more); this one has about " +
+                    num(density) + " per mm^2 (" + std::to_string(s.n_dense()) + " points)");
+}
+
 Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o) {
     check_options(o);
-    if (!s.from_mesh && cloud_density(s) < o.min_density)
-        throw Error("render-and-compare needs a dense cloud (about " + num(o.min_density) + " point per mm^2 or more); this one has about " +
-                    num(cloud_density(s)) + " per mm^2 (" + std::to_string(s.n_dense()) + " points)");
+    check_render_density(s, o);
     Codebook b;
     b.options = o;
     b.G = grid_cells(o);

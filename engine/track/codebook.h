@@ -44,6 +44,9 @@ struct Codebook {
     int64_t n_samples() const { return int64_t(samples.size() / 9); }
 };
 
+// Throws vtloc::Error, naming its density, for a cloud too sparse to render (SPEC 9): the
+// codebook and the renders at exact poses (pose_shape.h) both splat its points.
+void check_render_density(const Surface& s, const CodebookOptions& o);
 // Renders every sample's map (ctx null: the op's CPU reference). Throws
 // vtloc::Error for a cloud too sparse to render (SPEC 9), naming its density.
 Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o = {});

@@ -19,7 +19,10 @@ ShapeWindow shape_window(const std::vector<float>& depth_mm, int H, int W, doubl
 // Bins of 2 mm (larger on big objects: bin_points caps them at 64 a side); a window reads
 // the bins of its bounding sphere's box that its own oriented box (the window's cells and
 // splat across, the cap deep) can reach: about a fifth of them.
-PoseShapeScorer::PoseShapeScorer(const Surface& s, const CodebookOptions& o) : bins_(ops::book::bin_points(s.dense, 2.0)), o_(o) {}
+PoseShapeScorer::PoseShapeScorer(const Surface& s, const CodebookOptions& o) : o_(o) {
+    check_render_density(s, o);
+    bins_ = ops::book::bin_points(s.dense, 2.0);
+}
 
 std::vector<float> PoseShapeScorer::render(const Rigid& pose, int R, int C, double win_mm) const {
     if (R < 1 || C < 1 || !(win_mm > 0)) throw Error("render-and-compare: a window of " + std::to_string(R) + " x " + std::to_string(C) + " cells");

@@ -30,8 +30,8 @@ ShapeWindow shape_window(const std::vector<float>& depth_mm, int H, int W, doubl
 
 class PoseShapeScorer {
 public:
-    // The surface's dense points binned once (a cloud too sparse to render is refused
-    // as render_codebook refuses it). `o` the codebook's rendering options (splat, cap, facing).
+    // The surface's dense points binned once; a cloud too sparse to render is refused
+    // (check_render_density). `o`: the codebook's rendering options (splat, cap, facing).
     explicit PoseShapeScorer(const Surface& s, const CodebookOptions& o = {});
     // The depth along the pose's axis z (from its origin) of the shallowest dense point facing
     // the sensor whose splat disc covers each window cell's centre (row r at v along y, column
