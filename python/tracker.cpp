@@ -222,6 +222,7 @@ void bind_tracker(py::module_& m) {
                         else if (k == "render_press_percentile") o.render_press_percentile = value.cast<double>();
                         else if (k == "render_cell_mm") o.render_cell_mm = value.cast<double>();
                         else if (k == "render_refined_weight") o.render_refined_weight = value.cast<double>();
+                        else if (k == "render_slack_rounds") o.render_slack_rounds = value.cast<int>();
                         else if (k == "codebook_cache") o.codebook_cache = value.cast<std::string>();
                         else if (k == "threads") o.threads = value.cast<int>();
                         else if (k == "free_space_mm") o.free_space_mm = value.cast<double>();

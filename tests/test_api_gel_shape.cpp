@@ -127,6 +127,18 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
         CHECK(t.evaluate_window_terms({m}, terms, {&a, &b}).sample_belief != t.evaluate_window_terms({m}, terms).sample_belief);
         off.render_refined_weight = -1;
         CHECK_THROWS_WITH(t.with_options(off), Catch::Contains("render_refined_weight"));
+        // With odometry noise the earlier shape is also scored where it matches within the noise
+        // (render_slack_rounds); without noise the option changes nothing.
+        api::TrackerOptions noisy = o, rigid = o;
+        noisy.odometry_mm = rigid.odometry_mm = 0.5;
+        rigid.render_slack_rounds = 0;
+        const api::TrackerEstimate en = t.with_options(noisy).evaluate_window_terms({m}, terms, {&a, &b});
+        const api::TrackerEstimate er = t.with_options(rigid).evaluate_window_terms({m}, terms, {&a, &b});
+        CHECK(en.sample_belief != er.sample_belief);
+        rigid.odometry_mm = 0;
+        CHECK(t.with_options(rigid).evaluate_window_terms({m}, terms, {&a, &b}).sample_belief == reused.sample_belief);
+        rigid.render_slack_rounds = 9;
+        CHECK_THROWS_WITH(t.with_options(rigid), Catch::Contains("render_slack_rounds must be 0..8"));
     }
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0], std::vector<float>(7)}), Catch::Contains("7"));
     // Online with the same terms: add_touch_term is add_touch with the shape, and reset starts over.

@@ -170,3 +170,69 @@ TEST_CASE("the tracker climbs its refined modes on the touches' pose terms: rend
     bad = o, bad.shape_climb_modes = 1000;
     CHECK_THROWS_WITH(track::Tracker(nullptr, s, bad), Catch::Contains("1000"));
 }
+
+TEST_CASE("with odometry noise an earlier touch's pose term is taken where it is best within the noise's widths", "[track]") {
+    // Terms peaked (quadratic, curvature a) at each touch's true place, shifted along the gel
+    // for the earlier touches as noisy motions would leave them. Shifts along the gel's x and y
+    // are what the alignment may undo, each paying its Gaussian prior (sigma = sqrt(steps) x
+    // odometry_mm): the best of -a e^2 - e'^2 / (2 sigma^2) over e' is -e^2 a b / (a + b),
+    // b = 1 / (2 sigma^2); the offset along the axis stays. The shape climb is off so the
+    // estimate's pose is the geometry's and the value can be computed from it.
+    const track::Surface s = stud(20000);
+    track::FilterOptions o;
+    o.free_space_mm = 0;
+    o.shape_climb_rounds = 0;
+    o.odometry_mm = 0.4;
+    o.shape_slack_rounds = 8;
+    const std::array<double, 3> under[3] = {{9, 1, -10}, {2, 9.5, -10}, {-6, -7, -10}};
+    std::vector<Rigid> poses;
+    for (int k = 0; k < 3; ++k) poses.push_back(pose_at(under[k], {0, 0, -1}, 0.4 + k, 0.8));
+    const std::vector<Rigid> motions{track::compose(track::inverse(poses[0]), poses[1]),
+                                     track::compose(track::inverse(poses[1]), poses[2])};
+    const double a = 2.0, shift[3][2] = {{0.9, -0.5}, {0.0, 0.6}, {0, 0}};
+    std::vector<track::PoseTerm> terms;
+    std::vector<std::array<double, 3>> peak(3);
+    for (size_t k = 0; k < 3; ++k) {
+        const Rigid& p = poses[k];
+        for (int i = 0; i < 3; ++i) peak[k][size_t(i)] = p.t[size_t(i)] + p.R[size_t(3 * i)] * shift[k][0] + p.R[size_t(3 * i + 1)] * shift[k][1];
+        terms.push_back([a, c = peak[k]](const Rigid& x) {
+            return -a * ((x.t[0] - c[0]) * (x.t[0] - c[0]) + (x.t[1] - c[1]) * (x.t[1] - c[1]) + (x.t[2] - c[2]) * (x.t[2] - c[2]));
+        });
+    }
+    track::FilterOptions rigid_o = o;
+    rigid_o.shape_slack_rounds = 0;
+    track::Tracker with(nullptr, s, o), rigid(nullptr, s, rigid_o);
+    const track::Estimate e = with.evaluate_window(motions, {}, terms), r = rigid.evaluate_window(motions, {}, terms);
+    REQUIRE(e.window_poses.size() == 3);
+    auto expected = [&](const track::Estimate& est, bool aligned) {
+        double v = 0;
+        for (size_t k = 0; k < 3; ++k) {
+            const Rigid& x = k < 2 ? est.window_poses[k] : est.pose;
+            double along[3];  // the offset to the peak in x's own axes
+            for (int j = 0; j < 3; ++j) {
+                along[j] = 0;
+                for (int i = 0; i < 3; ++i) along[j] += x.R[size_t(3 * i + j)] * (peak[k][size_t(i)] - x.t[size_t(i)]);
+            }
+            const double in_plane = along[0] * along[0] + along[1] * along[1];
+            const double sigma2 = double(2 - k) * o.odometry_mm * o.odometry_mm, b = k < 2 ? 1 / (2 * sigma2) : 0;
+            v -= a * along[2] * along[2] + (aligned && k < 2 ? in_plane * a * b / (a + b) : a * in_plane);
+        }
+        return v;
+    };
+    INFO("pose terms aligned " << e.pose_terms << " (expected " << expected(e, true) << "), rigid " << r.pose_terms << " (expected "
+                               << expected(r, false) << ")");
+    // The expected values split the offset along the pose's axes, which are orthonormal only to
+    // float precision (the refinement starts from the grid's single-precision frames): 1e-6.
+    CHECK(r.pose_terms == Approx(expected(r, false)).epsilon(1e-6));
+    // The pattern search ends at steps of sigma / 128: its optimum within (sigma / 256)^2 (a + b) a coordinate.
+    CHECK(e.pose_terms == Approx(expected(e, true)).margin(1e-3));
+    CHECK(e.pose_terms > r.pose_terms + 0.1);
+    // No noise, no slack: the terms are read where the motions carry the pose.
+    track::FilterOptions exact = o;
+    exact.odometry_mm = 0;
+    const track::Estimate x = track::Tracker(nullptr, s, exact).evaluate_window(motions, {}, terms);
+    CHECK(x.pose_terms == Approx(expected(x, false)).epsilon(1e-6));
+    track::FilterOptions bad = o;
+    bad.shape_slack_rounds = 9;
+    CHECK_THROWS_WITH(track::Tracker(nullptr, s, bad), Catch::Contains("shape_slack_rounds must be 0..8, got 9"));
+}

@@ -52,6 +52,8 @@ void Tracker::check_options(const FilterOptions& opt_) {
     if (opt_.shape_climb_rounds < 0 || opt_.shape_climb_rounds > 8 || opt_.shape_climb_modes < 0 || opt_.shape_climb_modes > 256)
         throw Error("filter options: shape_climb_rounds must be 0..8 and shape_climb_modes 0..256, got " +
                     std::to_string(opt_.shape_climb_rounds) + " and " + std::to_string(opt_.shape_climb_modes));
+    if (opt_.shape_slack_rounds < 0 || opt_.shape_slack_rounds > 8)
+        throw Error("filter options: shape_slack_rounds must be 0..8, got " + std::to_string(opt_.shape_slack_rounds));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
@@ -239,6 +241,48 @@ Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, doubl
 // The geometry's climb: from 4 degrees and 0.8 mm, halved six times.
 Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx) {
     return climb_on([&](const Rigid& y) { return pose_fit(grid, terms, o, y); }, x, fx, 6, 4.0 * M_PI / 180, 0.8);
+}
+
+// How far odometry noise may have moved an earlier touch from where the motions carry it:
+// steps motions back, at lever arm |rel.t| (term_row's widths without the surface's own).
+struct Slack {
+    double sigma_t = 0, sigma_r = 0;
+};
+Slack slack_of(const Rigid& rel, int steps, const FilterOptions& o) {
+    const double lever2 = rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2];
+    const double od = o.odometry_deg * M_PI / 180;
+    return {std::sqrt(steps * (o.odometry_mm * o.odometry_mm + od * od * lever2)), std::sqrt(double(steps)) * od};
+}
+
+// A pose term taken where it is best near pose x: offsets d = (spin about the gel's axis,
+// shift along its x, shift along its y) within the slack, each paying the Gaussian's log.
+// The render-and-compare score ignores the press's depth and tilt, so those stay. d: where the
+// search starts (the last alignment), then what it found; returns the term plus the prior.
+double aligned_term(const PoseTerm& term, const Rigid& x, const Slack& sl, int rounds, std::array<double, 3>& d) {
+    auto at = [&](const std::array<double, 3>& e) {
+        const double v[6] = {0, 0, e[0], e[1], e[2], 0};
+        double prior = 0;
+        if (sl.sigma_r > 0) prior -= 0.5 * e[0] * e[0] / (sl.sigma_r * sl.sigma_r);
+        if (sl.sigma_t > 0) prior -= 0.5 * (e[1] * e[1] + e[2] * e[2]) / (sl.sigma_t * sl.sigma_t);
+        return term(perturb(x, v)) + prior;
+    };
+    double fd = at(d);
+    double step[3] = {sl.sigma_r, sl.sigma_t, sl.sigma_t};
+    for (int round = 0; round < rounds; ++round) {
+        for (bool moved = true; moved;) {
+            moved = false;
+            for (int k = 0; k < 3; ++k)
+                for (double sign : {1.0, -1.0}) {
+                    if (!(step[k] > 0)) continue;
+                    std::array<double, 3> e = d;
+                    e[size_t(k)] += sign * step[k];
+                    const double fe = at(e);
+                    if (fe > fd + 1e-9) d = e, fd = fe, moved = true;
+                }
+        }
+        for (double& s : step) s /= 2;
+    }
+    return fd;
 }
 
 // The refinement: with o.refine_widen > 0 it first climbs at the grid's widths times that (a
@@ -526,13 +570,45 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     }
     const int n_refine = int(fit.size());
     if (any_pose_term) {
-        auto shape_at = [&](const Rigid& x) {
+        // With odometry noise each earlier touch's term is aligned within its slack (the
+        // offsets found per mode and touch, align[m]); the climb holds them, then they are found
+        // again at the pose it reached.
+        std::vector<Slack> slack(to_window.size());
+        bool any_slack = false;
+        if (opt_.shape_slack_rounds > 0)
+            for (size_t k = 0; k < to_window.size(); ++k) {
+                slack[k] = slack_of(to_window[k], int(to_window.size() - k), opt_);
+                any_slack = any_slack || slack[k].sigma_t > 0 || slack[k].sigma_r > 0;
+            }
+        using Offsets = std::vector<std::array<double, 3>>;
+        std::vector<Offsets> align(static_cast<size_t>(n_refine), Offsets(pose_terms.size(), std::array<double, 3>{}));
+        auto shape_at = [&](const Rigid& x, const Offsets& d) {
             double v = 0;
-            for (size_t k = 0; k < pose_terms.size(); ++k)
-                if (pose_terms[k]) v += pose_terms[k](k < to_window.size() ? compose(x, to_window[k]) : x);
+            for (size_t k = 0; k < pose_terms.size(); ++k) {
+                if (!pose_terms[k]) continue;
+                if (k >= to_window.size()) {
+                    v += pose_terms[k](x);
+                    continue;
+                }
+                const double e[6] = {0, 0, d[k][0], d[k][1], d[k][2], 0};
+                const Slack& sl = slack[k];
+                v += pose_terms[k](perturb(compose(x, to_window[k]), e));
+                if (sl.sigma_r > 0) v -= 0.5 * d[k][0] * d[k][0] / (sl.sigma_r * sl.sigma_r);
+                if (sl.sigma_t > 0) v -= 0.5 * (d[k][1] * d[k][1] + d[k][2] * d[k][2]) / (sl.sigma_t * sl.sigma_t);
+            }
             return v;
         };
-        parallel_for(size_t(n_refine), opt_.threads, [&](size_t m) { shape[m] = shape_at(refined[m]); });
+        auto align_at = [&](const Rigid& x, Offsets& d) {
+            if (!any_slack) return shape_at(x, d);
+            double v = 0;
+            for (size_t k = 0; k < pose_terms.size(); ++k)
+                if (pose_terms[k])
+                    v += k < to_window.size() && (slack[k].sigma_t > 0 || slack[k].sigma_r > 0)
+                             ? aligned_term(pose_terms[k], compose(x, to_window[k]), slack[k], opt_.shape_slack_rounds, d[k])
+                             : pose_terms[k](k < to_window.size() ? compose(x, to_window[k]) : x);
+            return v;
+        };
+        parallel_for(size_t(n_refine), opt_.threads, [&](size_t m) { shape[m] = align_at(refined[m], align[m]); });
         // Where the geometry leaves directions flat (touches on one face slide along it), the
         // climb stopped wherever the grid's pose lay; the gel's shapes tell along them. So the
         // best few modes by geometry + shapes climb on both (a render per touch per step: the
@@ -545,9 +621,10 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             parallel_for(by_total.size(), opt_.threads, [&](size_t i) {
                 const size_t m = by_total[i];
                 double fb = refiner.fit(refined[m]) + shape[m];
-                const Rigid y = climb_on([&](const Rigid& x) { return refiner.fit(x) + shape_at(x); }, refined[m], fb,
+                Offsets d = align[m];
+                const Rigid y = climb_on([&](const Rigid& x) { return refiner.fit(x) + shape_at(x, d); }, refined[m], fb,
                                          opt_.shape_climb_rounds, 2.0 * M_PI / 180, 0.8);
-                const double fy = refiner.fit(y) + refiner.free_space(y), sy = shape_at(y);
+                const double fy = refiner.fit(y) + refiner.free_space(y), sy = align_at(y, d);
                 if (fy + sy > fit[m] + shape[m]) {
                     refined[m] = y, fit[m] = fy, shape[m] = sy;
                     refined_contact[m] = axis_contact(s, grid, y, opt_.press_mm);

@@ -68,6 +68,11 @@ struct FilterOptions {
     // (steps from 2 degrees and 0.8 mm, halved each round); 0: the pose terms only score.
     int shape_climb_rounds = 3;
     int shape_climb_modes = 4;   // the refined modes best by geometry + pose terms that climb so
+    // With odometry noise, each earlier touch's pose is the current one carried back by noisy
+    // motions, so its pose term is taken where it is best within the noise's widths: a shift
+    // along the gel and a spin about its axis, found by a pattern search of this many rounds
+    // from one standard deviation, each offset paying its Gaussian log-prior. 0: carried rigidly.
+    int shape_slack_rounds = 2;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
     // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
     // fewer); n, at most n (a robot process with its own thread budget). The outputs do not

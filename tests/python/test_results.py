@@ -291,6 +291,13 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     t0 = t.with_options(render_refined_weight=0.0)
     assert np.array_equal(t0.evaluate_window([step], terms=[term, term], shapes=[shape, shape])["sample_belief"],
                           t0.evaluate_window([step], terms=[term, term])["sample_belief"])
+    # With odometry noise the earlier shape is scored where it matches within the noise (render_slack_rounds).
+    noisy = t.with_options(odometry_mm=0.5)
+    assert not np.array_equal(noisy.evaluate_window([step], terms=[term, term], shapes=[shape, shape])["sample_belief"],
+                              noisy.with_options(render_slack_rounds=0).evaluate_window(
+                                  [step], terms=[term, term], shapes=[shape, shape])["sample_belief"])
+    with pytest.raises(vtloc.Error, match="render_slack_rounds must be 0..8"):
+        t.with_options(render_slack_rounds=9)
     with pytest.raises(vtloc.Error, match="1 gel shapes for 2 touches"):
         t.evaluate_window([step], terms=[term, term], shapes=[shape])
     geo = t.evaluate_window([step])

@@ -383,6 +383,11 @@ struct TrackerOptions {
     // fit where the modes share the belief; the best 4 modes also climb on it. Fitted on train
     // windows (docs/render_compare.md, "At the refined poses").
     double render_refined_weight = 16;
+    // With odometry noise (odometry_mm, odometry_deg > 0), each earlier touch's gel shape is
+    // compared where it matches best within the noise's widths (a shift along the gel and a spin,
+    // each paying its Gaussian prior), found in this many rounds of a pattern search; 0: at the
+    // pose the motions carry it to. No effect without noise.
+    int render_slack_rounds = 2;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
