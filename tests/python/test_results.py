@@ -298,6 +298,8 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
                                   [step], terms=[term, term], shapes=[shape, shape])["sample_belief"])
     with pytest.raises(vtloc.Error, match="render_slack_rounds must be 0..8"):
         t.with_options(render_slack_rounds=9)
+    with pytest.raises(vtloc.Error, match="render_slack_rounds must be 0..8"):
+        vtloc.Tracker(ctx, obj, hypotheses=20000, render_slack_rounds=-1)
     with pytest.raises(vtloc.Error, match="1 gel shapes for 2 touches"):
         t.evaluate_window([step], terms=[term, term], shapes=[shape])
     geo = t.evaluate_window([step])
