@@ -72,6 +72,7 @@ py::dict estimate_dict(const api::TrackerEstimate& e) {
     d["modes"] = modes;
     d["mass_within_5mm"] = e.mass_within_5mm;
     d["fit"] = e.fit;
+    d["pose_terms"] = e.pose_terms;
     d["heatmap"] = floats(e.heatmap);
     d["sample_belief"] = floats(e.sample_belief);
     return d;

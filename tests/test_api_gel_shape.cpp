@@ -115,6 +115,8 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     CHECK(terms[0] == t.shape_term(a));
     CHECK(reused.sample_belief == direct.sample_belief);
     CHECK(reused.contact == direct.contact);
+    CHECK(direct.pose_terms < 0);  // the shapes' score at the estimate's poses (0 is a perfect match)
+    CHECK(t.evaluate_window({m}).pose_terms == 0);
     CHECK(t.touch_term(nullptr, nullptr, nullptr).empty());  // no network, no shape: no term
     CHECK(t.evaluate_window_terms({m}, {{}, {}}).sample_belief == t.evaluate_window({m}).sample_belief);
     CHECK_THROWS_WITH(t.evaluate_window_terms({m}, {terms[0]}), Catch::Contains("1 touch terms for 2 touches"));

@@ -2,6 +2,7 @@
 // sensor's pose on the object after each touch (SPEC section 6, api::Tracker).
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdio>
 
 #include "apps/vtloc/report.h"
@@ -34,6 +35,22 @@ const char* kHelp =
     "                            units (a glTF in metres with a robot in mm: 1000; default 1)\n"
     "  --geometry-only           no network term (no model is loaded)\n"
     "  --window W                touches scored exactly, older ones through a prior (default 8)\n"
+    "  --odometry-noise MM,DEG   how far each motion may be off (std per motion: translation mm,\n"
+    "                            rotation degrees); the filter widens its widths and, with\n"
+    "                            --render-compare, aligns the earlier touches' shapes within them\n"
+    "  --render-compare          each frame's gel shape (as vtloc shape reads it) compared with what\n"
+    "                            the object would press at every hypothesis and at the refined\n"
+    "                            poses (SPEC 9, \"MidasTouch-style\"); the object's codebook is\n"
+    "                            rendered at the first touch (seconds) unless --codebook-cache has it\n"
+    "  --background EMPTY.png    with --render-compare: the sensor's empty frame (default: the\n"
+    "                            calibration's)\n"
+    "  --calibration C           with --render-compare: a Taxim-style calibration (default: the\n"
+    "                            shipped GelSight one)\n"
+    "  --rendered                with --render-compare: the reader for frames vtloc synth rendered\n"
+    "                            (as vtloc shape --rendered)\n"
+    "  --codebook-cache FILE     with --render-compare: read the object's codebook from FILE when it\n"
+    "                            was made for this object and options (else an error), write it after\n"
+    "                            the first render\n"
     "  --model M                 weight file for the network term (default: the shipped model)\n"
     "  --json                    print the result as JSON\n"
     "  --render OUT.png          the belief after each touch, side by side on the object\n"
@@ -53,7 +70,9 @@ nlohmann::json matrix_json(const api::Motion& m) {
 
 int cmd_sequence(Session& s, int argc, char** argv) {
     std::vector<OptionSpec> specs{{"--object"}, {"--touches"}, {"--tool"}, {"--object-units"}, {"--geometry-only", false},
-                                  {"--window"}, {"--model"}, {"--json", false}, {"--render"}};
+                                  {"--window"}, {"--model"}, {"--json", false}, {"--render"}, {"--odometry-noise"},
+                                  {"--render-compare", false}, {"--background"}, {"--calibration"}, {"--rendered", false},
+                                  {"--codebook-cache"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -81,6 +100,26 @@ int cmd_sequence(Session& s, int argc, char** argv) {
                          " touches of " + touches_path);
     to.object_units = a.number("--object-units", 1.0);
     const bool geometry_only = a.flag("--geometry-only");
+    if (auto n = a.get("--odometry-noise")) {
+        const std::vector<double> v = parse_numbers(*n, 2, "--odometry-noise");
+        if (!(v[0] >= 0) || !(v[1] >= 0) || !std::isfinite(v[0]) || !std::isfinite(v[1]))
+            throw UsageError("--odometry-noise: both widths must be finite and >= 0, got " + *n);
+        to.odometry_mm = v[0], to.odometry_deg = v[1];
+    }
+    // Render-and-compare: the reader's options and the empty frame, checked before any work.
+    const bool render_compare = a.flag("--render-compare");
+    for (const char* opt : {"--background", "--calibration", "--codebook-cache"})
+        if (!render_compare && a.get(opt)) throw UsageError(std::string(opt) + " is for --render-compare");
+    if (!render_compare && a.flag("--rendered")) throw UsageError("--rendered is for --render-compare");
+    std::optional<api::GelShapeReader> reader;
+    std::optional<api::TactileImage> empty;
+    if (render_compare) {
+        api::GelShapeOptions go = a.flag("--rendered") ? api::GelShapeOptions::rendered_frames() : api::GelShapeOptions{};
+        go.calibration = a.get("--calibration").value_or("");
+        reader.emplace(s.gpu(), go);
+        if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
+        to.codebook_cache = a.get("--codebook-cache").value_or("");
+    }
 
     std::optional<api::Model> model;
     std::optional<api::Object> object;
@@ -98,7 +137,9 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         if (model) print_model(model->info(), is_shipped_random_model(model_file));
         std::printf("object    %s: hypotheses %zu surface samples x %d spins (%.2f mm apart), %.1f MiB on the GPU%s\n",
                     object_path.c_str(), tracker.sample_points().size() / 3, tracker.n_spin(), tracker.spacing_mm(),
-                    double(tracker.device_bytes()) / 1048576.0, geometry_only ? ", geometry only" : "");
+                    double(tracker.device_bytes()) / 1048576.0,
+                    geometry_only ? (render_compare ? ", geometry + render-and-compare" : ", geometry only")
+                                  : (render_compare ? ", network + render-and-compare" : ""));
     }
     for (size_t i = 0; i < file.touches.size(); ++i) {
         std::optional<api::TouchResult> r;
@@ -108,13 +149,16 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         } else if (!std::filesystem::exists(file.touches[i].tactile)) {
             throw api::Error(file.touches[i].tactile + ": no such file (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
         }
-        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr);
+        std::optional<api::GelShape> shape;
+        if (reader) shape = reader->read(api::load_tactile_image(file.touches[i].tactile), empty ? &*empty : nullptr);
+        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, shape ? &*shape : nullptr);
         const api::TrackerEstimate e = tracker.estimate();
         steps.push_back(e);
         nlohmann::json modes = nlohmann::json::array();
         for (const api::TrackerMode& m : e.modes) modes.push_back({{"contact", point_json(m.contact)}, {"probability", m.probability}});
         nlohmann::json t{{"tactile", file.touches[i].tactile}, {"contact", point_json(e.contact)}, {"pose", matrix_json(e.pose)},
-                         {"pose_contact", point_json(e.pose_contact)}, {"modes", modes}, {"mass_within_5mm", e.mass_within_5mm}};
+                         {"pose_contact", point_json(e.pose_contact)}, {"modes", modes}, {"mass_within_5mm", e.mass_within_5mm},
+                         {"fit", e.fit}, {"pose_terms", e.pose_terms}};
         if (file.flange)  // the object in the robot's frame: flange * tool * inverse(sensor pose in the object)
             t["object_in_robot"] = matrix_json(api::compose(to_motion(compose(*file.touches[i].flange, *file.tool)), api::inverse(e.pose)));
         jt.push_back(t);
@@ -133,7 +177,8 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         if (!json) std::printf("wrote     %s\n", p->c_str());
     }
     if (json) {
-        nlohmann::json j{{"object", object_path}, {"geometry_only", geometry_only}, {"touches", jt}, {"outputs", outputs}};
+        nlohmann::json j{{"object", object_path}, {"geometry_only", geometry_only}, {"render_compare", render_compare},
+                         {"odometry_noise", {to.odometry_mm, to.odometry_deg}}, {"touches", jt}, {"outputs", outputs}};
         if (model) j["model"] = model_json(model->info(), is_shipped_random_model(model_file));
         if (s.context) j["device"] = s.context->device().name;
         std::printf("%s\n", j.dump(2).c_str());

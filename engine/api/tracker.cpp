@@ -180,6 +180,7 @@ struct Tracker::Impl {
         for (const auto& m : e.modes) o.modes.push_back({m.contact, m.probability});
         o.mass_within_5mm = e.mass_within_5mm;
         o.fit = e.fit;
+        o.pose_terms = e.pose_terms;
         o.heatmap = tracker.heatmap(e, display_tensor);
         o.sample_belief = e.sample_belief;
         return o;

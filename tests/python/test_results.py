@@ -303,6 +303,8 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     with pytest.raises(vtloc.Error, match="1 gel shapes for 2 touches"):
         t.evaluate_window([step], terms=[term, term], shapes=[shape])
     geo = t.evaluate_window([step])
+    assert geo["pose_terms"] == 0  # no shapes: no score at the refined poses
+    assert t.evaluate_window([step], terms=[term, term], shapes=[shape, shape])["pose_terms"] < 0
     assert np.array_equal(t.evaluate_window([step], terms=[None, None])["sample_belief"], geo["sample_belief"])
     both = t.evaluate_window([step], terms=[term, term])
     assert not np.array_equal(both["sample_belief"], geo["sample_belief"])

@@ -438,6 +438,9 @@ struct TrackerEstimate {
     std::vector<TrackerMode> modes;          // best first, probabilities under the belief
     double mass_within_5mm = 0;              // the belief's own mass within 5 mm of `contact`
     double fit = 0;                          // `pose`'s geometry fit (log), as window_fit measures it
+    // The window's gel shapes scored at `pose` and its window poses (log, times
+    // render_refined_weight; with odometry noise, each earlier one aligned within it); 0: none.
+    double pose_terms = 0;
     std::vector<float> heatmap;              // belief over the tracker's display_cloud(), in [0, 1]
     std::vector<float> sample_belief;        // the belief at each of sample_points(), sums to 1
 };
