@@ -247,6 +247,13 @@ Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& ter
 // steps motions back, at lever arm |rel.t| (term_row's widths without the surface's own).
 struct Slack {
     double sigma_t = 0, sigma_r = 0;
+    // The Gaussian log-prior of offsets e = (spin, shift x, shift y); a zero width holds its offsets at 0.
+    double log_prior(const std::array<double, 3>& e) const {
+        double v = 0;
+        if (sigma_r > 0) v -= 0.5 * e[0] * e[0] / (sigma_r * sigma_r);
+        if (sigma_t > 0) v -= 0.5 * (e[1] * e[1] + e[2] * e[2]) / (sigma_t * sigma_t);
+        return v;
+    }
 };
 Slack slack_of(const Rigid& rel, int steps, const FilterOptions& o) {
     const double lever2 = rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2];
@@ -261,10 +268,7 @@ Slack slack_of(const Rigid& rel, int steps, const FilterOptions& o) {
 double aligned_term(const PoseTerm& term, const Rigid& x, const Slack& sl, int rounds, std::array<double, 3>& d) {
     auto at = [&](const std::array<double, 3>& e) {
         const double v[6] = {0, 0, e[0], e[1], e[2], 0};
-        double prior = 0;
-        if (sl.sigma_r > 0) prior -= 0.5 * e[0] * e[0] / (sl.sigma_r * sl.sigma_r);
-        if (sl.sigma_t > 0) prior -= 0.5 * (e[1] * e[1] + e[2] * e[2]) / (sl.sigma_t * sl.sigma_t);
-        return term(perturb(x, v)) + prior;
+        return term(perturb(x, v)) + sl.log_prior(e);
     };
     double fd = at(d);
     double step[3] = {sl.sigma_r, sl.sigma_t, sl.sigma_t};
@@ -591,10 +595,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
                     continue;
                 }
                 const double e[6] = {0, 0, d[k][0], d[k][1], d[k][2], 0};
-                const Slack& sl = slack[k];
-                v += pose_terms[k](perturb(compose(x, to_window[k]), e));
-                if (sl.sigma_r > 0) v -= 0.5 * d[k][0] * d[k][0] / (sl.sigma_r * sl.sigma_r);
-                if (sl.sigma_t > 0) v -= 0.5 * (d[k][1] * d[k][1] + d[k][2] * d[k][2]) / (sl.sigma_t * sl.sigma_t);
+                v += pose_terms[k](perturb(compose(x, to_window[k]), e)) + slack[k].log_prior(d[k]);
             }
             return v;
         };
