@@ -1,7 +1,7 @@
 // Self-test cases of the multi-touch filter's ops (tests/test_pose_ops.cpp):
 // pose_evidence on a random scene (terms with geometry, with fields, both; some
 // poses leave the grid, some cells are empty), then log_softmax, spin_marginal
-// and expected_distance on its score.
+// and expected_distance on its score; field_slack on random fields.
 #include <cmath>
 #include <random>
 
@@ -75,6 +75,27 @@ OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
     return c;
 }
 
+// field_slack on random fields and a random neighbour table (0..KN neighbours a sample).
+OpCase slack_case(int64_t F, int64_t S, int64_t KN, int64_t NS, uint32_t seed) {
+    OpCase c("field_slack", std::to_string(F) + " fields, " + std::to_string(S) + " samples x " + std::to_string(NS) +
+                                " spins, " + std::to_string(KN) + " neighbours");
+    std::mt19937 rng(seed);
+    HostTensor nb({S, KN, 3}), w({F, 2});
+    for (int64_t s = 0; s < S; ++s) {
+        const int64_t n = int64_t(rng() % uint32_t(KN + 1));
+        for (int64_t k = 0; k < KN; ++k) {
+            float* r = &nb.data[size_t((s * KN + k) * 3)];
+            r[0] = k < n ? float(rng() % uint32_t(S)) : -1.0f;
+            r[1] = float(rng() % 900) / 100.0f;
+            r[2] = float(rng() % uint32_t(NS));
+        }
+    }
+    for (int64_t f = 0; f < F; ++f) w.data[size_t(2 * f)] = f % 2 ? 0.0f : 0.4f, w.data[size_t(2 * f + 1)] = f % 3 ? 3.0f : 0.0f;
+    const int fields = c.input("fields", random_tensor({F, S * NS}, seed, -30.0f, 0.0f));
+    c.output(ops::field_slack(c.g, fields, c.input("neighbours", nb), c.input("widths", w), NS), "fields");
+    return c;
+}
+
 }  // namespace
 
 void random_unit_pair(std::mt19937& rng, float* r) {
@@ -95,6 +116,7 @@ std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
     v.push_back(reduce_case("log_softmax", 1031, 12, 5));
     v.push_back(reduce_case("spin_marginal", 300, 36, 6));
     v.push_back(reduce_case("expected_distance", 77, 1, 7));
+    v.push_back(slack_case(4, 97, 12, 36, 8));
     return v;
 }
 

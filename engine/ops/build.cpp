@@ -189,6 +189,10 @@ int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int p
 
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }
 
+int field_slack(Graph& g, int fields, int neighbours, int widths, int64_t n_spin, const std::string& name) {
+    return g.add1("field_slack", {fields, neighbours, widths}, {{"n_spin", d(n_spin)}}, name);
+}
+
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {
     return g.add1("spin_marginal", {prob}, {{"n_spin", d(n_spin)}}, name);
 }

@@ -125,6 +125,9 @@ int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = 
 // points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
 // subgroup = false: the shared-memory tiles even where the device has shuffles.
 int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "", bool subgroup = true);
+// fields [F, S * n_spin], neighbours [S, KN, 3], widths [F, 2] -> fields widened by odometry slack
+// (engine/ops/field_slack.cpp).
+int field_slack(Graph& g, int fields, int neighbours, int widths, int64_t n_spin, const std::string& name = "");
 // Render-and-compare (SPEC 9; engine/ops/codebook_math.h says how). The binning of the
 // dense points: origin, cell size `coarse`, dims, and the largest bin's count.
 struct CodebookRender {

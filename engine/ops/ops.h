@@ -52,6 +52,7 @@ extern const OpDef op_codebook_window_min;  // codebook.cpp
 extern const OpDef op_codebook_score;    // codebook.cpp
 extern const OpDef op_spin_marginal;     // pose_reduce.cpp
 extern const OpDef op_expected_distance; // pose_reduce.cpp
+extern const OpDef op_field_slack;       // field_slack.cpp
 extern const OpDef op_fps;              // fps.cpp (point cloud)
 extern const OpDef op_ball_query;       // ball_query.cpp
 extern const OpDef op_point_group;      // point_group.cpp

@@ -34,6 +34,7 @@ const OpDef* const kOps[] = {
     &ops::op_log_softmax,
     &ops::op_spin_marginal,
     &ops::op_expected_distance,
+    &ops::op_field_slack,
     &ops::op_gel_gradient,
     &ops::op_masked_poisson,
     &ops::op_mean_pool2,

@@ -1,0 +1,35 @@
+#version 450
+// A log field over the hypotheses (sample s, spin j) widened by odometry slack:
+// out[f, s NS + j] = the best of in[f] at (s, j), at the spins j +- 1 less a_r step^2,
+// and at each neighbour s' of s (at the spin j + off that keeps the pose's heading)
+// less a_t d^2 (engine/ops/field_slack.cpp; a_t, a_r = 0: that slack is off).
+layout(local_size_x_id = 0) in;
+layout(std430, binding = 0) readonly buffer In_ { float fin[]; };       // [F, S * NS]
+layout(std430, binding = 1) readonly buffer Nb_ { float nb[]; };        // [S, KN, 3]: s' (-1: none), d^2, off
+layout(std430, binding = 2) readonly buffer Wd_ { float width[]; };     // [F, 2]: a_t, a_r
+layout(std430, binding = 3) writeonly buffer Out_ { float fout[]; };
+layout(push_constant) uniform Push { uint F; uint S; uint NS; uint KN; float step2; } p;
+
+void main() {
+    const uint H = p.S * p.NS, total = p.F * H, stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
+    for (uint e = gl_GlobalInvocationID.x; e < total; e += stride) {
+        const uint f = e / H, h = e - f * H, s = h / p.NS, j = h - s * p.NS, base = f * H;
+        const float at = width[2u * f], ar = width[2u * f + 1u];
+        float v = fin[e];
+        if (ar > 0.0 && p.NS > 1u) {
+            precise float pen = ar * p.step2;
+            v = max(v, fin[base + s * p.NS + (j + 1u) % p.NS] - pen);
+            v = max(v, fin[base + s * p.NS + (j + p.NS - 1u) % p.NS] - pen);
+        }
+        if (at > 0.0) {
+            for (uint k = 0u; k < p.KN; ++k) {
+                const uint r = (s * p.KN + k) * 3u;
+                const float idx = nb[r];
+                if (idx < 0.0) break;  // a row's neighbours come first, then -1s
+                precise float pen = at * nb[r + 1u];
+                v = max(v, fin[base + uint(idx) * p.NS + (j + uint(nb[r + 2u])) % p.NS] - pen);
+            }
+        }
+        fout[e] = v;
+    }
+}

@@ -1,0 +1,95 @@
+// field_slack (engine/ops/field_slack.cpp): the grid's log fields widened by
+// odometry slack. GPU against the CPU reference on random fields and neighbour
+// tables of odd sizes with fixed seeds, then the closed form on a hand-made table.
+// Tolerance 0: each output is a max over the same fp32 subtractions of the same
+// products (`precise` in the shader, no contraction on the host), with no sum.
+#include <catch2/catch.hpp>
+
+#include <cmath>
+#include <random>
+
+#include "engine/executor.h"
+#include "engine/ops/build.h"
+#include "tests/harness.h"
+
+using namespace vtloc;
+
+namespace {
+
+// A random neighbour table: each sample gets 0..KN neighbours (then -1s), offsets 0..NS-1.
+HostTensor random_neighbours(int64_t S, int64_t KN, int64_t NS, uint32_t seed) {
+    std::mt19937 rng(seed);
+    HostTensor nb({S, KN, 3});
+    for (int64_t s = 0; s < S; ++s) {
+        const int64_t n = int64_t(rng() % uint32_t(KN + 1));
+        for (int64_t k = 0; k < KN; ++k) {
+            float* r = &nb.data[size_t((s * KN + k) * 3)];
+            r[0] = k < n ? float(rng() % uint32_t(S)) : -1.0f;
+            r[1] = float(rng() % 1000) / 100.0f;
+            r[2] = float(rng() % uint32_t(NS));
+        }
+    }
+    return nb;
+}
+
+Graph slack_graph(int64_t F, int64_t S, int64_t KN, int64_t NS) {
+    Graph g;
+    g.output(ops::field_slack(g, g.input("fields", {F, S * NS}), g.input("nb", {S, KN, 3}), g.input("w", {F, 2}), NS), "out");
+    return g;
+}
+
+}  // namespace
+
+TEST_CASE("field_slack matches the CPU reference", "[op][pose][field_slack]") {
+    struct Shape { int64_t F, S, KN, NS; };
+    for (const Shape sh : {Shape{1, 1, 1, 1}, Shape{3, 7, 5, 36}, Shape{2, 331, 12, 36}, Shape{5, 61, 3, 7}, Shape{1, 1031, 16, 12}}) {
+        INFO("F " << sh.F << " S " << sh.S << " KN " << sh.KN << " NS " << sh.NS);
+        const uint32_t seed = uint32_t(sh.S * 31 + sh.F);
+        HostTensor w({sh.F, 2});
+        for (int64_t f = 0; f < sh.F; ++f) {  // every mix of the two slacks on and off
+            w.data[size_t(2 * f)] = f % 2 == 0 ? 0.35f + 0.1f * float(f) : 0.0f;
+            w.data[size_t(2 * f + 1)] = f % 3 != 1 ? 2.5f : 0.0f;
+        }
+        HostTensor fields = test::random_tensor({sh.F, sh.S * sh.NS}, seed, -30.0f, 0.0f);
+        fields.data[0] = -INFINITY;  // a field may hold -inf (a touch no hypothesis explains)
+        const TensorMap in{{"fields", fields}, {"nb", random_neighbours(sh.S, sh.KN, sh.NS, seed + 1)}, {"w", w}};
+        const TensorMap got = test::run_gpu_and_compare(slack_graph(sh.F, sh.S, sh.KN, sh.NS), WeightStore{}, in, {0, 0});
+        for (size_t i = 0; i < fields.data.size(); ++i) CHECK(got.at("out").data[i] >= fields.data[i]);  // a max with itself
+    }
+}
+
+TEST_CASE("field_slack takes the best neighbour less its prior, and nothing where the widths are 0", "[op][pose][field_slack]") {
+    // Three samples, four spins. Sample 0's neighbours: sample 2 at d^2 = 4 with spin offset 1, then sample 1
+    // at d^2 = 1 with offset 0. Field 0 has both slacks; field 1 none.
+    const int64_t S = 3, NS = 4, KN = 3, H = S * NS;
+    HostTensor nb({S, KN, 3}, std::vector<float>(size_t(S * KN * 3), -1.0f));
+    const float rows[2][3] = {{2, 4, 1}, {1, 1, 0}};
+    for (int k = 0; k < 2; ++k)
+        for (int i = 0; i < 3; ++i) nb.data[size_t(k * 3 + i)] = rows[k][i];
+    HostTensor fields({2, H}, std::vector<float>(size_t(2 * H), -20.0f));
+    for (int f = 0; f < 2; ++f) {
+        fields.data[size_t(f * H + 2 * NS + 3)] = 0.0f;  // sample 2, spin 3: reached from sample 0's spin 2
+        fields.data[size_t(f * H + 1 * NS + 0)] = -1.0f; // sample 1, spin 0: from sample 0's spin 0
+        fields.data[size_t(f * H + 0 * NS + 1)] = -5.0f; // sample 0, spin 1: a spin step from spins 0 and 2
+    }
+    HostTensor w({2, 2}, {0.5f, 0.25f, 0.0f, 0.0f});
+    const TensorMap got = test::run_gpu_and_compare(slack_graph(2, S, KN, NS), WeightStore{},
+                                                    {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
+    const std::vector<float>& o = got.at("out").data;
+    const float step = float(2 * M_PI / 4), spin_pen = 0.25f * (step * step);
+    CHECK(o[2] == std::max(-20.0f, std::max(-5.0f - spin_pen, 0.0f - 0.5f * 4.0f)));  // sample 2's peak, less 2
+    CHECK(o[0] == std::max(-1.0f - 0.5f, -5.0f - spin_pen));                           // sample 1, less 0.5
+    CHECK(o[1] == -5.0f);                                                              // its own value is best
+    CHECK(o[3] == -20.0f);                                                             // nothing better near
+    for (int64_t h = 0; h < H; ++h) CHECK(o[size_t(H + h)] == fields.data[size_t(H + h)]);  // field 1: unchanged
+}
+
+TEST_CASE("field_slack refuses bad shapes by name", "[pose][field_slack]") {
+    Graph g;
+    const int f = g.input("f", {2, 12}), w = g.input("w", {2, 2});
+    CHECK_THROWS_WITH(ops::field_slack(g, f, g.input("nb", {3, 2, 2}), w, 4), Catch::Contains("neighbours must be [S > 0, KN > 0, 3]"));
+    CHECK_THROWS_WITH(ops::field_slack(g, f, g.input("nb2", {4, 2, 3}), w, 4), Catch::Contains("fields must be [F > 0, S * NS] = [F, 16]"));
+    CHECK_THROWS_WITH(ops::field_slack(g, f, g.input("nb3", {3, 2, 3}), g.input("w3", {3, 2}), 4),
+                      Catch::Contains("widths must be [F, 2]"));
+    CHECK_THROWS_WITH(ops::field_slack(g, f, g.input("nb4", {3, 2, 3}), w, 0), Catch::Contains("n_spin must be an integer"));
+}
