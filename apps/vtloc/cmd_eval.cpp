@@ -51,7 +51,7 @@ const char* kHelp =
     "                            refine_widen, refine_reach, rescue_fit, rescue_modes, free_space,\n"
     "                            network_weight, render_weight, render_quadratic,\n"
     "                            render_press_percentile, render_cell_mm, render_refined_weight,\n"
-    "                            render_slack_rounds, hypotheses, n_spin;\n"
+    "                            render_slack_rounds, field_slack, hypotheses, n_spin;\n"
     "                            online_window=W: the online form, touch by touch); fit them with\n"
     "                            --end-split train\n"
     "  --end-split test|train    with --sequence: windows end at test touches (default) or train ones\n"

@@ -185,6 +185,10 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "render_cell_mm") to.render_cell_mm = v;
             else if (k == "render_refined_weight") to.render_refined_weight = v;
             else if (k == "render_slack_rounds") to.render_slack_rounds = int(v);
+            else if (k == "field_slack") {
+                if (v != 0 && v != 1) throw UsageError("--filter: field_slack is 0 or 1");
+                to.field_slack = v == 1;
+            }
             else if (k == "render_quadratic") {
                 if (v != 0 && v != 1) throw UsageError("--filter: render_quadratic is 0 or 1");
                 to.render_quadratic = v == 1;
@@ -195,7 +199,7 @@ int run_sequence(Session& s, const Args& a) {
                 if (!(v >= 1 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: online_window is an integer in [1, 64]");
                 online_window = int(v), to.window = int(v);
             }
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_slack_rounds, hypotheses, n_spin, online_window)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_slack_rounds, field_slack, hypotheses, n_spin, online_window)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");

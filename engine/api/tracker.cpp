@@ -65,6 +65,7 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     if (o.render_slack_rounds < 0 || o.render_slack_rounds > 8)
         throw Error("tracker: render_slack_rounds must be 0..8 (0: off), got " + std::to_string(o.render_slack_rounds));
     f.shape_slack_rounds = o.render_slack_rounds;
+    f.field_slack = o.field_slack;
     if (!(o.grid_allowance >= 0) || !(o.sigma_d_mm > 0) || !(o.sigma_a_deg > 0) || !std::isfinite(o.press_mm))
         throw Error("tracker: widths must be > 0, grid_allowance >= 0 and press_mm finite");
     f.term_weight = 1;  // the network's temperature is applied when its field is made

@@ -257,3 +257,52 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
 }
 
 }  // namespace vtloc::track
+
+namespace vtloc::track {
+
+HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
+    const int64_t S = s.n_samples(), NS = s.n_spin();
+    if (kn < 1) throw Error("slack_neighbours: kn must be >= 1, got " + std::to_string(kn));
+    HostTensor nb({S, int64_t(kn), 3}, std::vector<float>(size_t(S * kn * 3), -1.0f));
+    if (!(radius > 0) || S == 0) return nb;
+    // Bucket the samples in cubes of the radius: a sample's neighbours lie in the 27 around its own.
+    const D3 lo{-1e9, -1e9, -1e9};
+    std::unordered_map<int64_t, std::vector<int64_t>> bins;
+    for (int64_t i = 0; i < S; ++i) bins[key_of(&s.samples[size_t(9 * i)], lo, radius)].push_back(i);
+    const double step = 2 * M_PI / double(NS), r2 = radius * radius;
+    std::vector<std::pair<double, int64_t>> near;
+    for (int64_t i = 0; i < S; ++i) {
+        const float* a = &s.samples[size_t(9 * i)];
+        near.clear();
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
+                    const float q[3] = {float(a[0] + dx * radius), float(a[1] + dy * radius), float(a[2] + dz * radius)};
+                    auto it = bins.find(key_of(q, lo, radius));
+                    if (it == bins.end()) continue;
+                    for (int64_t j : it->second) {
+                        const float* b = &s.samples[size_t(9 * j)];
+                        const double d2 = (double(a[0]) - b[0]) * (double(a[0]) - b[0]) + (double(a[1]) - b[1]) * (double(a[1]) - b[1]) +
+                                          (double(a[2]) - b[2]) * (double(a[2]) - b[2]);
+                        const double nn = double(a[3]) * b[3] + double(a[4]) * b[4] + double(a[5]) * b[5];
+                        if (j != i && d2 <= r2 && nn >= kSlackMinCos) near.push_back({d2, j});
+                    }
+                }
+        std::sort(near.begin(), near.end());  // nearest first, lower index on a tie
+        for (size_t k = 0; k < near.size() && k < size_t(kn); ++k) {
+            const float* b = &s.samples[size_t(9 * near[k].second)];
+            // The spin of s' whose x axis is nearest s's spin 0 (x = t1): its angle in s''s basis (t1', z' x t1').
+            const double z[3] = {-b[3], -b[4], -b[5]}, t1[3] = {b[6], b[7], b[8]};
+            const double t2[3] = {z[1] * t1[2] - z[2] * t1[1], z[2] * t1[0] - z[0] * t1[2], z[0] * t1[1] - z[1] * t1[0]};
+            const double phi = std::atan2(a[6] * t2[0] + a[7] * t2[1] + a[8] * t2[2], a[6] * t1[0] + a[7] * t1[1] + a[8] * t1[2]);
+            const int64_t off = ((int64_t(std::lround(phi / step)) % NS) + NS) % NS;
+            float* r = &nb.data[size_t((i * kn + int64_t(k)) * 3)];
+            r[0] = float(near[k].second);
+            r[1] = float(near[k].first);
+            r[2] = float(off);
+        }
+    }
+    return nb;
+}
+
+}  // namespace vtloc::track

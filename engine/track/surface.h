@@ -71,6 +71,13 @@ struct Surface {
 Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOptions& o = {},
                       const std::string& source = "object");
 
+// The samples near each sample, for the filter's field_slack op (engine/ops/field_slack.cpp):
+// [S, kn, 3] rows (s' as a float, squared distance, the spin offset that keeps a pose's
+// heading from s to s'), the kn nearest within `radius` whose normal is within 45 degrees
+// of s's (another face is another pose), nearest first, -1 rows after the last.
+constexpr double kSlackMinCos = 0.7071;
+HostTensor slack_neighbours(const Surface& s, int kn, double radius);
+
 // The renderer's tangent t1 of unit axis a (engine/sim/touch_renderer.cpp: from
 // the world axis least aligned with a), so spin 0 means the dataset's spin_deg 0.
 std::array<double, 3> tangent_of(const std::array<double, 3>& a);

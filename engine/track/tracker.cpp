@@ -23,6 +23,12 @@ namespace {
 
 using P = ops::pose::V3;
 constexpr int64_t kMaxAnswers = 512;
+constexpr int kSlackNeighbours = 12;
+
+// field_slack's neighbourhood: two sample spacings, at least 4 mm (the candidates
+// protocol has no spacing; 0.5 mm and 0.5 degrees a motion reach ~1.5 mm by T = 8).
+double slack_radius(const Surface& s) { return std::max(2 * s.spacing_mm, 4.0); }
+bool slack_on(const FilterOptions& o) { return o.field_slack && (o.odometry_mm > 0 || o.odometry_deg > 0); }
 
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
@@ -76,6 +82,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     std::vector<float> ans;
     for (int64_t i = 0; i < s.n_samples(); i += answer_stride(s)) ans.insert(ans.end(), &pts[size_t(3 * i)], &pts[size_t(3 * i + 3)]);
     w.add("surface.answers", HostTensor({int64_t(ans.size() / 3), 3}, ans));
+    if (slack_on(opt_)) w.add("surface.neighbours", slack_neighbours(s, kSlackNeighbours, slack_radius(s)));
 }
 
 Tracker::~Tracker() = default;
@@ -95,10 +102,14 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
     p.voxel = s.voxel;
     p.own_field = own;
     p.own_weight = 1;
+    int fields = g.input("fields", {F, H});
+    if (slack_on(o) && F > 0)
+        fields = ops::field_slack(g, fields, g.weight("surface.neighbours", {S, kSlackNeighbours, 3}), g.input("widths", {F, 2}),
+                                  NS, "track.slack");
     int score = ops::pose_evidence(g, g.weight("surface.samples", {S, 12}), g.weight("surface.dense", {s.n_dense(), 8}),
                                    g.weight("surface.cells", {s.n_cells(), 2}, ElemType::I32),
-                                   g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}),
-                                   g.input("fields", {F, H}), p, "track.evidence");
+                                   g.weight("surface.spins", {NS, 2}), g.input("terms", {K, 16}), fields, p,
+                                   "track.evidence");
     std::vector<int> lp = ops::log_softmax(g, score, "track.belief");
     int m = ops::spin_marginal(g, lp[1], NS, "track.marginal");
     const int64_t A = (S + answer_stride(s) - 1) / answer_stride(s);
@@ -399,11 +410,20 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
         term_row(&tr.data[size_t(16 * k)], st.to_window[size_t(k)], int(m - 1 - k), opt_, has ? int(k) : -1, opt_.term_weight,
                  opt_.grid_allowance * surface_.spacing_mm, opt_.grid_allowance * 2 * M_PI / surface_.n_spin());
     }
+    // field_slack's widths: a_t = 1 / (2 sigma_t^2), a_r = 1 / (2 sigma_r^2) of each earlier field's
+    // odometry slack; the current touch's own field has none (0).
+    HostTensor widths({F, 2});
+    auto set_widths = [&](int64_t f, const Slack& sl) {
+        widths.data[size_t(2 * f)] = sl.sigma_t > 0 ? float(0.5 / (sl.sigma_t * sl.sigma_t)) : 0.0f;
+        widths.data[size_t(2 * f + 1)] = sl.sigma_r > 0 ? float(0.5 / (sl.sigma_r * sl.sigma_r)) : 0.0f;
+    };
+    for (int64_t f = 0; f + 1 < n_term_fields; ++f) set_widths(f, slack_of(st.to_window[size_t(f)], int(m - 1 - f), opt_));
     if (prior) {
         // The touch before the window: its belief read at the pose the motions lead back to (no geometry: its
         // belief holds it). The read is at the nearest hypothesis; the window's own geometry is exact.
-        term_row(&tr.data[size_t(16 * (K - 1))], compose(m > 1 ? st.to_window[0] : Rigid{}, inverse(*prior_motion)), int(m), opt_,
-                 int(F - 1), 1.0);
+        const Rigid back = compose(m > 1 ? st.to_window[0] : Rigid{}, inverse(*prior_motion));
+        set_widths(F - 1, slack_of(back, int(m), opt_));
+        term_row(&tr.data[size_t(16 * (K - 1))], back, int(m), opt_, int(F - 1), 1.0);
         tr.data[size_t(16 * (K - 1) + 12)] = 0;
         std::copy(prior->begin(), prior->end(), fields.data.begin() + (F - 1) * H);
     }
@@ -411,7 +431,8 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
         if (terms[size_t(f)] && !terms[size_t(f)]->empty())
             for (int64_t h = 0; h < H; ++h)
                 fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
-    const TensorMap in{{"terms", tr}, {"fields", fields}};
+    TensorMap in{{"terms", tr}, {"fields", fields}};
+    if (slack_on(opt_) && F > 0) in.emplace("widths", std::move(widths));
     TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
     st.log = std::move(out.at("log").data);
     st.prob = std::move(out.at("prob").data);

@@ -73,6 +73,12 @@ struct FilterOptions {
     // along the gel and a spin about its axis, found by a pattern search of this many rounds
     // from one standard deviation, each offset paying its Gaussian log-prior. 0: carried rigidly.
     int shape_slack_rounds = 2;
+    // With odometry noise, the grid reads each earlier touch's field (its render-and-compare
+    // or network term; online, the prior belief) where it is best near the hypothesis the
+    // motions lead to: over the neighbouring samples (kSlackNeighbours nearest within
+    // slack_radius) and spins, each offset paying its Gaussian log-prior at the noise's
+    // widths (the field_slack op). false: at the nearest hypothesis alone.
+    bool field_slack = true;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
     // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
     // fewer); n, at most n (a robot process with its own thread budget). The outputs do not
