@@ -137,6 +137,18 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
         const api::TrackerEstimate en = t.with_options(noisy).evaluate_window_terms({m}, terms, {&a, &b});
         const api::TrackerEstimate er = t.with_options(rigid).evaluate_window_terms({m}, terms, {&a, &b});
         CHECK(en.sample_belief != er.sample_belief);
+        // The grid reads the earlier term widened within the noise (field_slack); without, at the nearest
+        // hypothesis. These shapes' terms span only ~0.04 nats, far less than a neighbour ~4 mm away costs
+        // at 0.5 mm of noise (35 nats), so here the terms are sharpened 1000 times and the noise is 2 mm.
+        std::vector<std::vector<float>> sharp = terms;
+        for (auto& f : sharp)
+            for (float& v : f) v *= 1000;
+        api::TrackerOptions widened = noisy;
+        widened.odometry_mm = 2;
+        api::TrackerOptions unwidened = widened;
+        unwidened.field_slack = false;
+        CHECK(t.with_options(unwidened).evaluate_window_terms({m}, sharp).sample_belief !=
+              t.with_options(widened).evaluate_window_terms({m}, sharp).sample_belief);
         rigid.odometry_mm = 0;
         CHECK(t.with_options(rigid).evaluate_window_terms({m}, terms, {&a, &b}).sample_belief == reused.sample_belief);
         rigid.render_slack_rounds = 9;
