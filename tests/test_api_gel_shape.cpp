@@ -144,7 +144,7 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
         for (auto& f : sharp)
             for (float& v : f) v *= 1000;
         api::TrackerOptions widened = noisy;
-        widened.odometry_mm = 2;
+        widened.odometry_mm = 2, widened.field_slack = true;
         api::TrackerOptions unwidened = widened;
         unwidened.field_slack = false;
         CHECK(t.with_options(unwidened).evaluate_window_terms({m}, sharp).sample_belief !=

@@ -49,7 +49,7 @@ std::pair<Rigid, Rigid> two_poses() {
 
 TEST_CASE("with odometry noise the grid reads an earlier touch's field widened at its noise widths", "[track]") {
     track::FilterOptions o;
-    o.odometry_mm = 0.6, o.odometry_deg = 1.5;
+    o.odometry_mm = 0.6, o.odometry_deg = 1.5, o.field_slack = true;
     o.n_modes = 2, o.refine = 1, o.rescue_modes = 0;
     track::FilterOptions off = o;
     off.field_slack = false;
@@ -117,7 +117,7 @@ TEST_CASE("the slack's neighbours are the nearest samples on the same face, thei
 
 TEST_CASE("the tracker's CPU reference follows the GPU tracker with odometry noise and field slack", "[track]") {
     track::FilterOptions o;
-    o.odometry_mm = 0.5, o.odometry_deg = 0.5, o.online_window = 3;  // past the window by touch 4: the prior widened too
+    o.odometry_mm = 0.5, o.odometry_deg = 0.5, o.online_window = 3, o.field_slack = true;  // past the window by touch 4: the prior widened too
     track::Tracker gpu(test::gpu(), block_surface(), o), cpu(nullptr, block_surface(), o);
     const int64_t H = gpu.surface().n_hypotheses();
     const float pts[5][6] = {{12, 10, 12, 0, 0, 1}, {20, 14, 12, 0, 0, 1}, {40, 10, 6, 1, 0, 0}, {8, 0, 5, 0, -1, 0}, {26, 20, 12, 0, 0, 1}};

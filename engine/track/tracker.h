@@ -77,8 +77,9 @@ struct FilterOptions {
     // or network term; online, the prior belief) where it is best near the hypothesis the
     // motions lead to: over the neighbouring samples (kSlackNeighbours nearest within
     // slack_radius) and spins, each offset paying its Gaussian log-prior at the noise's
-    // widths (the field_slack op). false: at the nearest hypothesis alone.
-    bool field_slack = true;
+    // widths (the field_slack op). false: at the nearest hypothesis alone. Fitted on train windows
+    // (docs/render_compare.md, "The grid's terms widened"): no change windowed, online worse, so off.
+    bool field_slack = false;
     int online_window = 8;       // add_touch scores the last W touches exactly, older ones through a prior
     // Host threads an estimate climbs its modes on: 0, up to 4 (fewer where the host has
     // fewer); n, at most n (a robot process with its own thread budget). The outputs do not

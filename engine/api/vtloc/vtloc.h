@@ -391,8 +391,9 @@ struct TrackerOptions {
     // With odometry noise, the hypothesis grid reads each earlier touch's term (render-and-compare,
     // the network's heat-map; online, the belief before the window) where it is best among the
     // neighbouring hypotheses, each offset paying its Gaussian prior at the noise's widths;
-    // false: at the nearest hypothesis the motions lead to. No effect without noise.
-    bool field_slack = true;
+    // false (the default, fitted on train windows: docs/render_compare.md, "The grid's terms
+    // widened"): at the nearest hypothesis the motions lead to. No effect without noise.
+    bool field_slack = false;
     // Where the object's codebook (the height maps render-and-compare needs) is cached: read
     // when present and made for this object and these options (else an error naming it),
     // written after the first render. Empty: rendered in memory at the first GelShape.
