@@ -29,14 +29,17 @@ fi
 # processes run side by side, one per core), fails on any exit status or any report in
 # their logs (reports do not halt a run, so one run shows them all).
 status=0
-# shard BUILD-DIR TARGET SPEC: the test cases SPEC selects, dealt in declaration
-# order to one list per process (neighbours in a file cost alike, so the lists take
-# about as long; two fixed halves ran 6 and 12 minutes side by side), each a
-# Catch input file (-f: a name per line, quoted by Catch); prints the filters.
+# shard BUILD-DIR TARGET SPEC: the test cases SPEC selects, dealt to one list per
+# process by their measured cost (durations.tsv beside this script: seconds, a tab,
+# the case's name, from a --durations run; an unlisted case counts 1 s), the
+# costliest first, each to the list with the least so far; each list a Catch input
+# file (-f: a name per line, quoted by Catch); prints the filters. Dealt in
+# declaration order instead, the two lists ended 2-2.5 minutes apart.
 # Processes: one per core, at least 2, at most one per 6 GiB available (each holds
 # ~5.5 GB with ASan's shadow); SANITIZE_JOBS overrides.
 shard() {
-  local n k mem_gib out="" names="$1/shard.names"
+  local n k mem_gib out="" names="$1/shard.names" durations="$here/durations.tsv"
+  [ -f "$durations" ] || durations=/dev/null
   n=$(nproc)
   [ "$n" -ge 2 ] || n=2
   mem_gib=$(awk '/^MemAvailable:/ { print int($2 / 1048576) }' /proc/meminfo 2> /dev/null || echo 12)
@@ -50,7 +53,18 @@ shard() {
     echo "sanitize: listing $2's cases ($3) gave fewer than $n" >&2
     exit 1
   fi
-  sed '/^$/d; s/[\\",]/\\&/g' "$names" | awk -v n="$n" -v dir="$1" '{ print > (dir "/shard." ((NR - 1) % n) ".txt") }'
+  sed '/^$/d' "$names" |
+    awk -F '\t' -v costs="$durations" 'FILENAME == costs { cost[$2] = $1; next }
+      { printf "%s\t%s\n", (($0 in cost) ? cost[$0] : 1), $0 }' "$durations" - |
+    sort -t "$(printf '\t')" -k1,1gr -k2,2 |
+    awk -F '\t' -v n="$n" -v dir="$1" '{
+      best = 0
+      for (k = 1; k < n; k++) if (load[k] < load[best]) best = k
+      load[best] += $1
+      name = substr($0, index($0, "\t") + 1)
+      gsub(/[\\",]/, "\\\\&", name)
+      print name > (dir "/shard." best ".txt")
+    }'
   for ((k = 0; k < n; k++)); do out+="${out:+|}--order decl --durations yes -f shard.$k.txt"; done
   printf '%s' "$out"
 }
@@ -91,8 +105,14 @@ for kind in "${kinds[@]}"; do
       # ASan does not see;
       # ~[subgroup_sweep]: the same sweeps on the subgroup shader's variants (for the subgroup-4 run);
       # ~[picture]: the hidden case that rewrites a picture in docs/ (exclusions alone match hidden cases).
+      # GALLIVM_PERF=nopt, as the README's command runs lavapipe: ASan sees our host code, not
+      # the JIT's, and Mesa's disk cache keys on the flag, so the run reuses the command's
+      # compiled pipelines instead of compiling each cold with LLVM's passes (most of this
+      # run's time on a fresh machine: docs/testing.md). The optimised JIT still runs every
+      # op in the long suite (long/opt/: the op self-test) and the TSan run below.
       run build-asan "address,undefined" vtloc_tests "runtime error:" \
         "shards:~[long]~[sweep]~[subgroup_sweep]~[picture]" \
+        GALLIVM_PERF="${GALLIVM_PERF-nopt}" \
         ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1" \
         LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
         UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=0"
