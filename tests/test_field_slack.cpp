@@ -6,8 +6,8 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
-#include <random>
 
+#include "engine/check/op_selftest.h"
 #include "engine/executor.h"
 #include "engine/ops/build.h"
 #include "tests/harness.h"
@@ -15,22 +15,6 @@
 using namespace vtloc;
 
 namespace {
-
-// A random neighbour table: each sample gets 0..KN neighbours (then -1s), offsets 0..NS-1.
-HostTensor random_neighbours(int64_t S, int64_t KN, int64_t NS, uint32_t seed) {
-    std::mt19937 rng(seed);
-    HostTensor nb({S, KN, 3});
-    for (int64_t s = 0; s < S; ++s) {
-        const int64_t n = int64_t(rng() % uint32_t(KN + 1));
-        for (int64_t k = 0; k < KN; ++k) {
-            float* r = &nb.data[size_t((s * KN + k) * 3)];
-            r[0] = k < n ? float(rng() % uint32_t(S)) : -1.0f;
-            r[1] = float(rng() % 1000) / 100.0f;
-            r[2] = float(rng() % uint32_t(NS));
-        }
-    }
-    return nb;
-}
 
 Graph slack_graph(int64_t F, int64_t S, int64_t KN, int64_t NS) {
     Graph g;
@@ -52,7 +36,7 @@ TEST_CASE("field_slack matches the CPU reference", "[op][pose][field_slack]") {
         }
         HostTensor fields = test::random_tensor({sh.F, sh.S * sh.NS}, seed, -30.0f, 0.0f);
         fields.data[0] = -INFINITY;  // a field may hold -inf (a touch no hypothesis explains)
-        const TensorMap in{{"fields", fields}, {"nb", random_neighbours(sh.S, sh.KN, sh.NS, seed + 1)}, {"w", w}};
+        const TensorMap in{{"fields", fields}, {"nb", check::random_slack_neighbours(sh.S, sh.KN, sh.NS, seed + 1)}, {"w", w}};
         const TensorMap got = test::run_gpu_and_compare(slack_graph(sh.F, sh.S, sh.KN, sh.NS), WeightStore{}, in, {0, 0});
         for (size_t i = 0; i < fields.data.size(); ++i) CHECK(got.at("out").data[i] >= fields.data[i]);  // a max with itself
     }

@@ -79,20 +79,12 @@ OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
 OpCase slack_case(int64_t F, int64_t S, int64_t KN, int64_t NS, uint32_t seed) {
     OpCase c("field_slack", std::to_string(F) + " fields, " + std::to_string(S) + " samples x " + std::to_string(NS) +
                                 " spins, " + std::to_string(KN) + " neighbours");
-    std::mt19937 rng(seed);
-    HostTensor nb({S, KN, 3}), w({F, 2});
-    for (int64_t s = 0; s < S; ++s) {
-        const int64_t n = int64_t(rng() % uint32_t(KN + 1));
-        for (int64_t k = 0; k < KN; ++k) {
-            float* r = &nb.data[size_t((s * KN + k) * 3)];
-            r[0] = k < n ? float(rng() % uint32_t(S)) : -1.0f;
-            r[1] = float(rng() % 900) / 100.0f;
-            r[2] = float(rng() % uint32_t(NS));
-        }
-    }
+    HostTensor w({F, 2});
     for (int64_t f = 0; f < F; ++f) w.data[size_t(2 * f)] = f % 2 ? 0.0f : 0.4f, w.data[size_t(2 * f + 1)] = f % 3 ? 3.0f : 0.0f;
     const int fields = c.input("fields", random_tensor({F, S * NS}, seed, -30.0f, 0.0f));
-    c.output(ops::field_slack(c.g, fields, c.input("neighbours", nb), c.input("widths", w), NS), "fields");
+    c.output(ops::field_slack(c.g, fields, c.input("neighbours", random_slack_neighbours(S, KN, NS, seed + 1)),
+                              c.input("widths", w), NS),
+             "fields");
     return c;
 }
 
@@ -107,6 +99,21 @@ void random_unit_pair(std::mt19937& rng, float* r) {
     for (int i = 0; i < 3; ++i) b[i] -= d * a[i];
     float lb = std::sqrt(b[0] * b[0] + b[1] * b[1] + b[2] * b[2]);
     for (int i = 0; i < 3; ++i) r[i] = a[i], r[3 + i] = b[i] / lb;
+}
+
+HostTensor random_slack_neighbours(int64_t S, int64_t KN, int64_t NS, uint32_t seed) {
+    std::mt19937 rng(seed);
+    HostTensor nb({S, KN, 3});
+    for (int64_t s = 0; s < S; ++s) {
+        const int64_t n = int64_t(rng() % uint32_t(KN + 1));
+        for (int64_t k = 0; k < KN; ++k) {
+            float* r = &nb.data[size_t((s * KN + k) * 3)];
+            r[0] = k < n ? float(rng() % uint32_t(S)) : -1.0f;
+            r[1] = float(rng() % 1000) / 100.0f;
+            r[2] = float(rng() % uint32_t(NS));
+        }
+    }
+    return nb;
 }
 
 std::vector<OpCase> track_cases(const rt::DeviceInfo&) {

@@ -39,6 +39,9 @@ HostTensor random_tensor(const Shape& shape, uint32_t seed, float lo = -1.0f, fl
 // A random unit vector in out[0..2] and a unit vector orthogonal to it in out[3..5]
 // (six normal draws from rng): a normal and its tangent (the multi-touch filter's cases).
 void random_unit_pair(std::mt19937& rng, float* out);
+// A random neighbour table for field_slack [S, KN, 3]: 0..KN neighbours a sample (then -1
+// rows), squared distances in [0, 10), spin offsets in 0..NS-1.
+HostTensor random_slack_neighbours(int64_t S, int64_t KN, int64_t NS, uint32_t seed);
 
 // Balls in SPEC 2's layout (real slots, then the first index again) of very
 // different lengths in one subgroup, [S, NS] indices into P points: in each run of 8

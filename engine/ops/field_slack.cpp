@@ -13,15 +13,12 @@
 #include "base/error.h"
 #include "engine/ops/common.h"
 #include "engine/ops/ops.h"
+#include "engine/ops/point_common.h"
 
 namespace vtloc::ops {
 namespace {
 
-int64_t slack_spins(const Params& p) {
-    double v = p.get("n_spin", 0);
-    if (!(v >= 1) || v != std::floor(v) || v > 65536) throw Error("n_spin must be an integer in [1, 65536]");
-    return int64_t(v);
-}
+int64_t slack_spins(const Params& p) { return int_param(p, "n_spin", 1, 65536); }
 
 // The spin step squared, as both paths compute it (one float expression).
 float step2_of(int64_t NS) {
