@@ -266,7 +266,11 @@ HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
     HostTensor nb({S, int64_t(kn), 3}, std::vector<float>(size_t(S * kn * 3), -1.0f));
     if (!(radius > 0) || S == 0) return nb;
     // Bucket the samples in cubes of the radius: a sample's neighbours lie in the 27 around its own.
-    const D3 lo{-1e9, -1e9, -1e9};
+    // The cubes' corner a radius below the samples' least coordinates: keys stay small (key_of packs
+    // three 20-bit indices), and a probe a cube below any sample stays at index >= 0.
+    D3 lo{INFINITY, INFINITY, INFINITY};
+    for (int64_t i = 0; i < S; ++i)
+        for (int k = 0; k < 3; ++k) lo[size_t(k)] = std::min(lo[size_t(k)], double(s.samples[size_t(9 * i + k)]) - radius);
     std::unordered_map<int64_t, std::vector<int64_t>> bins;
     for (int64_t i = 0; i < S; ++i) bins[key_of(&s.samples[size_t(9 * i)], lo, radius)].push_back(i);
     const double step = 2 * M_PI / double(NS), r2 = radius * radius;
