@@ -13,8 +13,8 @@ endif()
 # tests check what the shaders compute, and a first run spends most of its time
 # compiling ~900 pipelines. README command, same hour: cold with an AVX2 JIT 365 s
 # with the passes, 301 s without; warm and native 180 s and 236 s (docs/testing.md).
-# Mesa keys its disk cache on the flag, so the two never share code. CI's ASan and
-# TSan runs (not under ctest) keep the passes. A user's own setting is kept.
+# Mesa keys its disk cache on the flag, so the two never share code. CI's ASan run
+# (not under ctest) goes without them too; its TSan run keeps them. A user's own setting is kept.
 if(NOT DEFINED ENV{GALLIVM_PERF})
   set(ENV{GALLIVM_PERF} nopt)
 endif()
