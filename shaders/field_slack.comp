@@ -24,10 +24,13 @@ void main() {
         if (at > 0.0) {
             for (uint k = 0u; k < p.KN; ++k) {
                 const uint r = (s * p.KN + k) * 3u;
-                const float idx = nb[r];
-                if (idx < 0.0) break;  // a row's neighbours come first, then -1s
-                precise float pen = at * nb[r + 1u];
-                v = max(v, fin[base + uint(idx) * p.NS + (j + uint(nb[r + 2u])) % p.NS] - pen);
+                const float idx = nb[r], d2 = nb[r + 1u], off = nb[r + 2u];
+                // A row's neighbours come first, then -1s; an entry out of range (a user's table) ends it too.
+                if (!(idx >= 0.0 && idx < float(p.S) && off >= 0.0 && off < float(p.NS) && d2 >= 0.0)) break;
+                precise float pen = d2 > 0.0 ? at * d2 : 0.0;  // at = inf, d^2 = 0 would be NaN
+                // Clamped too: a driver may assume no NaN (no SignedZeroInfNanPreserve) and pass one above.
+                const uint s2 = min(uint(idx), p.S - 1u), o2 = min(uint(off), p.NS - 1u);
+                v = max(v, fin[base + s2 * p.NS + (j + o2) % p.NS] - pen);
             }
         }
         fout[e] = v;

@@ -63,7 +63,9 @@ void require_close(const HostTensor& got, const HostTensor& want, Tolerance tol,
     for (size_t i = 0; i < got.data.size(); ++i) {
         double a = got.data[i], b = want.data[i];
         if (a == b) continue;  // equal infinities match (their difference and 0 * inf are NaN)
-        double limit = tol.abs + tol.rel * std::abs(b);
+        // Unequal and either one infinite or NaN: no tolerance admits it (with tol.rel > 0 an infinite
+        // want would make the limit infinite and accept anything).
+        double limit = std::isfinite(a) && std::isfinite(b) ? tol.abs + tol.rel * std::abs(b) : -1.0;
         double err = std::abs(a - b);
         if (!(err <= limit)) ++bad;  // NaN counts as bad
         double excess = std::isnan(err) ? 1e30 : err - limit;

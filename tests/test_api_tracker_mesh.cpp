@@ -98,5 +98,9 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     refused(x, "window");
     x = o, x.render_cell_mm = 20;
     refused(x, "render_cell_mm");
+    x = o, x.odometry_mm = INFINITY;  // would turn field_slack's widths to 0 and the geometry's infinite
+    refused(x, "odometry noise finite");
+    x = o, x.odometry_deg = -1;
+    refused(x, "odometry noise finite and >= 0");
     CHECK(ctx.take_validation_messages().empty());
 }

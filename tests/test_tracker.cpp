@@ -302,14 +302,7 @@ TEST_CASE("the tracker's CPU reference follows the GPU tracker touch by touch", 
         // hypothesis's log evidence differs by up to ~2e-3 (K = 8 terms of magnitude up to 9),
         // so a probability agrees within 0.5 % of itself, or 1e-6 of the peak where it is tiny.
         const float peak = *std::max_element(b.begin(), b.end());
-        size_t bad = 0;
-        double worst = 0;
-        for (size_t h = 0; h < a.size(); ++h) {
-            bad += std::abs(a[h] - b[h]) > 1e-6f * peak + 5e-3f * std::abs(b[h]);
-            worst = std::max(worst, double(std::abs(a[h] - b[h])) / (1e-12 + std::abs(b[h])));
-        }
-        INFO("worst relative " << worst);
-        CHECK(bad == 0);
+        test::require_close(HostTensor({int64_t(a.size())}, a), HostTensor({int64_t(b.size())}, b), {1e-6 * peak, 5e-3}, "belief");
         CHECK(dist(gpu.estimate().contact, cpu.estimate().contact) < 1e-3);
     }
     CHECK(gpu.device_bytes() > cpu.surface().device_bytes());  // tables plus the step graphs' arenas

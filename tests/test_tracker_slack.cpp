@@ -7,6 +7,7 @@
 // its window (the prior's field widened too).
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
 #include <random>
 
@@ -60,16 +61,23 @@ TEST_CASE("with odometry noise the grid reads an earlier touch's field widened a
     const Rigid motion = track::compose(track::inverse(p0), p1);
     const std::vector<std::vector<float>> terms{random_field(H, 1), random_field(H, 2)};
 
-    // By hand: touch 0's field widened at one motion's widths, lever |inverse(motion).t|.
+    // By hand: touch 0's field widened at one motion's widths, lever |inverse(motion).t|. The widths as
+    // the tracker rounds them (bit equality below), checked against the closed form to 1e-6 of themselves
+    // (float rounding; a host that contracts the hand formula into FMA differs in the last bits).
     const Rigid back = track::inverse(motion);
     const double lever2 = back.t[0] * back.t[0] + back.t[1] * back.t[1] + back.t[2] * back.t[2];
     const double od = o.odometry_deg * M_PI / 180, sigma_t = std::sqrt(o.odometry_mm * o.odometry_mm + od * od * lever2);
+    const std::array<float, 2> w = track::slack_widths(back, 1, o);
+    CHECK(std::abs(w[0] - 0.5 / (sigma_t * sigma_t)) <= 1e-6 * w[0]);
+    CHECK(std::abs(w[1] - 0.5 / (od * od)) <= 1e-6 * w[1]);
+    CHECK(track::slack_widths(back, 4, o)[0] == Approx(w[0] / 4).epsilon(1e-6));  // variances add over motions
     Graph g;
-    g.output(ops::field_slack(g, g.input("f", {1, H}), g.input("nb", {s.n_samples(), 12, 3}), g.input("w", {1, 2}), NS), "out");
+    const int KN = track::kSlackNeighbours;
+    g.output(ops::field_slack(g, g.input("f", {1, H}), g.input("nb", {s.n_samples(), KN, 3}), g.input("w", {1, 2}), NS), "out");
     const TensorMap out = run_cpu(g, WeightStore{},
                                   {{"f", HostTensor({1, H}, terms[0])},
-                                   {"nb", track::slack_neighbours(s, 12, std::max(2 * s.spacing_mm, 4.0))},
-                                   {"w", HostTensor({1, 2}, {float(0.5 / (sigma_t * sigma_t)), float(0.5 / (od * od))})}});
+                                   {"nb", track::slack_neighbours(s, KN, track::slack_radius(s))},
+                                   {"w", HostTensor({1, 2}, {w[0], w[1]})}});
     const std::vector<std::vector<float>> widened{out.at("out").data, terms[1]};
     CHECK(widened[0] != terms[0]);
 
@@ -87,23 +95,37 @@ TEST_CASE("with odometry noise the grid reads an earlier touch's field widened a
 
 TEST_CASE("the slack's neighbours are the nearest samples on the same face, their spins keeping the heading", "[track]") {
     const track::Surface s = block_surface();
-    const double radius = std::max(2 * s.spacing_mm, 4.0);
-    const HostTensor nb = track::slack_neighbours(s, 12, radius);
+    const double radius = track::slack_radius(s);
+    const int KN = track::kSlackNeighbours;
+    const HostTensor nb = track::slack_neighbours(s, KN, radius);
     const int64_t S = s.n_samples(), NS = s.n_spin();
     const ops::pose::Grid grid = s.grid();
     int64_t rows = 0;
+    std::vector<double> want;
     for (int64_t i = 0; i < S; ++i) {
         const float* a = &s.samples[size_t(9 * i)];
-        double last = -1;
-        for (int64_t k = 0; k < 12; ++k) {
-            const float* r = &nb.data[size_t((i * 12 + k) * 3)];
-            if (r[0] < 0) break;
+        // The oracle: every sample, no buckets (a missed neighbour at a bucket's edge shows here).
+        want.clear();
+        for (int64_t j = 0; j < S; ++j) {
+            const float* b = &s.samples[size_t(9 * j)];
+            double d2 = 0, nn = 0;
+            for (int k = 0; k < 3; ++k) d2 += (double(a[k]) - b[k]) * (double(a[k]) - b[k]), nn += double(a[3 + k]) * b[3 + k];
+            if (j != i && d2 <= radius * radius && nn >= track::kSlackMinCos) want.push_back(d2);
+        }
+        std::sort(want.begin(), want.end());
+        want.resize(std::min(want.size(), size_t(KN)));
+        for (int64_t k = 0; k < KN; ++k) {
+            const float* r = &nb.data[size_t((i * KN + k) * 3)];
+            INFO("sample " << i << " neighbour " << k);
+            if (size_t(k) >= want.size()) {  // the row ends where the oracle's list does
+                CHECK(r[0] == -1.0f);
+                continue;
+            }
+            REQUIRE(r[0] >= 0);
             const int64_t j = int64_t(r[0]);
             const float* b = &s.samples[size_t(9 * j)];
             REQUIRE(j != i);
-            CHECK(r[1] >= last);  // nearest first
-            last = r[1];
-            CHECK(r[1] <= radius * radius * 1.0001);
+            CHECK(std::abs(r[1] - want[size_t(k)]) <= 1e-4 * (1 + want[size_t(k)]));  // the k-th nearest (float d^2)
             CHECK(a[3] * b[3] + a[4] * b[4] + a[5] * b[5] >= 0.7);
             // The offset spin's x axis at s' is within half a spin step of spin 0's at s (both in s''s plane).
             const ops::pose::Frame f0 = ops::pose::hypothesis_frame(grid, i * NS, 0), f1 = ops::pose::hypothesis_frame(grid, j * NS + int64_t(r[2]), 0);
@@ -132,13 +154,11 @@ TEST_CASE("the tracker's CPU reference follows the GPU tracker with odometry noi
         cpu.add_touch(m, term);
         INFO("touch " << i + 1);
         // As the GPU-against-reference test of test_tracker.cpp: the slack's max is exact on both
-        // sides, the evidence's exp and log are not correctly rounded on the GPU.
+        // sides, the evidence's exp and log are not correctly rounded on the GPU (the prior carries
+        // that error on; measured worst 7e-5 of itself by touch 5 on lavapipe, 70 times inside this bound).
         const std::vector<float>&a = gpu.belief(), &b = cpu.belief();
-        REQUIRE(a.size() == b.size());
         const float peak = *std::max_element(b.begin(), b.end());
-        size_t bad = 0;
-        for (size_t h = 0; h < a.size(); ++h) bad += std::abs(a[h] - b[h]) > 1e-6f * peak + 5e-3f * std::abs(b[h]);
-        CHECK(bad == 0);
+        test::require_close(HostTensor({int64_t(a.size())}, a), HostTensor({int64_t(b.size())}, b), {1e-6 * peak, 5e-3}, "belief");
     }
     test::require_no_validation_messages();
 }

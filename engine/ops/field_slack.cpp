@@ -1,8 +1,9 @@
 // field_slack: log fields over the filter's hypotheses [F, S * NS] widened by
-// odometry slack (docs/multitouch.md, "The grid's terms under odometry noise"): each
+// odometry slack (docs/multitouch.md, "Under odometry noise, the fields widened"): each
 // value becomes the best, within the neighbourhood, of the field less a Gaussian
 // log-prior of the offset. Inputs: fields [F, S * NS]; neighbours [S, KN, 3], per
-// sample its neighbours s' (as floats, -1 after the last), their squared distance
+// sample its neighbours s' (as floats, -1 after the last; an entry out of range
+// ends the row too), their squared distance
 // d^2 and the spin offset off (0..NS-1) that keeps a pose's heading from s to s';
 // widths [F, 2], per field a_t = 1 / (2 sigma_t^2) and a_r = 1 / (2 sigma_r^2)
 // (0: no slack of that kind). Param n_spin. Out[f, s NS + j] = max of in at (s, j),
@@ -61,8 +62,8 @@ void slack_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
                 if (at > 0)
                     for (int64_t k = 0; k < KN; ++k) {
                         const float* r = &nb[size_t((s * KN + k) * 3)];
-                        if (r[0] < 0) break;
-                        const float pen = at * r[1];
+                        if (!(r[0] >= 0 && r[0] < float(S) && r[2] >= 0 && r[2] < float(NS) && r[1] >= 0)) break;
+                        const float pen = r[1] > 0 ? at * r[1] : 0.0f;
                         v = std::max(v, x[int64_t(r[0]) * NS + (j + int64_t(r[2])) % NS] - pen);
                     }
                 fout[size_t(f * H + s * NS + j)] = v;

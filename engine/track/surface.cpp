@@ -15,10 +15,17 @@ namespace {
 
 using D3 = std::array<double, 3>;
 
+int64_t key_of_cell(int64_t x, int64_t y, int64_t z) { return (z * 1048576 + y) * 1048576 + x; }
+
+std::array<int64_t, 3> cell_of(const float* p, const D3& lo, double h) {
+    std::array<int64_t, 3> k;
+    for (int i = 0; i < 3; ++i) k[size_t(i)] = int64_t(std::floor((double(p[i]) - lo[size_t(i)]) / h));
+    return k;
+}
+
 int64_t key_of(const float* p, const D3& lo, double h) {
-    int64_t k[3];
-    for (int i = 0; i < 3; ++i) k[i] = int64_t(std::floor((double(p[i]) - lo[i]) / h));
-    return (k[2] * 1048576 + k[1]) * 1048576 + k[0];
+    const auto k = cell_of(p, lo, h);
+    return key_of_cell(k[0], k[1], k[2]);
 }
 
 // Interleaves the bits of a cube's indices (z-order): cubes near in space get near codes.
@@ -265,24 +272,30 @@ HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
     if (kn < 1) throw Error("slack_neighbours: kn must be >= 1, got " + std::to_string(kn));
     HostTensor nb({S, int64_t(kn), 3}, std::vector<float>(size_t(S * kn * 3), -1.0f));
     if (!(radius > 0) || S == 0) return nb;
-    // Bucket the samples in cubes of the radius: a sample's neighbours lie in the 27 around its own.
-    // The cubes' corner a radius below the samples' least coordinates: keys stay small (key_of packs
-    // three 20-bit indices), and a probe a cube below any sample stays at index >= 0.
-    D3 lo{INFINITY, INFINITY, INFINITY};
+    // Bucket the samples in cubes of at least the radius: a sample's neighbours lie in the 27 around its
+    // own. The cubes' corner one cube below the samples' least coordinates, and at most 2^19 cubes along
+    // the extent: every index and its +-1 stay within key_of's three 20-bit fields, whatever the radius.
+    D3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < S; ++i)
-        for (int k = 0; k < 3; ++k) lo[size_t(k)] = std::min(lo[size_t(k)], double(s.samples[size_t(9 * i + k)]) - radius);
+        for (int k = 0; k < 3; ++k) {
+            lo[size_t(k)] = std::min(lo[size_t(k)], double(s.samples[size_t(9 * i + k)]));
+            hi[size_t(k)] = std::max(hi[size_t(k)], double(s.samples[size_t(9 * i + k)]));
+        }
+    const double h = std::max({radius, (hi[0] - lo[0]) / 524288.0, (hi[1] - lo[1]) / 524288.0, (hi[2] - lo[2]) / 524288.0});
+    for (double& l : lo) l -= h;
     std::unordered_map<int64_t, std::vector<int64_t>> bins;
-    for (int64_t i = 0; i < S; ++i) bins[key_of(&s.samples[size_t(9 * i)], lo, radius)].push_back(i);
+    for (int64_t i = 0; i < S; ++i) bins[key_of(&s.samples[size_t(9 * i)], lo, h)].push_back(i);
     const double step = 2 * M_PI / double(NS), r2 = radius * radius;
     std::vector<std::pair<double, int64_t>> near;
     for (int64_t i = 0; i < S; ++i) {
         const float* a = &s.samples[size_t(9 * i)];
         near.clear();
-        for (int dz = -1; dz <= 1; ++dz)
-            for (int dy = -1; dy <= 1; ++dy)
-                for (int dx = -1; dx <= 1; ++dx) {
-                    const float q[3] = {float(a[0] + dx * radius), float(a[1] + dy * radius), float(a[2] + dz * radius)};
-                    auto it = bins.find(key_of(q, lo, radius));
+        // The 27 integer cells around a's own: a probe at a +- radius could round into a's cell again.
+        const auto c = cell_of(a, lo, h);
+        for (int64_t dz = -1; dz <= 1; ++dz)
+            for (int64_t dy = -1; dy <= 1; ++dy)
+                for (int64_t dx = -1; dx <= 1; ++dx) {
+                    auto it = bins.find(key_of_cell(c[0] + dx, c[1] + dy, c[2] + dz));
                     if (it == bins.end()) continue;
                     for (int64_t j : it->second) {
                         const float* b = &s.samples[size_t(9 * j)];

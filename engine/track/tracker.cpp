@@ -23,11 +23,6 @@ namespace {
 
 using P = ops::pose::V3;
 constexpr int64_t kMaxAnswers = 512;
-constexpr int kSlackNeighbours = 12;
-
-// field_slack's neighbourhood: two sample spacings, at least 4 mm (the candidates
-// protocol has no spacing; 0.5 mm and 0.5 degrees a motion reach ~1.5 mm by T = 8).
-double slack_radius(const Surface& s) { return std::max(2 * s.spacing_mm, 4.0); }
 bool slack_on(const FilterOptions& o) { return o.field_slack && (o.odometry_mm > 0 || o.odometry_deg > 0); }
 
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
@@ -47,8 +42,9 @@ Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options) : Tra
 
 void Tracker::check_options(const FilterOptions& opt_) {
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
+        !std::isfinite(opt_.odometry_mm) || !std::isfinite(opt_.odometry_deg) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
-        throw Error("filter options: widths must be positive, odometry noise >= 0, n_modes >= 1");
+        throw Error("filter options: widths must be positive, odometry noise finite and >= 0, n_modes >= 1");
     if (opt_.threads < 0 || opt_.threads > 256)
         throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
     if (!(opt_.refine_reach_mm >= 0))
@@ -382,6 +378,13 @@ std::vector<Rigid> window_in_current(const std::vector<Rigid>& motions) {
 
 }  // namespace
 
+double slack_radius(const Surface& s) { return std::max(2 * s.spacing_mm, 4.0); }
+
+std::array<float, 2> slack_widths(const Rigid& rel, int steps, const FilterOptions& o) {
+    const Slack sl = slack_of(rel, steps, o);
+    return {sl.sigma_t > 0 ? float(0.5 / (sl.sigma_t * sl.sigma_t)) : 0.0f, sl.sigma_r > 0 ? float(0.5 / (sl.sigma_r * sl.sigma_r)) : 0.0f};
+}
+
 void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
     const int64_t H = surface_.n_hypotheses();
     if (!term.empty() && int64_t(term.size()) != H)
@@ -413,16 +416,16 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
     // field_slack's widths: a_t = 1 / (2 sigma_t^2), a_r = 1 / (2 sigma_r^2) of each earlier field's
     // odometry slack; the current touch's own field has none (0).
     HostTensor widths({F, 2});
-    auto set_widths = [&](int64_t f, const Slack& sl) {
-        widths.data[size_t(2 * f)] = sl.sigma_t > 0 ? float(0.5 / (sl.sigma_t * sl.sigma_t)) : 0.0f;
-        widths.data[size_t(2 * f + 1)] = sl.sigma_r > 0 ? float(0.5 / (sl.sigma_r * sl.sigma_r)) : 0.0f;
+    auto set_widths = [&](int64_t f, const Rigid& rel, int steps) {
+        const std::array<float, 2> a = slack_widths(rel, steps, opt_);
+        widths.data[size_t(2 * f)] = a[0], widths.data[size_t(2 * f + 1)] = a[1];
     };
-    for (int64_t f = 0; f + 1 < n_term_fields; ++f) set_widths(f, slack_of(st.to_window[size_t(f)], int(m - 1 - f), opt_));
+    for (int64_t f = 0; f + 1 < n_term_fields; ++f) set_widths(f, st.to_window[size_t(f)], int(m - 1 - f));
     if (prior) {
         // The touch before the window: its belief read at the pose the motions lead back to (no geometry: its
         // belief holds it). The read is at the nearest hypothesis; the window's own geometry is exact.
         const Rigid back = compose(m > 1 ? st.to_window[0] : Rigid{}, inverse(*prior_motion));
-        set_widths(F - 1, slack_of(back, int(m), opt_));
+        set_widths(F - 1, back, int(m));
         term_row(&tr.data[size_t(16 * (K - 1))], back, int(m), opt_, int(F - 1), 1.0);
         tr.data[size_t(16 * (K - 1) + 12)] = 0;
         std::copy(prior->begin(), prior->end(), fields.data.begin() + (F - 1) * H);
@@ -431,7 +434,7 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
         if (terms[size_t(f)] && !terms[size_t(f)]->empty())
             for (int64_t h = 0; h < H; ++h)
                 fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
-    TensorMap in{{"terms", tr}, {"fields", fields}};
+    TensorMap in{{"terms", std::move(tr)}, {"fields", std::move(fields)}};
     if (slack_on(opt_) && F > 0) in.emplace("widths", std::move(widths));
     TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
     st.log = std::move(out.at("log").data);

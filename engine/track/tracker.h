@@ -87,6 +87,16 @@ struct FilterOptions {
     int threads = 0;
 };
 
+// field_slack's neighbourhood (FilterOptions::field_slack): the kSlackNeighbours nearest samples within
+// slack_radius, two sample spacings and at least 4 mm (the candidates protocol has no spacing; 0.5 mm and
+// 0.5 degrees a motion reach ~1.5 mm by T = 8).
+constexpr int kSlackNeighbours = 12;
+double slack_radius(const Surface& s);
+// field_slack's widths (a_t, a_r) = 1 / (2 sigma^2) for a field read `steps` noisy motions back over the
+// relative pose rel: sigma_t^2 = steps (odometry_mm^2 + odometry_rad^2 |rel.t|^2), sigma_r^2 = steps
+// odometry_rad^2; 0 where a width is 0 (that slack off).
+std::array<float, 2> slack_widths(const Rigid& rel, int steps, const FilterOptions& o);
+
 // A touch's own evidence (log) at an exact pose of that touch, asked of every refined mode
 // once its climb has ended and added to its fit where the refined modes share the grid's
 // mass: render-and-compare at the refined poses (engine/track/pose_shape.h), which the

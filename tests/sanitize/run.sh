@@ -31,7 +31,8 @@ fi
 status=0
 # shard BUILD-DIR TARGET SPEC: the test cases SPEC selects, dealt to one list per
 # process by their measured cost (durations.tsv beside this script: seconds, a tab,
-# the case's name, from a --durations run; an unlisted case counts 1 s), the
+# the case's name, from a --durations run; an unlisted case counts 1 s, none less than
+# 0.01 s so that every list gets a case), the
 # costliest first, each to the list with the least so far; each list a Catch input
 # file (-f: a name per line, quoted by Catch); prints the filters. Dealt in
 # declaration order instead, the two lists ended 2-2.5 minutes apart.
@@ -55,7 +56,7 @@ shard() {
   fi
   sed '/^$/d' "$names" |
     awk -F '\t' -v costs="$durations" 'FILENAME == costs { cost[$2] = $1; next }
-      { printf "%s\t%s\n", (($0 in cost) ? cost[$0] : 1), $0 }' "$durations" - |
+      { c = ($0 in cost) ? cost[$0] + 0 : 1; printf "%s\t%s\n", (c > 0.01 ? c : 0.01), $0 }' "$durations" - |
     sort -t "$(printf '\t')" -k1,1gr -k2,2 |
     awk -F '\t' -v n="$n" -v dir="$1" '{
       best = 0
