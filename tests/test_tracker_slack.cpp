@@ -74,17 +74,27 @@ TEST_CASE("with odometry noise the grid reads an earlier touch's field widened a
     Graph g;
     const int KN = track::kSlackNeighbours;
     g.output(ops::field_slack(g, g.input("f", {1, H}), g.input("nb", {s.n_samples(), KN, 3}), g.input("w", {1, 2}), NS), "out");
-    const TensorMap out = run_cpu(g, WeightStore{},
-                                  {{"f", HostTensor({1, H}, terms[0])},
-                                   {"nb", track::slack_neighbours(s, KN, track::slack_radius(s))},
-                                   {"w", HostTensor({1, 2}, {w[0], w[1]})}});
-    const std::vector<std::vector<float>> widened{out.at("out").data, terms[1]};
+    const HostTensor nb = track::slack_neighbours(s, KN, track::slack_radius(s));
+    auto widen = [&](const std::vector<float>& f, const std::array<float, 2>& wf) {
+        return run_cpu(g, WeightStore{}, {{"f", HostTensor({1, H}, f)}, {"nb", nb}, {"w", HostTensor({1, 2}, {wf[0], wf[1]})}}).at("out").data;
+    };
+    const std::vector<std::vector<float>> widened{widen(terms[0], w), terms[1]};
     CHECK(widened[0] != terms[0]);
 
     const track::Estimate a = with.evaluate_window({motion}, terms), b = without.evaluate_window({motion}, widened),
                           c = without.evaluate_window({motion}, terms);
     CHECK(a.sample_belief == b.sample_belief);
     CHECK(a.sample_belief != c.sample_belief);  // the slack changed what the grid believes
+
+    // Three touches: the oldest field is two noisy motions back, over the lever of its pose in the
+    // newest touch's frame; the middle one a motion back (the fields' order and each one's steps).
+    const float c2[6] = {28, 18, 12, 0, 0, 1};
+    const Rigid p2 = test::pose_at(c2, 1.6, 0.8), motion2 = track::compose(track::inverse(p1), p2);
+    const std::vector<std::vector<float>> terms3{terms[0], terms[1], random_field(H, 3)};
+    const std::vector<std::vector<float>> widened3{widen(terms3[0], track::slack_widths(track::inverse(track::compose(motion, motion2)), 2, o)),
+                                                   widen(terms3[1], track::slack_widths(track::inverse(motion2), 1, o)), terms3[2]};
+    CHECK(with.evaluate_window({motion, motion2}, terms3).sample_belief ==
+          without.evaluate_window({motion, motion2}, widened3).sample_belief);
 
     // Without noise the option changes nothing (the op is not in the graph).
     track::FilterOptions quiet = o, quiet_off = off;
