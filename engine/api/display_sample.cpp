@@ -4,6 +4,7 @@
 #include <unordered_map>
 
 #include "base/error.h"
+#include "engine/cell_key.h"
 
 namespace vtloc::api {
 
@@ -14,7 +15,6 @@ HostTensor display_sample(const io::TriangleMesh& mesh, int64_t n, const std::st
     // i.e. n ~ 0.7 A / r^2; 4x candidates gets close to that count.
     const double r = std::sqrt(0.7 * area / double(n)), r2 = r * r;
     HostTensor cand = io::sample_surface(mesh, 4 * n, io::kDefaultSampleSeed + 1, source);
-    auto key = [](int64_t x, int64_t y, int64_t z) { return ((x & 0x1FFFFF) << 42) | ((y & 0x1FFFFF) << 21) | (z & 0x1FFFFF); };
     std::unordered_map<int64_t, std::vector<int64_t>> grid;
     std::vector<float> kept;
     for (int64_t i = 0; i < cand.shape[0]; ++i) {
@@ -25,7 +25,7 @@ HostTensor display_sample(const io::TriangleMesh& mesh, int64_t n, const std::st
         for (int dx = -1; dx <= 1 && free; ++dx)
             for (int dy = -1; dy <= 1 && free; ++dy)
                 for (int dz = -1; dz <= 1 && free; ++dz) {
-                    auto it = grid.find(key(cx + dx, cy + dy, cz + dz));
+                    auto it = grid.find(cell_key(cx + dx, cy + dy, cz + dz));
                     if (it == grid.end()) continue;
                     for (int64_t j : it->second) {
                         const float* o = &kept[size_t(j) * 6];
@@ -38,7 +38,7 @@ HostTensor display_sample(const io::TriangleMesh& mesh, int64_t n, const std::st
                     }
                 }
         if (!free) continue;
-        grid[key(cx, cy, cz)].push_back(int64_t(kept.size() / 6));
+        grid[cell_key(cx, cy, cz)].push_back(int64_t(kept.size() / 6));
         kept.insert(kept.end(), p, p + 6);
     }
     const int64_t count = int64_t(kept.size() / 6);

@@ -6,6 +6,7 @@
 #include <unordered_map>
 
 #include "base/error.h"
+#include "engine/cell_key.h"
 #include "engine/ops/codebook_math.h"
 #include "engine/track/parallel.h"
 
@@ -15,8 +16,6 @@ namespace {
 
 using D3 = std::array<double, 3>;
 
-int64_t key_of_cell(int64_t x, int64_t y, int64_t z) { return (z * 1048576 + y) * 1048576 + x; }
-
 std::array<int64_t, 3> cell_of(const float* p, const D3& lo, double h) {
     std::array<int64_t, 3> k;
     for (int i = 0; i < 3; ++i) k[size_t(i)] = int64_t(std::floor((double(p[i]) - lo[size_t(i)]) / h));
@@ -25,7 +24,7 @@ std::array<int64_t, 3> cell_of(const float* p, const D3& lo, double h) {
 
 int64_t key_of(const float* p, const D3& lo, double h) {
     const auto k = cell_of(p, lo, h);
-    return key_of_cell(k[0], k[1], k[2]);
+    return cell_key(k[0], k[1], k[2]);
 }
 
 // Interleaves the bits of a cube's indices (z-order): cubes near in space get near codes.
@@ -273,8 +272,8 @@ HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
     HostTensor nb({S, int64_t(kn), 3}, std::vector<float>(size_t(S * kn * 3), -1.0f));
     if (!(radius > 0) || S == 0) return nb;
     // Bucket the samples in cubes of at least the radius: a sample's neighbours lie in the 27 around its
-    // own. The cubes' corner one cube below the samples' least coordinates, and at most 2^19 cubes along
-    // the extent: every index and its +-1 stay within key_of's three 20-bit fields, whatever the radius.
+    // own. At most 2^19 cubes along the extent, whatever the radius: indices stay far from int64's
+    // limits and from cell_key's 21 bits (where distinct cubes would share buckets).
     D3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < S; ++i)
         for (int k = 0; k < 3; ++k) {
@@ -295,7 +294,7 @@ HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
         for (int64_t dz = -1; dz <= 1; ++dz)
             for (int64_t dy = -1; dy <= 1; ++dy)
                 for (int64_t dx = -1; dx <= 1; ++dx) {
-                    auto it = bins.find(key_of_cell(c[0] + dx, c[1] + dy, c[2] + dz));
+                    auto it = bins.find(cell_key(c[0] + dx, c[1] + dy, c[2] + dz));
                     if (it == bins.end()) continue;
                     for (int64_t j : it->second) {
                         const float* b = &s.samples[size_t(9 * j)];
