@@ -14,7 +14,8 @@ void main() {
     const uint H = p.S * p.NS, total = p.F * H, stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
     for (uint e = gl_GlobalInvocationID.x; e < total; e += stride) {
         const uint f = e / H, h = e - f * H, s = h / p.NS, j = h - s * p.NS, base = f * H;
-        const float at = width[2u * f], ar = width[2u * f + 1u];
+        // Below the smallest normal float: 0, as the CPU reference takes them (a device may flush subnormals).
+        const float at = width[2u * f] >= 1.17549435e-38 ? width[2u * f] : 0.0, ar = width[2u * f + 1u] >= 1.17549435e-38 ? width[2u * f + 1u] : 0.0;
         float v = fin[e];
         if (ar > 0.0 && p.NS > 1u) {
             precise float pen = ar * p.step2;
@@ -26,8 +27,8 @@ void main() {
                 const uint r = (s * p.KN + k) * 3u;
                 const float idx = nb[r], d2 = nb[r + 1u], off = nb[r + 2u];
                 // A row's neighbours come first, then -1s; an entry out of range (a user's table) ends it too.
-                if (!(idx >= 0.0 && idx < float(p.S) && off >= 0.0 && off < float(p.NS) && d2 >= 0.0)) break;
-                precise float pen = d2 > 0.0 ? at * d2 : 0.0;  // at = inf, d^2 = 0 would be NaN
+                if (!(idx >= 0.0 && idx < 4294967296.0 && uint(idx) < p.S && off >= 0.0 && off < float(p.NS) && d2 >= 0.0)) break;
+                precise float pen = d2 >= 1.17549435e-38 ? at * d2 : 0.0;  // at = inf, d^2 = 0 would be NaN
                 // Clamped too: a driver may assume no NaN (no SignedZeroInfNanPreserve) and pass one above.
                 const uint s2 = min(uint(idx), p.S - 1u), o2 = min(uint(off), p.NS - 1u);
                 v = max(v, fin[base + s2 * p.NS + (j + o2) % p.NS] - pen);

@@ -102,5 +102,7 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     refused(x, "odometry noise finite");
     x = o, x.odometry_deg = -1;
     refused(x, "odometry noise finite and >= 0");
+    x = o, x.odometry_mm = 1e7;  // finite, but its squares reach float's limits in the widths
+    refused(x, "at most 1e6");
     CHECK(ctx.take_validation_messages().empty());
 }

@@ -91,6 +91,15 @@ TEST_CASE("field_slack ends a row at an entry out of range, and an infinite widt
     const TensorMap got = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
                                                     {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
     for (int64_t j = 0; j < NS; ++j) CHECK(got.at("out").data[size_t(j)] == fields.data[size_t(NS + j)]);
+    // Subnormals count as 0 on both sides (a GPU may flush them): a d^2 of 1e-40 costs nothing at
+    // a_t = inf, and a width of 1e-40 is off (the field unchanged, though its neighbour is better).
+    nb.data[1] = 1e-40f;
+    const TensorMap sub = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
+                                                    {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
+    for (int64_t j = 0; j < NS; ++j) CHECK(sub.at("out").data[size_t(j)] == fields.data[size_t(NS + j)]);
+    const TensorMap off = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
+                                                    {{"fields", fields}, {"nb", nb}, {"w", HostTensor({1, 2}, {1e-40f, 1e-40f})}}, {0, 0});
+    for (int64_t h = 0; h < H; ++h) CHECK(off.at("out").data[size_t(h)] == fields.data[size_t(h)]);
 }
 
 TEST_CASE("field_slack refuses bad shapes by name", "[pose][field_slack]") {

@@ -63,7 +63,7 @@ TEST_CASE("with odometry noise the grid reads an earlier touch's field widened a
 
     // By hand: touch 0's field widened at one motion's widths, lever |inverse(motion).t|. The widths as
     // the tracker rounds them (bit equality below), checked against the closed form to 1e-6 of themselves
-    // (float rounding; a host that contracts the hand formula into FMA differs in the last bits).
+    // (the float rounding of widths computed in double).
     const Rigid back = track::inverse(motion);
     const double lever2 = back.t[0] * back.t[0] + back.t[1] * back.t[1] + back.t[2] * back.t[2];
     const double od = o.odometry_deg * M_PI / 180, sigma_t = std::sqrt(o.odometry_mm * o.odometry_mm + od * od * lever2);
@@ -145,6 +145,7 @@ TEST_CASE("the slack's neighbours are the nearest samples on the same face, thei
         }
     }
     CHECK(rows > 6 * S);  // most samples have neighbours on this block
+    CHECK_THROWS_WITH(track::slack_neighbours(s, KN, INFINITY), Catch::Contains("radius must be finite"));
 }
 
 TEST_CASE("the tracker's CPU reference follows the GPU tracker with odometry noise and field slack", "[track]") {

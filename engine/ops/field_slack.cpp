@@ -9,6 +9,7 @@
 // (0: no slack of that kind). Param n_spin. Out[f, s NS + j] = max of in at (s, j),
 // at (s, j +- 1) less a_r step^2 (step = 2 pi / NS), and at (s', j + off) less a_t d^2.
 // -> shaders/field_slack.comp
+#include <cfloat>
 #include <cmath>
 
 #include "base/error.h"
@@ -49,7 +50,8 @@ void slack_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
     const std::vector<float>&fin = in[0]->data, &nb = in[1]->data, &w = in[2]->data;
     std::vector<float>& fout = out[0]->data;
     for (int64_t f = 0; f < F; ++f) {
-        const float at = w[size_t(2 * f)], ar = w[size_t(2 * f + 1)];
+        // Widths and distances below FLT_MIN count as 0: a GPU may flush subnormals (lavapipe does).
+        const float at = w[size_t(2 * f)] >= FLT_MIN ? w[size_t(2 * f)] : 0.0f, ar = w[size_t(2 * f + 1)] >= FLT_MIN ? w[size_t(2 * f + 1)] : 0.0f;
         const float* x = &fin[size_t(f * H)];
         for (int64_t s = 0; s < S; ++s)
             for (int64_t j = 0; j < NS; ++j) {
@@ -62,8 +64,8 @@ void slack_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
                 if (at > 0)
                     for (int64_t k = 0; k < KN; ++k) {
                         const float* r = &nb[size_t((s * KN + k) * 3)];
-                        if (!(r[0] >= 0 && r[0] < float(S) && r[2] >= 0 && r[2] < float(NS) && r[1] >= 0)) break;
-                        const float pen = r[1] > 0 ? at * r[1] : 0.0f;
+                        if (!(r[0] >= 0 && r[0] < 4294967296.0f && int64_t(r[0]) < S && r[2] >= 0 && r[2] < float(NS) && r[1] >= 0)) break;
+                        const float pen = r[1] >= FLT_MIN ? at * r[1] : 0.0f;
                         v = std::max(v, x[int64_t(r[0]) * NS + (j + int64_t(r[2])) % NS] - pen);
                     }
                 fout[size_t(f * H + s * NS + j)] = v;

@@ -269,10 +269,11 @@ namespace vtloc::track {
 HostTensor slack_neighbours(const Surface& s, int kn, double radius) {
     const int64_t S = s.n_samples(), NS = s.n_spin();
     if (kn < 1) throw Error("slack_neighbours: kn must be >= 1, got " + std::to_string(kn));
+    if (!std::isfinite(radius)) throw Error("slack_neighbours: the radius must be finite, got " + std::to_string(radius));
     HostTensor nb({S, int64_t(kn), 3}, std::vector<float>(size_t(S * kn * 3), -1.0f));
     if (!(radius > 0) || S == 0) return nb;
     // Bucket the samples in cubes of at least the radius: a sample's neighbours lie in the 27 around its
-    // own. At most 2^19 cubes along the extent, whatever the radius: indices stay far from int64's
+    // own. At most 2^19 cubes along the extent, whatever the (finite) radius: indices stay far from int64's
     // limits and from cell_key's 21 bits (where distinct cubes would share buckets).
     D3 lo{INFINITY, INFINITY, INFINITY}, hi{-INFINITY, -INFINITY, -INFINITY};
     for (int64_t i = 0; i < S; ++i)

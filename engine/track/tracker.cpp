@@ -42,9 +42,9 @@ Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options) : Tra
 
 void Tracker::check_options(const FilterOptions& opt_) {
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
-        !std::isfinite(opt_.odometry_mm) || !std::isfinite(opt_.odometry_deg) ||
+        !(opt_.odometry_mm <= 1e6) || !(opt_.odometry_deg <= 1e6) || !std::isfinite(opt_.sigma_d_mm) || !std::isfinite(opt_.sigma_a_deg) ||
         !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
-        throw Error("filter options: widths must be positive, odometry noise finite and >= 0, n_modes >= 1");
+        throw Error("filter options: widths must be positive and finite, odometry noise finite and >= 0 (at most 1e6), n_modes >= 1");
     if (opt_.threads < 0 || opt_.threads > 256)
         throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
     if (!(opt_.refine_reach_mm >= 0))
