@@ -72,8 +72,11 @@ TEST_CASE("field_slack ends a row at an entry out of range, and an infinite widt
     // A table from a user may hold anything: an entry out of range (index >= S, a NaN, a spin offset
     // outside 0..NS-1, a negative d^2) must end its row as -1 does, never read past the field.
     const int64_t S = 2, NS = 3, KN = 2, H = S * NS;
-    HostTensor fields({1, H}, {-9.0f, -9.0f, -9.0f, 0.0f, -1.0f, -2.0f});
-    HostTensor w({1, 2}, {INFINITY, 0.0f});
+    const HostTensor fields({1, H}, {-9.0f, -9.0f, -9.0f, 0.0f, -1.0f, -2.0f}), inf_width({1, 2}, {INFINITY, 0.0f});
+    const auto run = [&](const HostTensor& nb, const HostTensor& w) {
+        return test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{}, {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0})
+            .at("out").data;
+    };
     const float bad[][3] = {{2, 1, 0}, {NAN, 1, 0}, {1, 1, 3}, {1, 1, -1}, {1, -1, 0}, {1e9f, 1, 0}};
     for (const auto& b : bad) {
         INFO("entry " << b[0] << " " << b[1] << " " << b[2]);
@@ -81,25 +84,21 @@ TEST_CASE("field_slack ends a row at an entry out of range, and an infinite widt
         for (int i = 0; i < 3; ++i) nb.data[size_t(i)] = b[i];   // sample 0: the bad entry first,
         const float after[3] = {1, 0, 0};                        // then a good one it hides
         for (int i = 0; i < 3; ++i) nb.data[size_t(3 + i)] = after[i];
-        const TensorMap got = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
-                                                        {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
-        for (int64_t h = 0; h < H; ++h) CHECK(got.at("out").data[size_t(h)] == fields.data[size_t(h)]);
+        const std::vector<float> got = run(nb, inf_width);
+        for (int64_t h = 0; h < H; ++h) CHECK(got[size_t(h)] == fields.data[size_t(h)]);
     }
     // The good entry alone: sample 1 at d^2 = 0 with a_t = inf takes sample 1's values at no cost (not NaN).
     HostTensor nb({S, KN, 3}, std::vector<float>(size_t(S * KN * 3), -1.0f));
     nb.data[0] = 1, nb.data[1] = 0, nb.data[2] = 0;
-    const TensorMap got = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
-                                                    {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
-    for (int64_t j = 0; j < NS; ++j) CHECK(got.at("out").data[size_t(j)] == fields.data[size_t(NS + j)]);
+    const std::vector<float> got = run(nb, inf_width);
+    for (int64_t j = 0; j < NS; ++j) CHECK(got[size_t(j)] == fields.data[size_t(NS + j)]);
     // Subnormals count as 0 on both sides (a GPU may flush them): a d^2 of 1e-40 costs nothing at
     // a_t = inf, and a width of 1e-40 is off (the field unchanged, though its neighbour is better).
     nb.data[1] = 1e-40f;
-    const TensorMap sub = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
-                                                    {{"fields", fields}, {"nb", nb}, {"w", w}}, {0, 0});
-    for (int64_t j = 0; j < NS; ++j) CHECK(sub.at("out").data[size_t(j)] == fields.data[size_t(NS + j)]);
-    const TensorMap off = test::run_gpu_and_compare(slack_graph(1, S, KN, NS), WeightStore{},
-                                                    {{"fields", fields}, {"nb", nb}, {"w", HostTensor({1, 2}, {1e-40f, 1e-40f})}}, {0, 0});
-    for (int64_t h = 0; h < H; ++h) CHECK(off.at("out").data[size_t(h)] == fields.data[size_t(h)]);
+    const std::vector<float> sub = run(nb, inf_width);
+    for (int64_t j = 0; j < NS; ++j) CHECK(sub[size_t(j)] == fields.data[size_t(NS + j)]);
+    const std::vector<float> off = run(nb, HostTensor({1, 2}, {1e-40f, 1e-40f}));
+    for (int64_t h = 0; h < H; ++h) CHECK(off[size_t(h)] == fields.data[size_t(h)]);
 }
 
 TEST_CASE("field_slack refuses bad shapes by name", "[pose][field_slack]") {

@@ -103,9 +103,8 @@ TEST_CASE("with odometry noise the grid reads an earlier touch's field widened a
     CHECK(q1.evaluate_window({motion}, terms).sample_belief == q2.evaluate_window({motion}, terms).sample_belief);
 }
 
-TEST_CASE("the slack's neighbours are the nearest samples on the same face, their spins keeping the heading", "[track]") {
-    const track::Surface s = block_surface();
-    const double radius = track::slack_radius(s);
+// Checks slack_neighbours(s, radius) row by row against a brute-force search; returns the entries found.
+static int64_t check_neighbours(const track::Surface& s, double radius) {
     const int KN = track::kSlackNeighbours;
     const HostTensor nb = track::slack_neighbours(s, KN, radius);
     const int64_t S = s.n_samples(), NS = s.n_spin();
@@ -144,8 +143,18 @@ TEST_CASE("the slack's neighbours are the nearest samples on the same face, thei
             ++rows;
         }
     }
-    CHECK(rows > 6 * S);  // most samples have neighbours on this block
-    CHECK_THROWS_WITH(track::slack_neighbours(s, KN, INFINITY), Catch::Contains("radius must be finite"));
+    return rows;
+}
+
+TEST_CASE("the slack's neighbours are the nearest samples on the same face, their spins keeping the heading", "[track]") {
+    const track::Surface s = block_surface();
+    CHECK(check_neighbours(s, track::slack_radius(s)) > 6 * s.n_samples());  // most samples have neighbours on this block
+    // One sample 10 km away: the buckets grow to extent / 2^19 (about 19 mm), wider than the radius,
+    // and the 27 cells around a sample must still hold all its neighbours.
+    track::Surface far = s;
+    far.samples[0] += 1e7f;
+    CHECK(check_neighbours(far, track::slack_radius(s)) > 6 * s.n_samples());
+    CHECK_THROWS_WITH(track::slack_neighbours(s, track::kSlackNeighbours, INFINITY), Catch::Contains("radius must be finite"));
 }
 
 TEST_CASE("the tracker's CPU reference follows the GPU tracker with odometry noise and field slack", "[track]") {

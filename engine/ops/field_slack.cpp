@@ -28,6 +28,9 @@ float step2_of(int64_t NS) {
     return step * step;
 }
 
+// Below the smallest normal float: 0, on both paths (a GPU may flush subnormals; lavapipe does).
+float normal_or_zero(float x) { return x >= FLT_MIN ? x : 0.0f; }
+
 std::vector<TensorDesc> slack_infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 3, 3);
     expect_f32(in);
@@ -50,8 +53,7 @@ void slack_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
     const std::vector<float>&fin = in[0]->data, &nb = in[1]->data, &w = in[2]->data;
     std::vector<float>& fout = out[0]->data;
     for (int64_t f = 0; f < F; ++f) {
-        // Widths and distances below FLT_MIN count as 0: a GPU may flush subnormals (lavapipe does).
-        const float at = w[size_t(2 * f)] >= FLT_MIN ? w[size_t(2 * f)] : 0.0f, ar = w[size_t(2 * f + 1)] >= FLT_MIN ? w[size_t(2 * f + 1)] : 0.0f;
+        const float at = normal_or_zero(w[size_t(2 * f)]), ar = normal_or_zero(w[size_t(2 * f + 1)]);
         const float* x = &fin[size_t(f * H)];
         for (int64_t s = 0; s < S; ++s)
             for (int64_t j = 0; j < NS; ++j) {
@@ -65,7 +67,7 @@ void slack_cpu(const std::vector<const HostTensor*>& in, const std::vector<HostT
                     for (int64_t k = 0; k < KN; ++k) {
                         const float* r = &nb[size_t((s * KN + k) * 3)];
                         if (!(r[0] >= 0 && r[0] < 4294967296.0f && int64_t(r[0]) < S && r[2] >= 0 && r[2] < float(NS) && r[1] >= 0)) break;
-                        const float pen = r[1] >= FLT_MIN ? at * r[1] : 0.0f;
+                        const float pen = r[1] >= FLT_MIN ? at * r[1] : 0.0f;  // at = inf, d^2 = 0 would be NaN
                         v = std::max(v, x[int64_t(r[0]) * NS + (j + int64_t(r[2])) % NS] - pen);
                     }
                 fout[size_t(f * H + s * NS + j)] = v;

@@ -29,9 +29,9 @@ int64_t key_of(const float* p, const D3& lo, double h) {
 
 // Interleaves the bits of a cube's indices (z-order): cubes near in space get near codes.
 uint64_t morton(const float* p, const D3& lo, double h) {
-    uint64_t code = 0;
-    uint64_t k[3];
-    for (int i = 0; i < 3; ++i) k[i] = uint64_t(std::max(0.0, std::floor((double(p[i]) - lo[i]) / h)));
+    const auto c = cell_of(p, lo, h);
+    uint64_t code = 0, k[3];
+    for (int i = 0; i < 3; ++i) k[i] = uint64_t(std::max<int64_t>(0, c[size_t(i)]));
     for (int bit = 0; bit < 21; ++bit)
         for (int i = 0; i < 3; ++i) code |= ((k[i] >> bit) & 1u) << (3 * bit + i);
     return code;
