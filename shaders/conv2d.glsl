@@ -50,6 +50,10 @@ layout(constant_id = 16) const bool YVEC4 = false;
 // op's scratch, [KSPLIT][N][Cout][OH][OW]) with no epilogue; conv2d_split_sum.comp
 // adds the parts. A small output of a long reduction then fills a big GPU.
 layout(constant_id = 17) const uint KSPLIT = 1;
+// Accumulators of a block row taken together through a step's fma chains (the row's
+// last group may be smaller): each weight loaded feeds CG of them. Each accumulator's
+// chain keeps its order, so every CG gives the same bits.
+layout(constant_id = 18) const uint CG = 1;
 
 const uint IR = (R - 1) * SH + KHB;  // input window rows per iteration
 const uint IC = (C - 1) * SW + KW;   // input window columns
@@ -154,16 +158,21 @@ void main() {
                 }
             }
         }
-        // One accumulator at a time through all taps of the step: it stays in a
-        // register for the whole chain instead of being reloaded per tap.
+        // CG neighbouring accumulators of a row at a time through all taps of the
+        // step: they stay in registers for the whole chain.
         [[unroll]] for (uint m = 0; m < TM; ++m)
             [[unroll]] for (uint r = 0; r < R; ++r)
-                [[unroll]] for (uint c = 0; c < C; ++c) {
-                    float s = acc[(m * R + r) * C + c];
+                [[unroll]] for (uint c0 = 0; c0 < C; c0 += CG) {
+                    const uint G = min(CG, C - c0);
+                    float s[CG];
+                    [[unroll]] for (uint g = 0; g < G; ++g) s[g] = acc[(m * R + r) * C + c0 + g];
                     [[unroll]] for (uint ky = 0; ky < KHB; ++ky)
-                        [[unroll]] for (uint kx = 0; kx < KW; ++kx)
-                            s = fma(w[(ky * KW + kx) * TM / 4 + m / 4][m % 4], xin[(r * SH + ky) * IC + c * SW + kx], s);
-                    acc[(m * R + r) * C + c] = s;
+                        [[unroll]] for (uint kx = 0; kx < KW; ++kx) {
+                            const float wv = w[(ky * KW + kx) * TM / 4 + m / 4][m % 4];
+                            [[unroll]] for (uint g = 0; g < G; ++g)
+                                s[g] = fma(wv, xin[(r * SH + ky) * IC + (c0 + g) * SW + kx], s[g]);
+                        }
+                    [[unroll]] for (uint g = 0; g < G; ++g) acc[(m * R + r) * C + c0 + g] = s[g];
                 }
       }
 

@@ -27,11 +27,14 @@ struct ConvCase {
     uint32_t act;
     uint32_t layout;
     int64_t split = 0;  // > 0: the input channels summed in that many parts (a big GPU's choice, forced here)
+    int64_t c_group = 0;  // > 0: accumulators a group in the fma chains (an AVX2 host's choice, forced here)
 };
 
 // Every case on every binding path (texel buffers and the storage-buffer fallback
 // that runs when a tensor exceeds the device's maxTexelBufferElements).
-void check_conv(const ConvCase& c, uint32_t seed) {
+// Returns each path's output.
+std::vector<HostTensor> check_conv(const ConvCase& c, uint32_t seed) {
+  std::vector<HostTensor> outs;
   for (ops::BufferPath path : ops::kBufferPaths) {
     const int64_t cin = c.x[1];
     const int64_t oh = (c.x[2] + 2 * c.ph - c.kh) / c.sh + 1, ow = (c.x[3] + 2 * c.pw - c.kw) / c.sw + 1;
@@ -48,11 +51,11 @@ void check_conv(const ConvCase& c, uint32_t seed) {
     const Shape rs{c.x[0], c.cout, oh, ow};
     const int res = c.residual ? g.input("res", rs) : -1;
     if (c.residual) inputs["res"] = random_tensor(rs, seed + 3);
-    g.output(ops::conv2d(g, x, wv, bv, res, ops::Conv2d{c.sh, c.sw, c.ph, c.pw, c.layout, ops::Act(c.act), 0.1, path, c.split}),
+    g.output(ops::conv2d(g, x, wv, bv, res, ops::Conv2d{c.sh, c.sw, c.ph, c.pw, c.layout, ops::Act(c.act), 0.1, path, c.split, c.c_group}),
              "y");
     INFO("conv x" << shape_str(c.x) << " -> " << c.cout << " k" << c.kh << "x" << c.kw << " s" << c.sh << "," << c.sw
                   << " p" << c.ph << "," << c.pw << " layout " << c.layout << " bias " << c.bias << " res "
-                  << c.residual << " split " << c.split << " " << ops::path_name(path));
+                  << c.residual << " split " << c.split << " c_group " << c.c_group << " " << ops::path_name(path));
     TensorMap got = run_gpu_and_compare(g, ws, inputs);
     const TensorMap cpu_out = run_cpu(g, ws, inputs);
     const HostTensor& want = cpu_out.at("y");
@@ -61,7 +64,9 @@ void check_conv(const ConvCase& c, uint32_t seed) {
         worst = std::max(worst, double(std::abs(got.at("y").data[i] - want.data[i])));
     INFO("max |gpu - cpu| " << worst);
     CHECK(worst < 1e-4);  // the default tolerance's absolute part; shown with -s
+    outs.push_back(got.at("y"));
   }
+  return outs;
 }
 
 }  // namespace
@@ -112,6 +117,31 @@ TEST_CASE("conv2d summing its input channels in parts matches the CPU reference"
     CHECK(log[1].shader == "conv2d_split_sum");
     CHECK(ex.memory_plan().scratch_bytes == 4u * 8 * 6 * 6 * 4);
     test::require_no_validation_messages();
+}
+
+TEST_CASE("conv2d's accumulators in groups give the same bits as one at a time", "[op][conv2d]") {
+    using ops::kConvIHWO, ops::kConvOIHW;
+    // Each accumulator's fma chain keeps its order whatever the group, so every group size
+    // must give the bits of 1. On lavapipe the first case's block rows are 7 columns wide
+    // (groups of 4 and 3), the stem's 2 (one group, smaller than 4). Two cases only: each
+    // group size is a pipeline of its own per path, ~0.3 s to compile cold.
+    const ConvCase cases[] = {
+        {{1, 6, 14, 14}, 8, 3, 3, 1, 1, 1, 1, true, true, ops::kActRelu, kConvIHWO},
+        {{1, 3, 37, 53}, 10, 7, 7, 2, 2, 3, 3, true, false, ops::kActRelu, kConvOIHW},  // the stem: strided, KHB 1
+    };
+    uint32_t seed = 41;
+    for (ConvCase c : cases) {
+        c.c_group = 1;
+        const std::vector<HostTensor> one = check_conv(c, seed);
+        c.c_group = 4;
+        const std::vector<HostTensor> grouped = check_conv(c, seed);
+        REQUIRE(grouped.size() == one.size());
+        for (size_t i = 0; i < one.size(); ++i) {
+            INFO("path " << i);
+            CHECK(grouped[i].data == one[i].data);
+        }
+        ++seed;
+    }
 }
 
 TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
@@ -171,6 +201,15 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
     CHECK(ops::choose_conv_tiles(big, stem, true, true).ksplit == 1);
     big.compute_units = 8;  // a Jetson-class GPU: fewer parts
     CHECK(ops::choose_conv_tiles(big, layer4, true, true).ksplit < t4.ksplit);
+    // Accumulators in groups of 4 only where lavapipe's JIT has 16 vector registers (AVX2);
+    // a GPU's compiler schedules its own.
+    cpu.host_vector_registers = 16;
+    CHECK(ops::choose_conv_tiles(cpu, layer4, true, true).c_group == 4);
+    CHECK(ops::choose_conv_tiles(cpu, stem, true, true).c_group == 4);
+    cpu.host_vector_registers = 32;
+    CHECK(ops::choose_conv_tiles(cpu, layer4, true, true).c_group == 1);
+    big.host_vector_registers = 0;
+    CHECK(ops::choose_conv_tiles(big, layer4, true, true).c_group == 1);
 }
 
 TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {

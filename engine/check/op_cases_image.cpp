@@ -22,6 +22,7 @@ struct Conv {
     uint32_t act, layout;
     const char* why;
     int64_t split = 0;  // > 0: the input channels summed in that many parts (a big GPU's choice, forced)
+    int64_t c_group = 0;  // > 0: accumulators a group in the fma chains (an AVX2 host's choice, forced)
 };
 
 OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
@@ -31,6 +32,7 @@ OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
                            std::to_string(k.kh) + "x" + std::to_string(k.kw) + " s" + std::to_string(k.sh) +
                            (k.layout == ops::kConvIHWO ? " IHWO" : " OIHW") +
                            (k.split > 0 ? " in " + std::to_string(k.split) + " parts" : std::string()) +
+                           (k.c_group > 0 ? " accumulators in " + std::to_string(k.c_group) + "s" : std::string()) +
                            " " + ops::path_name(path));
     const float bound = 1.0f / std::sqrt(float(cin * k.kh * k.kw));
     HostTensor w = random_tensor({k.cout, cin, k.kh, k.kw}, seed + 1, -bound, bound);
@@ -39,7 +41,7 @@ OpCase conv_case(const Conv& k, ops::BufferPath path, uint32_t seed) {
     const int b = k.bias ? c.weight("b", random_tensor({k.cout}, seed + 2, -0.5f, 0.5f)) : -1;
     const int res = k.residual ? c.input("res", random_tensor({k.x[0], k.cout, oh, ow}, seed + 3)) : -1;
     c.output(ops::conv2d(c.g, x, wv, b, res,
-                         ops::Conv2d{k.sh, k.sw, k.ph, k.pw, k.layout, ops::Act(k.act), 0.1, path, k.split}),
+                         ops::Conv2d{k.sh, k.sw, k.ph, k.pw, k.layout, ops::Act(k.act), 0.1, path, k.split, k.c_group}),
              "y");
     return c;
 }
@@ -60,6 +62,8 @@ std::vector<OpCase> image_cases(const rt::DeviceInfo&) {
         // checks the parts and their sum: an uneven last part, then bias, residual, activation.
         {{1, 19, 6, 5}, 12, 3, 3, 1, 1, 1, 1, true, true, kActRelu, kConvIHWO, "split reduction", 3},
         {{2, 16, 7, 4}, 8, 3, 3, 2, 2, 1, 1, false, false, kActLeaky, kConvOIHW, "split reduction, no epilogue", 2},
+        // What an AVX2 host's lavapipe runs (ConvTiles::c_group), forced here for every device.
+        {{1, 6, 14, 14}, 8, 3, 3, 1, 1, 1, 1, true, true, kActRelu, kConvIHWO, "accumulators in groups", 0, 4},
     };
     uint32_t seed = 1;
     for (const Conv& k : convs) {  // every case on every binding path

@@ -53,6 +53,7 @@ int conv2d(Graph& g, int x, int w, int bias, int residual, const Conv2d& c, cons
              {"slope", c.slope}, {"residual", flag(residual >= 0)},
              {"texel", flag(c.path == BufferPath::Texel)}};
     if (c.split > 0) p.set("split", d(c.split));
+    if (c.c_group > 0) p.set("c_group", d(c.c_group));
     return g.add1("conv2d", in, p, name);
 }
 

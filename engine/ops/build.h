@@ -46,6 +46,7 @@ struct Conv2d {
     double slope = 0.01;
     BufferPath path = BufferPath::Texel;
     int64_t split = 0;  // > 0: sum the input channels in that many parts (tests; 0: the device's choice)
+    int64_t c_group = 0;  // > 0: accumulators a group in the fma chains (tests; 0: the device's choice)
 };
 // bias, residual: -1 for none.
 int conv2d(Graph& g, int x, int w, int bias, int residual, const Conv2d& c, const std::string& name = "");

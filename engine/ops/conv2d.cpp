@@ -7,7 +7,8 @@
 // texel (1: read inputs as texel buffers where the device allows; 0: storage
 // buffers, the fallback, forced for tests), split (0: the device's choice of
 // how many parts the input channels are summed in, see ConvTiles::ksplit; > 0:
-// that many, forced for tests).
+// that many, forced for tests), c_group (0: the device's choice of ConvTiles::c_group;
+// > 0: that many, at most 8, forced for tests).
 #include "engine/ops/conv2d.h"
 
 #include <algorithm>
@@ -152,6 +153,9 @@ ConvPlan conv_plan(const rt::DeviceInfo& d, const std::vector<Shape>& in, const 
     // "split" (tests): that many parts on any device; 0: the device's choice.
     const int64_t split = int_param(params, "split", "split", 0, 0);
     if (split > 0) pl.t.ksplit = uint32_t(std::min<int64_t>(split, pl.s.cin));
+    // "c_group" (tests): accumulators a group on any device; 0: the device's choice.
+    const int64_t cg = int_param(params, "c_group", "c_group", 0, 0);
+    if (cg > 0) pl.t.c_group = uint32_t(std::min<int64_t>(cg, 8));
     pl.cper = uint32_t((pl.s.cin + pl.t.ksplit - 1) / pl.t.ksplit);
     pl.t.ksplit = uint32_t((pl.s.cin + pl.cper - 1) / pl.cper);  // no empty part
     return pl;
@@ -207,7 +211,7 @@ void gpu(const GpuOpArgs& a) {
     rt::PipelineDesc desc{texel ? "conv2d" : "conv2d_ssbo", 9, sizeof(push),
                           {t.local, t.tm, t.r, t.c, uint32_t(s.kh), uint32_t(s.kw), uint32_t(s.sh), uint32_t(s.sw),
                            wmode, split ? 0u : c.act, epi_bias ? 1u : 0u, epi_res ? 1u : 0u, s.cout < int64_t(t.tm) ? 1u : 0u,
-                           xvec4 ? 1u : 0u, t.kh_block, t.x_shift, yvec4 ? 1u : 0u, t.ksplit},
+                           xvec4 ? 1u : 0u, t.kh_block, t.x_shift, yvec4 ? 1u : 0u, t.ksplit, t.c_group},
                           texel ? 0x15fu : 0u};
     const rt::Pipeline& pipe = a.ctx.pipelines().get(desc);
     const uint64_t groups = (uint64_t(push.lanes) + t.local - 1) / t.local;
@@ -237,7 +241,7 @@ void gpu(const GpuOpArgs& a) {
 
 const OpDef op_conv2d{"conv2d", infer, cpu, gpu, 0,
                       {"stride", "stride_h", "stride_w", "pad", "pad_h", "pad_w", "weight_layout", "act", "slope", "residual", "texel",
-                       "split"},
+                       "split", "c_group"},
                       nullptr, scratch_bytes};
 
 }  // namespace vtloc::ops
