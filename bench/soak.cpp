@@ -4,8 +4,10 @@
 // case; the bytes malloc holds, host RSS and the context's GPU memory are sampled
 // after every run and must stay flat after the warm-up (each case's first run
 // builds its graph).
-//   vtloc-soak [--model M] [--runs 10000] [--warmup W] [--json FILE]
+//   vtloc-soak [--model M] [--runs 10000] [--warmup W] [--cases N] [--json FILE]
 //              [--png FILE] [--max-heap-drift-mib 0.25] [--max-drift-mib 8]
+// --cases N runs the first N of the mixed cases only (the leak check's own test:
+// a first run compiles each case's shaders, most of a short run on a cold machine).
 //   vtloc-soak --plot-from SOAK.json --png FILE    (redraw a run's picture)
 // The warm-up (default: the larger of one pass over the cases and a tenth of
 // the runs) is left out of the flatness checks: glibc's heap takes a few
@@ -212,7 +214,7 @@ Fit line_fit(const std::vector<double>& y, size_t from) {
 }
 
 int usage() {
-    std::fprintf(stderr, "usage: vtloc-soak [--model M] [--runs N] [--warmup W] [--json FILE] [--png FILE] [--max-heap-drift-mib X] [--max-drift-mib X]\n");
+    std::fprintf(stderr, "usage: vtloc-soak [--model M] [--runs N] [--warmup W] [--cases N] [--json FILE] [--png FILE] [--max-heap-drift-mib X] [--max-drift-mib X]\n");
     return 2;
 }
 
@@ -224,7 +226,7 @@ int main(int argc, char** argv) {
 #endif
     std::string model_path;  // default: the shipped model, found as the CLI finds it
     std::string json_path, png_path, plot_from;
-    long runs = 10000, warmup_arg = -1, leak_bytes = 0;
+    long runs = 10000, warmup_arg = -1, leak_bytes = 0, n_cases = 0;
     double max_drift = 8.0, max_heap_drift = 0.25;
     for (int i = 1; i < argc; ++i) {
         std::string a = argv[i];
@@ -232,6 +234,7 @@ int main(int argc, char** argv) {
         if (a == "--model") model_path = argv[++i];
         else if (a == "--runs") runs = std::atol(argv[++i]);
         else if (a == "--warmup") warmup_arg = std::atol(argv[++i]);
+        else if (a == "--cases") n_cases = std::atol(argv[++i]);
         else if (a == "--json") json_path = argv[++i];
         else if (a == "--png") png_path = argv[++i];
         else if (a == "--plot-from") plot_from = argv[++i];
@@ -240,7 +243,7 @@ int main(int argc, char** argv) {
         else if (a == "--leak-bytes-per-run") leak_bytes = std::atol(argv[++i]);  // the check's own test
         else return usage();
     }
-    if (runs < 1) return usage();
+    if (runs < 1 || n_cases < 0) return usage();
     try {
         if (!plot_from.empty()) {
             std::ifstream in(plot_from);
@@ -267,7 +270,8 @@ int main(int argc, char** argv) {
         to.hypotheses = 20000;
         for (const api::Object& o : objects) trackers.emplace_back(ctx, o.cloud(), to);
         const std::vector<api::TactileImage> images = image_set(ex);
-        const std::vector<Case> cases = make_cases(int(objects.size()), int(images.size()));
+        std::vector<Case> cases = make_cases(int(objects.size()), int(images.size()));
+        if (n_cases > 0 && size_t(n_cases) < cases.size()) cases.resize(size_t(n_cases));
 
         std::vector<uint64_t> first(cases.size(), 0);
         std::vector<double> rss, heap, gpu;
