@@ -201,11 +201,12 @@ TEST_CASE("conv2d tiles fit the device and its limits", "[op][conv2d]") {
     CHECK(ops::choose_conv_tiles(big, stem, true, true).ksplit == 1);
     big.compute_units = 8;  // a Jetson-class GPU: fewer parts
     CHECK(ops::choose_conv_tiles(big, layer4, true, true).ksplit < t4.ksplit);
-    // Accumulators in groups of 4 only where lavapipe's JIT has 16 vector registers (AVX2);
-    // a GPU's compiler schedules its own.
+    // Accumulators in groups of 4 only where lavapipe's JIT has 16 vector registers (AVX2),
+    // on big convolutions; a GPU's compiler schedules its own.
     cpu.host_vector_registers = 16;
     CHECK(ops::choose_conv_tiles(cpu, layer4, true, true).c_group == 4);
     CHECK(ops::choose_conv_tiles(cpu, stem, true, true).c_group == 4);
+    CHECK(ops::choose_conv_tiles(cpu, {1, 64, 56, 56, 128, 1, 1, 2, 2, 28, 28, 0}, true, true).c_group == 1);  // 6.4e6 MACs
     cpu.host_vector_registers = 32;
     CHECK(ops::choose_conv_tiles(cpu, layer4, true, true).c_group == 1);
     big.host_vector_registers = 0;

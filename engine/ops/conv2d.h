@@ -33,8 +33,9 @@ struct ConvTiles {
     // gives every compute unit of a big GPU workgroups.
     uint32_t ksplit = 1;
     // Accumulators of a block row taken together through a step's fma chains: each
-    // weight loaded then feeds c_group of them. 4 where lavapipe's JIT has 16 vector
-    // registers (AVX2: one accumulator at a time, each fma had both operands to load), else 1.
+    // weight loaded then feeds c_group of them. 4 for big convolutions where lavapipe's JIT
+    // has 16 vector registers (AVX2: one accumulator at a time, each fma had both operands
+    // to load), else 1.
     uint32_t c_group = 1;
     uint32_t accumulators() const { return tm * r * c; }
 };

@@ -79,9 +79,10 @@ ConvTiles choose_conv_tiles(const rt::DeviceInfo& d, const ConvShape& s, bool ve
     }
     // Measured on ResNet-18 at 224 (docs/performance.md, "Accumulators in groups"): with the
     // JIT held to AVX2 its nodes took ~7 % less time in groups of 4; with AVX-512's 32
-    // registers, no clear difference either way.
+    // registers, no clear difference either way. Grouped code compiles slower, so only big
+    // convolutions (as for max_acc) earn it.
     const uint32_t regs = d.host_vector_registers;
-    best.c_group = regs > 0 && regs <= 16 ? 4u : 1u;
+    best.c_group = regs > 0 && regs <= 16 && macs >= 5e7 ? 4u : 1u;
     return best;
 }
 
