@@ -221,6 +221,7 @@ TEST_CASE("conv2d names bad shapes and parameters", "[op][conv2d]") {
     int w = g.weight("w", {4, 3, 3, 3});
     // Raw Params on purpose: the shorthand "stride" with a bad value must be refused.
     REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w}, {{"stride", 0}}), Catch::Contains("stride_h must be an integer >= 1"));
+    REQUIRE_THROWS_WITH(g.add1("conv2d", {x, w}, {{"c_group", 9}}, "c9"), Catch::Contains("c9") && Catch::Contains("c_group must be an integer from 0 to 8, got 9"));
     REQUIRE_THROWS_WITH(ops::conv2d(g, x, g.weight("w9", {4, 3, 9, 9}), -1, -1, {}),
                         Catch::Contains("kernel 9x9 is larger than the padded input 8x8"));
     REQUIRE_THROWS_WITH(ops::conv2d(g, x, w, g.weight("b", {5}), -1, {}), Catch::Contains("bias [5]"));

@@ -8,7 +8,7 @@
 // buffers, the fallback, forced for tests), split (0: the device's choice of
 // how many parts the input channels are summed in, see ConvTiles::ksplit; > 0:
 // that many, forced for tests), c_group (0: the device's choice of ConvTiles::c_group;
-// > 0: that many, at most 8, forced for tests).
+// 1 to 8: that many, forced for tests).
 #include "engine/ops/conv2d.h"
 
 #include <algorithm>
@@ -53,6 +53,8 @@ ConvParams conv_params(const Params& p) {
                  p.get("residual", 0) != 0};
     if (c.layout > kConvIHWO) throw Error("weight_layout must be 0 (OIHW) or 1 (IHWO)");
     if (c.act > kActSigmoid) throw Error("unknown activation code " + std::to_string(c.act));
+    const int64_t cg = int_param(p, "c_group", "c_group", 0, 0);
+    if (cg > 8) throw Error("c_group must be an integer from 0 to 8, got " + std::to_string(cg));
     return c;
 }
 
@@ -155,7 +157,7 @@ ConvPlan conv_plan(const rt::DeviceInfo& d, const std::vector<Shape>& in, const 
     if (split > 0) pl.t.ksplit = uint32_t(std::min<int64_t>(split, pl.s.cin));
     // "c_group" (tests): accumulators a group on any device; 0: the device's choice.
     const int64_t cg = int_param(params, "c_group", "c_group", 0, 0);
-    if (cg > 0) pl.t.c_group = uint32_t(std::min<int64_t>(cg, 8));
+    if (cg > 0) pl.t.c_group = uint32_t(cg);  // at most 8 (conv_params)
     pl.cper = uint32_t((pl.s.cin + pl.t.ksplit - 1) / pl.t.ksplit);
     pl.t.ksplit = uint32_t((pl.s.cin + pl.cper - 1) / pl.cper);  // no empty part
     return pl;
