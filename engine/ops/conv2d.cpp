@@ -36,6 +36,7 @@ struct ConvParams {
     uint32_t layout, act;
     float slope;
     bool residual;
+    uint32_t c_group = 0;  // tests: 1-8 forces ConvTiles::c_group; 0: the device's choice
 };
 
 int64_t int_param(const Params& p, const std::string& name, const std::string& fallback, double dflt, int64_t lo) {
@@ -55,6 +56,7 @@ ConvParams conv_params(const Params& p) {
     if (c.act > kActSigmoid) throw Error("unknown activation code " + std::to_string(c.act));
     const int64_t cg = int_param(p, "c_group", "c_group", 0, 0);
     if (cg > 8) throw Error("c_group must be an integer from 0 to 8, got " + std::to_string(cg));
+    c.c_group = uint32_t(cg);
     return c;
 }
 
@@ -155,9 +157,7 @@ ConvPlan conv_plan(const rt::DeviceInfo& d, const std::vector<Shape>& in, const 
     // "split" (tests): that many parts on any device; 0: the device's choice.
     const int64_t split = int_param(params, "split", "split", 0, 0);
     if (split > 0) pl.t.ksplit = uint32_t(std::min<int64_t>(split, pl.s.cin));
-    // "c_group" (tests): accumulators a group on any device; 0: the device's choice.
-    const int64_t cg = int_param(params, "c_group", "c_group", 0, 0);
-    if (cg > 0) pl.t.c_group = uint32_t(cg);  // at most 8 (conv_params)
+    if (pl.c.c_group > 0) pl.t.c_group = pl.c.c_group;  // "c_group" (tests): that many on any device
     pl.cper = uint32_t((pl.s.cin + pl.t.ksplit - 1) / pl.t.ksplit);
     pl.t.ksplit = uint32_t((pl.s.cin + pl.cper - 1) / pl.cper);  // no empty part
     return pl;
