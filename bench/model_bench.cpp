@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
+#include <functional>
 #include <map>
 #include <unistd.h>
 
@@ -244,6 +245,32 @@ json point_sweep(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOpt
     return rows;
 }
 
+// End to end under each of the executor's node orders (engine/executor.h
+// Schedule), in turns so that drift on a shared machine falls on all of them;
+// with the barriers each recording has. The runner is left on the default.
+json schedules(VtlocRunner& r, const std::function<void()>& once, const ModelBenchOptions& opt) {
+    const Schedule all[] = {Schedule::Serial, Schedule::Steps, Schedule::Late};
+    std::map<std::string, std::vector<double>> t;
+    std::map<std::string, uint32_t> barriers;
+    try {
+        for (int round = 0; round < 3; ++round)
+            for (Schedule s : all) {
+                r.set_schedule(s);
+                std::vector<double> v = time_ms(once, round == 0 ? 2 : 1, std::max(1, opt.reps / 2));
+                t[schedule_name(s)].insert(t[schedule_name(s)].end(), v.begin(), v.end());
+                barriers[schedule_name(s)] = r.last_barriers();
+            }
+    } catch (...) {
+        r.set_schedule(Schedule::Steps);
+        throw;
+    }
+    r.set_schedule(Schedule::Steps);
+    json out = json::object();
+    for (Schedule s : all)
+        out[schedule_name(s)] = {{"end_to_end_ms", stats_json(t[schedule_name(s)])}, {"barriers", barriers[schedule_name(s)]}};
+    return out;
+}
+
 // Progress on stderr for people watching a long run; silent when stderr is
 // not a terminal (scripts and the smoke test see no stray lines).
 void progress(const std::string& what) {
@@ -314,6 +341,8 @@ json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchO
     // End to end again, after everything above: on a fresh NVIDIA machine the runs just
     // after the first one were 4x slower in some processes (docs/performance.md, "Real GPU").
     if (r.on_gpu()) {
+        progress("end to end by schedule");
+        out["schedules"] = schedules(r, once, opt);
         out["end_to_end_late_ms"] = stats_json(time_ms(once, 1, opt.reps));
         // After every shape above: the weights are held once, whatever the shape count.
         const VtlocRunner::AllMemory all = r.all_memory();

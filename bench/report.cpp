@@ -26,6 +26,10 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
     std::fprintf(f, "  first run (graph build, upload%s): %.0f ms\n", name == "gpu" ? ", shader compile" : "",
                  b["first_run_ms"].get<double>());
     stats_line(f, "end to end (wall, one touch)", b["end_to_end_ms"]);
+    if (b.contains("schedules"))
+        for (const auto& [name, sc] : b["schedules"].items())
+            stats_line(f, ("end to end, " + name + " (" + std::to_string(sc["barriers"].get<uint32_t>()) + " barriers)").c_str(),
+                       sc["end_to_end_ms"]);
     if (b.contains("end_to_end_late_ms")) stats_line(f, "end to end again, after the rest", b["end_to_end_late_ms"]);
     stats_line(f, "touch on a cached object (wall)", b["cached_touch_ms"]);
     if (name == "gpu") {
@@ -111,6 +115,16 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
             }
             std::fprintf(f, "    wave %4d  %-16s workgroup %4u  %.4f ms\n", r["wave"].get<int>(),
                          r.value("shader", std::string("?")).c_str(), r.value("workgroup", 0u), med(r["ms"]));
+        }
+    }
+    if (b.contains("fps_variants")) {
+        std::fprintf(f, "\n  FPS by workgroup size (GPU timestamps; threads 0 = the default's choice)\n");
+        for (const json& r : b["fps_variants"]["rows"]) {
+            std::fprintf(f, "    %5lld -> %4lld points, threads %4lld", r["points"].get<long long>(), r["npoint"].get<long long>(),
+                         r["threads"].get<long long>());
+            if (r.contains("refused")) std::fprintf(f, "  refused: %s\n", r["refused"].get<std::string>().c_str());
+            else std::fprintf(f, "  %-13s workgroup %4u  %.4f ms\n", r.value("shader", std::string("?")).c_str(),
+                              r.value("workgroup", 0u), med(r["ms"]));
         }
     }
     if (b.contains("retrieval_split")) {

@@ -135,15 +135,20 @@ std::map<int, HostTensor> run_cpu_values(const Graph& g, const WeightStore& weig
     return out;
 }
 
-MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share) {
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share,
+                       const std::vector<int>& step) {
+    if (!step.empty() && step.size() != order.size())
+        throw Error("plan_memory: " + std::to_string(step.size()) + " steps for " + std::to_string(order.size()) +
+                    " nodes");
     const size_t nv = g.values().size();
     std::vector<int> first(nv, INT_MAX), last(nv, -2);
     for (size_t i = 0; i < nv; ++i)
         if (g.values()[i].kind == ValueKind::Input) first[i] = last[i] = -1;
     for (size_t pos = 0; pos < order.size(); ++pos) {
         const Node& n = g.nodes()[size_t(order[pos])];
-        for (int id : n.outputs) first[size_t(id)] = last[size_t(id)] = int(pos);
-        for (int id : n.inputs) last[size_t(id)] = std::max(last[size_t(id)], int(pos));
+        const int t = step.empty() ? int(pos) : step[pos];
+        for (int id : n.outputs) first[size_t(id)] = last[size_t(id)] = t;
+        for (int id : n.inputs) last[size_t(id)] = std::max(last[size_t(id)], t);
     }
     for (auto& [name, id] : g.outputs()) last[size_t(id)] = INT_MAX;
 
@@ -180,19 +185,23 @@ MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t a
     return plan;
 }
 
+const char* schedule_name(Schedule s) {
+    return s == Schedule::Steps ? "steps" : s == Schedule::Late ? "late" : "serial";
+}
+
 GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights, bool profile,
                          bool keep_all)
     : GpuExecutor(ctx, g, weights, std::make_shared<ResidentWeights>(ctx), profile, keep_all) {}
 
 GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights,
-                         std::shared_ptr<ResidentWeights> resident, bool profile, bool keep_all)
-    : ctx_(ctx), graph_(g), order_(graph_.topo_order()), resident_(std::move(resident)) {
+                         std::shared_ptr<ResidentWeights> resident, bool profile, bool keep_all, Schedule schedule)
+    : ctx_(ctx), graph_(g), resident_(std::move(resident)) {
     const uint64_t align = ctx_.info().tensor_alignment();
     seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
 
     const size_t mark = resident_->batches();
     try {
-        build(weights, align, keep_all);
+        build(weights, align, keep_all, profile ? Schedule::Serial : schedule);
     } catch (...) {
         // What this build made is freed by the members' own destructors; the
         // weights it alone uploaded go back too.
@@ -202,28 +211,50 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
     }
 }
 
-void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_all) {
+void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_all, Schedule schedule) {
     resident_->ensure(graph_, weights);
     std::set<std::string> read;
     for (const Value& v : graph_.values())
         if (v.kind == ValueKind::Weight && read.insert(v.name).second) weight_bytes_ += resident_->view(v.name).size;
 
-    // Activations: one arena, reused across values with disjoint lifetimes.
-    plan_ = plan_memory(graph_, order_, align, !keep_all);
-    arena_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Device);
-    std::vector<uint64_t> scratch(graph_.nodes().size(), 0);
-    for (int ni : order_) {
-        const Node& n = graph_.nodes()[size_t(ni)];
+    std::vector<uint64_t> scratch(graph_.nodes().size(), 0), scratch_at(graph_.nodes().size(), 0);
+    for (size_t ni = 0; ni < graph_.nodes().size(); ++ni) {
+        const Node& n = graph_.nodes()[ni];
         const OpDef& op = find_op(n.op);
         if (!op.scratch_bytes) continue;
         std::vector<Shape> shapes;
         for (int id : n.inputs) shapes.push_back(graph_.value(id).shape);
         try {
-            scratch[size_t(ni)] = op.scratch_bytes(ctx_.info(), shapes, n.params);
+            scratch[ni] = op.scratch_bytes(ctx_.info(), shapes, n.params);
         } catch (const Error& e) {
             throw Error("node '" + n.name + "' (" + n.op + "): " + e.what());
         }
-        plan_.scratch_bytes = std::max(plan_.scratch_bytes, scratch[size_t(ni)]);
+    }
+    if (schedule == Schedule::Serial) {
+        order_ = graph_.topo_order();
+        for (size_t i = 0; i < order_.size(); ++i) step_.push_back(int(i));
+    } else {
+        order_ = graph_.stepped_order(&step_, schedule == Schedule::Late);
+        for (size_t b = 0, e = 0; b < order_.size(); b = e) {  // a step's scratch users first
+            while (e < order_.size() && step_[e] == step_[b]) ++e;
+            std::stable_partition(order_.begin() + long(b), order_.begin() + long(e),
+                                  [&](int n) { return scratch[size_t(n)] > 0; });
+        }
+    }
+
+    // Activations: one arena, reused across values with disjoint lifetimes.
+    plan_ = plan_memory(graph_, order_, align, !keep_all, step_);
+    arena_ = rt::Buffer(ctx_, plan_.arena_bytes, rt::MemoryKind::Device);
+    // Scratch: a step's nodes side by side (they may run at once), steps
+    // reusing the same bytes (a barrier lies between them).
+    uint64_t step_bytes = 0;
+    for (size_t pos = 0; pos < order_.size(); ++pos) {
+        if (pos > 0 && step_[pos] != step_[pos - 1]) step_bytes = 0;
+        const size_t ni = size_t(order_[pos]);
+        if (!scratch[ni]) continue;
+        scratch_at[ni] = step_bytes;
+        step_bytes += (scratch[ni] + align - 1) / align * align;
+        plan_.scratch_bytes = std::max(plan_.scratch_bytes, step_bytes);
     }
     if (plan_.scratch_bytes) scratch_ = rt::Buffer(ctx_, plan_.scratch_bytes, rt::MemoryKind::Device);
 
@@ -256,7 +287,9 @@ void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_al
         for (int id : n.outputs) out.push_back({view_of(id), graph_.value(id).shape});
         seq_->begin_node(n.name);
         try {
-            const rt::BufferView sv = scratch[size_t(ni)] ? rt::BufferView{scratch_.handle(), 0, scratch[size_t(ni)]} : rt::BufferView{};
+            const rt::BufferView sv = scratch[size_t(ni)]
+                                          ? rt::BufferView{scratch_.handle(), scratch_at[size_t(ni)], scratch[size_t(ni)]}
+                                          : rt::BufferView{};
             find_op(n.op).gpu(GpuOpArgs{ctx_, *seq_, in, out, n.params, sv});
         } catch (const Error& e) {
             throw Error("node '" + n.name + "' (" + n.op + "): " + e.what());

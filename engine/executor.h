@@ -45,10 +45,23 @@ struct MemoryPlan {
     std::vector<int64_t> offset;  // per value; -1 for weights
     uint64_t arena_bytes = 0;     // size of the arena
     uint64_t total_bytes = 0;     // what one buffer per tensor would take
-    uint64_t scratch_bytes = 0;   // GpuExecutor: the nodes' scratch (OpDef::scratch_bytes), one buffer for all
+    uint64_t scratch_bytes = 0;   // GpuExecutor: the nodes' scratch (OpDef::scratch_bytes), one buffer for
+                                  // all, a step's nodes side by side in it
 };
 // share = false gives every value bytes of its own (GpuExecutor's keep_all).
-MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share = true);
+// With `step` (Graph::stepped_order's), lifetimes count in steps: values alive
+// in one step never share bytes, as its nodes may run at once.
+MemoryPlan plan_memory(const Graph& g, const std::vector<int>& order, uint64_t alignment, bool share = true,
+                       const std::vector<int>& step = {});
+
+// How a GpuExecutor orders the graph's nodes. Steps (the default) and Late:
+// Graph::stepped_order's, early or late; within a step the nodes that ask for
+// scratch come first (they write it and read it back: the barrier inside them
+// then waits for them alone). Serial: topo_order, barriers wherever a node reads
+// its predecessors' outputs. A profiled executor always runs Serial, so that each
+// node's timestamps time it alone.
+enum class Schedule { Steps, Late, Serial };
+const char* schedule_name(Schedule s);
 
 class GpuExecutor {
 public:
@@ -61,7 +74,8 @@ public:
     // The same, reading its weights from (and adding missing ones to) a
     // model's resident set, shared with the model's other executors.
     GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& weights,
-                std::shared_ptr<ResidentWeights> resident, bool profile = false, bool keep_all = false);
+                std::shared_ptr<ResidentWeights> resident, bool profile = false, bool keep_all = false,
+                Schedule schedule = Schedule::Steps);
     ~GpuExecutor();
 
     TensorMap run(const TensorMap& inputs);
@@ -77,11 +91,11 @@ public:
 private:
     rt::BufferView view_of(int value) const;
     // Uploads missing weights, plans and allocates the arena, records the graph.
-    void build(const WeightStore& weights, uint64_t align, bool keep_all);
+    void build(const WeightStore& weights, uint64_t align, bool keep_all, Schedule schedule);
 
     rt::Context& ctx_;
     Graph graph_;
-    std::vector<int> order_;
+    std::vector<int> order_, step_;  // the schedule's order, and each position's step
     MemoryPlan plan_;
     std::shared_ptr<ResidentWeights> resident_;
     uint64_t weight_bytes_ = 0;

@@ -106,4 +106,59 @@ std::vector<int> Graph::topo_order() const {
     return order;
 }
 
+std::vector<int> Graph::stepped_order(std::vector<int>* step, bool late) const {
+    // Kahn's algorithm again, but a node that reads a value written in the
+    // current step waits for the next one while any other ready node can go
+    // now; lowest index first among those that can.
+    const std::vector<int> producer = producers();
+    std::vector<int> missing(nodes_.size(), 0), step_of(nodes_.size(), -1);
+    std::vector<std::vector<int>> consumers(nodes_.size());
+    for (size_t i = 0; i < nodes_.size(); ++i)
+        for (int in : nodes_[i].inputs)
+            if (int p = producer[size_t(in)]; p >= 0) {
+                ++missing[i];
+                consumers[size_t(p)].push_back(int(i));
+            }
+    std::vector<int> order, ready;
+    for (size_t i = 0; i < nodes_.size(); ++i)
+        if (!missing[i]) ready.push_back(int(i));
+    int current = 0;
+    auto free_now = [&](int n) {
+        for (int in : nodes_[size_t(n)].inputs)
+            if (int p = producer[size_t(in)]; p >= 0 && step_of[size_t(p)] == current) return false;
+        return true;
+    };
+    while (!ready.empty()) {
+        int pick = -1;
+        for (int n : ready)
+            if ((pick < 0 || n < pick) && free_now(n)) pick = n;
+        if (pick < 0) {  // every ready node reads this step's outputs: a barrier
+            ++current;
+            pick = *std::min_element(ready.begin(), ready.end());
+        }
+        ready.erase(std::find(ready.begin(), ready.end(), pick));
+        step_of[size_t(pick)] = current;
+        order.push_back(pick);
+        for (int c : consumers[size_t(pick)])
+            if (--missing[size_t(c)] == 0) ready.push_back(c);
+    }
+    if (order.size() != nodes_.size()) throw Error("graph has a cycle");
+    if (late)  // readers first: each node one step before its earliest reader, or in the last step
+        for (auto it = order.rbegin(); it != order.rend(); ++it) {
+            int s = current;
+            for (int c : consumers[size_t(*it)]) s = std::min(s, step_of[size_t(c)] - 1);
+            step_of[size_t(*it)] = s;
+        }
+    std::vector<int> rank(nodes_.size());
+    for (size_t i = 0; i < order.size(); ++i) rank[size_t(order[i])] = int(i);
+    std::stable_sort(order.begin(), order.end(), [&](int a, int b) {
+        return step_of[size_t(a)] != step_of[size_t(b)] ? step_of[size_t(a)] < step_of[size_t(b)] : rank[size_t(a)] < rank[size_t(b)];
+    });
+    if (step) {
+        step->clear();
+        for (int n : order) step->push_back(step_of[size_t(n)]);
+    }
+    return order;
+}
+
 }  // namespace vtloc

@@ -70,6 +70,14 @@ public:
     std::vector<int> producers() const;
     // Node indices such that every node comes after the producers of its inputs.
     std::vector<int> topo_order() const;
+    // A topological order in steps: a step's nodes read nothing another node of
+    // the same step writes, so a GPU may run them at once and one barrier
+    // between steps orders them (independent branches, e.g. the tactile and
+    // point encoders or a multi-scale layer's scales, share their barriers).
+    // step[i] is the step of order[i], non-decreasing from 0. late: the same
+    // number of steps, each node in the last step its readers allow (a side
+    // branch then runs beside the main chain's later, longer nodes).
+    std::vector<int> stepped_order(std::vector<int>* step, bool late = false) const;
 
 private:
     int new_value(const std::string& name, Shape shape, ValueKind kind, ElemType type = ElemType::F32);

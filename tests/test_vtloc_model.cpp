@@ -170,6 +170,26 @@ TEST_CASE("the GPU and the CPU reference backends agree on the whole model", "[m
     test::require_no_validation_messages();
 }
 
+TEST_CASE("the tiny model gives the same bits in every schedule", "[model]") {
+    GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
+    VtlocRunner runner(c.weights, &test::gpu());
+    runner.set_schedule(Schedule::Serial);
+    const TouchResult ref = runner.localize_once(c.image, c.cloud, &c.candidates);
+    const uint32_t serial_barriers = runner.last_barriers();
+    for (Schedule s : {Schedule::Steps, Schedule::Late}) {
+        INFO(schedule_name(s));
+        runner.set_schedule(s);
+        const TouchResult got = runner.localize_once(c.image, c.cloud, &c.candidates);
+        CHECK(runner.last_barriers() < serial_barriers);
+        for (auto& [name, t] : ref.tensors) {
+            INFO(name);
+            REQUIRE(got.tensors.count(name));
+            CHECK(got.tensors.at(name).data == t.data);
+        }
+    }
+    test::require_no_validation_messages();
+}
+
 TEST_CASE("bad inputs to the model are named", "[model]") {
     GoldenCase c = load_case(test::goldens_dir(), "vtloc-tiny");
     VtlocRunner runner(c.weights, &test::gpu());

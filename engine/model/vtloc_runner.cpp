@@ -47,7 +47,8 @@ TensorMap VtlocRunner::run(const VtlocGraphSpec& spec_in, const TensorMap& input
     VtlocGraphSpec spec = spec_in;
     spec.ilu_stepped = ilu_stepped_ && spec.image_height > 0 && spec.max_iters > 0;
     spec.retrieval_apart = retrieval_apart_;
-    return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : "") + (retrieval_apart_ ? "/apart" : ""),
+    return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : "") + (retrieval_apart_ ? "/apart" : "") +
+                         "/" + schedule_name(schedule_),
                      [&] { return build_vtloc_graph(config_, weights_, spec); }, inputs);
 }
 
@@ -58,7 +59,7 @@ TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Gra
         fresh->graph = build();
         if (gpu_) {
             if (!resident_) resident_ = std::make_shared<ResidentWeights>(*gpu_);
-            fresh->gpu = std::make_unique<GpuExecutor>(*gpu_, fresh->graph, weights_, resident_, profile_);
+            fresh->gpu = std::make_unique<GpuExecutor>(*gpu_, fresh->graph, weights_, resident_, profile_, false, schedule_);
         }
         c = std::move(fresh);
     }
@@ -85,6 +86,8 @@ std::vector<std::pair<std::string, uint64_t>> VtlocRunner::last_dispatch_workgro
             out.push_back({d.node, uint64_t(d.groups[0]) * d.groups[1] * d.groups[2]});
     return out;
 }
+
+uint32_t VtlocRunner::last_barriers() const { return last_ && last_->gpu ? last_->gpu->sequence().barrier_count() : 0; }
 
 const Graph* VtlocRunner::last_graph() const { return last_ ? &last_->graph : nullptr; }
 

@@ -106,6 +106,11 @@ public:
     // Bench diagnostics: retrieval in a dispatch of its own rather than as the
     // ILU's epilogue (engine/ops/ilu_retrieve.cpp), to time it apart.
     void set_retrieval_apart(bool on) { retrieval_apart_ = on; }
+    // Bench diagnostics: how the GPU orders each graph's nodes (engine/executor.h
+    // Schedule; Steps by default), to time the orders side by side.
+    void set_schedule(Schedule s) { schedule_ = s; }
+    // Pipeline barriers in the last run's recording (0 on the CPU).
+    uint32_t last_barriers() const;
 
     // The graph of the last run, and on the GPU the device memory it holds.
     struct MemoryUse {
@@ -141,6 +146,7 @@ private:
     bool profile_ = false;
     bool ilu_stepped_ = false;
     bool retrieval_apart_ = false;
+    Schedule schedule_ = Schedule::Steps;
     struct Compiled;
     // Weights on the GPU, once for every graph shape (made at the first GPU run).
     std::shared_ptr<ResidentWeights> resident_;
