@@ -18,6 +18,7 @@
 #include "bench/tracker_bench.h"
 #include "engine/io/touch_sequence.h"
 #include "bench/validation.h"
+#include "bench/fps_variants.h"
 #include "bench/ilu_variants.h"
 #include "bench/versus.h"
 #include "base/error.h"
@@ -266,6 +267,8 @@ void measure_gpu(json& report, const Args& a, const WeightStore& weights, const 
     report["gpu"] = bench::measure_model(runner, in, a.opt);
     if (cfg.head == Head::Ilu && cfg.ilu_iters > 0)
         report["gpu"]["ilu_variants"] = bench::ilu_variants(ctx, weights, cfg.ilu_iters, a.opt.reps);
+    if (!a.opt.points.empty() && ctx.info().type != VK_PHYSICAL_DEVICE_TYPE_CPU)  // lavapipe's rule was measured
+        report["gpu"]["fps_variants"] = bench::fps_variants(ctx, a.opt.reps);
     if (a.probe) {  // the higher of before/after: a busy machine cannot flatter the fractions
         const double after = bench::peak_gflops(ctx);
         report["probe"]["after"] = after;

@@ -65,6 +65,10 @@ layout(constant_id = 16) const bool XPM = false;
 // PAD, plain output, vote shader: one invocation per ball, the subgroup's chunks
 // pooled (main), instead of one per row block (row_block).
 layout(constant_id = 17) const bool POOL = false;
+// MAXPOOL, vote shader: PARTS neighbouring lanes of a subgroup share a group, lane q
+// taking its chunks q, q + PARTS, ...; their maxima meet by xor shuffles (a power of
+// two <= SG). More lanes for a GPU when a layer has few groups (group_linear.cpp).
+layout(constant_id = 18) const uint PARTS = 1;
 #ifdef SUBGROUP_VOTE
 #define ANY_LANE(x) subgroupAny(x)
 const bool SKIP_BLOCKS = PAD;
@@ -403,7 +407,17 @@ void main() {
     }
     float mx[TN];
     [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = uintBitsToFloat(0xFF800000u);  // -inf
-    const uint g0 = t * p.NS, gend = g0 + p.NS;
+    uint grp = t, part = 0u;
+    bool store = live;
+#ifdef SUBGROUP_VOTE
+    if (PARTS > 1u) {  // by lane, so that a group's PARTS lanes are neighbours in one subgroup
+        const uint ta = RBLOCK * gl_WorkGroupSize.x + gl_SubgroupID * SG + gl_SubgroupInvocationID;
+        store = ta < p.blocks && ta % PARTS == 0u;
+        grp = min(ta, p.blocks - 1u) / PARTS;
+        part = ta % PARTS;
+    }
+#endif
+    const uint g0 = grp * p.NS, gend = g0 + p.NS;
 #ifdef SUBGROUP_VOTE
     // Pooled where that takes less time than one lane per ball; a chunk's max
     // reaches the lane that owns its ball by SG rounds of TN shuffles (max is
@@ -411,15 +425,17 @@ void main() {
     // channel, the rounds about 3 SG operations more: much for narrow layers on
     // wide subgroups (K = 32, SG = 32: a third more).
     const Pool pl = PAD ? pool_of(g0, live) : Pool(0u, 0u, 0u, 0u);
-    const bool pooled = (pl.total + SG - 1u) / SG * (TM * p.K + 3u * SG) < pl.most * TM * p.K;  // subgroup-uniform
-    const uint steps = pooled ? (pl.total + SG - 1u) / SG : p.chunks;
+    const bool pooled = PARTS == 1u && (pl.total + SG - 1u) / SG * (TM * p.K + 3u * SG) < pl.most * TM * p.K;  // subgroup-uniform
+    const uint steps = pooled ? (pl.total + SG - 1u) / SG : (p.chunks + PARTS - 1u) / PARTS;
 #else
     const uint steps = p.chunks;
 #endif
     // One loop and one block() call for both forms: NIR's passes run over every
     // inlined copy of block() (its comment says why that matters).
     for (uint s = 0u; s < steps; ++s) {
-        uint m0 = g0 + s * TM, mend = gend, owner = 0u;
+        // A lane past its share (PARTS > 1) redoes the last chunk and keeps none of it.
+        const bool beyond = s * PARTS + part >= p.chunks;
+        uint m0 = g0 + min(s * PARTS + part, p.chunks - 1u) * TM, mend = gend, owner = 0u;
         bool pad[TM];
 #ifdef SUBGROUP_VOTE
         if (pooled) {
@@ -429,11 +445,11 @@ void main() {
         } else
 #endif
         {
-            [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = false;
+            [[unroll]] for (uint i = 0; i < TM; ++i) pad[i] = beyond;
             if (PAD) {  // padding rows may hold anything (PAD's plain output): left out, never used
                 bool need = false;
                 [[unroll]] for (uint i = 0; i < TM; ++i) {
-                    pad[i] = padding_row(min(m0 + i, gend - 1u));
+                    pad[i] = beyond || padding_row(min(m0 + i, gend - 1u));
                     need = need || !pad[i];
                 }
                 if (!ANY_LANE(need)) continue;  // subgroup-uniform, as the return above
@@ -461,6 +477,10 @@ void main() {
 #endif
         [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], cm[j]);
     }
+#ifdef SUBGROUP_VOTE
+    for (uint o = 1u; o < PARTS; o <<= 1u)  // max is order-free: the same value as one lane's loop
+        [[unroll]] for (uint j = 0; j < TN; ++j) mx[j] = max(mx[j], subgroupShuffleXor(mx[j], o));
+#endif
     [[unroll]] for (uint j = 0; j < TN; ++j)
-        if (live && n0 + j < p.N) outv[(t * p.N + n0 + j) / 4u][(t * p.N + n0 + j) % 4u] = mx[j];
+        if (store && n0 + j < p.N) outv[(grp * p.N + n0 + j) / 4u][(grp * p.N + n0 + j) % 4u] = mx[j];
 }

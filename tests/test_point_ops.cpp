@@ -128,6 +128,41 @@ TEST_CASE("FPS and ball query equal the PyTorch reference on ties, duplicates, g
     }
 }
 
+TEST_CASE("FPS at every workgroup size picks the CPU reference's points", "[op][fps]") {
+    // Param threads (the bench's variants, a GPU's choice to come): the registers
+    // path at up to 32 points a thread, the workspace path past that, on a cloud with
+    // ties (a grid, every point twice) and a random one; sizes the device cannot take
+    // are refused by name.
+    const rt::DeviceInfo& d = test::gpu().info();
+    std::vector<float> grid;
+    for (int i = 0; i < 8; ++i)
+        for (int j = 0; j < 8; ++j)
+            for (int k = 0; k < 5; ++k) grid.insert(grid.end(), {i * 0.5f, j * 0.5f, k * 0.25f});
+    std::vector<float> twice = grid;
+    twice.insert(twice.end(), grid.begin(), grid.end());
+    for (const HostTensor& cloud : {cloud_tensor(twice), random_cloud(700, 81, 6)}) {
+        const int64_t N = cloud.shape[0], S = 150;
+        for (uint32_t threads = std::max(1u, d.subgroup_size); threads <= 256; threads *= 2) {
+            INFO(N << " points, threads " << threads);
+            Graph g;
+            const int x = g.input("x", cloud.shape);
+            const std::vector<int> f = ops::fps(g, x, S, "fps", false, false, threads);
+            g.output(f[0], "index");
+            g.output(f[1], "centres");
+            const TensorMap out = test::run_gpu_and_compare(g, WeightStore{}, {{"x", cloud}});
+            GpuExecutor ex(test::gpu(), g, WeightStore{});
+            CHECK(ex.sequence().dispatch_log().at(0).spec.at(0) == threads);
+        }
+    }
+    Graph g;
+    const int x = g.input("x", {64, 3});
+    REQUIRE_THROWS_WITH(ops::fps(g, x, 8, "three", false, false, 3), Catch::Contains("power of two"));
+    if (d.max_invocations < 1024 || d.max_shared_memory / 16 < 1024) {
+        g.output(ops::fps(g, x, 8, "big", false, false, 1024)[0], "i");
+        REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, WeightStore{}), Catch::Contains("'big'") && Catch::Contains("threads = 1024"));
+    }
+}
+
 TEST_CASE("FPS and ball query match the CPU reference at odd sizes and widths", "[op][fps][ball_query]") {
     check_fps_and_balls(random_cloud(1000, 1), 1000, {{0.3, 16}});        // npoint = N, N not a power of two
     check_fps_and_balls(random_cloud(333, 2, 6), 100, {{0.2, 7}, {0.9, 64}});  // [N, 6]: xyz + normals
@@ -455,6 +490,67 @@ TEST_CASE("group_linear's tiles shrunk as a big GPU's are (forced) match the CPU
             }
             CHECK(layers == 9);
         }
+}
+
+TEST_CASE("a max's groups split across lanes (parts) give the same bits as one lane each", "[op][group_linear]") {
+    // A GPU's rule gives a max's groups 2, 4, ... lanes when a layer has few groups
+    // (point_mlp.glsl PARTS); forced here on lavapipe: every power of two up to the
+    // subgroup size, groups of 128 rows (16 chunks) and of 13 (2 chunks: past 2 parts
+    // some lanes have none), rows with ball padding skipped and a gathering layer.
+    const rt::DeviceInfo& d = test::gpu().info();
+    if (!(d.subgroup_ops & VK_SUBGROUP_FEATURE_SHUFFLE_BIT) || !(d.subgroup_ops & VK_SUBGROUP_FEATURE_VOTE_BIT))
+        FAIL("lavapipe has subgroup shuffles and votes: this test needs them");
+    using In = ops::GroupLinear::Input;
+    const int64_t N = 400, C1 = 24, C2 = 20;
+    WeightStore w;
+    w.add("w0t", test::random_tensor({6, C1}, 71, -0.5f, 0.5f));
+    w.add("b0", test::random_tensor({C1}, 72, -0.2f, 0.2f));
+    w.add("w1t", test::random_tensor({C1, C2}, 73, -0.4f, 0.4f));
+    w.add("b1", test::random_tensor({C2}, 74, -0.2f, 0.2f));
+    const TensorMap in{{"cloud", random_cloud(N, 75, 6)}};
+    for (int64_t ns : {int64_t(128), int64_t(13)}) {
+        std::map<std::string, HostTensor> first;
+        for (uint32_t parts = 1; parts <= d.subgroup_size; parts *= 2) {
+            INFO("group " << ns << ", parts " << parts);
+            Graph g;
+            const int x = g.input("cloud", {N, 6});
+            const std::vector<int> f = ops::fps(g, x, 37);
+            const int ball = ops::ball_query(g, x, f[1], 0.3, ns);  // small radius: padded balls
+            const int w0t = g.weight("w0t", {6, C1}), b0 = g.weight("b0", {C1});
+            const int w1t = g.weight("w1t", {C1, C2}), b1 = g.weight("b1", {C2});
+            ops::GroupLinear rows{In::Gather, 3, false, 1, ops::kActRelu, 0.01, ops::BufferPath::Texel, Weights::Shuffle};
+            rows.skip_padding = true;
+            const int h = ops::group_linear(g, {x, f[1], ball, w0t, b0, x}, rows, "rows");
+            ops::GroupLinear mx{In::Rows, 0, true, ns, ops::kActRelu, 0.01, ops::BufferPath::Texel, Weights::Shuffle};
+            mx.skip_padding = true, mx.parts = parts;
+            g.output(ops::group_linear(g, {h, w1t, b1, ball}, mx, "max"), "max");
+            ops::GroupLinear gm{In::Gather, 3, true, 1, ops::kActLeaky, 0.1, ops::BufferPath::Texel, Weights::Shuffle};
+            gm.parts = parts;
+            g.output(ops::group_linear(g, {x, f[1], ball, w0t, b0, x}, gm, "gather_max"), "gather_max");
+            const TensorMap out = test::run_gpu_and_compare(g, w, in);
+            GpuExecutor ex(test::gpu(), g, w);
+            for (const auto& r : ex.sequence().dispatch_log())
+                if (r.node == "max" || r.node == "gather_max") CHECK(r.spec.at(18) == parts);
+            for (const char* name : {"max", "gather_max"}) {
+                if (parts == 1) first[name] = out.at(name);
+                else CHECK(out.at(name).data == first.at(name).data);
+            }
+        }
+    }
+    // Refused by name: not a power of two, not a max, wider than a subgroup.
+    Graph g;
+    const int x = g.input("cloud", {N, 6});
+    const int w1t = g.weight("w1t", {C1, C2}), b1 = g.weight("b1", {C2});
+    const int rows = g.input("rows", {C1, 64});
+    ops::GroupLinear l{In::Rows, 0, true, 16, ops::kActNone, 0.01, ops::BufferPath::Texel, Weights::Shuffle};
+    l.parts = 3;
+    REQUIRE_THROWS_WITH(ops::group_linear(g, {rows, w1t, b1}, l, "three"), Catch::Contains("power of two"));
+    l.max = false, l.group = 1, l.parts = 2;
+    REQUIRE_THROWS_WITH(ops::group_linear(g, {rows, w1t, b1}, l, "plain"), Catch::Contains("max = 1"));
+    l.max = true, l.group = 16, l.parts = int64_t(d.subgroup_size) * 2;
+    g.output(ops::group_linear(g, {rows, w1t, b1}, l, "wide"), "wide");
+    (void)x;
+    REQUIRE_THROWS_WITH(GpuExecutor(test::gpu(), g, w), Catch::Contains("'wide'") && Catch::Contains("subgroup size"));
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear][sweep]") {

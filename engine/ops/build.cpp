@@ -204,10 +204,12 @@ int expected_distance(Graph& g, int points, int weights, int answers, const std:
     return g.add1("expected_distance", {points, weights, answers}, p, name);
 }
 
-std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace, bool force_tree) {
+std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name, bool force_workspace, bool force_tree,
+                     int64_t threads) {
     Params p{{"npoint", d(npoint)}};
     if (force_workspace) p.set("no_registers", 1);
     if (force_tree) p.set("subgroup", 0);
+    if (threads > 0) p.set("threads", d(threads));
     return g.add("fps", {xyz}, p, name);
 }
 
@@ -239,6 +241,7 @@ int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, con
     if (l.row_blocks) p.set("row_blocks", 1);
     if (l.skip_padding) p.set("pad", 1);
     if (l.fill > 0) p.set("fill", d(l.fill));
+    if (l.parts > 0) p.set("parts", d(l.parts));
     if (l.max && l.input != GroupLinear::Input::Gather) p.set("group", d(l.group));  // a gather's groups are its balls
     return g.add1("group_linear", in, p, name);
 }

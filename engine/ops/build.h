@@ -157,8 +157,9 @@ int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int p
 // device has subgroup arithmetic (tests and the self-test cover all of them).
 // The normalised frame on the GPU: outputs the cloud and the frame [4].
 std::vector<int> cloud_normalize(Graph& g, int cloud, const std::string& name = "");
+// threads > 0: the workgroup size (a power of two; tests and the bench's variants).
 std::vector<int> fps(Graph& g, int xyz, int64_t npoint, const std::string& name = "", bool force_workspace = false,
-                     bool force_tree = false);
+                     bool force_tree = false, int64_t threads = 0);
 // force_tiles: the shared-memory tiles even where the device has subgroup shuffles.
 int ball_query(Graph& g, int xyz, int centres, double radius, int64_t nsample, const std::string& name = "",
                bool force_tiles = false);
@@ -209,6 +210,9 @@ struct GroupLinear {
     // > 0: the tiles a GPU would shrink to so as to offer this many workgroups, on any
     // device (tests: lavapipe runs what a big GPU runs).
     int64_t fill = 0;
+    // max on the Shuffle path, > 1: lanes per group, a power of two up to the subgroup
+    // size (tests; 0: the device's choice, which a GPU's rule may raise).
+    int64_t parts = 0;
 };
 int group_linear(Graph& g, const std::vector<int>& in, const GroupLinear& l, const std::string& name = "");
 // The weight path group_linear takes on device `d` for a K x N weight at byte

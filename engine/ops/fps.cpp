@@ -5,6 +5,8 @@
 // Param npoint (1..N). Outputs: index I32 [npoint], centres F32 [npoint, 3]
 // (the picked xyz, what the next stage groups around), and a workspace F32 [N]
 // (running minimum distances when they do not fit in registers; contents unspecified).
+// Param threads (tests, bench): the workgroup size, a power of two within the device's
+// limits, instead of the device's choice (points a thread keep in registers up to 32).
 #include <algorithm>
 #include <cmath>
 #include <limits>
@@ -23,6 +25,10 @@ constexpr uint32_t kMaxPerCpu = 32;  // the same on CPU devices (see gpu())
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 1, 1);
     expect_f32(in);
+    if (p.has("threads")) {
+        const int64_t t = int_param(p, "threads", 1, 1024);
+        if (t & (t - 1)) throw Error("threads = " + std::to_string(t) + " must be a power of two");
+    }
     const Shape& s = in[0].shape;
     if (s.size() != 2 || s[1] < 3) throw Error("points must be [N, D >= 3], got " + shape_str(s));
     if (s[0] == 0) throw Error("the point cloud is empty");
@@ -85,9 +91,16 @@ void gpu(const GpuOpArgs& a) {
     uint32_t L = 1;
     while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
     Plan pl = plan(L, kMaxPer);
+    if (a.params.has("threads")) {
+        L = uint32_t(a.params.get("threads", 1));
+        if (L > cap)
+            throw Error("threads = " + std::to_string(L) + " is over this device's " + std::to_string(cap) +
+                        " (workgroup size and shared-memory limits)");
+        pl = plan(L, kMaxPerCpu);
+    }
     const bool arithmetic = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
                             (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT);
-    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && arithmetic && sg <= cap) {
+    if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && arithmetic && sg <= cap && !a.params.has("threads")) {
         // A CPU driver runs a workgroup's subgroups one after another, switching at
         // every barrier, while a lane's points cost only SIMD arithmetic: the fewest
         // subgroups that hold the cloud at 32 points a lane (one subgroup, no shared
@@ -111,6 +124,6 @@ void gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2, {"npoint", "no_registers", "subgroup"}};  // output 2: the workspace
+const OpDef op_fps{"fps", infer, cpu, gpu, 1u << 2, {"npoint", "no_registers", "subgroup", "threads"}};  // output 2: the workspace
 
 }  // namespace vtloc::ops

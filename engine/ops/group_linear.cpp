@@ -47,7 +47,9 @@
 // (GroupLinear::Tile): 1 = 16 x 32, 2 = 8 x 32, big-layer tiles, whatever the layer
 // and device (tests). Param rows_in_x = 1: row blocks along x, channel blocks along
 // y (tests; the default is the reverse, see gpu()). Param fill = W (tests): the tiles
-// a GPU would shrink to so as to offer W workgroups, on any device (see gpu()).
+// a GPU would shrink to so as to offer W workgroups, on any device (see gpu()). Param
+// parts = P (tests; a max on the vote shader, P a power of two <= the subgroup size):
+// P lanes per group, as a GPU's rule may choose; larger P is refused at the dispatch.
 #include <algorithm>
 #include <limits>
 
@@ -87,6 +89,11 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     l.mode = p.has("in") ? int(int_param(p, "in", 0, 3)) : 0;
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
     if (p.has("tile")) int_param(p, "tile", 0, 2);
+    if (p.has("parts")) {
+        const int64_t parts = int_param(p, "parts", 1, 64);
+        if (parts & (parts - 1)) throw Error("parts = " + std::to_string(parts) + " must be a power of two");
+        if (p.get("max", 0) == 0) throw Error("parts is for a max over rows (max = 1)");
+    }
     l.max = p.get("max", 0) != 0;
     l.hidden = p.has("hidden") ? int(int_param(p, "hidden", 0, 2)) : 0;
     if (l.hidden != 0 && l.mode != 1) throw Error("hidden = " + std::to_string(l.hidden) + " needs gathered rows (in = 1)");
@@ -284,7 +291,16 @@ void gpu(const GpuOpArgs& a) {
     // per row block: 16x fewer invocations would leave it idle. Param row_blocks
     // (tests) keeps the GPU's way on any device.
     const bool pool = l.pad && !l.max && wp == Weights::Shuffle && cpu_rule && a.params.get("row_blocks", 0) == 0;
-    auto blocks_of = [&](uint32_t tm) { return l.max || pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + tm - 1) / tm; };
+    // A max's groups each take PARTS lanes (point_mlp.glsl): the vote shader's only.
+    uint32_t parts = uint32_t(a.params.get("parts", 1));
+    const bool can_part = l.max && wp == Weights::Shuffle;
+    if (parts > 1 && (!can_part || parts > d.subgroup_size))
+        throw Error("parts = " + std::to_string(parts) + " needs a max on the subgroup-shuffle shader, at most " +
+                    std::to_string(d.subgroup_size) + " lanes (the subgroup size)" + (can_part ? "" : ": not this layer or device"));
+    const uint32_t chunks = uint32_t((l.NS + TM - 1) / TM);  // a max's TM stays as it is
+    auto blocks_of = [&](uint32_t tm) {
+        return l.max ? uint64_t(l.M / l.NS) * parts : pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + tm - 1) / tm;
+    };
     // Up to 64 invocations (whole subgroups), fewer when there are few blocks:
     // spare invocations redo the last block.
     uint32_t L = std::min(64u, elementwise_local_size(d));
@@ -301,6 +317,7 @@ void gpu(const GpuOpArgs& a) {
             if (L / 2 >= sg && (L / 2) % sg == 0) L /= 2;
             else if (TN > 4 && !big) TN /= 2;
             else if (TM > 4 && !big && !l.max) TM = 4;
+            else if (can_part && !a.params.has("parts") && parts * 2 <= sg && parts * 2 <= chunks) parts *= 2;
             else break;
         }
     }
@@ -328,7 +345,7 @@ void gpu(const GpuOpArgs& a) {
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,
                                wvec4, wp == Weights::Uniform ? uint32_t(l.K * l.N / 4) : 1u, d.subgroup_size,
                                !l.max && !l.point_major && l.M % 4 == 0 && (!pool || l.NS % 4 == 0), uint32_t(l.hidden),
-                               l.point_major, cb_first, l.pad, l.x_point_major, pool};
+                               l.point_major, cb_first, l.pad, l.x_point_major, pool, parts};
     const char* shader = wp == Weights::Shuffle ? "point_mlp_shfl" : wp == Weights::Uniform ? "point_mlp_ubo"
                          : texel                ? "point_mlp"
                                                 : "point_mlp_ssbo";
@@ -369,7 +386,7 @@ void take_unspecified(const std::vector<const HostTensor*>& in, const Params& p,
 
 const OpDef op_group_linear{"group_linear", infer, cpu, gpu, 0,
                             {"in", "feat_begin", "max", "group", "act", "slope", "texel", "weights", "tile", "hidden", "point_major",
-                             "x_point_major", "rows_in_x", "pad", "row_blocks", "fill"},
+                             "x_point_major", "rows_in_x", "pad", "row_blocks", "fill", "parts"},
                             take_unspecified};
 
 GroupLinear::Weights group_linear_weight_path(const rt::DeviceInfo& d, int64_t K, int64_t N, bool texel,
