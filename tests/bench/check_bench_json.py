@@ -118,6 +118,17 @@ def main(path, plot, reps, iters, batches, points, window):
         f = g["efficiency"][k]["fraction_of_peak_fastest"]
         need(abs(f - g["efficiency"][k]["gflops_fastest"] / p["gflops"]) < 1e-9, f"fraction_of_peak_fastest {k}")
     stats(g["end_to_end_late_ms"], "gpu.end_to_end_late_ms", reps)  # the same timing after the rest
+    # The executor's node orders in turns: 3 rounds of max(1, reps // 2) each; steps and
+    # late share barriers between independent nodes, so they record fewer than serial.
+    sc = g["schedules"]
+    need(sorted(sc) == ["late", "serial", "steps"], f"schedules: {sorted(sc)}")
+    for k in sc:
+        stats(sc[k]["end_to_end_ms"], f"gpu.schedules.{k}.end_to_end_ms", 3 * max(1, reps // 2))
+        need(isinstance(sc[k]["barriers"], int) and sc[k]["barriers"] > 0, f"schedules.{k}.barriers")
+    need(sc["steps"]["barriers"] < sc["serial"]["barriers"] and sc["late"]["barriers"] < sc["serial"]["barriers"],
+         f"schedules: steps {sc['steps']['barriers']} and late {sc['late']['barriers']} barriers against serial "
+         f"{sc['serial']['barriers']}")
+    need("fps_variants" not in g, "fps_variants: GPUs only (lavapipe's FPS rule was measured)")
     if ilu:
         # The fused node's shaders side by side: the default (wave 1), the shared-memory
         # shader (0), then the register shader at the subgroup size and its doublings to 256.
