@@ -411,7 +411,8 @@ void main() {
     bool store = live;
 #ifdef SUBGROUP_VOTE
     if (PARTS > 1u) {  // by lane, so that a group's PARTS lanes are neighbours in one subgroup
-        const uint ta = RBLOCK * gl_WorkGroupSize.x + gl_SubgroupID * SG + gl_SubgroupInvocationID;
+        // Full subgroups of SG lanes, as the weight shuffles already need (group_linear.cpp).
+        const uint ta = RBLOCK * gl_WorkGroupSize.x + gl_SubgroupID * gl_SubgroupSize + gl_SubgroupInvocationID;
         store = ta < p.blocks && ta % PARTS == 0u;
         grp = min(ta, p.blocks - 1u) / PARTS;
         part = ta % PARTS;

@@ -294,9 +294,8 @@ void gpu(const GpuOpArgs& a) {
     // A max's groups each take PARTS lanes (point_mlp.glsl): the vote shader's only.
     uint32_t parts = uint32_t(a.params.get("parts", 1));
     const bool can_part = l.max && wp == Weights::Shuffle;
-    if (parts > 1 && (!can_part || parts > d.subgroup_size))
-        throw Error("parts = " + std::to_string(parts) + " needs a max on the subgroup-shuffle shader, at most " +
-                    std::to_string(d.subgroup_size) + " lanes (the subgroup size)" + (can_part ? "" : ": not this layer or device"));
+    if (parts > 1 && !can_part)
+        throw Error("parts = " + std::to_string(parts) + " needs a max on the subgroup-shuffle shader: not this layer or device");
     const uint32_t chunks = uint32_t((l.NS + TM - 1) / TM);  // a max's TM stays as it is
     auto blocks_of = [&](uint32_t tm) {
         return l.max ? uint64_t(l.M / l.NS) * parts : pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + tm - 1) / tm;
@@ -317,10 +316,15 @@ void gpu(const GpuOpArgs& a) {
             if (L / 2 >= sg && (L / 2) % sg == 0) L /= 2;
             else if (TN > 4 && !big) TN /= 2;
             else if (TM > 4 && !big && !l.max) TM = 4;
-            else if (can_part && !a.params.has("parts") && parts * 2 <= sg && parts * 2 <= chunks) parts *= 2;
+            else if (can_part && !a.params.has("parts") && parts * 2 <= std::min(sg, L) && parts * 2 <= chunks) parts *= 2;
             else break;
         }
     }
+    // A group's lanes must share a subgroup: at most its size, nor the workgroup's where
+    // that is smaller (a 128-lane subgroup, 64 invocations).
+    if (parts > std::min(sg, L))
+        throw Error("parts = " + std::to_string(parts) + " is over this layer's " + std::to_string(std::min(sg, L)) +
+                    " lanes a subgroup (the subgroup size " + std::to_string(sg) + ", the workgroup " + std::to_string(L) + ")");
     const uint64_t blocks = blocks_of(TM);
     const uint64_t gx = (blocks + L - 1) / L, gy = (uint64_t(l.N) + TN - 1) / TN;
     // Channel blocks along x, so that the workgroups a driver runs one after the
