@@ -44,19 +44,7 @@ json fps_variants(rt::Context& ctx, int reps) {
                 const int x = g.input("x", {N, 3});
                 g.output(ops::fps(g, x, S, "fps", false, false, threads)[0], "index");
                 GpuExecutor exec(ctx, g, WeightStore{}, /*profile=*/true);
-                exec.run(in);  // compiles
-                std::vector<double> ms;
-                for (int r = 0; r < reps; ++r) {
-                    exec.run(in);
-                    for (const auto& t : exec.node_times())
-                        if (t.label == "fps") ms.push_back(t.ms);
-                }
-                const auto& log = exec.sequence().dispatch_log();
-                if (!log.empty()) {
-                    row["shader"] = log.back().shader;
-                    row["workgroup"] = log.back().spec.empty() ? 0u : log.back().spec.at(0);
-                }
-                row["ms"] = stats_json(ms);
+                time_node(exec, in, "fps", reps, row);
             } catch (const Error& e) {
                 row["refused"] = e.what();
             }

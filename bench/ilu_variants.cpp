@@ -43,19 +43,7 @@ json ilu_variants(rt::Context& ctx, const WeightStore& w, int iters, int reps) {
             std::vector<int> out = ops::ilu(g, inputs(g, w, C), iters, "ilu", 0, true, wave);
             g.output(out[1], "contact");
             GpuExecutor exec(ctx, g, w, /*profile=*/true);
-            exec.run(in);  // compiles
-            std::vector<double> ms;
-            for (int r = 0; r < reps; ++r) {
-                exec.run(in);
-                for (const auto& t : exec.node_times())
-                    if (t.label == "ilu") ms.push_back(t.ms);
-            }
-            const auto& log = exec.sequence().dispatch_log();
-            if (!log.empty()) {
-                row["shader"] = log.back().shader;
-                row["workgroup"] = log.back().spec.empty() ? 0u : log.back().spec.at(0);
-            }
-            row["ms"] = stats_json(ms);
+            time_node(exec, in, "ilu", reps, row);
         } catch (const Error& e) {
             row["refused"] = e.what();
         }

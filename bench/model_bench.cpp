@@ -285,6 +285,22 @@ json stats_json(const std::vector<double>& samples) {
     return {{"median", s.median}, {"p10", s.p10}, {"p90", s.p90}, {"min", s.min}, {"n", samples.size()}};
 }
 
+void time_node(GpuExecutor& exec, const TensorMap& in, const std::string& label, int reps, json& row) {
+    exec.run(in);
+    std::vector<double> ms;
+    for (int r = 0; r < reps; ++r) {
+        exec.run(in);
+        for (const auto& t : exec.node_times())
+            if (t.label == label) ms.push_back(t.ms);
+    }
+    const auto& log = exec.sequence().dispatch_log();
+    if (!log.empty()) {
+        row["shader"] = log.back().shader;
+        row["workgroup"] = log.back().spec.empty() ? 0u : log.back().spec.at(0);
+    }
+    row["ms"] = stats_json(ms);
+}
+
 json measure_model(VtlocRunner& r, const ModelBenchInputs& in, const ModelBenchOptions& opt) {
     json out;
     const TouchOptions defaults;

@@ -29,6 +29,10 @@ struct ModelBenchInputs {
 };
 
 nlohmann::json stats_json(const std::vector<double>& samples_ms);
+// Node `label` of a profiled executor over `reps` runs after one untimed run (shader
+// compilation): row["ms"], its GPU times' stats, and row["shader"], row["workgroup"],
+// those of the last dispatch recorded.
+void time_node(GpuExecutor& exec, const TensorMap& in, const std::string& label, int reps, nlohmann::json& row);
 
 // An efficiency entry's fractions of the probe (fraction_of_peak, and
 // fraction_of_peak_fastest), null without a probe; measure_model sets them with the

@@ -7,6 +7,24 @@
 
 namespace vtloc {
 
+namespace {
+
+// Per node, how many of its inputs other nodes write (missing) and which nodes read
+// its outputs (consumers): Kahn's algorithm's start.
+void dependencies(const std::vector<Node>& nodes, const std::vector<int>& producer, std::vector<int>& missing,
+                  std::vector<std::vector<int>>& consumers) {
+    missing.assign(nodes.size(), 0);
+    consumers.assign(nodes.size(), {});
+    for (size_t i = 0; i < nodes.size(); ++i)
+        for (int in : nodes[i].inputs)
+            if (int p = producer[size_t(in)]; p >= 0) {
+                ++missing[i];
+                consumers[size_t(p)].push_back(int(i));
+            }
+}
+
+}  // namespace
+
 int Graph::new_value(const std::string& name, Shape shape, ValueKind kind, ElemType type) {
     for (int64_t d : shape)
         if (d < 0) throw Error("value '" + name + "' has a negative dimension " + shape_str(shape));
@@ -83,14 +101,9 @@ std::vector<int> Graph::producers() const {
 std::vector<int> Graph::topo_order() const {
     // Kahn's algorithm, taking ready nodes in insertion order for a stable schedule.
     const std::vector<int> producer = producers();
-    std::vector<int> missing(nodes_.size(), 0);
-    std::vector<std::vector<int>> consumers(nodes_.size());
-    for (size_t i = 0; i < nodes_.size(); ++i)
-        for (int in : nodes_[i].inputs)
-            if (int p = producer[size_t(in)]; p >= 0) {
-                ++missing[i];
-                consumers[size_t(p)].push_back(int(i));
-            }
+    std::vector<int> missing;
+    std::vector<std::vector<int>> consumers;
+    dependencies(nodes_, producer, missing, consumers);
     std::vector<int> order, ready;
     for (size_t i = 0; i < nodes_.size(); ++i)
         if (!missing[i]) ready.push_back(int(i));
@@ -111,14 +124,9 @@ std::vector<int> Graph::stepped_order(std::vector<int>* step, bool late) const {
     // current step waits for the next one while any other ready node can go
     // now; lowest index first among those that can.
     const std::vector<int> producer = producers();
-    std::vector<int> missing(nodes_.size(), 0), step_of(nodes_.size(), -1);
-    std::vector<std::vector<int>> consumers(nodes_.size());
-    for (size_t i = 0; i < nodes_.size(); ++i)
-        for (int in : nodes_[i].inputs)
-            if (int p = producer[size_t(in)]; p >= 0) {
-                ++missing[i];
-                consumers[size_t(p)].push_back(int(i));
-            }
+    std::vector<int> missing, step_of(nodes_.size(), -1);
+    std::vector<std::vector<int>> consumers;
+    dependencies(nodes_, producer, missing, consumers);
     std::vector<int> order, ready;
     for (size_t i = 0; i < nodes_.size(); ++i)
         if (!missing[i]) ready.push_back(int(i));
