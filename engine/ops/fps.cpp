@@ -25,10 +25,7 @@ constexpr uint32_t kMaxPerCpu = 32;  // the same on CPU devices (see gpu())
 std::vector<TensorDesc> infer(const std::vector<TensorDesc>& in, const Params& p) {
     expect_input_count(in, 1, 1);
     expect_f32(in);
-    if (p.has("threads")) {
-        const int64_t t = int_param(p, "threads", 1, 1024);
-        if (t & (t - 1)) throw Error("threads = " + std::to_string(t) + " must be a power of two");
-    }
+    if (p.has("threads")) pow2_param(p, "threads", 1, 1024);
     const Shape& s = in[0].shape;
     if (s.size() != 2 || s[1] < 3) throw Error("points must be [N, D >= 3], got " + shape_str(s));
     if (s[0] == 0) throw Error("the point cloud is empty");

@@ -90,8 +90,7 @@ Layout layout_of(const std::vector<TensorDesc>& in, const Params& p) {
     if (p.has("weights")) int_param(p, "weights", 0, 2);  // GroupLinear::Weights: named at graph build
     if (p.has("tile")) int_param(p, "tile", 0, 2);
     if (p.has("parts")) {
-        const int64_t parts = int_param(p, "parts", 1, 64);
-        if (parts & (parts - 1)) throw Error("parts = " + std::to_string(parts) + " must be a power of two");
+        pow2_param(p, "parts", 1, 64);
         if (p.get("max", 0) == 0) throw Error("parts is for a max over rows (max = 1)");
     }
     l.max = p.get("max", 0) != 0;
@@ -296,7 +295,7 @@ void gpu(const GpuOpArgs& a) {
     const bool can_part = l.max && wp == Weights::Shuffle;
     if (parts > 1 && !can_part)
         throw Error("parts = " + std::to_string(parts) + " needs a max on the subgroup-shuffle shader: not this layer or device");
-    const uint32_t chunks = uint32_t((l.NS + TM - 1) / TM);  // a max's TM stays as it is
+    auto chunks = [&] { return uint32_t((l.NS + TM - 1) / TM); };  // TM-row blocks per group
     auto blocks_of = [&](uint32_t tm) {
         return l.max ? uint64_t(l.M / l.NS) * parts : pool ? uint64_t(l.M / l.NS) : (uint64_t(l.M) + tm - 1) / tm;
     };
@@ -316,7 +315,7 @@ void gpu(const GpuOpArgs& a) {
             if (L / 2 >= sg && (L / 2) % sg == 0) L /= 2;
             else if (TN > 4 && !big) TN /= 2;
             else if (TM > 4 && !big && !l.max) TM = 4;
-            else if (can_part && !a.params.has("parts") && parts * 2 <= std::min(sg, L) && parts * 2 <= chunks) parts *= 2;
+            else if (can_part && !a.params.has("parts") && parts * 2 <= std::min(sg, L) && parts * 2 <= chunks()) parts *= 2;
             else break;
         }
     }
@@ -343,7 +342,7 @@ void gpu(const GpuOpArgs& a) {
     struct { uint32_t M, N, K, NS; float slope; uint32_t P, D, DF, FB, CF, blocks, chunks; } push{
         uint32_t(l.M), uint32_t(l.N), uint32_t(l.K), uint32_t(l.NS), float(a.params.get("slope", 0.01)),
         uint32_t(l.g.P), uint32_t(l.g.D), uint32_t(l.g.DF), uint32_t(l.g.FB), uint32_t(l.g.CF), uint32_t(blocks),
-        uint32_t((l.NS + TM - 1) / TM)};
+        chunks()};
     // WVECS (9) only where the shader declares it: elsewhere a weight-shape-dependent
     // constant would compile one pipeline per layer shape for nothing.
     std::vector<uint32_t> spec{L, TM, TN, uint32_t(l.mode), l.max, uint32_t(a.params.get("act", kActNone)), avec4, fvec4,

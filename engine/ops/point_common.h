@@ -32,6 +32,13 @@ inline int64_t int_param(const Params& p, const char* name, int64_t lo, int64_t 
     return int64_t(v);
 }
 
+// int_param that must also be a power of two (workgroup sizes, lanes per group).
+inline int64_t pow2_param(const Params& p, const char* name, int64_t lo, int64_t hi) {
+    const int64_t v = int_param(p, name, lo, hi);
+    if (v & (v - 1)) throw Error(std::string(name) + " = " + std::to_string(v) + " must be a power of two");
+    return v;
+}
+
 // CPU references throw on NaN/inf coordinates (the GPU path relies on the host
 // check before upload: object_frame / check_object_cloud).
 inline void require_finite_xyz(const HostTensor& x, const char* op) {
