@@ -403,14 +403,12 @@ TEST_CASE("on a thin plate the grid names the face a pose presses, not the neare
     }
 }
 
-TEST_CASE("the surface's grid and each point's sample match a brute-force search", "[track]") {
-    // Every cell against every point (the build splats each point only over the cells of its
-    // band, row by row): the nearest within the band, ties to the lower index, and the nearest
-    // on a face turned the other way; each dense point's sample likewise from the samples.
-    io::TriangleMesh m = sim::mesh::extrude({{0, 0}, {14, 0}, {9, 6}, {0, 9}}, 0, 2.5);
-    const HostTensor dense = io::sample_surface(m, 700, 5, "prism");
-    track::SurfaceOptions o;
-    o.target_hypotheses = 3000, o.n_spin = 12, o.max_cells = 12000;
+namespace {
+
+// Every cell against every point (the build splats each point only over the cells of its
+// band, row by row): the nearest within the band, ties to the lower index, and the nearest
+// on a face turned the other way; each dense point's sample likewise from the samples.
+void check_grid_by_brute_force(const HostTensor& dense, track::SurfaceOptions o) {
     // On one thread and on three (slabs of z, each cell written by one): the same grid.
     std::vector<track::Surface> built;
     for (int threads : {1, 3}) {
@@ -465,4 +463,34 @@ TEST_CASE("the surface's grid and each point's sample match a brute-force search
     CHECK(built[0].cells == built[1].cells);
     CHECK(built[0].dense_sample == built[1].dense_sample);
     CHECK(built[0].dims[2] > 3);  // more slabs than threads
+}
+
+}  // namespace
+
+TEST_CASE("the surface's grid and each point's sample match a brute-force search", "[track]") {
+    track::SurfaceOptions o;
+    o.target_hypotheses = 3000, o.n_spin = 12, o.max_cells = 12000;
+    SECTION("a thin prism: every point near one facing away") {
+        io::TriangleMesh m = sim::mesh::extrude({{0, 0}, {14, 0}, {9, 6}, {0, 9}}, 0, 2.5);
+        check_grid_by_brute_force(io::sample_surface(m, 700, 5, "prism"), o);
+    }
+    SECTION("a block with a 2 mm slot: the far-face pass skips the points nothing nearby opposes") {
+        // The slot's walls face each other; the block's outer faces have nothing turned away
+        // from them within reach but at their rims (track::may_oppose).
+        // Broad beside the reach (two bands and a cell: ~17 mm here), so that its top and
+        // bottom have middles with no rim in reach.
+        io::TriangleMesh m = sim::mesh::extrude({{0, 0}, {200, 0}, {200, 200}, {101, 200}, {101, 60}, {99, 60}, {99, 200}, {0, 200}}, 0, 40);
+        const HostTensor dense = io::sample_surface(m, 3000, 7, "slotted block");
+        const track::Surface s = track::build_surface(dense, true, o, "slotted block");
+        const double band = std::max(o.band_mm, double(s.voxel));
+        const std::vector<char> may = track::may_oppose(s.dense.data(), s.n_dense(), 6, s, 2 * band + s.voxel);
+        const auto kept = std::count(may.begin(), may.end(), char(1));
+        INFO(kept << " of " << may.size() << " points may oppose a neighbour");
+        CHECK(kept > int64_t(may.size()) / 10);      // the slot's walls and the rims
+        CHECK(kept < int64_t(may.size()) * 9 / 10);  // the broad faces' middles skipped (~22 %)
+        int64_t far_filled = 0;
+        for (size_t c = 0; c < s.cells.size(); c += 2) far_filled += s.cells[c + 1] >= 0;
+        CHECK(far_filled > 20);  // the slot's far faces are in the grid
+        check_grid_by_brute_force(dense, o);
+    }
 }

@@ -1,6 +1,7 @@
 #include "engine/track/surface.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <limits>
 #include <unordered_map>
@@ -40,45 +41,54 @@ uint64_t morton(const float* p, const D3& lo, double h) {
 // One sample per occupied cube of side h: the dense point nearest the cube's
 // centre (lowest index on a tie), and a second where the cube also holds points
 // whose normals oppose the first's (a thin part's far face, which would otherwise
-// have no hypothesis there); in z-order of the cubes, so that samples near in index
-// are near in space (the evidence shader's lanes then read nearby cells).
-std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo, double h) {
+// have no hypothesis there). With `zorder`, in z-order of the cubes, so that samples
+// near in index are near in space (the evidence shader's lanes then read nearby
+// cells); the spacing's bisection below needs only how many.
+// The cubes' keys go in a flat table (open addressing): the bisection calls this ~25
+// times on every dense point, and std::unordered_map's nodes and the z-order sort of
+// each try took ~30 % of a tracker's making (a 224k-point mug: 460 ms).
+std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo, double h, bool zorder) {
     const int64_t D = int64_t(dense.size() / 6);
-    std::unordered_map<int64_t, size_t> slot;
+    int bits = 4;
+    while ((int64_t(1) << bits) < 2 * D) ++bits;
+    const uint64_t mask = (uint64_t(1) << bits) - 1;
+    std::vector<int64_t> table_key(size_t(mask + 1), -1);  // cell_key is never negative
+    std::vector<uint32_t> table_slot(size_t(mask + 1));
+    std::vector<uint32_t> slot_of(static_cast<size_t>(D));
     std::vector<int64_t> best, far;
-    std::vector<double> best_d, far_d;
-    auto centre_distance = [&](const float* p) {
-        double d = 0;
-        for (int k = 0; k < 3; ++k) {
-            double c = lo[k] + (std::floor((double(p[k]) - lo[k]) / h) + 0.5) * h, e = double(p[k]) - c;
-            d += e * e;
-        }
-        return d;
-    };
+    std::vector<double> best_d, far_d, centre_d(static_cast<size_t>(D));
     for (int64_t i = 0; i < D; ++i) {
         const float* p = &dense[size_t(i * 6)];
-        const double d = centre_distance(p);
-        auto [it, fresh] = slot.emplace(key_of(p, lo, h), best.size());
-        if (fresh) {
-            best.push_back(i);
-            best_d.push_back(d);
-        } else if (d < best_d[it->second]) {
-            best[it->second] = i;
-            best_d[it->second] = d;
+        int64_t c[3];
+        double d = 0;
+        for (int k = 0; k < 3; ++k) {
+            const double f = std::floor((double(p[k]) - lo[size_t(k)]) / h), e = double(p[k]) - (lo[size_t(k)] + (f + 0.5) * h);
+            c[k] = int64_t(f), d += e * e;
         }
+        centre_d[size_t(i)] = d;
+        const int64_t key = cell_key(c[0], c[1], c[2]);
+        uint64_t t = (uint64_t(key) * 0x9E3779B97F4A7C15ull) >> (64 - bits);
+        while (table_key[t] >= 0 && table_key[t] != key) t = (t + 1) & mask;
+        if (table_key[t] < 0) {
+            table_key[t] = key, table_slot[t] = uint32_t(best.size());
+            best.push_back(i), best_d.push_back(d);
+        } else if (d < best_d[table_slot[t]]) {
+            best[table_slot[t]] = i, best_d[table_slot[t]] = d;
+        }
+        slot_of[size_t(i)] = table_slot[t];
     }
     far.assign(best.size(), -1);
     far_d.assign(best.size(), INFINITY);
     for (int64_t i = 0; i < D; ++i) {
         const float* p = &dense[size_t(i * 6)];
-        const size_t c = slot.at(key_of(p, lo, h));
+        const size_t c = slot_of[size_t(i)];
         const float* m = &dense[size_t(best[c] * 6)];
         if (!(p[3] * m[3] + p[4] * m[4] + p[5] * m[5] < 0)) continue;
-        const double d = centre_distance(p);
-        if (d < far_d[c]) far[c] = i, far_d[c] = d;
+        if (centre_d[size_t(i)] < far_d[c]) far[c] = i, far_d[c] = centre_d[size_t(i)];
     }
     for (int64_t i : far)
         if (i >= 0) best.push_back(i);
+    if (!zorder) return best;
     std::vector<std::pair<uint64_t, int64_t>> order;
     for (int64_t i : best) order.push_back({morton(&dense[size_t(i * 6)], lo, h), i});
     std::sort(order.begin(), order.end());
@@ -95,12 +105,15 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
 void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, int64_t stride, const Surface& s,
            double band, int threads, bool opposes = false) {
     std::vector<float> best(cells.size() / 2, std::numeric_limits<float>::infinity());
+    // Both points within the band of one cell: at most 2 bands apart (a cell's width spare).
+    const std::vector<char> may = opposes ? may_oppose(pts, n, stride, s, 2 * band + s.voxel) : std::vector<char>();
     const int r = int(std::ceil(band / s.voxel));
     const float band2 = float(band * band);
     const int nz = s.dims[2], slabs = threads == 1 ? 1 : std::min(nz, 16);  // each slab scans every point
     parallel_for(size_t(slabs), threads, [&](size_t slab) {
         const int z_begin = int(int64_t(slab) * nz / slabs), z_end = int(int64_t(slab + 1) * nz / slabs);
         for (int64_t i = 0; i < n; ++i) {
+            if (opposes && !may[size_t(i)]) continue;
             const float* p = pts + i * stride;
             int c[3];
             for (int k = 0; k < 3; ++k) c[k] = int(std::floor((p[k] - s.origin[size_t(k)]) / s.voxel));
@@ -144,6 +157,49 @@ void splat(std::vector<int32_t>& cells, int slot, const float* pts, int64_t n, i
 }
 
 }  // namespace
+
+// Per cube of side `reach`, the bounds of its points' normals; a point whose normal has a
+// dot product of at least 1e-4 with every normal those bounds allow in its 27 cubes cannot
+// oppose any (float rounding is ~1e-7 here). The far-face pass stores a point only in a
+// cell whose slot-0 point opposes it, both within the cell's band, so it skips these: on
+// most of a surface the normals nearby agree, and the pass had checked every point against
+// every cell of its band (potato_tour.ply: a tracker's making 0.50 -> 0.24 s; a thin-walled
+// mug keeps most of its points).
+std::vector<char> may_oppose(const float* pts, int64_t n, int64_t stride, const Surface& s, double reach) {
+    std::array<int, 3> dims;
+    for (int k = 0; k < 3; ++k) dims[size_t(k)] = std::max(1, int(std::ceil(double(s.dims[size_t(k)]) * s.voxel / reach)));
+    auto cube = [&](const float* p) {
+        std::array<int, 3> c;
+        for (int k = 0; k < 3; ++k)
+            c[size_t(k)] = int(std::clamp(std::floor((double(p[k]) - s.origin[size_t(k)]) / reach), 0.0, double(dims[size_t(k)] - 1)));
+        return c;
+    };
+    const size_t C = size_t(dims[0]) * size_t(dims[1]) * size_t(dims[2]);
+    std::vector<std::array<float, 6>> bounds(C, {INFINITY, INFINITY, INFINITY, -INFINITY, -INFINITY, -INFINITY});
+    auto index = [&](const std::array<int, 3>& c) { return (size_t(c[2]) * size_t(dims[1]) + size_t(c[1])) * size_t(dims[0]) + size_t(c[0]); };
+    for (int64_t i = 0; i < n; ++i) {
+        const float* p = pts + i * stride;
+        auto& b = bounds[index(cube(p))];
+        for (int k = 0; k < 3; ++k) b[size_t(k)] = std::min(b[size_t(k)], p[3 + k]), b[size_t(3 + k)] = std::max(b[size_t(3 + k)], p[3 + k]);
+    }
+    std::vector<char> may(static_cast<size_t>(n), 0);
+    for (int64_t i = 0; i < n; ++i) {
+        const float* p = pts + i * stride;
+        const auto c = cube(p);
+        for (int dz = -1; dz <= 1 && !may[size_t(i)]; ++dz)
+            for (int dy = -1; dy <= 1 && !may[size_t(i)]; ++dy)
+                for (int dx = -1; dx <= 1 && !may[size_t(i)]; ++dx) {
+                    const std::array<int, 3> q{c[0] + dx, c[1] + dy, c[2] + dz};
+                    if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= dims[0] || q[1] >= dims[1] || q[2] >= dims[2]) continue;
+                    const auto& b = bounds[index(q)];
+                    if (b[0] > b[3]) continue;  // empty
+                    double least = 0;
+                    for (int k = 0; k < 3; ++k) least += std::min(double(p[3 + k]) * b[size_t(k)], double(p[3 + k]) * b[size_t(3 + k)]);
+                    if (least < 1e-4) may[size_t(i)] = 1;
+                }
+    }
+    return may;
+}
 
 D3 tangent_of(const D3& a) {
     D3 e = std::abs(a[0]) <= std::abs(a[1]) && std::abs(a[0]) <= std::abs(a[2]) ? D3{1, 0, 0}
@@ -208,13 +264,13 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
     std::vector<int64_t> picked;
     for (int it = 0; it < 24 && o.candidates.empty(); ++it) {
         const double h = std::sqrt(h_lo * h_hi);
-        picked = pick_samples(s.dense, lo, h);
+        picked = pick_samples(s.dense, lo, h, false);
         if (double(picked.size()) > want) h_lo = h;
         else h_hi = h;
     }
     if (o.candidates.empty()) {
         s.spacing_mm = h_hi;
-        picked = pick_samples(s.dense, lo, s.spacing_mm);
+        picked = pick_samples(s.dense, lo, s.spacing_mm, true);
     }
     for (int64_t i : picked) {
         const float* p = &s.dense[size_t(i * 6)];

@@ -71,6 +71,11 @@ struct Surface {
 Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOptions& o = {},
                       const std::string& source = "object");
 
+// Per point of pts ([n, stride], a unit normal at 3..5), 1 where some point of the set
+// within `reach` may have a normal turned away from its own (a dot product below 1e-4);
+// 0 where none can. build_surface's far-face pass skips the 0s (surface.cpp).
+std::vector<char> may_oppose(const float* pts, int64_t n, int64_t stride, const Surface& s, double reach);
+
 // The samples near each sample, for the filter's field_slack op (engine/ops/field_slack.cpp):
 // [S, kn, 3] rows (s' as a float, squared distance, the spin offset that keeps a pose's
 // heading from s to s'), the kn nearest within `radius` whose normal is within 45 degrees
