@@ -58,8 +58,9 @@ def test_tracker_equals_the_cli(cli, ctx, root):
     assert len(win["window_poses"]) == 2 and win["pose"].shape == (4, 4)
     # window_fit: the estimate's own pose, refined again, fits at least as well as its `fit`.
     assert t.window_fit([np.eye(4)], win["pose"]) >= win["fit"] - 1e-9
-    # A thread budget changes who climbs the modes, not the estimate.
-    one = vtloc.Tracker(ctx, mug_path, threads=1).evaluate_window([np.eye(4)])
+    # A thread budget changes who climbs the modes, not the estimate (with_options: the
+    # same surface, not built again).
+    one = t.with_options(threads=1).evaluate_window([np.eye(4)])
     assert one["contact"].tolist() == win["contact"].tolist() and one["fit"] == win["fit"]
     with pytest.raises(vtloc.Error, match="threads"):
         vtloc.Tracker(ctx, mug_path, threads=-1)
