@@ -59,11 +59,11 @@ std::vector<int64_t> pick_samples(const std::vector<float>& dense, const D3& lo,
     std::vector<double> best_d, far_d, centre_d(static_cast<size_t>(D));
     for (int64_t i = 0; i < D; ++i) {
         const float* p = &dense[size_t(i * 6)];
-        int64_t c[3];
-        double d = 0;
-        for (int k = 0; k < 3; ++k) {
-            const double f = std::floor((double(p[k]) - lo[size_t(k)]) / h), e = double(p[k]) - (lo[size_t(k)] + (f + 0.5) * h);
-            c[k] = int64_t(f), d += e * e;
+        const auto c = cell_of(p, lo, h);
+        double d = 0;  // to the cube's centre
+        for (size_t k = 0; k < 3; ++k) {
+            const double e = double(p[k]) - (lo[k] + (double(c[k]) + 0.5) * h);
+            d += e * e;
         }
         centre_d[size_t(i)] = d;
         const int64_t key = cell_key(c[0], c[1], c[2]);
@@ -182,22 +182,23 @@ std::vector<char> may_oppose(const float* pts, int64_t n, int64_t stride, const 
         auto& b = bounds[index(cube(p))];
         for (int k = 0; k < 3; ++k) b[size_t(k)] = std::min(b[size_t(k)], p[3 + k]), b[size_t(3 + k)] = std::max(b[size_t(3 + k)], p[3 + k]);
     }
-    std::vector<char> may(static_cast<size_t>(n), 0);
-    for (int64_t i = 0; i < n; ++i) {
-        const float* p = pts + i * stride;
+    auto opposable = [&](const float* p) {
         const auto c = cube(p);
-        for (int dz = -1; dz <= 1 && !may[size_t(i)]; ++dz)
-            for (int dy = -1; dy <= 1 && !may[size_t(i)]; ++dy)
-                for (int dx = -1; dx <= 1 && !may[size_t(i)]; ++dx) {
+        for (int dz = -1; dz <= 1; ++dz)
+            for (int dy = -1; dy <= 1; ++dy)
+                for (int dx = -1; dx <= 1; ++dx) {
                     const std::array<int, 3> q{c[0] + dx, c[1] + dy, c[2] + dz};
                     if (q[0] < 0 || q[1] < 0 || q[2] < 0 || q[0] >= dims[0] || q[1] >= dims[1] || q[2] >= dims[2]) continue;
                     const auto& b = bounds[index(q)];
                     if (b[0] > b[3]) continue;  // empty
                     double least = 0;
                     for (int k = 0; k < 3; ++k) least += std::min(double(p[3 + k]) * b[size_t(k)], double(p[3 + k]) * b[size_t(3 + k)]);
-                    if (least < 1e-4) may[size_t(i)] = 1;
+                    if (least < 1e-4) return true;
                 }
-    }
+        return false;
+    };
+    std::vector<char> may(static_cast<size_t>(n));
+    for (int64_t i = 0; i < n; ++i) may[size_t(i)] = opposable(pts + i * stride);
     return may;
 }
 
