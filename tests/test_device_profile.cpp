@@ -5,11 +5,14 @@
 #include <catch2/catch.hpp>
 #include <fstream>
 #include <sstream>
+#include <tuple>
 
 #include "base/error.h"
 #include "engine/executor.h"
+#include "engine/model/vtloc_runner.h"
 #include "engine/ops/build.h"
 #include "runtime/device_profile.h"
+#include "tests/api_test_util.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -132,5 +135,44 @@ TEST_CASE("on a plan-only H200 the point MLPs and GMA's decoder give every SM wo
         CHECK(uint64_t(r.groups[0]) * r.groups[1] * r.groups[2] >= 132);
         CHECK(r.spec[0] % 32 == 0);
     }
+    CHECK(plan.take_validation_messages().empty());
+}
+
+TEST_CASE("on a plan-only H200 FPS takes 2 points a thread and the point encoder's rows go channel-major",
+          "[runtime][profile]") {
+    // Both choices measured on an H200 (engine/ops/fps.cpp, VtlocRunner::point_major_rows);
+    // a CPU driver keeps its own (lavapipe: one subgroup of 32 points a lane, point-major rows).
+    rt::ContextOptions o;
+    o.validation = 1;
+    o.plan_for = rt::read_device_profile(profile_path("nvidia-h200.json"));
+    rt::Context plan(o);
+    for (auto [N, S, want] : {std::tuple<int64_t, int64_t, uint32_t>{1024, 512, 512}, {512, 128, 256}, {100, 50, 64},
+                              {16384, 512, 1024}}) {
+        INFO(N << " -> " << S << " points");
+        Graph g;
+        g.output(ops::fps(g, g.input("x", {N, 3}), S, "fps")[0], "i");
+        GpuExecutor ex(plan, g, WeightStore{});
+        REQUIRE(ex.sequence().dispatch_log().size() == 1);
+        CHECK(ex.sequence().dispatch_log()[0].shader == "fps_subgroup");
+        CHECK(ex.sequence().dispatch_log()[0].spec.at(0) == want);
+        if (test::gpu().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU && N <= 1024) {
+            GpuExecutor here(test::gpu(), g, WeightStore{});
+            CHECK(here.sequence().dispatch_log().at(0).spec.at(0) < want);
+        }
+    }
+    const WeightStore tiny = WeightStore::load(test::tiny_model());
+    auto point_major_layers = [&](rt::Context& ctx) {
+        VtlocRunner runner(tiny, &ctx);
+        const HostTensor cloud = test::random_tensor({300, runner.config().point.use_normals ? 6 : 3}, 7);
+        const HostTensor image(Shape{120, 160, 3}, ElemType::I32);
+        const Graph g = runner.prepare_once(image, cloud, nullptr).graph;
+        int layers = 0, point_major = 0;
+        for (const Node& n : g.nodes())
+            if (n.op == "group_linear") ++layers, point_major += n.params.get("point_major", 0) != 0;
+        REQUIRE(layers > 0);
+        return point_major;
+    };
+    CHECK(point_major_layers(plan) == 0);
+    if (test::gpu().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) CHECK(point_major_layers(test::gpu()) > 0);
     CHECK(plan.take_validation_messages().empty());
 }

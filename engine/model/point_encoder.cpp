@@ -117,6 +117,7 @@ int sa_scale(Graph& g, const WeightStore& w, const SaStageConfig& st, size_t s, 
         gl.group = ns;
         gl.x_point_major = !gather && x_pm;
         gl.point_major = !gl.max && opt.point_major_rows;
+        gl.fill = opt.fill;
         // Ball padding (a ball's free slots repeat its first point) is skipped:
         // the max leaves it out, and a gathering layer right before it leaves it
         // unwritten (not one with rows layers between: they would compute on

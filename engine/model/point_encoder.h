@@ -31,6 +31,9 @@ struct PointEncoderOptions {
     // Fused only: a scale's layers pass their rows point-major ([M, C]) instead of
     // channel-major ([C, M]); faster on lavapipe (docs/performance.md "Point-major rows").
     bool point_major_rows = true;
+    // > 0: a set-abstraction layer's tiles as a GPU shrinks them to offer this many
+    // workgroups (GroupLinear::fill; vtloc-bench-point's sweep on GPUs).
+    int64_t fill = 0;
 };
 
 // cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in

@@ -34,7 +34,9 @@ Graph build_vtloc_graph(const ModelConfig& cfg, const WeightStore& w, const Vtlo
     if (spec.encode_object || gma || spec.n_candidates > 0)
         cloud = g.input("point.cloud", {spec.n_points, normals ? 6 : 3});
     if (spec.encode_object) {
-        PointEncoderOutputs p = build_point_encoder(g, w, cfg, cloud);
+        PointEncoderOptions po;
+        po.point_major_rows = spec.point_major_rows;
+        PointEncoderOutputs p = build_point_encoder(g, w, cfg, cloud, po);
         for (auto& [name, id] : p.indices) g.output(id, name);
         fp = p.feature;
         g.output(fp, "point.feature");

@@ -60,8 +60,11 @@ void gpu(const GpuOpArgs& a) {
     const rt::DeviceInfo& d = a.ctx.info();
     const uint32_t N = to_u32(a.in[0].shape[0], "points"), S = to_u32(a.out[0].shape[0], "npoint");
     // A power of two (the tree reduction halves it) within the limits and the
-    // shared memory (2 x 8 bytes per thread), about 8 points per thread: each
-    // step costs log2(L) barriers, so more threads than that only add barriers.
+    // shared memory (2 x 8 bytes per thread). About 8 points per thread where the
+    // tree's log2(L) barriers a step are the cost; a GPU with subgroup arithmetic
+    // (one barrier a step) takes 2 points a thread: on an H200 (2026-12-04, bench
+    // "FPS by workgroup size") the paper's SA1 at 512 threads took 0.74x the time of
+    // 128 threads, SA2's 512 -> 128 at 256 threads 0.69x that of 64.
     const uint32_t cap = std::min({1024u, d.max_invocations, d.max_workgroup_size[0], d.max_shared_memory / 16});
     const uint32_t sg = std::max(1u, d.subgroup_size);
     struct Plan {
@@ -85,8 +88,11 @@ void gpu(const GpuOpArgs& a) {
         p.subgroup_iters = uint64_t(S) * (pass + (L / sg + sg - 1) / sg + 1);
         return p;
     };
+    const bool arithmetic = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
+                            (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT);
+    const uint32_t per_thread = arithmetic && d.type != VK_PHYSICAL_DEVICE_TYPE_CPU ? 2 : 8;
     uint32_t L = 1;
-    while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * 8 < N)) L *= 2;
+    while (L * 2 <= cap && (L < d.subgroup_size || L < 32 || uint64_t(L) * per_thread < N)) L *= 2;
     Plan pl = plan(L, kMaxPer);
     if (a.params.has("threads")) {
         L = uint32_t(a.params.get("threads", 1));
@@ -95,8 +101,6 @@ void gpu(const GpuOpArgs& a) {
                         " (workgroup size and shared-memory limits)");
         pl = plan(L, kMaxPerCpu);
     }
-    const bool arithmetic = a.params.get("subgroup", 1) != 0 && (d.subgroup_ops & VK_SUBGROUP_FEATURE_ARITHMETIC_BIT) &&
-                            (d.subgroup_ops & VK_SUBGROUP_FEATURE_BASIC_BIT);
     if (d.type == VK_PHYSICAL_DEVICE_TYPE_CPU && arithmetic && sg <= cap && !a.params.has("threads")) {
         // A CPU driver runs a workgroup's subgroups one after another, switching at
         // every barrier, while a lane's points cost only SIMD arithmetic: the fewest
