@@ -12,6 +12,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <map>
+#include <memory>
 #include <random>
 
 #include "bench/flops.h"
@@ -44,6 +45,53 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
     return c;
 }
 
+// GPUs: the paper size's encoder (1,024 points, the model's layout) with its
+// set-abstraction layers' tiles shrunk as if the device wanted 2-32x the workgroups
+// its rule asks for (GroupLinear::fill): smaller tiles, fewer accumulators a lane.
+// Each variant's MLP time (node minima over the rounds, in turns) and its three
+// slowest layers, to tell whether the rule's choice leaves speed behind.
+void fill_sweep(rt::Context& ctx, const WeightStore& w, const ModelConfig& cfg, int rounds) {
+    const int64_t n = 1024;
+    const uint64_t base = rt::fill_workgroups(ctx.info());
+    std::vector<int64_t> fills{0};
+    for (uint64_t f = 2; f <= 32; f *= 2) fills.push_back(int64_t(base * f));
+    const TensorMap in{{"point.cloud", sphere_cloud(n, 3)}};
+    std::vector<std::unique_ptr<GpuExecutor>> ex;
+    std::vector<Graph> graphs;
+    for (int64_t f : fills) {
+        PointEncoderOptions o;
+        o.point_major_rows = false;
+        o.fill = f;
+        Graph e;
+        e.output(build_point_encoder(e, w, cfg, e.input("point.cloud", {n, 6}), o).feature, "point.feature");
+        graphs.push_back(e);
+        ex.push_back(std::make_unique<GpuExecutor>(ctx, graphs.back(), w, /*profile=*/true));
+        ex.back()->run(in);
+    }
+    std::vector<std::map<std::string, double>> best(fills.size());
+    for (int r = 0; r < std::max(rounds, 5); ++r)
+        for (size_t i = 0; i < fills.size(); ++i) {
+            ex[i]->run(in);
+            for (const auto& t : ex[i]->node_times())
+                best[i][t.label] = best[i].count(t.label) ? std::min(best[i][t.label], t.ms) : t.ms;
+        }
+    std::printf("\n  set-abstraction tiles for more workgroups (1024 points, channel-major rows; fill 0 = the rule's %llu)\n",
+                (unsigned long long)base);
+    for (size_t i = 0; i < fills.size(); ++i) {
+        double mlp = 0;
+        std::vector<std::pair<double, std::string>> slow;
+        for (const Node& nd : graphs[i].nodes())
+            if (nd.op == "group_linear" && best[i].count(nd.name)) {
+                mlp += best[i][nd.name];
+                slow.push_back({best[i][nd.name], nd.name});
+            }
+        std::sort(slow.rbegin(), slow.rend());
+        std::printf("    fill %6lld: group_linear %.3f ms;", (long long)fills[i], mlp);
+        for (size_t k = 0; k < slow.size() && k < 3; ++k) std::printf(" %s %.3f", slow[k].second.c_str(), slow[k].first);
+        std::printf("\n");
+    }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -68,7 +116,10 @@ int main(int argc, char** argv) {
                 e.output(build_point_encoder(e, w, cfg, e.input("point.cloud", {n, 6}), opt).feature, "point.feature");
                 return e;
             };
-            const Graph g = encoder({});
+            // The layout the model takes on this device (VtlocRunner::point_major_rows).
+            PointEncoderOptions base;
+            base.point_major_rows = ctx.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+            const Graph g = encoder(base);
             // VTLOC_BENCH_OBJECT: a mesh or cloud file sampled to n points and normalised
             // as the model does it; its balls pad fewer rows than the sphere's.
             const char* object = std::getenv("VTLOC_BENCH_OBJECT");
@@ -99,17 +150,17 @@ int main(int argc, char** argv) {
             std::vector<double> round_gf, round_probe, round_frac;
             // The same encoder computing every row (no ball padding skipped), in the same
             // rounds right after: an A/B that a host's phases cannot tilt one way.
-            PointEncoderOptions every_row;
+            PointEncoderOptions every_row = base;
             every_row.skip_padding = false;
             const Graph g_all = encoder(every_row);
             GpuExecutor prof_all(ctx, g_all, w, /*profile=*/true);
             prof_all.run(in);
             const std::map<std::string, double> flops_all = bench::node_flops(g_all);
-            // And the encoder with the rows between layers channel-major, as before
-            // PointEncoderOptions::point_major_rows: the layouts' A/B.
-            PointEncoderOptions channel_major;
-            channel_major.point_major_rows = false;
-            const Graph g_cm = encoder(channel_major);
+            // And the encoder with the rows between layers in the other layout
+            // (PointEncoderOptions::point_major_rows): the layouts' A/B.
+            PointEncoderOptions other = base;
+            other.point_major_rows = !base.point_major_rows;
+            const Graph g_cm = encoder(other);
             GpuExecutor prof_cm(ctx, g_cm, w, /*profile=*/true);
             prof_cm.run(in);
             std::map<std::string, double> node_ms_all, node_ms_cm;
@@ -161,8 +212,9 @@ int main(int argc, char** argv) {
             double mlp_cm = 0;  // the same nodes and FLOPs: the layouts differ in memory only
             for (auto& [label, ms] : node_ms_cm)
                 if (flops.count(label)) mlp_cm += ms;
-            std::printf("        (rows channel-major between layers, in the same rounds: MLP %.2f ms; point-major rows: %.0f %% less)\n",
-                        mlp_cm, 100 * (1 - mlp_ms / mlp_cm));
+            std::printf("        (rows %s between layers instead, in the same rounds: MLP %.2f ms; %s rows, the default here: %.0f %% less)\n",
+                        other.point_major_rows ? "point-major" : "channel-major", mlp_cm,
+                        base.point_major_rows ? "point-major" : "channel-major", 100 * (1 - mlp_ms / mlp_cm));
             std::vector<std::pair<double, std::string>> slow;
             for (auto& [label, ms] : node_ms) slow.push_back({ms, label});
             std::sort(slow.rbegin(), slow.rend());
@@ -172,6 +224,7 @@ int main(int argc, char** argv) {
                             f > 0 ? (std::to_string(int(f / (slow[i].first * 1e-3) * 1e-9 * 10) / 10.0).substr(0, 5) + " GFLOP/s").c_str() : "");
             }
         }
+        if (ctx.info().type != VK_PHYSICAL_DEVICE_TYPE_CPU) fill_sweep(ctx, w, cfg, rounds);
         bench::check_validation(ctx, "vtloc-bench-point");
     } catch (const Error& e) {
         std::fprintf(stderr, "vtloc-bench-point: %s\n", e.what());
