@@ -80,7 +80,7 @@ TEST_CASE("point encoder matches the PyTorch golden (vtloc-mcr-tiny: MSG, no nor
 // group-all 643 -> 1024): the GPU alone (the CPU reference would take most of
 // the time budget; it is checked against the GPU on the tiny configs). fp32
 // accumulation over K <= 1024 with values O(1): relative error ~1e-6 per layer.
-TEST_CASE("point encoder matches the PyTorch golden (vtloc-r18, paper config)", "[point][golden]") {
+TEST_CASE("point encoder matches the PyTorch golden (vtloc-r18, paper config)", "[point][golden][paper]") {
     run_golden(test::build_goldens_dir(), "vtloc-r18", true, false, {1e-4, 1e-4});
 }
 

@@ -93,7 +93,7 @@ TEST_CASE("tactile branch matches the PyTorch golden (vtloc-tiny)", "[tactile][g
     check_against_golden(test::goldens_dir(), "vtloc-tiny", true);
 }
 
-TEST_CASE("tactile branch matches the PyTorch golden (vtloc-r18 at 224x224)", "[tactile][golden]") {
+TEST_CASE("tactile branch matches the PyTorch golden (vtloc-r18 at 224x224)", "[tactile][golden][paper]") {
     check_against_golden(test::build_goldens_dir(), "vtloc-r18", true);
 }
 

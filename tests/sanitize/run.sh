@@ -105,14 +105,20 @@ for kind in "${kinds[@]}"; do
       # other [group_linear] cases, and a variant's numbers are the shader's, which
       # ASan does not see;
       # ~[subgroup_sweep]: the same sweeps on the subgroup shader's variants (for the subgroup-4 run);
-      # ~[picture]: the hidden case that rewrites a picture in docs/ (exclusions alone match hidden cases).
+      # ~[picture]: the hidden case that rewrites a picture in docs/ (exclusions alone match hidden cases);
+      # ~[selftest]: the op self-test, whose host code is every op's CPU reference and recording,
+      # which the ops' own cases run here (it runs at both subgroup sizes in the long suite; here
+      # it compiled ~100 pipelines cold and took 36 s);
+      # ~[paper]: the paper size's end-to-end, tactile and point-encoder goldens (50 s here,
+      # its CPU reference in instrumented loops); the tiny models' goldens run the same graph
+      # building and recording, and GMA's paper-size goldens (the split W^d) stay.
       # GALLIVM_PERF=nopt, as the README's command runs lavapipe: ASan sees our host code, not
       # the JIT's, and Mesa's disk cache keys on the flag, so the run reuses the command's
       # compiled pipelines instead of compiling each cold with LLVM's passes (most of this
       # run's time on a fresh machine: docs/testing.md). The optimised JIT still runs every
       # op in the long suite (long/opt/: the op self-test) and the TSan run below.
       run build-asan "address,undefined" vtloc_tests "runtime error:" \
-        "shards:~[long]~[sweep]~[subgroup_sweep]~[picture]" \
+        "shards:~[long]~[sweep]~[subgroup_sweep]~[picture]~[selftest]~[paper]" \
         GALLIVM_PERF="${GALLIVM_PERF-nopt}" \
         ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1" \
         LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
