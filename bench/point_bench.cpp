@@ -45,7 +45,7 @@ HostTensor sphere_cloud(int64_t n, uint32_t seed) {
     return c;
 }
 
-// GPUs: the paper size's encoder (1,024 points, the model's layout) with its
+// GPUs: the paper size's encoder (1,024 points, the model's layout: channel-major rows) with its
 // set-abstraction layers' tiles shrunk as if the device wanted 2-32x the workgroups
 // its rule asks for (GroupLinear::fill): smaller tiles, fewer accumulators a lane.
 // Each variant's MLP time (node minima over the rounds, in turns) and its three
@@ -60,7 +60,7 @@ void fill_sweep(rt::Context& ctx, const WeightStore& w, const ModelConfig& cfg, 
     std::vector<Graph> graphs;
     for (int64_t f : fills) {
         PointEncoderOptions o;
-        o.point_major_rows = false;
+        o.point_major_rows = point_major_rows_on(&ctx.info());
         o.fill = f;
         Graph e;
         e.output(build_point_encoder(e, w, cfg, e.input("point.cloud", {n, 6}), o).feature, "point.feature");
@@ -116,9 +116,8 @@ int main(int argc, char** argv) {
                 e.output(build_point_encoder(e, w, cfg, e.input("point.cloud", {n, 6}), opt).feature, "point.feature");
                 return e;
             };
-            // The layout the model takes on this device (VtlocRunner::point_major_rows).
-            PointEncoderOptions base;
-            base.point_major_rows = ctx.info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
+            PointEncoderOptions base;  // the layout the model takes on this device
+            base.point_major_rows = point_major_rows_on(&ctx.info());
             const Graph g = encoder(base);
             // VTLOC_BENCH_OBJECT: a mesh or cloud file sampled to n points and normalised
             // as the model does it; its balls pad fewer rows than the sphere's.

@@ -140,7 +140,7 @@ TEST_CASE("on a plan-only H200 the point MLPs and GMA's decoder give every SM wo
 
 TEST_CASE("on a plan-only H200 FPS takes 2 points a thread and the point encoder's rows go channel-major",
           "[runtime][profile]") {
-    // Both choices measured on an H200 (engine/ops/fps.cpp, VtlocRunner::point_major_rows);
+    // Both choices measured on an H200 (engine/ops/fps.cpp, point_major_rows_on);
     // a CPU driver keeps its own (lavapipe: one subgroup of 32 points a lane, point-major rows).
     rt::ContextOptions o;
     o.validation = 1;

@@ -157,6 +157,8 @@ int group_all(Graph& g, const WeightStore& w, const PointConfig& c, const StageI
 
 }  // namespace
 
+bool point_major_rows_on(const rt::DeviceInfo* device) { return !device || device->type == VK_PHYSICAL_DEVICE_TYPE_CPU; }
+
 PointEncoderOutputs build_point_encoder(Graph& g, const WeightStore& w, const ModelConfig& config, int cloud) {
     return build_point_encoder(g, w, config, cloud, PointEncoderOptions{});
 }

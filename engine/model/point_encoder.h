@@ -10,6 +10,7 @@
 #include "engine/model/model_config.h"
 #include "engine/tensor.h"
 #include "engine/weights.h"
+#include "runtime/context.h"
 
 namespace vtloc {
 
@@ -30,11 +31,17 @@ struct PointEncoderOptions {
     bool skip_padding = true;
     // Fused only: a scale's layers pass their rows point-major ([M, C]) instead of
     // channel-major ([C, M]); faster on lavapipe (docs/performance.md "Point-major rows").
+    // The model takes point_major_rows_on(its device).
     bool point_major_rows = true;
     // > 0: a set-abstraction layer's tiles as a GPU shrinks them to offer this many
     // workgroups (GroupLinear::fill; vtloc-bench-point's sweep on GPUs).
     int64_t fill = 0;
 };
+
+// The rows' layout the model takes on a device (null: the CPU reference): point-major on
+// CPU drivers, channel-major on GPUs, where it took an H200's point MLPs 11-15 % less
+// time (2026-12-04, vtloc-bench-point's layout A/B at 1,024-16,384 points).
+bool point_major_rows_on(const rt::DeviceInfo* device);
 
 // cloud: [N, 6] (xyz + normals) when config point.use_normals, else [N, 3], in
 // the normalised frame (object_frame.h). Reads `point.sa{i}.conv_blocks.*`,

@@ -40,7 +40,7 @@ struct VtlocGraphSpec {
     int symmetry_order = 0;                     // > 1: heat-map with the symmetry prior
     bool ilu_stepped = false;                   // bench: one dispatch per ILU iteration (build_ilu_stepped)
     bool retrieval_apart = false;               // bench: ILU and retrieval as nodes of their own (ilu, retrieve)
-    bool point_major_rows = true;               // PointEncoderOptions's; VtlocRunner: false on GPUs
+    bool point_major_rows = true;               // PointEncoderOptions's; VtlocRunner: point_major_rows_on
 };
 
 // Builds the graph from weights made by prepare_weights (engine/model/prepared_weights.h).

@@ -47,17 +47,10 @@ TensorMap VtlocRunner::run(const VtlocGraphSpec& spec_in, const TensorMap& input
     VtlocGraphSpec spec = spec_in;
     spec.ilu_stepped = ilu_stepped_ && spec.image_height > 0 && spec.max_iters > 0;
     spec.retrieval_apart = retrieval_apart_;
-    spec.point_major_rows = point_major_rows();
+    spec.point_major_rows = point_major_rows_on(gpu_ ? &gpu_->info() : nullptr);
     return run_graph(spec_key(spec, profile_) + (spec.ilu_stepped ? "/stepped" : "") + (retrieval_apart_ ? "/apart" : "") +
                          "/" + schedule_name(schedule_),
                      [&] { return build_vtloc_graph(config_, weights_, spec); }, inputs);
-}
-
-// Measured on an H200 (2026-12-04, vtloc-bench-point's layout A/B at 1,024, 4,096
-// and 16,384 points): channel-major rows took the point MLPs 11-15 % less time;
-// on lavapipe point-major is the faster (docs/performance.md "Point-major rows").
-bool VtlocRunner::point_major_rows() const {
-    return !gpu_ || gpu_->info().type == VK_PHYSICAL_DEVICE_TYPE_CPU;
 }
 
 TensorMap VtlocRunner::run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs) {
@@ -279,7 +272,7 @@ VtlocRunner::Prepared VtlocRunner::prepare_once(const HostTensor& image, const H
     EncodedObject o = prepare_object(cloud, candidates);
     TouchRun r = touch_run(config(), o, {image}, options);
     r.spec.encode_object = true;
-    r.spec.point_major_rows = point_major_rows();
+    r.spec.point_major_rows = point_major_rows_on(gpu_ ? &gpu_->info() : nullptr);
     return {build_vtloc_graph(config_, weights_, r.spec), std::move(r.inputs)};
 }
 

@@ -139,9 +139,6 @@ private:
     EncodedObject prepare_object(const HostTensor& cloud, const HostTensor* candidates) const;
     TensorMap run(const VtlocGraphSpec& spec, const TensorMap& inputs);
     TensorMap run_graph(const std::string& key, const std::function<Graph()>& build, const TensorMap& inputs);
-    // The point encoder's rows between layers point-major on the CPU reference and CPU
-    // drivers, channel-major on GPUs (PointEncoderOptions::point_major_rows).
-    bool point_major_rows() const;
 
     const PreparedWeights weights_;  // what every graph shape reads, never changed
     ModelConfig config_;  // the weights' config, parsed once per load
