@@ -1,9 +1,11 @@
 #include "engine/sim/symmetry.h"
 
 #include <algorithm>
+#include <array>
 #include <cmath>
+#include <cstdint>
 #include <limits>
-#include <unordered_map>
+#include <vector>
 
 #include "base/error.h"
 #include "engine/sim/everyday_shapes.h"
@@ -168,24 +170,55 @@ double symmetry_residual_mm(const Symmetry& s, const io::TriangleMesh& mesh, int
     double edge = 0;
     for (size_t t = 0; t < T; ++t) edge += std::sqrt(sq(vert(t, 0), vert(t, 1)));
     const double cell = std::max(0.5, 2 * edge / double(std::max<size_t>(T, 1)));
-    auto key = [&](int64_t x, int64_t y, int64_t z) { return (x * 73856093) ^ (y * 19349663) ^ (z * 83492791); };
-    std::unordered_multimap<int64_t, size_t> grid;
+    // Cells hashed into a flat table of 2^k buckets (CSR: each bucket's triangles in one run);
+    // a bucket may mix cells, which only adds triangles to a search.
+    using Cell = std::array<int64_t, 3>;
+    auto cell_of = [&](const Vec3d& p) {
+        return Cell{int64_t(std::floor(p[0] / cell)), int64_t(std::floor(p[1] / cell)), int64_t(std::floor(p[2] / cell))};
+    };
+    std::vector<std::pair<Cell, Cell>> boxes(T);  // each triangle's cells, lowest and highest
+    size_t entries = 0;
     for (size_t t = 0; t < T; ++t) {
         Vec3d lo = vert(t, 0), hi = lo;
         for (int c = 1; c < 3; ++c)
             for (int k = 0; k < 3; ++k) lo[size_t(k)] = std::min(lo[size_t(k)], vert(t, c)[size_t(k)]), hi[size_t(k)] = std::max(hi[size_t(k)], vert(t, c)[size_t(k)]);
-        for (int64_t x = int64_t(std::floor(lo[0] / cell)); x <= int64_t(std::floor(hi[0] / cell)); ++x)
-            for (int64_t y = int64_t(std::floor(lo[1] / cell)); y <= int64_t(std::floor(hi[1] / cell)); ++y)
-                for (int64_t z = int64_t(std::floor(lo[2] / cell)); z <= int64_t(std::floor(hi[2] / cell)); ++z) grid.emplace(key(x, y, z), t);
+        boxes[t] = {cell_of(lo), cell_of(hi)};
+        const Cell& l = boxes[t].first;
+        const Cell& h = boxes[t].second;
+        entries += size_t((h[0] - l[0] + 1) * (h[1] - l[1] + 1) * (h[2] - l[2] + 1));
     }
-    auto nearest = [&](const Vec3d& p) {  // within one cell around p, else "far" (one cell)
+    size_t buckets = 1;
+    while (buckets < 2 * entries) buckets *= 2;
+    auto bucket = [&](int64_t x, int64_t y, int64_t z) {
+        return size_t(uint64_t((x * 73856093) ^ (y * 19349663) ^ (z * 83492791)) & (buckets - 1));
+    };
+    auto each_cell = [&](size_t t, const auto& f) {
+        const Cell& l = boxes[t].first;
+        const Cell& h = boxes[t].second;
+        for (int64_t x = l[0]; x <= h[0]; ++x)
+            for (int64_t y = l[1]; y <= h[1]; ++y)
+                for (int64_t z = l[2]; z <= h[2]; ++z) f(bucket(x, y, z));
+    };
+    std::vector<uint32_t> start(buckets + 1, 0), tris(entries);
+    for (size_t t = 0; t < T; ++t) each_cell(t, [&](size_t b) { ++start[b + 1]; });
+    for (size_t b = 0; b < buckets; ++b) start[b + 1] += start[b];
+    std::vector<uint32_t> fill(start.begin(), start.end() - 1);
+    for (size_t t = 0; t < T; ++t) each_cell(t, [&](size_t b) { tris[fill[b]++] = uint32_t(t); });
+    // The distance from p to the mesh within one cell around p, else "far" (one cell); it stops
+    // early once below `enough`, a bound its caller only needs to know p is under (the worst so far).
+    auto nearest = [&](const Vec3d& p, double enough) {
         double best = cell * cell;
-        const int64_t c[3] = {int64_t(std::floor(p[0] / cell)), int64_t(std::floor(p[1] / cell)), int64_t(std::floor(p[2] / cell))};
+        const double stop = enough * enough;
+        const Cell c = cell_of(p);
         for (int64_t x = c[0] - 1; x <= c[0] + 1; ++x)
             for (int64_t y = c[1] - 1; y <= c[1] + 1; ++y)
                 for (int64_t z = c[2] - 1; z <= c[2] + 1; ++z) {
-                    auto [b, e] = grid.equal_range(key(x, y, z));
-                    for (auto it = b; it != e; ++it) best = std::min(best, point_triangle_sq(p, vert(it->second, 0), vert(it->second, 1), vert(it->second, 2)));
+                    const size_t b = bucket(x, y, z);
+                    for (uint32_t i = start[b]; i < start[b + 1]; ++i) {
+                        const size_t t = tris[i];
+                        best = std::min(best, point_triangle_sq(p, vert(t, 0), vert(t, 1), vert(t, 2)));
+                        if (best <= stop && std::sqrt(best) <= enough) return std::sqrt(best);  // sqrt: no rounding past it
+                    }
                 }
         return std::sqrt(best);
     };
@@ -200,7 +233,7 @@ double symmetry_residual_mm(const Symmetry& s, const io::TriangleMesh& mesh, int
     for (const Mat3d& R : Rs)
         for (int64_t i = 0; i < pts.shape[0]; ++i) {
             const Vec3d p{pts.data[size_t(6 * i)], pts.data[size_t(6 * i + 1)], pts.data[size_t(6 * i + 2)]};
-            worst = std::max(worst, nearest(s.apply(R, p)));
+            worst = std::max(worst, nearest(s.apply(R, p), worst));  // exact: a point under worst cannot raise it
         }
     return worst;
 }

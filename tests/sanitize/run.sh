@@ -98,7 +98,7 @@ for kind in "${kinds[@]}"; do
   case "$kind" in
     asan)
       echo "sanitize: ASan + UBSan, the whole vtloc_tests suite but the point-MLP variant sweeps (a share per core, side by side)"
-      # ~[long]: the full-size sweeps (the suite's quick versions cover the same paths);
+      # ~[long]: the full-size sweeps and chamfer at 16,384 points (the quick versions cover the same paths);
       # ~[sweep]: those quick versions too, the three point-MLP variant sweeps (~210 of
       # ~1,225 test-seconds here: the CPU reference's loops instrumented); their host
       # code (group_linear's tile and pipeline choice, its CPU reference) runs in the
