@@ -8,6 +8,7 @@
 #include "engine/ops/build.h"
 #include "engine/ops/common.h"
 #include "engine/ops/point_common.h"
+#include "runtime/context.h"
 
 namespace vtloc {
 

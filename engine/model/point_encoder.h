@@ -10,9 +10,12 @@
 #include "engine/model/model_config.h"
 #include "engine/tensor.h"
 #include "engine/weights.h"
-#include "runtime/context.h"
 
 namespace vtloc {
+
+namespace rt {
+struct DeviceInfo;  // runtime/context.h: the layout rule reads only its type
+}
 
 struct PointEncoderOutputs {
     int feature = -1;  // F^p, [1, C]
