@@ -18,6 +18,7 @@
 #include "engine/executor.h"
 #include "engine/ops/build.h"
 #include "engine/ops/pose_evidence.h"
+#include "runtime/device_profile.h"
 #include "tests/harness.h"
 
 using namespace vtloc;
@@ -131,11 +132,48 @@ TEST_CASE("the mirror's floor_of is std::floor, bit for bit", "[pose]") {
 
 TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose][pose_evidence]") {
     struct Case { int64_t S, D, NS, K, F; };
+    // Both ways of reading the tables (texel buffers, storage buffers) on every scene: each
+    // against the reference, and the two bit for bit (the same values read, the same arithmetic).
     for (Case c : {Case{1, 1, 1, 1, 0}, Case{13, 29, 7, 3, 2}, Case{61, 17, 36, 8, 3}, Case{257, 101, 12, 0, 1},
                    Case{40, 9, 5, 5, 0}}) {
         INFO("S " << c.S << " D " << c.D << " NS " << c.NS << " K " << c.K << " F " << c.F);
         Scene sc = scene(c.S, c.D, c.NS, c.K, c.F, uint32_t(c.S * 31 + c.K));
-        test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in);
+        std::vector<std::vector<float>> got;
+        for (ops::BufferPath path : ops::kBufferPaths) {
+            INFO(ops::path_name(path));
+            sc.p.path = path;
+            got.push_back(test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in).at("score").data);
+        }
+        CHECK(got[0] == got[1]);
+    }
+}
+
+TEST_CASE("pose_evidence reads its tables as texels only within the device's texel limit", "[pose][profile]") {
+    // Planned (not run) for a GPU allowing Vulkan's minimum of 65,536 texels: a grid of
+    // 32,768 cells (65,536 texels) still fits, one more row does not and takes the
+    // storage-buffer shader. The samples, dense rows and fields count alike.
+    rt::ContextOptions o;
+    o.validation = 1;
+    o.plan_for = rt::read_device_profile(std::string(VTLOC_SOURCE_DIR) + "/bench/device_profiles/mali-4core-conservative.json");
+    REQUIRE(o.plan_for->max_texel_elements == 65536);
+    rt::Context plan(o);
+    struct Case { int64_t S, D, nz, F; const char* want; };
+    for (Case c : {Case{13, 29, 32, 2, "pose_evidence"}, Case{13, 29, 33, 2, "pose_evidence_ssbo"},
+                   Case{21845, 29, 2, 0, "pose_evidence"}, Case{21846, 29, 2, 0, "pose_evidence_ssbo"},
+                   Case{13, 32768, 2, 1, "pose_evidence"}, Case{13, 32769, 2, 1, "pose_evidence_ssbo"},
+                   Case{13, 29, 2, 720, "pose_evidence"}, Case{13, 29, 2, 721, "pose_evidence_ssbo"}}) {
+        INFO("S " << c.S << " D " << c.D << " grid 32 x 32 x " << c.nz << " F " << c.F);
+        Graph g;
+        ops::PoseEvidence p;
+        p.dims[0] = 32, p.dims[1] = 32, p.dims[2] = c.nz;
+        const int64_t NS = 7, V = 32 * 32 * c.nz;
+        g.output(ops::pose_evidence(g, g.input("samples", {c.S, 12}), g.input("dense", {c.D, 8}),
+                                    g.input("cells", {V, 2}, ElemType::I32), g.input("spins", {NS, 2}),
+                                    g.input("terms", {3, 16}), g.input("fields", {c.F, c.S * NS}), p),
+                 "score");
+        GpuExecutor ex(plan, g, WeightStore{});
+        REQUIRE(ex.sequence().dispatch_log().size() == 1);
+        CHECK(ex.sequence().dispatch_log()[0].shader == c.want);
     }
 }
 

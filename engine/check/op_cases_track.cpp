@@ -1,6 +1,6 @@
 // Self-test cases of the multi-touch filter's ops (tests/test_pose_ops.cpp):
 // pose_evidence on a random scene (terms with geometry, with fields, both; some
-// poses leave the grid, some cells are empty), then log_softmax, spin_marginal
+// poses leave the grid, some cells are empty; tables as texels and in storage buffers), then log_softmax, spin_marginal
 // and expected_distance on its score; field_slack on random fields.
 #include <cmath>
 #include <random>
@@ -13,8 +13,9 @@ namespace vtloc::check {
 
 namespace {
 
-OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
-    OpCase c("pose_evidence", std::to_string(S) + " samples x " + std::to_string(NS) + " spins, " + std::to_string(K) + " terms");
+OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed, ops::BufferPath path) {
+    OpCase c("pose_evidence", std::to_string(S) + " samples x " + std::to_string(NS) + " spins, " + std::to_string(K) +
+                                  " terms, " + ops::path_name(path));
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(-4.0f, 4.0f);
     const int64_t D = 2 * S + 3, V = 6 * 5 * 7, F = 2;
@@ -54,6 +55,7 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed) {
     p.origin[0] = -4.5, p.origin[1] = -3.75, p.origin[2] = -5.25;
     p.dims[0] = 6, p.dims[1] = 5, p.dims[2] = 7;
     p.own_field = 1;
+    p.path = path;
     samples = HostTensor({S, 12}, ops::pose::evidence_samples(samples.data));
     int score = ops::pose_evidence(c.g, c.input("samples", samples), c.input("dense", dense),
                                    c.input("cells", HostTensor::from_ints({V, 2}, cells)), c.input("spins", spins),
@@ -118,8 +120,9 @@ HostTensor random_slack_neighbours(int64_t S, int64_t KN, int64_t NS, uint32_t s
 
 std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
     std::vector<OpCase> v;
-    v.push_back(pose_case(61, 36, 6, 3));
-    v.push_back(pose_case(7, 5, 0, 4));
+    v.push_back(pose_case(61, 36, 6, 3, ops::BufferPath::Texel));
+    v.push_back(pose_case(7, 5, 0, 4, ops::BufferPath::Texel));
+    v.push_back(pose_case(61, 36, 6, 3, ops::BufferPath::Storage));
     v.push_back(reduce_case("log_softmax", 1031, 12, 5));
     v.push_back(reduce_case("spin_marginal", 300, 36, 6));
     v.push_back(reduce_case("expected_distance", 77, 1, 7));

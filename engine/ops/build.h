@@ -101,6 +101,7 @@ struct PoseEvidence {
     int64_t dims[3] = {1, 1, 1};
     int64_t own_field = -1;  // a field added at the hypothesis itself, -1 none
     double own_weight = 1;
+    BufferPath path = BufferPath::Texel;  // the tables as texel buffers where the device allows
 };
 // samples [S, 12], dense [D, 8], cells [V, 2] I32, spins [NS, 2], terms [K, 16], fields [F, S*NS] -> score [S*NS].
 int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,

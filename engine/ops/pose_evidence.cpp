@@ -9,7 +9,8 @@
 // cells [V, 2] I32 (nearest dense point and its counterpart on a face turned the other
 // way: pose_evidence.h), spins [NS, 2] (cos, sin of 2 pi j / NS, evenly spaced),
 // terms [K, 16] (rel 9, trel 3, sigma_d, sigma_a, field, weight), fields
-// [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.comp
+// [F, S * NS]. Output: score [S * NS]. -> shaders/pose_evidence.glsl (pose_evidence.comp:
+// the tables as texel buffers; pose_evidence_ssbo.comp: past the texel limit)
 // Terms are data on the device, so only the CPU reference can refuse a term naming a
 // field past F; the shader reads nothing for one (no read out of bounds). The
 // tracker never builds one.
@@ -152,15 +153,28 @@ void gpu(const GpuOpArgs& a) {
         float press, log_floor, field_floor, own_weight, exp_floor;
     } push{st.origin.x, st.origin.y, st.origin.z, 1.0f / st.voxel, st.nx, st.ny, st.nz, int32_t(NS), H, K, F,
            st.own_field, st.press, st.log_floor, st.field_floor, st.own_weight, std::exp(st.log_floor)};
-    // Empty terms or fields: any read-only buffer fills the unused binding.
-    const rt::BufferView& terms = K ? a.in[4].view : a.in[0].view;
-    const rt::BufferView& fields = F ? a.in[5].view : a.in[0].view;
-    // NS specialises the shader (shaders/pose_evidence.comp).
-    // The terms are a texel buffer (binding 4, RGBA32F: a term's 16 floats in 4 texels).
-    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{"pose_evidence", 7, uint32_t(sizeof(push)), {local, NS}, 1u << 4}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.in[3].view, rt::Access::Read}, {terms, rt::Access::Read, VK_FORMAT_R32G32B32A32_SFLOAT},
-                    {fields, rt::Access::Read},
+    // Empty terms or fields: a small read-only input fills the unused binding (the spins:
+    // at least one RGBA32F texel from NS = 2 on).
+    const rt::BufferView& terms = K ? a.in[4].view : NS >= 2 ? a.in[3].view : a.in[0].view;
+    const rt::BufferView& fields = F ? a.in[5].view : a.in[3].view;
+    // The terms are always a texel buffer (binding 4, RGBA32F: a term's 16 floats in 4
+    // texels; a window's few terms fit any device). The tables too (samples and dense
+    // surface RGBA32F, cells and fields R32F/R32I: gathers on a CPU driver, where storage
+    // reads at varying offsets are lane loops), unless one holds more texels than the
+    // device allows or param texel = 0: then pose_evidence_ssbo.comp.
+    const uint64_t most = a.ctx.info().max_texel_elements;
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(a.in[0].shape[0]) * 3 <= most &&
+                       uint64_t(a.in[1].shape[0]) * 2 <= most && uint64_t(a.in[2].shape[0]) * 2 <= most &&
+                       (F ? uint64_t(F) * H : 2 * uint64_t(NS)) <= most;
+    const VkFormat f4 = texel ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_UNDEFINED;
+    const rt::Access R = rt::Access::Read;
+    // NS specialises the shader (shaders/pose_evidence.glsl).
+    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "pose_evidence" : "pose_evidence_ssbo", 7,
+                                                          uint32_t(sizeof(push)), {local, NS}, texel ? 0x37u : 0x10u}),
+                   {{a.in[0].view, R, f4}, {a.in[1].view, R, f4},
+                    {a.in[2].view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED}, {a.in[3].view, R},
+                    {terms, R, VK_FORMAT_R32G32B32A32_SFLOAT},
+                    {fields, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
                     {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
@@ -169,6 +183,6 @@ void gpu(const GpuOpArgs& a) {
 
 const OpDef op_pose_evidence{"pose_evidence", infer, cpu, gpu, 0,
                              {"press", "log_floor", "field_floor", "ox", "oy", "oz", "voxel", "nx", "ny", "nz",
-                              "own_field", "own_weight"}};
+                              "own_field", "own_weight", "texel"}};
 
 }  // namespace vtloc::ops
