@@ -320,6 +320,29 @@ TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU refere
     }
 }
 
+TEST_CASE("log_softmax in chunks: any number of workgroups, both buffer paths, chunks of -inf", "[op][pose][log_softmax]") {
+    // The chunks' partial max and sum of exps are combined in one order; a chunk holding
+    // only -inf (the rest finite) must add nothing rather than NaN. Sizes odd, some
+    // shorter than the groups asked (then fewer chunks, each a workgroup wide at least).
+    for (int64_t M : {1, 2, 37, 1000, 4099, 70001})
+        for (int64_t groups : {0, 1, 3, 7, 64})
+            for (ops::BufferPath path : ops::kBufferPaths)
+                for (bool holes : {false, true}) {
+                    INFO("M " << M << " groups " << groups << " " << ops::path_name(path) << (holes ? ", -inf first" : ""));
+                    Graph g;
+                    std::vector<int> lp = ops::log_softmax(g, g.input("score", {M}), "", path, groups);
+                    g.output(lp[0], "log");
+                    g.output(lp[1], "prob");
+                    HostTensor score = test::random_tensor({M}, uint32_t(M + groups), -40.0f, 10.0f);
+                    if (holes)  // the first half (at least one, never all) -inf
+                        for (int64_t i = 0; i < std::max<int64_t>(1, M / 2) && M > 1; ++i) score.data[size_t(i)] = -INFINITY;
+                    test::run_gpu_and_compare(g, WeightStore{}, {{"score", score}});
+                }
+    Graph g;
+    CHECK_THROWS_WITH(ops::log_softmax(g, g.input("score", {5}), "", ops::BufferPath::Texel, 2000),
+                      Catch::Contains("groups must be 0..1024"));
+}
+
 TEST_CASE("expected_distance skips zero weights without changing the sum", "[op][pose][expected_distance]") {
     // The belief of a filter past a few touches: most weights exactly 0 (some -0), whole
     // tiles of them, nonzero ones scattered; tiles of 1 to 256 at odd sizes.

@@ -189,7 +189,9 @@ int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int p
                   {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}, {"quadratic", quadratic ? 1.0 : 0.0}}, name);
 }
 
-std::vector<int> log_softmax(Graph& g, int score, const std::string& name) { return g.add("log_softmax", {score}, {}, name); }
+std::vector<int> log_softmax(Graph& g, int score, const std::string& name, BufferPath path, int64_t groups) {
+    return g.add("log_softmax", {score}, {{"texel", flag(path == BufferPath::Texel)}, {"groups", d(groups)}}, name);
+}
 
 int field_slack(Graph& g, int fields, int neighbours, int widths, int64_t n_spin, const std::string& name) {
     return g.add1("field_slack", {fields, neighbours, widths}, {{"n_spin", d(n_spin)}}, name);

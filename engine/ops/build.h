@@ -121,7 +121,9 @@ int poisson_prolong(Graph& g, int coarse, int mask, const std::string& name = ""
 // above threshold, closed, holes filled, opened (disc radii, 0: none), the largest piece.
 int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_radius, int64_t open_radius,
                      const std::string& name = "");
-std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "");
+// groups > 0 (tests): that many chunks, each a workgroup, instead of the device's fill.
+std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "", BufferPath path = BufferPath::Texel,
+                             int64_t groups = 0);
 // prob [S * n_spin] -> [S].
 int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
 // points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
