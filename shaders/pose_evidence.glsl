@@ -1,6 +1,6 @@
 // Body of pose_evidence.comp (the tables as texel buffers) and pose_evidence_ssbo.comp
-// (storage buffers, past the device's texel-buffer limit); they declare bindings 0, 1, 2
-// and 5 and LOAD_SMP, LOAD_DENSE, LOAD_CELL, LOAD_FIELD.
+// (storage buffers, past the device's texel-buffer limit); they declare bindings 0, 1, 2,
+// 3 and 5 and LOAD_SMP, LOAD_DENSE, LOAD_CELL, LOAD_SPIN, LOAD_FIELD.
 // Multi-touch filter: the log score of every pose hypothesis (engine/ops/pose_evidence.cpp
 // says what; engine/ops/pose_evidence.h is the CPU mirror, operation for operation).
 // The pose arithmetic is `precise` (no fused multiply-adds) so that a pose lands in the
@@ -16,7 +16,6 @@
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
 
-layout(std430, binding = 3) readonly buffer Spins_ { vec2 spins[]; };   // [NS, 2] cos, sin
 // [K, 16] as 4 RGBA32F texels a term: a texel fetch is a branch-free gather on a CPU
 // driver, where a storage-buffer read at the loop's offset was a loop over the lanes
 // for each of a term's 16 floats (the term's rows took ~10 of the potato's 23 ms).
@@ -66,7 +65,7 @@ int nearest_hypothesis(int s, vec3 x) {
     float best_v = -3.0;
     for (int c = 0; c < 4; ++c) {
         const int j = cand[c];
-        const vec2 cs = spins[j];
+        const vec2 cs = LOAD_SPIN(j);
         precise float v = cs.x * a + cs.y * b;
         if (v > best_v || (v == best_v && j < best)) { best_v = v; best = j; }
     }
@@ -91,7 +90,7 @@ void main() {
         precise vec3 z = load_smp(s, 1u) * -1.0;
         vec3 t1 = load_smp(s, 2u);
         precise vec3 t2 = cross3(z, t1);
-        const vec2 cs = spins[j];
+        const vec2 cs = LOAD_SPIN(j);
         precise vec3 x = t1 * cs.x + t2 * cs.y;
         precise vec3 y = cross3(z, x);
         precise vec3 t = load_smp(s, 0u) + z * p.press;

@@ -159,20 +159,21 @@ void gpu(const GpuOpArgs& a) {
     const rt::BufferView& fields = F ? a.in[5].view : a.in[3].view;
     // The terms are always a texel buffer (binding 4, RGBA32F: a term's 16 floats in 4
     // texels; a window's few terms fit any device). The tables too (samples and dense
-    // surface RGBA32F, cells and fields R32F/R32I: gathers on a CPU driver, where storage
+    // surface RGBA32F, cells R32I, spins and fields R32F: gathers on a CPU driver, where storage
     // reads at varying offsets are lane loops), unless one holds more texels than the
     // device allows or param texel = 0: then pose_evidence_ssbo.comp.
     const uint64_t most = a.ctx.info().max_texel_elements;
     const bool texel = a.params.get("texel", 1) != 0 && uint64_t(a.in[0].shape[0]) * 3 <= most &&
                        uint64_t(a.in[1].shape[0]) * 2 <= most && uint64_t(a.in[2].shape[0]) * 2 <= most &&
-                       (F ? uint64_t(F) * H : 2 * uint64_t(NS)) <= most;
+                       2 * uint64_t(NS) <= most && (F ? uint64_t(F) * H : 2 * uint64_t(NS)) <= most;
     const VkFormat f4 = texel ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_UNDEFINED;
     const rt::Access R = rt::Access::Read;
     // NS specialises the shader (shaders/pose_evidence.glsl).
     a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "pose_evidence" : "pose_evidence_ssbo", 7,
-                                                          uint32_t(sizeof(push)), {local, NS}, texel ? 0x37u : 0x10u}),
+                                                          uint32_t(sizeof(push)), {local, NS}, texel ? 0x3fu : 0x10u}),
                    {{a.in[0].view, R, f4}, {a.in[1].view, R, f4},
-                    {a.in[2].view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED}, {a.in[3].view, R},
+                    {a.in[2].view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
+                    {a.in[3].view, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
                     {terms, R, VK_FORMAT_R32G32B32A32_SFLOAT},
                     {fields, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
                     {a.out[0].view, rt::Access::Write}},
