@@ -1,15 +1,8 @@
 #version 450
-// out[s] = sum over the NS spins of prob[s * NS + j] (the belief at each surface sample).
-layout(local_size_x_id = 0) in;
-layout(std430, binding = 0) readonly buffer In_ { float prob[]; };
-layout(std430, binding = 1) writeonly buffer Out_ { float outv[]; };
-layout(push_constant) uniform Push { uint S; uint NS; } p;
-
-void main() {
-    const uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    for (uint s = gl_GlobalInvocationID.x; s < p.S; s += stride) {
-        float acc = 0.0;
-        for (uint j = 0u; j < p.NS; ++j) acc += prob[s * p.NS + j];
-        outv[s] = acc;
-    }
-}
+#extension GL_GOOGLE_include_directive : require
+// spin_marginal.glsl with prob read through a uniform texel buffer (R32F): a gather on a
+// CPU driver, where a storage read at each lane's own offset is a loop over the lanes
+// (stalling on store forwarding with AVX2 only: docs/multitouch.md, "The tables as texels").
+layout(binding = 0) uniform samplerBuffer Prob;
+#define LOAD_PROB(i) texelFetch(Prob, int(i)).x
+#include "spin_marginal.glsl"

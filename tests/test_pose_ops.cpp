@@ -304,11 +304,14 @@ TEST_CASE("log_softmax, spin_marginal and expected_distance match the CPU refere
             g.output(lp[0], "log");
             g.output(lp[1], "prob");
             g.output(m, "marginal");
+            g.output(ops::spin_marginal(g, lp[1], NS, "", ops::BufferPath::Storage), "marginal.storage");
             for (bool sub : {true, false}) {  // shuffled rows (where the device has them) and shared-memory tiles
                 const std::string on = sub ? "" : ".tiles";
                 g.output(ops::expected_distance(g, pts, m, pts, "", sub), "cost" + on);  // every sample an answer
                 g.output(ops::expected_distance(g, pts, m, ans, "", sub), "cost_answers" + on);
             }
+            // The shuffle shader's rows from storage buffers too.
+            g.output(ops::expected_distance(g, pts, m, ans, "", true, ops::BufferPath::Storage), "cost_answers.storage");
             TensorMap in{{"score", test::random_tensor({S * NS}, uint32_t(S + NS), -30.0f, 5.0f)},
                          {"pts", test::random_tensor({S, 3}, uint32_t(S), -50.0f, 50.0f)},
                          {"ans", test::random_tensor({(S + 6) / 7, 3}, uint32_t(S) + 3, -60.0f, 60.0f)}};

@@ -65,14 +65,16 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed, ops::BufferPat
 }
 
 // The three reductions in a chain, filed under `op` (the cases are small).
-OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed) {
-    OpCase c(op, std::to_string(S) + " x " + std::to_string(NS) + " spins: log_softmax, spin_marginal, expected_distance");
-    std::vector<int> lp = ops::log_softmax(c.g, c.input("score", random_tensor({S * NS}, seed, -30.0f, 5.0f)));
-    int m = ops::spin_marginal(c.g, lp[1], NS);
+OpCase reduce_case(const char* op, int64_t S, int64_t NS, uint32_t seed, ops::BufferPath path = ops::BufferPath::Texel) {
+    OpCase c(op, std::to_string(S) + " x " + std::to_string(NS) + " spins: log_softmax, spin_marginal, expected_distance, " +
+                     ops::path_name(path));
+    std::vector<int> lp = ops::log_softmax(c.g, c.input("score", random_tensor({S * NS}, seed, -30.0f, 5.0f)), "", path);
+    int m = ops::spin_marginal(c.g, lp[1], NS, "", path);
     c.output(lp[0], "log");
     c.output(m, "marginal");
     const int pts = c.input("pts", random_tensor({S, 3}, seed + 1, -50.0f, 50.0f));
-    c.output(ops::expected_distance(c.g, pts, m, c.input("answers", random_tensor({(S + 2) / 3, 3}, seed + 2, -60.0f, 60.0f))),
+    c.output(ops::expected_distance(c.g, pts, m, c.input("answers", random_tensor({(S + 2) / 3, 3}, seed + 2, -60.0f, 60.0f)),
+                                    "", true, path),
              "cost");
     return c;
 }
@@ -126,6 +128,7 @@ std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
     v.push_back(reduce_case("log_softmax", 1031, 12, 5));
     v.push_back(reduce_case("spin_marginal", 300, 36, 6));
     v.push_back(reduce_case("expected_distance", 77, 1, 7));
+    v.push_back(reduce_case("spin_marginal", 300, 36, 8, ops::BufferPath::Storage));
     v.push_back(slack_case(4, 97, 12, 36, 8));
     return v;
 }

@@ -197,13 +197,15 @@ int field_slack(Graph& g, int fields, int neighbours, int widths, int64_t n_spin
     return g.add1("field_slack", {fields, neighbours, widths}, {{"n_spin", d(n_spin)}}, name);
 }
 
-int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name) {
-    return g.add1("spin_marginal", {prob}, {{"n_spin", d(n_spin)}}, name);
+int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name, BufferPath path) {
+    return g.add1("spin_marginal", {prob}, {{"n_spin", d(n_spin)}, {"texel", flag(path == BufferPath::Texel)}}, name);
 }
 
-int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name, bool subgroup) {
+int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name, bool subgroup,
+                      BufferPath path) {
     Params p;
     if (!subgroup) p.set("subgroup", 0);
+    if (path == BufferPath::Storage) p.set("texel", 0);
     return g.add1("expected_distance", {points, weights, answers}, p, name);
 }
 

@@ -125,10 +125,12 @@ int gel_contact_mask(Graph& g, int gradient, double threshold, int64_t close_rad
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name = "", BufferPath path = BufferPath::Texel,
                              int64_t groups = 0);
 // prob [S * n_spin] -> [S].
-int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "");
+int spin_marginal(Graph& g, int prob, int64_t n_spin, const std::string& name = "", BufferPath path = BufferPath::Texel);
 // points [S, 3], weights [S], answers [A, 3] -> sum_s w_s ||p_s - a_j|| [A].
-// subgroup = false: the shared-memory tiles even where the device has shuffles.
-int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "", bool subgroup = true);
+// subgroup = false: the shared-memory tiles even where the device has shuffles; path: how the
+// shuffle shader reads the points and weights.
+int expected_distance(Graph& g, int points, int weights, int answers, const std::string& name = "", bool subgroup = true,
+                      BufferPath path = BufferPath::Texel);
 // fields [F, S * n_spin], neighbours [S, KN, 3], widths [F, 2] -> fields widened by odometry slack
 // (engine/ops/field_slack.cpp).
 int field_slack(Graph& g, int fields, int neighbours, int widths, int64_t n_spin, const std::string& name = "");

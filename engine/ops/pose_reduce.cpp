@@ -3,9 +3,11 @@
 // expected_distance: points [S, 3], weights [S], answers [A, 3] -> cost [A],
 // cost_j = sum_s w_s ||p_s - a_j||, whose argmin is the Bayes estimate of the contact
 // for the distance error (the tracker asks it of a strided subset of its samples).
-// -> shaders/spin_marginal.comp, shaders/expected_distance_subgroup.comp (rows passed by
+// -> shaders/spin_marginal.glsl, shaders/expected_distance_subgroup.glsl (rows passed by
 // subgroup shuffles) or shaders/expected_distance.comp (shared-memory tiles: devices
-// without shuffles, or param subgroup = 0)
+// without shuffles, or param subgroup = 0). The .glsl bodies read their inputs as texel
+// buffers (.comp) or, past the device's texel limit or with param texel = 0, storage
+// buffers (_ssbo.comp).
 #include <algorithm>
 #include <cmath>
 
@@ -47,8 +49,13 @@ void marginal_gpu(const GpuOpArgs& a) {
     const uint32_t local = elementwise_local_size(d), groups = grid_groups(push.S, local, d);
     const uint64_t strides = (uint64_t(push.S) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
     check_loop_budget(d, strides * (push.NS + 1), "spin_marginal");
-    a.seq.dispatch(pipeline(a.ctx, "spin_marginal", 2, sizeof(push), {local}),
-                   {{a.in[0].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}}, &push, sizeof(push), groups);
+    // prob as a texel buffer where the device allows (a gather on a CPU driver).
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(a.in[0].shape[0]) <= d.max_texel_elements;
+    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "spin_marginal" : "spin_marginal_ssbo", 2,
+                                                          uint32_t(sizeof(push)), {local}, texel ? 1u : 0u}),
+                   {{a.in[0].view, rt::Access::Read, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
+                    {a.out[0].view, rt::Access::Write}},
+                   &push, sizeof(push), groups);
 }
 
 std::vector<TensorDesc> expect_infer(const std::vector<TensorDesc>& in, const Params&) {
@@ -87,8 +94,12 @@ void expect_gpu_subgroup(const GpuOpArgs& a, uint32_t S, uint32_t A) {
                     std::to_string(d.max_workgroup_count[0]));
     check_loop_budget(d, uint64_t(S) + 2 * ((uint64_t(S) + sg - 1) / sg) + 8, "expected_distance over " + std::to_string(S) + " points");
     struct { uint32_t S, A; } push{S, A};
-    a.seq.dispatch(pipeline(a.ctx, "expected_distance_subgroup", 4, sizeof(push), {local, Q}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
+    // The rows as texel buffers where the device allows (gathers on a CPU driver).
+    const bool texel = a.params.get("texel", 1) != 0 && 3ull * S <= d.max_texel_elements;
+    const VkFormat f = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
+    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "expected_distance_subgroup" : "expected_distance_subgroup_ssbo",
+                                                          4, uint32_t(sizeof(push)), {local, Q}, texel ? 3u : 0u}),
+                   {{a.in[0].view, rt::Access::Read, f}, {a.in[1].view, rt::Access::Read, f}, {a.in[2].view, rt::Access::Read},
                     {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), uint32_t(groups));
 }
@@ -112,7 +123,7 @@ void expect_gpu(const GpuOpArgs& a) {
 
 }  // namespace
 
-const OpDef op_spin_marginal{"spin_marginal", marginal_infer, marginal_cpu, marginal_gpu, 0, {"n_spin"}};
-const OpDef op_expected_distance{"expected_distance", expect_infer, expect_cpu, expect_gpu, 0, {"subgroup"}};
+const OpDef op_spin_marginal{"spin_marginal", marginal_infer, marginal_cpu, marginal_gpu, 0, {"n_spin", "texel"}};
+const OpDef op_expected_distance{"expected_distance", expect_infer, expect_cpu, expect_gpu, 0, {"subgroup", "texel"}};
 
 }  // namespace vtloc::ops
