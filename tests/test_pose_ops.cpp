@@ -328,7 +328,7 @@ TEST_CASE("log_softmax in chunks: any number of workgroups, both buffer paths, c
     // only -inf (the rest finite) must add nothing rather than NaN. Sizes odd, some
     // shorter than the groups asked (then fewer chunks, each a workgroup wide at least).
     for (int64_t M : {1, 2, 37, 1000, 4099, 70001})
-        for (int64_t groups : {0, 1, 3, 7, 64})
+        for (int64_t groups : {0, 1, 3, 7, 64, 300})  // 300: more chunks than a workgroup has threads
             for (ops::BufferPath path : ops::kBufferPaths)
                 for (bool holes : {false, true}) {
                     INFO("M " << M << " groups " << groups << " " << ops::path_name(path) << (holes ? ", -inf first" : ""));
