@@ -1,56 +1,13 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
-// Render-and-compare: every hypothesis' height map, seen at its spin and pressed to
-// the measured press, against the measured indentation, in one pass over the window
-// (engine/ops/codebook.cpp says what; engine/ops/codebook_math.h is the CPU mirror,
-// operation for operation).
-layout(local_size_x_id = 0) in;
-// The window's rows and columns when the host fixes them (0: read p.R, p.C): a small window's
-// loops then unroll and the measured map's reads have constant offsets.
-layout(constant_id = 1) const int KR = 0;
-layout(constant_id = 2) const int KC = 0;
-
-layout(std430, binding = 0) readonly buffer Quads_ { vec4 quads[]; }; // [S, (G+1)^2] (make_quads)
-layout(std430, binding = 1) readonly buffer Spins_ { float spins[]; }; // [NS, 2]
-layout(std430, binding = 2) readonly buffer Meas_ { float m[]; };      // [R, C]
-layout(std430, binding = 3) readonly buffer Wmin_ { float wmins[]; };  // [S * NS] (codebook_window_min)
-layout(std430, binding = 4) readonly buffer Press_ { float press_[]; };// [1] the measured press (mm)
-layout(std430, binding = 5) writeonly buffer Out_ { float outv[]; };   // [S * NS]
-layout(push_constant) uniform Push {
-    int H; int NS; int G; int R; int C;
-    float inv_cell; float win; float cap; float weight;
-    // The fit's basis (codebook_math.h error_basis): inverse squared norms, the squares' means.
-    float inv_n; float inv_r; float inv_c; float inv_rr; float inv_cc; float inv_rc; float mr; float mc;
-} p;
-
-#include "codebook_window.glsl"
-
-void main() {
-    const uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    const float hr = float(p.R - 1) * 0.5, hc = float(p.C - 1) * 0.5;
-    const float press = press_[0];
-    for (uint h = gl_GlobalInvocationID.x; h < uint(p.H); h += stride) {
-        if (!(press > 1e-6)) { outv[h] = 0.0; continue; }
-        const uint base = (h / uint(p.NS)) * uint(p.G + 1) * uint(p.G + 1), j = h % uint(p.NS);
-        const float cs = spins[2u * j], sn = spins[2u * j + 1u];
-        precise float top = wmins[h] + press;
-        // The error's sums against the basis; its fit then goes by orthogonality.
-        precise float s0 = 0.0, sr = 0.0, sc = 0.0, srr = 0.0, scc = 0.0, src = 0.0, s2 = 0.0;
-        const int R = KR > 0 ? KR : p.R, C = KC > 0 ? KC : p.C;
-        for (int r = 0; r < R; ++r)
-            for (int c = 0; c < C; ++c) {
-                precise float a = float(r) - hr, b = float(c) - hc;
-                precise float e = m[r * C + c] - max(0.0, top - window_depth(base, cs, sn, r, c));
-                s0 += e;
-                sr += e * a;
-                sc += e * b;
-                srr += e * (a * a - p.mr);
-                scc += e * (b * b - p.mc);
-                src += e * (a * b);
-                s2 += e * e;
-            }
-        precise float k0 = s0 * p.inv_n, kr = sr * p.inv_r, kc = sc * p.inv_c, krr = srr * p.inv_rr, kcc = scc * p.inv_cc, krc = src * p.inv_rc;
-        precise float err = max(0.0, s2 - (k0 * s0 + kr * sr + kc * sc + krr * srr + kcc * scc + krc * src));
-        outv[h] = -p.weight * err / (float(p.R * p.C) * press * press);
-    }
-}
+// codebook_score.glsl with the quads, spins and window minima read through uniform texel
+// buffers: gathers on a CPU driver, where storage reads at each lane's own offset are
+// loops over the lanes that stall on store forwarding with AVX2 only (docs/render_compare.md,
+// "Speed").
+layout(binding = 0) uniform samplerBuffer Quads;  // RGBA32F, [S, (G+1)^2] (make_quads)
+layout(binding = 1) uniform samplerBuffer Spins;  // R32F, [NS, 2]
+layout(binding = 3) uniform samplerBuffer Wmins;  // R32F, [S * NS] (codebook_window_min)
+#define LOAD_QUAD(i) texelFetch(Quads, int(i))
+#define LOAD_SPIN(i) texelFetch(Spins, int(i)).x
+#define LOAD_WMIN(i) texelFetch(Wmins, int(i)).x
+#include "codebook_score.glsl"

@@ -6,6 +6,7 @@
 layout(local_size_x_id = 0) in;
 
 layout(std430, binding = 0) readonly buffer Quads_ { vec4 quads[]; }; // [S, (G+1)^2] (make_quads)
+#define LOAD_QUAD(i) quads[i]
 layout(std430, binding = 1) readonly buffer Spins_ { float spins[]; }; // [NS, 2]
 layout(std430, binding = 2) writeonly buffer Out_ { float outv[]; };   // [S * NS]
 layout(push_constant) uniform Push {

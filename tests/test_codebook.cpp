@@ -136,15 +136,18 @@ TEST_CASE("codebook_score matches the CPU reference", "[op][codebook][codebook_s
             const int64_t Q = k.G + 1;
             const int quads = g.input("quads", {k.S, 4 * Q * Q}), spins = g.input("spins", {k.NS, 2});
             const int wmin = ops::codebook_window_min(g, quads, spins, k.R, k.C, 0.9, 1.1, 6.0);
-            g.output(ops::codebook_score(g, quads, spins, g.input("measured", {k.R, k.C}), wmin, g.input("press", {1}), 0.9, 1.1, 6.0, 2.5,
-                                         quadratic),
-                     "term");
+            const int measured = g.input("measured", {k.R, k.C}), press_in = g.input("press", {1});
+            // Both ways of reading the quads, spins and minima: each against the reference, and bit for bit.
+            for (ops::BufferPath path : ops::kBufferPaths)
+                g.output(ops::codebook_score(g, quads, spins, measured, wmin, press_in, 0.9, 1.1, 6.0, 2.5, quadratic, "", path),
+                         std::string("term.") + ops::path_name(path));
             HostTensor meas = test::random_tensor({k.R, k.C}, uint32_t(k.S + k.R), -0.2f, 1.2f);
             for (float& v : meas.data) v = std::max(0.0f, v);
             const float press = ops::book::measured_press(meas.data.data(), int32_t(k.R * k.C), 95);
             TensorMap in{{"quads", random_quads(k.S, k.G, 6.0f, uint32_t(k.S * k.G))}, {"spins", spin_table(k.NS)}, {"measured", meas},
                          {"press", HostTensor({1}, {press})}};
-            test::run_gpu_and_compare(g, WeightStore{}, in);
+            const TensorMap got = test::run_gpu_and_compare(g, WeightStore{}, in);
+            CHECK(got.at("term.texel").data == got.at("term.storage-buffer").data);
         }
 }
 

@@ -184,9 +184,11 @@ int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, do
 }
 
 int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int press, double cell, double win, double cap, double weight,
-                   bool quadratic, const std::string& name) {
+                   bool quadratic, const std::string& name, BufferPath path) {
     return g.add1("codebook_score", {quads, spins, measured, wmin, press},
-                  {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}, {"quadratic", quadratic ? 1.0 : 0.0}}, name);
+                  {{"cell", cell}, {"win", win}, {"cap", cap}, {"weight", weight}, {"quadratic", quadratic ? 1.0 : 0.0},
+                   {"texel", flag(path == BufferPath::Texel)}},
+                  name);
 }
 
 std::vector<int> log_softmax(Graph& g, int score, const std::string& name, BufferPath path, int64_t groups) {

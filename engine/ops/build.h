@@ -154,7 +154,7 @@ int codebook_window_min(Graph& g, int quads, int spins, int64_t R, int64_t C, do
 // (codebook_window_min of the same window), press [1] (book::measured_press of the map)
 // -> log term [S*NS]; quadratic: the error also loses its r^2, c^2, r c fit.
 int codebook_score(Graph& g, int quads, int spins, int measured, int wmin, int press, double cell, double win, double cap, double weight,
-                   bool quadratic = false, const std::string& name = "");
+                   bool quadratic = false, const std::string& name = "", BufferPath path = BufferPath::Texel);
 
 // Point cloud.
 // force_workspace: the shared-memory/workspace path even where the registers

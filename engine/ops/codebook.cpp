@@ -257,9 +257,18 @@ void score_gpu(const GpuOpArgs& a) {
     // 3 mm cells (5 x 7) score a touch in 19.5-20 ms instead of 23 (docs/render_compare.md);
     // a 15 x 20 window stays a loop (code size).
     const bool fixed = int64_t(s.R) * s.C <= kUnrolledCells;
-    a.seq.dispatch(pipeline(a.ctx, "codebook_score", 6, sizeof(push), {local, uint32_t(fixed ? s.R : 0), uint32_t(fixed ? s.C : 0)}),
-                   {{a.in[0].view, rt::Access::Read}, {a.in[1].view, rt::Access::Read}, {a.in[2].view, rt::Access::Read},
-                    {a.in[3].view, rt::Access::Read}, {a.in[4].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
+    // The quads, spins and window minima as texel buffers where the device allows (gathers
+    // on a CPU driver; param texel = 0 forces storage buffers).
+    const uint64_t most = d.max_texel_elements;
+    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(a.in[0].shape)) / 4 <= most &&
+                       uint64_t(numel(a.in[1].shape)) <= most && uint64_t(numel(a.in[3].shape)) <= most;
+    const VkFormat f1 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
+    const uint32_t rows = uint32_t(fixed ? s.R : 0), cols = uint32_t(fixed ? s.C : 0);
+    a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "codebook_score" : "codebook_score_ssbo", 6,
+                                                          uint32_t(sizeof(push)), {local, rows, cols}, texel ? 0xbu : 0u}),
+                   {{a.in[0].view, rt::Access::Read, texel ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_UNDEFINED},
+                    {a.in[1].view, rt::Access::Read, f1}, {a.in[2].view, rt::Access::Read},
+                    {a.in[3].view, rt::Access::Read, f1}, {a.in[4].view, rt::Access::Read}, {a.out[0].view, rt::Access::Write}},
                    &push, sizeof(push), groups);
 }
 
@@ -268,6 +277,7 @@ void score_gpu(const GpuOpArgs& a) {
 const OpDef op_codebook_render{"codebook_render", render_infer, render_cpu, render_gpu, 0,
                                {"G", "cell", "splat", "cap", "facing", "origin_x", "origin_y", "origin_z", "coarse", "nx", "ny", "nz", "max_bin"}};
 const OpDef op_codebook_window_min{"codebook_window_min", window_min_infer, window_min_cpu, window_min_gpu, 0, {"rows", "cols", "cell", "win", "cap"}};
-const OpDef op_codebook_score{"codebook_score", score_infer, score_cpu, score_gpu, 0, {"cell", "win", "cap", "weight", "quadratic"}};
+const OpDef op_codebook_score{"codebook_score", score_infer, score_cpu, score_gpu, 0,
+                               {"cell", "win", "cap", "weight", "quadratic", "texel"}};
 
 }  // namespace vtloc::ops
