@@ -30,6 +30,16 @@ void reduce(bool is_max) {
     }
 }
 
+// v's max (or sum) over the workgroup, the same value in every invocation.
+float workgroup_all(float v, bool is_max) {
+    red[gl_LocalInvocationID.x] = v;
+    barrier();
+    reduce(is_max);
+    const float r = red[0];
+    barrier();
+    return r;
+}
+
 void main() {
     const uint L = gl_WorkGroupSize.x;
     const uint tid = gl_LocalInvocationID.x, g = gl_WorkGroupID.x;
@@ -37,41 +47,28 @@ void main() {
     if (PASS == 0) {
         float m = -1.0 / 0.0;
         for (uint i = lo + tid; i < hi; i += L) m = max(m, LOAD_V(i));
-        red[tid] = m;
-        barrier();
-        reduce(true);
-        m = red[0];
-        barrier();
+        m = workgroup_all(m, true);
         float s = 0.0;
         // A chunk of -inf only (possible when others are finite) adds nothing, not NaN.
         if (m > -1.0 / 0.0)
             for (uint i = lo + tid; i < hi; i += L) s += exp(LOAD_V(i) - m);
-        red[tid] = s;
-        barrier();
-        reduce(false);
+        s = workgroup_all(s, false);
         if (tid == 0u) {
             part[2u * g] = m;
-            part[2u * g + 1u] = red[0];
+            part[2u * g + 1u] = s;
         }
     } else {
         // The G pairs combined by the workgroup's trees, the same order in every workgroup,
         // so every chunk subtracts the same lse.
         float m = -1.0 / 0.0;
         for (uint k = tid; k < p.G; k += L) m = max(m, part[2u * k]);
-        red[tid] = m;
-        barrier();
-        reduce(true);
-        m = red[0];
-        barrier();
+        m = workgroup_all(m, true);
         float s = 0.0;
         for (uint k = tid; k < p.G; k += L) {
             const float mk = part[2u * k];
             if (mk > -1.0 / 0.0) s += part[2u * k + 1u] * exp(mk - m);
         }
-        red[tid] = s;
-        barrier();
-        reduce(false);
-        const float lse = m + log(red[0]);
+        const float lse = m + log(workgroup_all(s, false));
         for (uint i = lo + tid; i < hi; i += L) {
             const float l = LOAD_V(i) - lse;
             logp[i] = l;
