@@ -8,8 +8,9 @@
 //
 // Speed on a CPU driver (lavapipe, docs/multitouch.md "Speed"): it runs lanes in SIMD
 // with masks, so (1) a storage-buffer read at an offset not known to be uniform is a
-// loop over the lanes, one per read whatever its width: the cells, dense points and
-// spins are read as vectors (one loop where there were two or six); and (2) the code of
+// loop over the lanes, one per read whatever its width: the tables are texel fetches
+// (gathers) where the device allows, and the storage form reads the cells, dense points
+// and spins as vectors (one loop where there were two or six); and (2) the code of
 // an `if` runs (masked) even when no lane takes it, so the terms go in segments (below)
 // and a term without a field never runs the field's code. NS is a specialization
 // constant (h / NS by a constant). The arithmetic and the order of the sum are as before.

@@ -259,9 +259,8 @@ void score_gpu(const GpuOpArgs& a) {
     const bool fixed = int64_t(s.R) * s.C <= kUnrolledCells;
     // The quads, spins and window minima as texel buffers where the device allows (gathers
     // on a CPU driver; param texel = 0 forces storage buffers).
-    const uint64_t most = d.max_texel_elements;
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(a.in[0].shape)) / 4 <= most &&
-                       uint64_t(numel(a.in[1].shape)) <= most && uint64_t(numel(a.in[3].shape)) <= most;
+    const bool texel = texels_allowed(a, {uint64_t(numel(a.in[0].shape)) / 4, uint64_t(numel(a.in[1].shape)),
+                                          uint64_t(numel(a.in[3].shape))});
     const VkFormat f1 = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
     const uint32_t rows = uint32_t(fixed ? s.R : 0), cols = uint32_t(fixed ? s.C : 0);
     a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "codebook_score" : "codebook_score_ssbo", 6,

@@ -33,6 +33,13 @@ bool shuffles_allowed(const GpuOpArgs& a) {
     return a.params.get("subgroup", 1) != 0 && has_subgroup_shuffles(a.ctx.info());
 }
 
+bool texels_allowed(const GpuOpArgs& a, std::initializer_list<uint64_t> texels) {
+    if (a.params.get("texel", 1) == 0) return false;
+    for (uint64_t n : texels)
+        if (n > a.ctx.info().max_texel_elements) return false;
+    return true;
+}
+
 uint32_t fill_local_size(const rt::DeviceInfo& d, uint64_t items) {
     const uint32_t sg = std::max(1u, d.subgroup_size);
     uint32_t local = elementwise_local_size(d);

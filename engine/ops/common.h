@@ -1,6 +1,7 @@
 #pragma once
 // Helpers shared by the op implementations in engine/ops/.
 #include <cstdint>
+#include <initializer_list>
 #include <string>
 #include <vector>
 
@@ -26,6 +27,11 @@ bool has_subgroup_shuffles(const rt::DeviceInfo& d);
 // The op may take its *_subgroup shader: the device has shuffles and the op's
 // param "subgroup" (default 1) does not force the plain one.
 bool shuffles_allowed(const GpuOpArgs& a);
+// The op may read its inputs as uniform texel buffers (a gather on CPU drivers, where a
+// storage read at each lane's own offset is a loop over the lanes): param "texel" (default
+// 1) does not force storage buffers and every binding's texel count is within the device's
+// maxTexelBufferElements.
+bool texels_allowed(const GpuOpArgs& a, std::initializer_list<uint64_t> texels);
 // Workgroup size for shaders with one invocation per output row (max_pool2d): the
 // elementwise size, halved (in whole subgroups) until there are >= 16 groups. There
 // are only hundreds to thousands of rows, and a full 256-wide group would leave CPU

@@ -66,7 +66,7 @@ void gpu(const GpuOpArgs& a) {
     if (a.scratch.size < 8ull * sp.groups)
         throw Error("log_softmax: its scratch is smaller than its " + std::to_string(sp.groups) + " parts need");
     // The score as a texel buffer where the device allows (a gather on a CPU driver).
-    const bool texel = a.params.get("texel", 1) != 0 && M <= d.max_texel_elements;
+    const bool texel = texels_allowed(a, {M});
     const struct { uint32_t M, C, G; } push{M, sp.chunk, sp.groups};
     const rt::BufferView part{a.scratch.buffer, a.scratch.offset, 8ull * sp.groups};
     const rt::Access R = rt::Access::Read, W = rt::Access::Write;

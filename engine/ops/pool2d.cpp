@@ -82,7 +82,7 @@ void max_gpu(const GpuOpArgs& a) {
     to_u32(numel(x), "max_pool2d input size");
     // The input as a texel buffer (a branch-free gather on CPU devices, see
     // PipelineDesc) unless it has more elements than the device allows in one.
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(x)) <= d.max_texel_elements;
+    const bool texel = texels_allowed(a, {uint64_t(numel(x))});
     const rt::Pipeline& pipe = a.ctx.pipelines().get(rt::PipelineDesc{
         texel ? "max_pool2d" : "max_pool2d_ssbo", 3, sizeof(push),
         {local, uint32_t(g.kh), uint32_t(g.kw), uint32_t(g.sw), g.ow % 4 == 0}, texel ? 0x1u : 0u});

@@ -162,10 +162,8 @@ void gpu(const GpuOpArgs& a) {
     // surface RGBA32F, cells R32I, spins and fields R32F: gathers on a CPU driver, where storage
     // reads at varying offsets are lane loops), unless one holds more texels than the
     // device allows or param texel = 0: then pose_evidence_ssbo.comp.
-    const uint64_t most = a.ctx.info().max_texel_elements;
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(a.in[0].shape[0]) * 3 <= most &&
-                       uint64_t(a.in[1].shape[0]) * 2 <= most && uint64_t(a.in[2].shape[0]) * 2 <= most &&
-                       2 * uint64_t(NS) <= most && (F ? uint64_t(F) * H : 2 * uint64_t(NS)) <= most;
+    const bool texel = texels_allowed(a, {uint64_t(a.in[0].shape[0]) * 3, uint64_t(a.in[1].shape[0]) * 2,
+                                          uint64_t(a.in[2].shape[0]) * 2, 2 * uint64_t(NS), uint64_t(F) * H});
     const VkFormat f4 = texel ? VK_FORMAT_R32G32B32A32_SFLOAT : VK_FORMAT_UNDEFINED;
     const rt::Access R = rt::Access::Read;
     // NS specialises the shader (shaders/pose_evidence.glsl).

@@ -50,7 +50,7 @@ void marginal_gpu(const GpuOpArgs& a) {
     const uint64_t strides = (uint64_t(push.S) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
     check_loop_budget(d, strides * (push.NS + 1), "spin_marginal");
     // prob as a texel buffer where the device allows (a gather on a CPU driver).
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(a.in[0].shape[0]) <= d.max_texel_elements;
+    const bool texel = texels_allowed(a, {uint64_t(a.in[0].shape[0])});
     a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "spin_marginal" : "spin_marginal_ssbo", 2,
                                                           uint32_t(sizeof(push)), {local}, texel ? 1u : 0u}),
                    {{a.in[0].view, rt::Access::Read, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
@@ -95,7 +95,7 @@ void expect_gpu_subgroup(const GpuOpArgs& a, uint32_t S, uint32_t A) {
     check_loop_budget(d, uint64_t(S) + 2 * ((uint64_t(S) + sg - 1) / sg) + 8, "expected_distance over " + std::to_string(S) + " points");
     struct { uint32_t S, A; } push{S, A};
     // The rows as texel buffers where the device allows (gathers on a CPU driver).
-    const bool texel = a.params.get("texel", 1) != 0 && 3ull * S <= d.max_texel_elements;
+    const bool texel = texels_allowed(a, {3ull * S});
     const VkFormat f = texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED;
     a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "expected_distance_subgroup" : "expected_distance_subgroup_ssbo",
                                                           4, uint32_t(sizeof(push)), {local, Q}, texel ? 3u : 0u}),

@@ -78,7 +78,7 @@ void gpu(const GpuOpArgs& a) {
                                                               uint32_t(d.N), uint32_t(a.params.get("act", kActNone)),
                                                               float(a.params.get("slope", 0.01))};
     // U and W through texel buffers where the device's limit allows (a gather on lavapipe).
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(std::max(d.N * d.P, d.K * d.N)) <= dev.max_texel_elements;
+    const bool texel = texels_allowed(a, {uint64_t(d.N * d.P), uint64_t(d.K * d.N)});
     const rt::Access R = rt::Access::Read;
     const bool row4 = M % 4 == 0;
     rt::PipelineDesc desc{texel ? "sa_gather" : "sa_gather_ssbo", 5, sizeof(push), {local, row4}, texel ? 0x9u : 0u};

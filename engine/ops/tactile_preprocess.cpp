@@ -112,7 +112,7 @@ void gpu(const GpuOpArgs& a) {
     // The image as texels (a gather per fetch on CPU drivers, where a storage-buffer
     // load is a loop over the lanes) within the device's texel-buffer limit; param
     // texel = 0 forces the storage buffer (tests).
-    const bool texel = a.params.get("texel", 1) != 0 && uint64_t(numel(a.in[0].shape)) <= d.max_texel_elements;
+    const bool texel = texels_allowed(a, {uint64_t(numel(a.in[0].shape))});
     struct { uint32_t h, w, crop, s; int32_t top, left; } push{
         uint32_t(q.h), uint32_t(q.w), uint32_t(q.crop), uint32_t(q.size),
         int32_t(center_crop_start(q.h, q.crop)), int32_t(center_crop_start(q.w, q.crop))};
