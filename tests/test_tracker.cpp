@@ -341,6 +341,20 @@ TEST_CASE("the candidates protocol: hypotheses only at the candidates, the true 
         INFO("rescue " << rescue << ": belief at the truth " << e.sample_belief[truth]);
         CHECK(best == truth);
         CHECK(e.sample_belief[truth] > 0.5f);  // 4 touches: the true candidate holds most of the belief (0.58)
+        // A candidate is a place: its refinement turns the gel about it and presses along the axis
+        // but does not slide (climb_on's pivot), so the pose's axis still passes through the true
+        // candidate and every mode's contact is a candidate.
+        const std::array<double, 3> c{o.candidates[3 * truth], o.candidates[3 * truth + 1], o.candidates[3 * truth + 2]};
+        const std::array<double, 3> z{e.pose.R[2], e.pose.R[5], e.pose.R[8]}, d{c[0] - e.pose.t[0], c[1] - e.pose.t[1], c[2] - e.pose.t[2]};
+        const double along = d[0] * z[0] + d[1] * z[1] + d[2] * z[2];
+        CHECK(dist(c, {e.pose.t[0] + along * z[0], e.pose.t[1] + along * z[1], e.pose.t[2] + along * z[2]}) < 1e-3);
+        REQUIRE(!e.modes.empty());
+        for (const track::Mode& m : e.modes) {
+            double nearest = INFINITY;
+            for (size_t c = 0; c < 12; ++c)
+                nearest = std::min(nearest, dist(m.contact, {o.candidates[3 * c], o.candidates[3 * c + 1], o.candidates[3 * c + 2]}));
+            CHECK(nearest < 1e-3);
+        }
     }
     o.candidates.push_back(NAN);
     o.candidates.push_back(0);

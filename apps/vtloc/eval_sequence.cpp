@@ -249,11 +249,11 @@ int run_sequence(Session& s, const Args& a) {
             tn.odometry_mm = noise->first, tn.odometry_deg = noise->second;
             noisy_tracker.emplace(clean.with_options(tn));  // the same surface: not built again
         }
-        // The candidates protocol (the paper's): hypotheses only at the object's candidates S^c.
-        const HostTensor cands = o.candidates();
+        // The candidates protocol (the paper's): hypotheses only at the object's candidates S^c, the
+        // contacts of the split the windows end at (the test contacts; with --end-split train the
+        // train ones), so that the truth is among them as the protocol assumes.
         std::vector<std::array<double, 3>> cand_points;
-        for (int64_t c = 0; c < cands.shape[0]; ++c)
-            cand_points.push_back({cands.data[size_t(3 * c)], cands.data[size_t(3 * c + 1)], cands.data[size_t(3 * c + 2)]});
+        for (const sim::TouchRecord* t : o.touches_of(end_split)) cand_points.push_back(t->contact);
         api::TrackerOptions tc = to, tcn = tn;
         tc.candidates = tcn.candidates = cand_points;
         api::Tracker cand_clean(s.gpu(), mesh, tc);
@@ -464,7 +464,8 @@ int run_sequence(Session& s, const Args& a) {
             per_obj[key.method + (key.noise ? " (noise)" : "") + " T" + std::to_string(key.T)][name] = {{"nd", m.nd}, {"nd_symmetry", m.nd_sym}, {"nd_pose", m.nd_map}, {"nd_pose_symmetry", m.nd_sym_map}, {"mm", m.mm}, {"touches", sc.n},
                                                                                                    {"missed_search", m.miss_search}, {"missed_ambiguity", m.miss_ambiguity}};
         }
-    std::printf("\nwindows   %d (ending at the %s touches with order >= 7)\n", windows, end_split.c_str());
+    std::printf("\nwindows   %d (ending at the %s touches with order >= 7; the candidates protocol over the %s touches' contacts)\n",
+                windows, end_split.c_str(), end_split.c_str());
     if (auto p = a.get("--markdown")) write_file_atomic(*p, md), std::printf("wrote     %s\n", p->c_str());
     if (auto p = a.get("--per-touch")) write_file_atomic(*p, per_window), std::printf("wrote     %s\n", p->c_str());
     if (auto p = a.get("--plot")) plot_sequence(*p, rows, data);

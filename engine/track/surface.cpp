@@ -259,6 +259,7 @@ Surface build_surface(const HostTensor& dense, bool from_mesh, const SurfaceOpti
             for (double v : t1) s.samples.push_back(float(v));
         }
         s.spacing_mm = 0;  // the truth is among the candidates: no grid allowance in distance
+        s.from_candidates = true;
     }
     const double want = double(o.target_hypotheses) / o.n_spin;
     double h_lo = std::max(1e-3, s.diameter * 1e-4), h_hi = std::max(2 * s.diameter, 1e-2);

@@ -45,6 +45,7 @@ struct Surface {
     double spacing_mm = 0;        // hypothesis sample spacing
     double diameter = 0;          // largest distance between two dense points (bounding-box bound)
     bool from_mesh = false;
+    bool from_candidates = false;  // the candidates protocol: each sample is a candidate contact
 
     int64_t n_dense() const { return int64_t(dense.size() / 6); }
     int64_t n_samples() const { return int64_t(samples.size() / 9); }

@@ -147,8 +147,9 @@ Rigid rigid_of(const ops::pose::Frame& f) {
     return r;
 }
 
-// A small rotation about the pose's own axes (Rodrigues) and a shift in its frame.
-Rigid perturb(const Rigid& x, const double d[6]) {
+// A small rotation about the pose's own axes (Rodrigues) and a shift in its frame; with a
+// pivot (a world point), the rotation turns about the pivot instead of the pose's origin.
+Rigid perturb(const Rigid& x, const double d[6], const std::array<double, 3>* pivot = nullptr) {
     const double th = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     Rigid m;
     if (th > 0) {
@@ -158,6 +159,12 @@ Rigid perturb(const Rigid& x, const double d[6]) {
                k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
     }
     m.t = {d[3], d[4], d[5]};
+    if (pivot) {  // the pivot, in the pose's frame, is where m leaves it: m.t += c - m.R c
+        std::array<double, 3> c{};
+        for (size_t i = 0; i < 3; ++i)
+            for (size_t j = 0; j < 3; ++j) c[i] += x.R[j * 3 + i] * ((*pivot)[j] - x.t[j]);
+        for (size_t i = 0; i < 3; ++i) m.t[i] += c[i] - (m.R[i * 3] * c[0] + m.R[i * 3 + 1] * c[1] + m.R[i * 3 + 2] * c[2]);
+    }
     return compose(x, m);
 }
 
@@ -228,16 +235,21 @@ double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>&
 
 // Pattern search over six degrees of freedom from x on objective f (rotations about the
 // pose's axes from step_r, shifts from step_t, halved `rounds` times); fx: x's value, then the result's.
+// With a pivot (the candidates protocol, where a candidate is a place, and a climb that left it
+// would credit it with another place's fit): the turns are about the pivot and the only shift is
+// along the gel's axis, so a pivot on the axis stays on it, at the contact.
 template <class F>
-Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, double step_t) {
+Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, double step_t,
+               const std::array<double, 3>* pivot = nullptr) {
     for (int round = 0; round < rounds; ++round, step_r /= 2, step_t /= 2)
         for (bool moved = true; moved;) {
             moved = false;
             for (int k = 0; k < 6; ++k)
                 for (double sign : {1.0, -1.0}) {
+                    if (pivot && (k == 3 || k == 4)) continue;
                     double d[6] = {0, 0, 0, 0, 0, 0};
                     d[k] = sign * (k < 3 ? step_r : step_t);
-                    Rigid y = perturb(x, d);
+                    Rigid y = perturb(x, d, pivot);
                     double fy = f(y);
                     if (fy > fx + 1e-9) x = y, fx = fy, moved = true;
                 }
@@ -246,8 +258,9 @@ Rigid climb_on(const F& f, Rigid x, double& fx, int rounds, double step_r, doubl
 }
 
 // The geometry's climb: from 4 degrees and 0.8 mm, halved six times.
-Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx) {
-    return climb_on([&](const Rigid& y) { return pose_fit(grid, terms, o, y); }, x, fx, 6, 4.0 * M_PI / 180, 0.8);
+Rigid climb(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x, double& fx,
+            const std::array<double, 3>* pivot) {
+    return climb_on([&](const Rigid& y) { return pose_fit(grid, terms, o, y); }, x, fx, 6, 4.0 * M_PI / 180, 0.8, pivot);
 }
 
 // How far odometry noise may have moved an earlier touch from where the motions carry it:
@@ -308,8 +321,10 @@ struct Refiner {
     // The reach's stages: the tight terms within reach, 2 reach, 4 reach, ... of the
     // current touch (lever arm = the motion's translation), each a proper subset.
     std::vector<std::vector<ops::pose::Term>> stages;
-    Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin)
-        : grid(g), o(opt), tight(fit_terms(to_window, opt)) {
+    bool slide = true;  // false: the candidates protocol (climb_on)
+    Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin,
+            bool slide_)
+        : grid(g), o(opt), tight(fit_terms(to_window, opt)), slide(slide_) {
         const double f = opt.refine_widen * opt.grid_allowance;
         if (opt.refine_widen > 0) wide = fit_terms(to_window, opt, f * spacing, f * 2 * M_PI / n_spin);
         if (opt.refine_reach_mm > 0)
@@ -331,18 +346,21 @@ struct Refiner {
         for (const ops::pose::Term& t : tight) v += free_space_log(grid, ops::pose::moved(f, t), o);
         return v;
     }
-    // x refined (when o.refine > 0); fx: its tight fit plus its free space.
+    // x refined (when o.refine > 0); fx: its tight fit plus its free space. Without slide the
+    // climbs turn about x's contact (its axis at the press) and keep it there.
     Rigid refine(Rigid x, double& fx) const {
+        const std::array<double, 3> contact{x.t[0] - o.press_mm * x.R[2], x.t[1] - o.press_mm * x.R[5], x.t[2] - o.press_mm * x.R[8]};
+        const std::array<double, 3>* pv = slide ? nullptr : &contact;
         if (o.refine > 0 && o.refine_widen > 0) {
             double fw = pose_fit(grid, wide, o, x);
-            x = climb(grid, wide, o, x, fw);
+            x = climb(grid, wide, o, x, fw, pv);
         }
         fx = fit(x);
         if (o.refine == 0) {
             fx += free_space(x);
             return x;
         }
-        Rigid direct = climb(grid, tight, o, x, fx);
+        Rigid direct = climb(grid, tight, o, x, fx, pv);
         fx += free_space(direct);
         if (stages.empty()) return direct;
         // From the nearest touches outward: a pose a spin step off puts the far touches of a
@@ -352,10 +370,10 @@ struct Refiner {
         // fits better (ties too).
         for (const auto& near : stages) {
             double fn = pose_fit(grid, near, o, x);
-            x = climb(grid, near, o, x, fn);
+            x = climb(grid, near, o, x, fn, pv);
         }
         double fc = fit(x);
-        x = climb(grid, tight, o, x, fc);
+        x = climb(grid, tight, o, x, fc, pv);
         fc += free_space(x);
         if (fc > fx) {
             fx = fc;
@@ -514,7 +532,7 @@ double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose)
     check_rigid(pose, "the pose to fit");
     const ops::pose::Grid grid = surface_.grid();
     double f = 0;
-    Refiner(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin()).refine(pose, f);
+    Refiner(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin(), !surface_.from_candidates).refine(pose, f);
     return f;
 }
 
@@ -560,7 +578,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
-    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS));
+    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS), !s.from_candidates);
     // The refined modes share the grid mass they hold by their refined fit (the
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
@@ -586,7 +604,8 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             for (int64_t j = 1; j < NS; ++j)
                 if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
             refined[m] = refiner.refine(rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm))), fit[m]);
-            refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
+            // A candidate's refined pose turns about the candidate and keeps it (climb_on's pivot).
+            refined_contact[m] = s.from_candidates ? point(smp) : axis_contact(s, grid, refined[m], opt_.press_mm);
         };
         parallel_for(n, opt_.threads, [&](size_t i) { climb_mode(from + i); });
     };
@@ -645,14 +664,15 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         if (opt_.refine > 0 && opt_.shape_climb_rounds > 0)
             parallel_for(by_total.size(), opt_.threads, [&](size_t i) {
                 const size_t m = by_total[i];
+                const std::array<double, 3> sample_at = point(mode_sample[m]);  // its candidate, without slide
                 double fb = refiner.fit(refined[m]) + shape[m];
                 Offsets d = align[m];
                 const Rigid y = climb_on([&](const Rigid& x) { return refiner.fit(x) + shape_at(x, d); }, refined[m], fb,
-                                         opt_.shape_climb_rounds, 2.0 * M_PI / 180, 0.8);
+                                         opt_.shape_climb_rounds, 2.0 * M_PI / 180, 0.8, refiner.slide ? nullptr : &sample_at);
                 const double fy = refiner.fit(y) + refiner.free_space(y), sy = align_at(y, d);
                 if (fy + sy > fit[m] + shape[m]) {
                     refined[m] = y, fit[m] = fy, shape[m] = sy;
-                    refined_contact[m] = axis_contact(s, grid, y, opt_.press_mm);
+                    refined_contact[m] = s.from_candidates ? sample_at : axis_contact(s, grid, y, opt_.press_mm);
                 }
             });
     }

@@ -426,7 +426,8 @@ struct TrackerOptions {
     int threads = 0;
     double object_units = 1;     // multiply the object file's coordinates by this (glTF in metres: 1000)
     // The candidates protocol (the paper's S^c): hypotheses only at these contact points (in
-    // the tracker's units, after object_units), n_spin each; empty: the whole surface.
+    // the tracker's units, after object_units), n_spin each; empty: the whole surface. The
+    // refinement turns and presses the gel at each candidate but never slides it off.
     std::vector<std::array<double, 3>> candidates;
 };
 
