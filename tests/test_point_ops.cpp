@@ -618,6 +618,18 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
                     kEveryTile);
 }
 
+// The full-size sweeps' subgroup-dependent variants (every tile), for the long suite's
+// subgroup-4 run: the other variants hold no subgroup operation (checked above), and
+// their full-size sweep at subgroup 4 repeated the one at 8 (~120 of ~184 s there).
+const Sweep kSubgroupShaderEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {Weights::Shuffle}, false, {ops::BufferPath::Texel}, true};
+
+TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large groups and ragged shapes, at full size",
+          "[long][group_linear][subgroup_sweep]") {
+    fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
+                     FusedCase{640, 128, 160, 16}},
+                    kSubgroupShaderEveryTile);
+}
+
 TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_linear]") {
     // A layer with rows for 128 invocations and 1.3e8 multiply-adds (a big layer
     // on CPU devices) and a small one; the tile is spec constants 1 (rows) and 2
@@ -801,6 +813,12 @@ TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader e
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
     hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}},
                        kEveryTile);
+}
+
+TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader equals the two layers, at full size",
+          "[long][group_linear][subgroup_sweep]") {
+    hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}},
+                       kSubgroupShaderEveryTile);
 }
 
 TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {
