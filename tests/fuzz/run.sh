@@ -18,19 +18,32 @@ targets=("$@")
 build="$root/build-asan"
 . "$root/tests/sanitize/asan_build.sh"
 sanitizer_build "$root" "$build" "address,undefined" "${targets[@]/#/fuzz_}"
-status=0
-for t in "${targets[@]}"; do
-  corpus="$build/corpus/$t" findings="$build/findings/$t"
+# One fuzzer per core, side by side (each is single-threaded: in turn, one core sat idle
+# for the whole phase); each target keeps its own corpus, findings and log, and the
+# results print in the targets' order.
+fuzz_one() {
+  local t="$1" corpus="$build/corpus/$1" findings="$build/findings/$1" log="$build/fuzz_$1.log"
   mkdir -p "$corpus" "$findings"
   cp -n "$root/tests/fuzz/corpus/$t/"* "$corpus/"
-  log="$build/fuzz_$t.log"
   # Leaks and undefined behaviour (UBSan halts) are findings too; the OpenCV decoders' thread pool is not ours: one thread.
-  if OPENCV_FOR_THREADS_NUM=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
-      "$build/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
-      -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1; then
+  OPENCV_FOR_THREADS_NUM=1 ASAN_OPTIONS=detect_leaks=1 UBSAN_OPTIONS=print_stacktrace=1:halt_on_error=1 \
+    "$build/tests/fuzz/fuzz_$t" "$corpus" -max_total_time="$seconds" -timeout=10 -rss_limit_mb=2048 \
+    -print_final_stats=1 -artifact_prefix="$findings/" > "$log" 2>&1
+}
+jobs_max=$(nproc)
+pids=()
+for t in "${targets[@]}"; do
+  while [ "$(jobs -rp | wc -l)" -ge "$jobs_max" ]; do wait -n || true; done
+  fuzz_one "$t" &
+  pids+=($!)
+done
+status=0
+for k in "${!targets[@]}"; do
+  t="${targets[$k]}" log="$build/fuzz_${targets[$k]}.log"
+  if wait "${pids[$k]}"; then
     result=ok
   else
-    result="FINDING (see $log and $findings/)"
+    result="FINDING (see $log and $build/findings/$t/)"
     status=1
   fi
   execs=$(grep -o 'stat::number_of_executed_units: *[0-9]*' "$log" | grep -o '[0-9]*$' || echo "?")
