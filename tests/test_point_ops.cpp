@@ -297,9 +297,13 @@ void require_both_sets(const std::map<std::string, int>& sets_run, size_t cases)
     }
 }
 
+// Every tile, weight path and buffer path; the mode sets take turns over the shapes
+// (pairs), as in the quick sweeps: each variant runs both over the 4-5 full-size shapes.
+// Every set on every shape compiled twice the pipelines, cold on CI's fresh machine:
+// long/point_ops was 307-457 s there, the long suite's longest test.
 const Sweep kEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32},
                        {std::begin(kWeightPaths), std::end(kWeightPaths)},
-                       false,
+                       true,
                        {std::begin(ops::kBufferPaths), std::end(ops::kBufferPaths)},
                        true};
 // The variants whose shader depends on the subgroup size (test::subgroup_shader_variant;
@@ -621,7 +625,7 @@ TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shap
 // The full-size sweeps' subgroup-dependent variants (every tile), for the long suite's
 // subgroup-4 run: the other variants hold no subgroup operation (checked above), and
 // their full-size sweep at subgroup 4 repeated the one at 8 (~120 of ~184 s there).
-const Sweep kSubgroupShaderEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {Weights::Shuffle}, false, {ops::BufferPath::Texel}, true};
+const Sweep kSubgroupShaderEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {Weights::Shuffle}, true, {ops::BufferPath::Texel}, true};
 
 TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large groups and ragged shapes, at full size",
           "[long][group_linear][subgroup_sweep]") {
