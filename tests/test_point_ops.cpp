@@ -616,22 +616,26 @@ TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subg
     CHECK(seen == swept_at_4.size());
 }
 
-TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
-    fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
-                     FusedCase{640, 128, 160, 16}},
-                    kEveryTile);
-}
-
 // The full-size sweeps' subgroup-dependent variants (every tile), for the long suite's
 // subgroup-4 run: the other variants hold no subgroup operation (checked above), and
-// their full-size sweep at subgroup 4 repeated the one at 8 (~120 of ~184 s there).
+// their full-size sweep at subgroup 4 repeated the one at 8 (long/sg4/point_ops took
+// 184 s cold in CI's run of 2026-12-05).
 const Sweep kSubgroupShaderEveryTile{{Tile::Auto, Tile::Big16x32, Tile::Big8x32}, {Weights::Shuffle}, true, {ops::BufferPath::Texel}, true};
+
+// The full-size shapes, one list for both sweeps.
+static void fused_mlp_full_size(const Sweep& sweep) {
+    fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
+                     FusedCase{640, 128, 160, 16}},
+                    sweep);
+}
+
+TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes, at full size", "[long][group_linear]") {
+    fused_mlp_full_size(kEveryTile);
+}
 
 TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large groups and ragged shapes, at full size",
           "[long][group_linear][subgroup_sweep]") {
-    fused_mlp_cases({FusedCase{20 * 128, 131, 96, 128}, FusedCase{2560, 64, 200, 5}, FusedCase{1001, 37, 37, 13}, FusedCase{36, 8, 8, 12},
-                     FusedCase{640, 128, 160, 16}},
-                    kSubgroupShaderEveryTile);
+    fused_mlp_full_size(kSubgroupShaderEveryTile);
 }
 
 TEST_CASE("group_linear's big-layer tile and its workgroup grid", "[op][group_linear]") {
@@ -814,15 +818,19 @@ TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader e
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}, false, {ops::BufferPath::Texel}});
 }
 
-TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
+// The full-size shapes, one list for both sweeps.
+static void hidden_layer_full_size(const Sweep& sweep) {
     hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}},
-                       kEveryTile);
+                       sweep);
+}
+
+TEST_CASE("a first layer computed in registers (hidden) equals the two layers, at full size", "[long][group_linear]") {
+    hidden_layer_full_size(kEveryTile);
 }
 
 TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader equals the two layers, at full size",
           "[long][group_linear][subgroup_sweep]") {
-    hidden_layer_cases({HiddenCase{3, 37, 12, 20, 33}, HiddenCase{0, 19, 5, 4, 8}, HiddenCase{4, 16, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}},
-                       kSubgroupShaderEveryTile);
+    hidden_layer_full_size(kSubgroupShaderEveryTile);
 }
 
 TEST_CASE("cloud normalisation matches the CPU reference", "[op][cloud_normalize]") {

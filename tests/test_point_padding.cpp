@@ -294,18 +294,23 @@ TEST_CASE("ball padding skipped (pad) by the subgroup shader leaves every max ex
     padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false, true});
 }
 
-TEST_CASE("ball padding skipped (pad) leaves every max exact, at full size", "[long][group_linear]") {
+namespace {
+// The full-size shapes, one list for both sweeps.
+void padding_full_size(const PadSweep& sweep) {
     padding_cases({PadCase{37, 32, 0.25, 16, 20, 33}, PadCase{64, 128, 0.4, 64, 96, 128}, PadCase{8, 16, 1.5, 8, 12, 8},
                    PadCase{19, 40, 0.3, 12, 37, 16}, PadCase{23, 20, 0.3, 12, 20, 16}},
-                  PadSweep{true, false, true});
+                  sweep);
+}
+}  // namespace
+
+TEST_CASE("ball padding skipped (pad) leaves every max exact, at full size", "[long][group_linear]") {
+    padding_full_size(PadSweep{true, false, true});
 }
 
 TEST_CASE("ball padding skipped (pad) by the subgroup shader leaves every max exact, at full size",
           "[long][group_linear][subgroup_sweep]") {
     // The case above on the subgroup shader's variants, for the long suite's subgroup-4 run.
-    padding_cases({PadCase{37, 32, 0.25, 16, 20, 33}, PadCase{64, 128, 0.4, 64, 96, 128}, PadCase{8, 16, 1.5, 8, 12, 8},
-                   PadCase{19, 40, 0.3, 12, 37, 16}, PadCase{23, 20, 0.3, 12, 20, 16}},
-                  PadSweep{true, true, true});
+    padding_full_size(PadSweep{true, true, true});
 }
 
 TEST_CASE("pad = 1 and x_point_major = 1 name what they need", "[op][group_linear]") {

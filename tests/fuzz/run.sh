@@ -39,7 +39,8 @@ for t in "${targets[@]}"; do
 done
 status=0
 for k in "${!targets[@]}"; do
-  t="${targets[$k]}" log="$build/fuzz_${targets[$k]}.log"
+  t="${targets[$k]}"
+  log="$build/fuzz_$t.log"
   if wait "${pids[$k]}"; then
     result=ok
   else
