@@ -111,10 +111,10 @@ TEST_CASE("GMA, ILU, top-K and heat-map match the PyTorch golden (vtloc-tiny)", 
     check_back_half(test::goldens_dir(), "vtloc-tiny", 7 * 32 * 8 * 4);  // W^d in chunks of 7 rows
 }
 
-TEST_CASE("GMA, ILU, top-K and heat-map match the PyTorch golden (vtloc-r18)", "[post][golden]") {
+TEST_CASE("GMA, ILU, top-K and heat-map match the PyTorch golden (vtloc-r18)", "[post][golden][paper][long]") {
     check_back_half(test::build_goldens_dir(), "vtloc-r18", 0);
 }
 
-TEST_CASE("GMA with W^d split in three row chunks matches the golden (vtloc-r18)", "[post][golden]") {
+TEST_CASE("GMA with W^d split in three row chunks matches the golden (vtloc-r18)", "[post][golden][paper][long]") {
     check_back_half(test::build_goldens_dir(), "vtloc-r18", 100ull * 1024 * 64 * 4);  // 100 + 100 + 56 rows
 }

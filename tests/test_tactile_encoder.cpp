@@ -93,7 +93,7 @@ TEST_CASE("tactile branch matches the PyTorch golden (vtloc-tiny)", "[tactile][g
     check_against_golden(test::goldens_dir(), "vtloc-tiny", true);
 }
 
-TEST_CASE("tactile branch matches the PyTorch golden (vtloc-r18 at 224x224)", "[tactile][golden][paper]") {
+TEST_CASE("tactile branch matches the PyTorch golden (vtloc-r18 at 224x224)", "[tactile][golden][paper][long]") {
     check_against_golden(test::build_goldens_dir(), "vtloc-r18", true);
 }
 
@@ -110,7 +110,7 @@ TEST_CASE("the encoder fed the golden tactile.input gives the golden F^t (vtloc-
     gold.compare("tactile.feature", ft, kFeatureTol);
 }
 
-TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile][golden]") {
+TEST_CASE("the encoder reads torchvision resnet18 names", "[tactile][golden][paper][long]") {
     // The paper weight file holds exactly torchvision's resnet18 state_dict minus
     // fc under tactile.backbone. (module list written out by hand), and the graph
     // uses every one of its convolutions and BatchNorms (folded).

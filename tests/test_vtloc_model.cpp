@@ -90,11 +90,11 @@ TEST_CASE("vtloc-mcr-tiny end to end matches the PyTorch golden", "[model][golde
     CHECK_FALSE(check_end_to_end(test::goldens_dir(), "vtloc-mcr-tiny").alignment.has_value());
 }
 
-TEST_CASE("vtloc-r18 (the paper's config) end to end matches the PyTorch golden", "[model][golden][paper]") {
+TEST_CASE("vtloc-r18 (the paper's config) end to end matches the PyTorch golden", "[model][golden][paper][long]") {
     CHECK(check_end_to_end(test::build_goldens_dir(), "vtloc-r18").alignment.has_value());
 }
 
-TEST_CASE("vtloc-mcr (paper-size MCR baseline) end to end matches the PyTorch golden", "[model][golden][paper]") {
+TEST_CASE("vtloc-mcr (paper-size MCR baseline) end to end matches the PyTorch golden", "[model][golden][paper][long]") {
     CHECK_FALSE(check_end_to_end(test::build_goldens_dir(), "vtloc-mcr").alignment.has_value());
 }
 

@@ -9,7 +9,8 @@
 # Debian's, not instrumented: the suppression files next to this script name
 # what is theirs and why. Any report in our code fails the run.
 #   bash tests/sanitize/run.sh [asan|tsan ...]      (default: asan tsan)
-# Run after the README's test command: the [golden] tests read build/goldens.
+# Run after the README's test command (build/): the paper-size [golden] cases read
+# build/goldens, which the long suite's fixture writes (made here if missing).
 set -euo pipefail
 set -f  # test filters such as [threads] are Catch tags, not globs
 root="$(cd "$(dirname "$0")/../.." && pwd)"
@@ -17,9 +18,11 @@ here="$root/tests/sanitize"
 kinds=("$@")
 [ ${#kinds[@]} -gt 0 ] || kinds=(asan tsan)
 goldens="$root/build/goldens"
-if [ ! -d "$goldens" ]; then
-  echo "sanitize: $goldens is missing: run the README's test command first" >&2
-  exit 1
+if [ ! -f "$goldens/vtloc-r18.golden.safetensors" ]; then
+  ctest --test-dir "$root/build" -R '^goldens\.paper$' --output-on-failure > /dev/null || {
+    echo "sanitize: writing the paper-size goldens ($goldens) failed: run 'ctest --test-dir build -R goldens.paper' to see why" >&2
+    exit 1
+  }
 fi
 
 . "$here/asan_build.sh"
@@ -111,14 +114,15 @@ for kind in "${kinds[@]}"; do
       # it compiled ~100 pipelines cold and took 36 s);
       # ~[paper]: the paper size's end-to-end, tactile and point-encoder goldens (50 s here,
       # its CPU reference in instrumented loops); the tiny models' goldens run the same graph
-      # building and recording, and GMA's paper-size goldens (the split W^d) stay.
+      # building and recording; GMA's paper-size goldens (the split W^d; [post][paper], in the
+      # long suite under ctest) stay.
       # GALLIVM_PERF=nopt, as the README's command runs lavapipe: ASan sees our host code, not
       # the JIT's, and Mesa's disk cache keys on the flag, so the run reuses the command's
       # compiled pipelines instead of compiling each cold with LLVM's passes (most of this
       # run's time on a fresh machine: docs/testing.md). The optimised JIT still runs every
       # op in the long suite (long/opt/: the op self-test) and the TSan run below.
       run build-asan "address,undefined" vtloc_tests "runtime error:" \
-        "shards:~[long]~[sweep]~[subgroup_sweep]~[picture]~[selftest]~[paper]" \
+        "shards:~[long]~[sweep]~[subgroup_sweep]~[picture]~[selftest]~[paper],[post][paper]" \
         GALLIVM_PERF="${GALLIVM_PERF-nopt}" \
         ASAN_OPTIONS="detect_leaks=1:strict_string_checks=1:detect_stack_use_after_return=1" \
         LSAN_OPTIONS="suppressions=$here/lsan.supp:print_suppressions=0" \
