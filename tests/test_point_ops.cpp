@@ -281,20 +281,46 @@ struct Sweep {
     bool pairs = true;
     std::vector<ops::BufferPath> paths{std::begin(ops::kBufferPaths), std::end(ops::kBufferPaths)};
     bool big_on_storage = false;  // the tiles asked on storage buffers too (else Auto there)
+    // once_over = n (the quick sweeps, n cases): each variant runs one mode set on one
+    // case, variant v set (v / n + v) % 2 on case v % n, so that over four variants or
+    // more every set meets every case, and over two both sets run. Every pipeline a
+    // variant compiles is one more for a cold lavapipe (~0.3 s, ~0.1 s from its disk
+    // cache): the command runs each variant once, the long suite every set on every case.
+    size_t once_over = 0;
     bool takes(ops::BufferPath path, Tile tile) const {
         return test::sweep_takes_tile(path, tile, big_on_storage);
     }
-    // With pairs, mode set `set` (0 or 1) runs on variant v of case k when they alternate.
-    bool runs(size_t v, size_t k, int set) const { return !pairs || (v + k) % 2 == size_t(set); }
+    // Mode set `set` (0 or 1) runs on variant v of case k: with pairs they alternate.
+    bool runs(size_t v, size_t k, int set) const {
+        if (once_over > 0) return k == v % once_over && (v / once_over + v) % 2 == size_t(set);
+        return !pairs || (v + k) % 2 == size_t(set);
+    }
 };
-// Over two cases or more, every variant ran both mode sets (one case alone
-// pairs its variants with the modes by turns).
-void require_both_sets(const std::map<std::string, int>& sets_run, size_t cases) {
+// Over two cases or more, every variant ran both mode sets (one case alone pairs its
+// variants with the modes by turns); run once each (once_over), one set each and both
+// sets over the variants.
+void require_both_sets(const std::map<std::string, int>& sets_run, size_t cases, const Sweep& sweep) {
+    if (sweep.once_over > 0) {
+        REQUIRE(cases == sweep.once_over);
+        int any = 0;
+        for (const auto& [on, bits] : sets_run) {
+            INFO("variant " << on);
+            CHECK((bits == 1 || bits == 2));
+            any |= bits;
+        }
+        CHECK((any == 3 || sets_run.size() < 2));
+        return;
+    }
     if (cases < 2) return;
     for (const auto& [on, bits] : sets_run) {
         INFO("variant " << on);
         CHECK(bits == 3);
     }
+}
+// The quick sweeps' variants over their n cases, each once (Sweep::once_over).
+Sweep once_each(Sweep s, size_t n) {
+    s.once_over = n;
+    return s;
 }
 
 // Every tile, weight path and buffer path; the mode sets take turns over the shapes
@@ -402,12 +428,16 @@ void fused_mlp_cases(std::initializer_list<FusedCase> cases, const Sweep& sweep 
                      t8 = test::big_tiles_apply() ? asked(sweep.tiles, Tile::Big8x32) : 0;
         const size_t texel = asked(sweep.paths, ops::BufferPath::Texel), storage = asked(sweep.paths, ops::BufferPath::Storage);
         CHECK(variants == texel * (W + t16 * (W - U) + t8 * S) + storage * S * (1 + (sweep.big_on_storage ? t16 + t8 : 0)));
-        const size_t max_sets = sweep.pairs ? (variants + 1 - k % 2) / 2 : variants,
-                     plain_sets = sweep.pairs ? variants - max_sets : variants;
+        size_t max_sets = sweep.pairs ? (variants + 1 - k % 2) / 2 : variants,
+               plain_sets = sweep.pairs ? variants - max_sets : variants;
+        if (sweep.once_over > 0) {
+            max_sets = plain_sets = 0;
+            for (size_t v = 0; v < variants; ++v) max_sets += sweep.runs(v, k, 0), plain_sets += sweep.runs(v, k, 1);
+        }
         CHECK(same.size() == max_sets + 3 * plain_sets);
         ++k;
     }
-    require_both_sets(sets_run, cases.size());
+    require_both_sets(sets_run, cases.size(), sweep);
 }
 
 }  // namespace
@@ -558,13 +588,13 @@ TEST_CASE("a max's groups split across lanes (parts) give the same bits as one l
 }
 
 TEST_CASE("the fused MLP layer handles wide layers, large groups and ragged shapes", "[op][group_linear][sweep]") {
-    // Every path but the 16 x 32 tile and the big tile on storage buffers (Sweep) on two shapes: groups of 128 with vec4
-    // rows, and odd sizes with a group not a multiple of 4 (scalar loads, partial
-    // blocks), each path's maxes on one and its plain outputs on the other, by turns
-    // (Sweep::pairs); 80 KiB weights (128 x 160) on the uniform path it falls back from.
-    // A cold lavapipe spends most of this test compiling (~1.5 s a pipeline), so
-    // the long suite runs the full-size rows and every tile.
-    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}});
+    // Every path but the 16 x 32 tile and the big tile on storage buffers (Sweep), each
+    // once (Sweep::once_over): its maxes or its plain outputs on one of two shapes, groups
+    // of 128 with vec4 rows or odd sizes with a group not a multiple of 4 (scalar loads,
+    // partial blocks); 80 KiB weights (128 x 160) on the uniform path it falls back from.
+    // A cold lavapipe spends most of this test compiling, so the long suite runs every
+    // set of every path on every full-size shape, and every tile.
+    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}}, once_each({}, 2));
     fused_mlp_cases({FusedCase{48, 128, 160, 16}}, Sweep{{Tile::Auto}, {Weights::Uniform}, false});
 }
 
@@ -572,7 +602,7 @@ TEST_CASE("the fused MLP layer's subgroup shader handles wide layers, large grou
           "[op][group_linear][subgroup_sweep]") {
     // The sweep above on the variants that depend on the subgroup size (kSubgroupShader),
     // for the README's subgroup-4 run.
-    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}}, kSubgroupShader);
+    fused_mlp_cases({FusedCase{2 * 128, 131, 96, 128}, FusedCase{1001, 37, 37, 13}}, once_each(kSubgroupShader, 2));
 }
 
 TEST_CASE("of the point-MLP layer variants, only the subgroup shader's hold subgroup operations", "[op][group_linear]") {
@@ -794,19 +824,19 @@ void hidden_layer_cases(std::initializer_list<HiddenCase> cases, const Sweep& sw
             }
         ++ci;
     }
-    require_both_sets(sets_run, cases.size());
+    require_both_sets(sets_run, cases.size(), sweep);
 }
 
 }  // namespace
 
 TEST_CASE("a first layer computed in registers (hidden) equals the two layers", "[op][group_linear][sweep]") {
-    // Every path but the 16 x 32 tile (Sweep) on two shapes: 4 feature columns from a
-    // wider tensor with balls of 128 (around 3 centres; 16 in the long suite, with
-    // every tile), and the normals with an odd output width. No feature columns on
-    // shuffled weights and the device's tile (each buffer path's default). Plain and
-    // max second layers take turns over the shapes on each path (Sweep::pairs; on the
-    // third shape, over the two paths), layer one per point runs on every shape.
-    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}});
+    // Every path but the 16 x 32 tile (Sweep), each once (Sweep::once_over): a plain or
+    // a max second layer on one of two shapes, 4 feature columns from a wider tensor
+    // with balls of 128 (around 3 centres; 16 in the long suite, with every set of
+    // every tile on every shape) or the normals with an odd output width. No feature
+    // columns on shuffled weights and the device's tile (each buffer path's default;
+    // plain and max take turns over the two paths).
+    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}}, once_each({}, 2));
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}});
 }
 
@@ -814,7 +844,7 @@ TEST_CASE("a first layer computed in registers (hidden) by the subgroup shader e
           "[op][group_linear][subgroup_sweep]") {
     // The sweep above on the variants that depend on the subgroup size (kSubgroupShader),
     // for the README's subgroup-4 run; the third shape's plain and max both on that path.
-    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}}, kSubgroupShader);
+    hidden_layer_cases({HiddenCase{4, 3, 128, 64, 96}, HiddenCase{3, 9, 32, 64, 37}}, once_each(kSubgroupShader, 2));
     hidden_layer_cases({HiddenCase{0, 19, 5, 4, 8}}, Sweep{{Tile::Auto}, {Weights::Shuffle}, false, {ops::BufferPath::Texel}});
 }
 
