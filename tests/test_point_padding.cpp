@@ -5,7 +5,10 @@
 // default fp32 tolerance; a plain output's real rows must equal the reference's.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
 #include <cmath>
+#include <iterator>
+#include <set>
 #include <string>
 
 #include "base/error.h"
@@ -66,7 +69,9 @@ struct Variant {
     Tile tile;
     std::string suffix;  // of output names
     std::vector<bool> layouts;
+    std::vector<Hidden> hidden;  // the kinds of hidden layer it runs
 };
+constexpr Hidden kHiddenKinds[] = {Hidden::None, Hidden::Gathered, Hidden::PerPoint};
 struct PadSweep {
     // false: each buffer path's default only (shuffled weights, the device's tile),
     // for a second shape on the paths' code.
@@ -77,6 +82,10 @@ struct PadSweep {
     // The big-layer tile on storage buffers too (the long suite; a CPU device
     // reads texel buffers, and these pipelines are the slowest to compile).
     bool big_on_storage = false;
+    // -1: every variant runs each kind of hidden layer (the long suite). k >= 0: variant i
+    // runs kind (k + i) % 3 alone (the README's command: a third of the pipelines), and a
+    // case's shapes start at different k so that each kind meets each buffer path.
+    int hidden_from = -1;
 };
 std::vector<Variant> variants(const PadSweep& sweep) {
     const bool all_weights = sweep.all_weights;
@@ -93,7 +102,9 @@ std::vector<Variant> variants(const PadSweep& sweep) {
                 v.push_back({path, wp, tile,
                              std::string(".") + ops::path_name(path) + "." + std::to_string(int(wp)) +
                                  (tile == Tile::Auto ? "" : ".big8"),
-                             both ? std::vector<bool>{false, true} : std::vector<bool>{turn}});
+                             both ? std::vector<bool>{false, true} : std::vector<bool>{turn},
+                             sweep.hidden_from < 0 ? std::vector<Hidden>(std::begin(kHiddenKinds), std::end(kHiddenKinds))
+                                                   : std::vector<Hidden>{kHiddenKinds[(size_t(sweep.hidden_from) + v.size()) % 3]}});
                 if (!both) turn = !turn;
             }
     return v;
@@ -118,8 +129,10 @@ struct PadCase {
     int64_t C1, C2, C3;
 };
 
-// ball padding skipped (pad) leaves every max exact: the cases given.
-void padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep = {}) {
+// ball padding skipped (pad) leaves every max exact: the cases given. Returns the
+// kinds of hidden layer that ran (a once-per-variant sweep checks it met all three).
+std::set<Hidden> padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep = {}) {
+    std::set<Hidden> hidden_run;
     const bool all_weights = sweep.all_weights, subgroup_shader = sweep.subgroup_shader;
     // Balls of 16 .. 128 around 8 .. 64 centres of 300 points: a small radius pads
     // most slots (whole subgroups of rows are padding), a large one few. Three
@@ -151,7 +164,7 @@ void padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep =
             ops::GroupLinear u_layer{In::Points, 3, false, 1, ops::kActNone, 0.01, path, wp};
             u_layer.point_major = true;
             const int u = ops::group_linear(g, {x, w0, b0, x}, u_layer);
-            for (Hidden hidden : {Hidden::None, Hidden::Gathered, Hidden::PerPoint})
+            for (Hidden hidden : v.hidden)
                 for (bool pad : {false, true})
                     for (bool pm : v.layouts) {  // rows between layers channel- or point-major
                     const std::string lay = pm ? ".pm" : "";
@@ -220,12 +233,23 @@ void padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep =
                       nv = subgroup_shader ? (all_weights ? 1 + big : 1) : (all_weights ? 3 + 1 + big + big_storage : 2);
         CHECK(int64_t(variants(sweep).size()) == nv);
         // Both layouts on the defaults with every weight path, one elsewhere and on the defaults alone.
-        const int64_t both = all_weights ? (subgroup_shader ? 1 : 2) : 0, layouts = nv + both;
-        CHECK(maxes == 3 * layouts + nv);
-        CHECK(layout_twins == 3 * both);  // 3 hidden kinds on the variants that run both layouts
+        const int64_t both = all_weights ? (subgroup_shader ? 1 : 2) : 0;
+        // Per variant: its hidden kinds x its layouts, plus the one-layer max; twins where it
+        // runs both layouts; a plain output per hidden kind other than None and layout.
+        int64_t want_maxes = 0, want_twins = 0, want_plain = 0, n_both = 0;
+        for (const Variant& v : variants(sweep)) {
+            const int64_t nh = int64_t(v.hidden.size()), nl = int64_t(v.layouts.size());
+            const int64_t with_rows = nh - int64_t(std::count(v.hidden.begin(), v.hidden.end(), Hidden::None));
+            want_maxes += nh * nl + 1, want_twins += nl == 2 ? nh : 0, want_plain += with_rows * nl, n_both += nl == 2;
+            hidden_run.insert(v.hidden.begin(), v.hidden.end());
+            CHECK(int64_t(v.hidden.size()) == (sweep.hidden_from < 0 ? 3 : 1));
+        }
+        CHECK(n_both == both);
+        CHECK(maxes == want_maxes);
+        CHECK(layout_twins == want_twins);
         for (const std::string& name : plain_names)  // [C2, M], or [M, C2] (.pm)
             require_real_rows_close(r.gpu.at(name), r.cpu.at(name), pad, name.find(".pm") != std::string::npos, name);
-        CHECK(int64_t(plain_names.size()) == 2 * layouts);
+        CHECK(int64_t(plain_names.size()) == want_plain);
 
         // A max over rows whose padding holds poison (what a skipped block may hold):
         // left out, so it equals the max without pad over the clean rows (padding =
@@ -273,6 +297,17 @@ void padding_cases(std::initializer_list<PadCase> cases, const PadSweep& sweep =
         }
         CHECK(poisoned_maxes == int64_t(variants(sweep).size()) * 2);
     }
+    return hidden_run;
+}
+
+// The README command's sweeps: each variant one kind of hidden layer, the kinds taking
+// turns over the variants and starting elsewhere on the second shape; all three must run.
+void padding_quick(bool subgroup_shader) {
+    std::set<Hidden> run = padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}}, PadSweep{true, subgroup_shader, false, 0});
+    const std::set<Hidden> second =
+        padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false, subgroup_shader, false, 2});
+    run.insert(second.begin(), second.end());
+    CHECK(run.size() == 3);
 }
 
 }  // namespace
@@ -282,16 +317,15 @@ TEST_CASE("ball padding skipped (pad) leaves every max exact", "[op][group_linea
     // long suite) on a shape that is mostly padding, with odd widths and a
     // ball length that is not a multiple of the row tiles; balls of 128 around 6
     // centres on each buffer path's default, one row layout each (64 in the long
-    // suite, every path and both layouts).
-    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}});
-    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false});
+    // suite, every path and both layouts). Each variant one kind of hidden layer
+    // here, every kind on every variant in the long suite.
+    padding_quick(false);
 }
 
 TEST_CASE("ball padding skipped (pad) by the subgroup shader leaves every max exact", "[op][group_linear][subgroup_sweep]") {
     // The sweep above on the variants whose shader depends on the subgroup size (votes,
     // pooled chunks: texel buffers, shuffled weights), for the README's subgroup-4 run.
-    padding_cases({PadCase{19, 20, 0.3, 12, 37, 33}}, PadSweep{true, true});
-    padding_cases({PadCase{6, 128, 0.4, 64, 96, 128}}, PadSweep{false, true});
+    padding_quick(true);
 }
 
 namespace {
