@@ -96,13 +96,14 @@ void bind_tracker(py::module_& m) {
                          double network_weight, double object_units, const py::object& candidates, double render_weight,
                          const std::string& codebook_cache, bool render_quadratic, double render_press_percentile,
                          double render_cell_mm, int threads, double free_space_mm, double render_refined_weight,
-                         int render_slack_rounds, bool field_slack) {
+                         int render_slack_rounds, bool field_slack, double render_refined_floor) {
                  api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
                                                  n_spin, hypotheses, network_weight, object_units);
                  o.render_weight = render_weight, o.codebook_cache = codebook_cache, o.render_quadratic = render_quadratic;
                  o.render_press_percentile = render_press_percentile, o.render_cell_mm = render_cell_mm;
                  o.threads = threads, o.free_space_mm = free_space_mm, o.render_refined_weight = render_refined_weight;
                  o.render_slack_rounds = render_slack_rounds, o.field_slack = field_slack;
+                 o.render_refined_floor = render_refined_floor;
                  if (!candidates.is_none()) {  // C x 3, the candidates protocol
                      const auto c = candidates.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
                      if (c.ndim() != 2 || c.shape(1) != 3)
@@ -125,7 +126,8 @@ void bind_tracker(py::module_& m) {
              py::arg("free_space_mm") = api::TrackerOptions{}.free_space_mm,
              py::arg("render_refined_weight") = api::TrackerOptions{}.render_refined_weight,
              py::arg("render_slack_rounds") = api::TrackerOptions{}.render_slack_rounds,
-             py::arg("field_slack") = api::TrackerOptions{}.field_slack, py::keep_alive<1, 2>())
+             py::arg("field_slack") = api::TrackerOptions{}.field_slack,
+             py::arg("render_refined_floor") = api::TrackerOptions{}.render_refined_floor, py::keep_alive<1, 2>())
         .def(
             "add_touch",
             [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object,
@@ -227,6 +229,7 @@ void bind_tracker(py::module_& m) {
                         else if (k == "render_press_percentile") o.render_press_percentile = value.cast<double>();
                         else if (k == "render_cell_mm") o.render_cell_mm = value.cast<double>();
                         else if (k == "render_refined_weight") o.render_refined_weight = value.cast<double>();
+                        else if (k == "render_refined_floor") o.render_refined_floor = value.cast<double>();
                         else if (k == "render_slack_rounds") o.render_slack_rounds = value.cast<int>();
                         else if (k == "field_slack") o.field_slack = value.cast<bool>();
                         else if (k == "codebook_cache") o.codebook_cache = value.cast<std::string>();

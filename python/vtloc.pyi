@@ -90,7 +90,8 @@ class Tracker:
                  free_space_mm: float = 1.5,  # the pad's clearance behind the gel (0: off)
                  render_refined_weight: float = 16.0,  # render-and-compare at the refined poses (0: off)
                  render_slack_rounds: int = 2,  # with odometry noise: earlier shapes aligned within it (0: off)
-                 field_slack: bool = False) -> None: ...  # with odometry noise: the grid reads earlier terms within it
+                 field_slack: bool = False,  # with odometry noise: the grid reads earlier terms within it
+                 render_refined_floor: float = -5.0) -> None: ...  # one touch's floor at the refined poses (-inf: none)
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
                   object: Optional[Object] = None,
                   shape: Optional[Dict[str, Any]] = None) -> None: ...  # GelShapeReader.read's dict

@@ -129,6 +129,16 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
         CHECK(t.evaluate_window_terms({m}, terms, {&a, &b}).sample_belief != t.evaluate_window_terms({m}, terms).sample_belief);
         off.render_refined_weight = -1;
         CHECK_THROWS_WITH(t.with_options(off), Catch::Contains("render_refined_weight"));
+        // The floor reaches the refined poses' scores (their bounds: tests/test_pose_shape.cpp):
+        // without one (-inf) this window's estimate scores its shapes otherwise.
+        api::TrackerOptions bare = o;
+        bare.render_refined_floor = -INFINITY;
+        CHECK(t.with_options(bare).evaluate_window_terms({m}, terms, {&a, &b}).pose_terms !=
+              t.evaluate_window_terms({m}, terms, {&a, &b}).pose_terms);
+        bare.render_refined_floor = NAN;
+        CHECK_THROWS_WITH(t.with_options(bare), Catch::Contains("render_refined_floor"));
+        bare.render_refined_floor = INFINITY;
+        CHECK_THROWS_WITH(t.with_options(bare), Catch::Contains("render_refined_floor"));
         // With odometry noise the earlier shape is also scored where it matches within the noise
         // (render_slack_rounds); without noise the option changes nothing.
         api::TrackerOptions noisy = o, rigid = o;

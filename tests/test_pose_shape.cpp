@@ -101,6 +101,18 @@ TEST_CASE("render-and-compare at a pose: a touch's own pose scores 0, a pose bes
     std::fill(none.measured.data.begin(), none.measured.data.end(), 0.0f);
     none.press = 0;
     CHECK(sc.score(beside, none, 1.0, true) == 0);
+    // A floor bounds a touch's score: log(e^s + e^f) - log(1 + e^f), 0 at the touch's own pose,
+    // never below f - log(1 + e^f), between the bare score and 0 elsewhere, and in the bare
+    // score's order (a worse match scores lower).
+    CHECK(std::abs(sc.score(truth, m, 1.0, true, -5.0)) < 1e-9);
+    const double far = sc.score(beside, m, 1e6, true), floored = sc.score(beside, m, 1e6, true, -5.0);
+    CHECK(far < -1000);
+    CHECK(floored == Approx(-5.0 - std::log1p(std::exp(-5.0))).epsilon(1e-12));
+    const double mild = sc.score(beside, m, 1.0, true, -5.0);
+    CHECK(mild == Approx(std::log(std::exp(there) + std::exp(-5.0)) - std::log1p(std::exp(-5.0))).epsilon(1e-12));
+    CHECK(mild > there);
+    CHECK(mild < 0);
+    CHECK(sc.score(beside, m, 4.0, true, -5.0) < mild);
     // shape_window: a frame's map averaged onto the window's cells, its press the percentile.
     std::vector<float> depth(size_t(30 * 40), 0.5f);
     const track::ShapeWindow sw = track::shape_window(depth, 30, 40, 0.5, track::ScoreOptions{});

@@ -169,7 +169,10 @@ int run_sequence(Session& s, const Args& a) {
             const size_t eq = kv.find('=');
             if (eq == std::string::npos) throw UsageError("--filter takes key=value pairs, got '" + kv + "'");
             const std::string k = kv.substr(0, eq);
-            const double v = parse_numbers(kv.substr(eq + 1), 1, "--filter " + k)[0];
+            // render_refined_floor=none: no floor (-inf, which parse_numbers refuses).
+            const double v = k == "render_refined_floor" && kv.substr(eq + 1) == "none"
+                                 ? -INFINITY
+                                 : parse_numbers(kv.substr(eq + 1), 1, "--filter " + k)[0];
             if (k == "press") to.press_mm = v;
             else if (k == "sigma_d") to.sigma_d_mm = v;
             else if (k == "sigma_a") to.sigma_a_deg = v;
@@ -184,6 +187,7 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "render_press_percentile") to.render_press_percentile = v;
             else if (k == "render_cell_mm") to.render_cell_mm = v;
             else if (k == "render_refined_weight") to.render_refined_weight = v;
+            else if (k == "render_refined_floor") to.render_refined_floor = v;
             else if (k == "render_slack_rounds") to.render_slack_rounds = int(v);
             else if (k == "field_slack") {
                 if (v != 0 && v != 1) throw UsageError("--filter: field_slack is 0 or 1");
@@ -199,7 +203,7 @@ int run_sequence(Session& s, const Args& a) {
                 if (!(v >= 1 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: online_window is an integer in [1, 64]");
                 online_window = int(v), to.window = int(v);
             }
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_slack_rounds, field_slack, hypotheses, n_spin, online_window)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_refined_floor, render_slack_rounds, field_slack, hypotheses, n_spin, online_window)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");

@@ -44,6 +44,8 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     if (!(o.network_weight >= 0) || !std::isfinite(o.network_weight)) throw Error("tracker: network_weight must be >= 0");
     if (!(o.render_refined_weight >= 0) || !std::isfinite(o.render_refined_weight))
         throw Error("tracker: render_refined_weight must be >= 0 (0: off)");
+    if (std::isnan(o.render_refined_floor) || o.render_refined_floor == INFINITY)
+        throw Error("tracker: render_refined_floor must be a number or -inf (none), got " + std::to_string(o.render_refined_floor));
     track::FilterOptions f;
     f.press_mm = o.press_mm;
     f.sigma_d_mm = o.sigma_d_mm;
@@ -122,8 +124,9 @@ struct Tracker::Impl {
         check_shape(*g, touch);
         if (!pose_scorer) pose_scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
         auto win = std::make_shared<const track::ShapeWindow>(track::shape_window(g->depth_mm, g->height, g->width, g->mm_per_px, score));
-        return [sc = pose_scorer, win, w = options.render_refined_weight, q = score.quadratic](const track::Rigid& x) {
-            return sc->score(x, *win, w, q);
+        return [sc = pose_scorer, win, w = options.render_refined_weight, q = score.quadratic,
+                f = options.render_refined_floor](const track::Rigid& x) {
+            return sc->score(x, *win, w, q, f);
         };
     }
     std::vector<track::PoseTerm> pose_terms(const std::vector<const GelShape*>& shapes) {

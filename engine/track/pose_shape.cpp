@@ -76,7 +76,7 @@ std::vector<float> PoseShapeScorer::render(const Rigid& pose, int R, int C, doub
     return depth;
 }
 
-double PoseShapeScorer::score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic) const {
+double PoseShapeScorer::score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic, double floor) const {
     if (!(m.press > 1e-6f) || weight == 0) return 0;
     const int R = int(m.measured.shape[0]), C = int(m.measured.shape[1]);
     const std::vector<float> w = render(pose, R, C, m.win_mm);
@@ -96,7 +96,9 @@ double PoseShapeScorer::score(const Rigid& pose, const ShapeWindow& m, double we
     const double inv[6] = {B.inv_n, B.inv_r, B.inv_c, B.inv_rr, B.inv_cc, B.inv_rc};
     double err = s2;
     for (int k = 0; k < 6; ++k) err -= s[k] * s[k] * inv[k];
-    return -weight * std::max(0.0, err) / (double(R) * C * double(m.press) * m.press);
+    const double s2w = -weight * std::max(0.0, err) / (double(R) * C * double(m.press) * m.press);
+    if (!std::isfinite(floor)) return s2w;
+    return std::log(std::exp(s2w) + std::exp(floor)) - std::log1p(std::exp(floor));
 }
 
 }  // namespace vtloc::track

@@ -8,6 +8,7 @@
 // map, in the codebook score's form. The filter adds it to the refined modes' fits when
 // they share the grid's mass (track::PoseTerm, engine/track/tracker.h), so it breaks ties the
 // geometry leaves: places where the contacts fit alike but the gel would feel otherwise.
+#include <cmath>
 #include <cstdint>
 #include <vector>
 
@@ -39,8 +40,11 @@ public:
     std::vector<float> render(const Rigid& pose, int R, int C, double win_mm) const;
     // The codebook score at this pose: -weight * sum (e - fit)^2 / (R C press^2), e the measured
     // map less the rendered one pressed `press` past its shallowest cell, fit its least-squares
-    // plane (and bowl with `quadratic`); 0 for a touch with no press.
-    double score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic) const;
+    // plane (and bowl with `quadratic`); 0 for a touch with no press. With a finite `floor`
+    // (log) the score s is robust, log(e^s + e^floor) - log(1 + e^floor): 0 still where the
+    // maps agree, and no lower than floor - log(1 + e^floor) however badly one touch's map
+    // disagrees (a reader's bad frame costs a bounded amount, as a geometry term's floor).
+    double score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic, double floor = -INFINITY) const;
 
 private:
     ops::book::BinnedPoints bins_;

@@ -309,6 +309,12 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
         t.with_options(render_slack_rounds=9)
     with pytest.raises(vtloc.Error, match="render_slack_rounds must be 0..8"):
         vtloc.Tracker(ctx, obj, hypotheses=20000, render_slack_rounds=-1)
+    # One touch's floor at the refined poses (render_refined_floor): without one the window scores otherwise.
+    bare = t.with_options(render_refined_floor=float("-inf"))
+    assert (bare.evaluate_window([step], shapes=[shape, shape])["pose_terms"]
+            != t.evaluate_window([step], shapes=[shape, shape])["pose_terms"])
+    with pytest.raises(vtloc.Error, match="render_refined_floor"):
+        t.with_options(render_refined_floor=float("nan"))
     with pytest.raises(vtloc.Error, match="1 gel shapes for 2 touches"):
         t.evaluate_window([step], terms=[term, term], shapes=[shape])
     geo = t.evaluate_window([step])

@@ -383,6 +383,11 @@ struct TrackerOptions {
     // fit where the modes share the belief; the best 4 modes also climb on it. Fitted on train
     // windows (docs/render_compare.md, "At the refined poses").
     double render_refined_weight = 16;
+    // The floor of one touch's score at a refined pose (log; -inf: none): a touch whose map
+    // disagrees badly costs at most about this, as a geometry term's floor (-9) bounds a
+    // touch off the model, so one misread frame cannot veto the place the others agree on
+    // (fitted on train windows: docs/render_compare.md, "A floor at the refined poses").
+    double render_refined_floor = -5;
     // With odometry noise (odometry_mm, odometry_deg > 0), each earlier touch's gel shape is
     // compared where it matches best within the noise's widths (a shift along the gel and a spin,
     // each paying its Gaussian prior), found in this many rounds of a pattern search; 0: at the
