@@ -96,9 +96,9 @@ double PoseShapeScorer::score(const Rigid& pose, const ShapeWindow& m, double we
     const double inv[6] = {B.inv_n, B.inv_r, B.inv_c, B.inv_rr, B.inv_cc, B.inv_rc};
     double err = s2;
     for (int k = 0; k < 6; ++k) err -= s[k] * s[k] * inv[k];
-    const double s2w = -weight * std::max(0.0, err) / (double(R) * C * double(m.press) * m.press);
-    if (!std::isfinite(floor)) return s2w;
-    return std::log(std::exp(s2w) + std::exp(floor)) - std::log1p(std::exp(floor));
+    const double bare = -weight * std::max(0.0, err) / (double(R) * C * double(m.press) * m.press);
+    if (!std::isfinite(floor)) return bare;
+    return std::log(std::exp(bare) + std::exp(floor)) - std::log1p(std::exp(floor));
 }
 
 }  // namespace vtloc::track
