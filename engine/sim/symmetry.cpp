@@ -101,13 +101,23 @@ Symmetry shape_symmetry(const std::string& name) {
     for (const EverydayShape& e : everyday_shapes())
         if (name == e.name) return e.symmetry;
     Symmetry s;  // every revolved shape turns about z through the origin
-    const Vec3d x{1, 0, 0};
+    const Vec3d x{1, 0, 0}, y{0, 1, 0};
     if (name == "box") s.order = 2, s.flip = x;
     else if (name == "sphere") s.all = true;
     else if (name == "cylinder" || name == "torus" || name == "capsule") s.order = 0, s.flip = x;
     else if (name == "cone" || name == "bolt") s.order = 0;
     else if (name == "ridged_cylinder") s.order = 80, s.flip = x;
     else if (name == "knurled_cylinder") s.order = 63, s.flip = x;
+    // The toothed and textured parts built mirror-symmetric (shapes.cpp): a half turn about
+    // one of their frame's axes, through their middle, maps them onto themselves.
+    else if (name == "spur_gear") s.order = 46, s.flip = x;  // tooth 0 sits on the x axis
+    else if (name == "gear_cassette") s.order = 120;        // its sprockets shrink along z: no flip
+    else if (name == "rasp") s.order = 2, s.flip = x;
+    else if (name == "comb_coarse") s.axis = y, s.order = 2, s.point = {90, -7, 0};  // teeth at 5 + 4k of 180 mm
+    else if (name == "corrugated_plate") s.axis = y, s.order = 2;
+    else if (name == "file" || name == "fork") s.axis = x, s.order = 2;
+    else if (name == "studded_plate") s.order = 2, s.point = {64, 32, 0};
+    else if (name == "pin_heatsink") s.order = 2, s.point = {60, 19.5, 0};
     return s;
 }
 
