@@ -12,6 +12,7 @@
 #include "engine/sim/dataset.h"
 #include "engine/sim/dataset_builder.h"
 #include "engine/sim/everyday_shapes.h"
+#include "engine/sim/shapes.h"
 #include "tests/harness.h"
 #include "tests/io_test_util.h"
 
@@ -285,6 +286,55 @@ TEST_CASE("dataset builder: object list errors", "[sim]") {
     require_error([&] { read_object_list((d / "list6.txt").string()); }, {"list6.txt:2", "[seen|unseen]"});
     std::ofstream(d / "list7.txt") << "shape:sphere 50 60\n";
     require_error([&] { read_object_list((d / "list7.txt").string()); }, {"list7.txt:1", "expected"});
+    std::ofstream(d / "list8.txt") << "a.off 50 half-turn:y seen\nb.off half-turn:x\n";
+    auto h = read_object_list((d / "list8.txt").string());
+    REQUIRE(h.size() == 2);
+    CHECK((h[0].half_turn == 'y' && *h[0].scale_mm == 50.0 && h[0].split == "seen"));
+    CHECK((h[1].half_turn == 'x' && !h[1].scale_mm && h[1].split.empty()));
+    std::ofstream(d / "list9.txt") << "a.off half-turn:w\n";
+    require_error([&] { read_object_list((d / "list9.txt").string()); }, {"list9.txt:1", "half-turn:w", "x, y or z"});
+    std::ofstream(d / "list10.txt") << "shape:box half-turn:z\n";
+    require_error([&] { read_object_list((d / "list10.txt").string()); }, {"list10.txt:1", "declares its own"});
+    std::ofstream(d / "list11.txt") << "a.off half-turn:z half-turn:x\n";
+    require_error([&] { read_object_list((d / "list11.txt").string()); }, {"list11.txt:1", "twice"});
+    std::ofstream(d / "list12.txt") << "a.off seen half-turn:z\n";
+    require_error([&] { read_object_list((d / "list12.txt").string()); }, {"list12.txt:1", "expected"});
+}
+
+namespace {
+
+// A procedural shape as an OFF file (the list's mesh-file path).
+std::string write_off(const fs::path& path, const std::string& shape) {
+    const io::TriangleMesh m = sim::make_shape(shape);
+    std::ofstream f(path);
+    f << "OFF\n" << m.vertex_count() << " " << m.triangle_count() << " 0\n";
+    for (size_t i = 0; i < m.vertex_count(); ++i)
+        f << m.positions[3 * i] << " " << m.positions[3 * i + 1] << " " << m.positions[3 * i + 2] << "\n";
+    for (size_t t = 0; t < m.triangle_count(); ++t)
+        f << "3 " << m.triangles[3 * t] << " " << m.triangles[3 * t + 1] << " " << m.triangles[3 * t + 2] << "\n";
+    return path.string();
+}
+
+}  // namespace
+
+TEST_CASE("dataset builder: a mesh file's half turn is its symmetry, and is checked", "[sim][symmetry]") {
+    BuildOptions o = small_build("ds_build_half_turn", 0);
+    o.contacts = 2;
+    const fs::path dir(o.out);
+    // The comb's outline mirrors about the middle of its length: a half turn about y holds.
+    ObjectSource comb{write_off(dir / "comb.off", "comb_coarse"), 180.0};
+    comb.half_turn = 'y';
+    build_dataset({comb}, o);
+    const Dataset ds = read_dataset(o.out);
+    REQUIRE(ds.objects.size() == 1);
+    const sim::Symmetry& s = ds.objects[0].symmetry;
+    CHECK((s.order == 2 && s.axis == sim::Vec3d{0, 1, 0} && !s.flip));
+    // The same comb turned about x would hang its teeth above its back: refused, naming the file.
+    BuildOptions o2 = small_build("ds_build_half_turn_bad", 0);
+    o2.contacts = 2;
+    ObjectSource bad{write_off(fs::path(o2.out) / "comb_x.off", "comb_coarse"), 180.0};
+    bad.half_turn = 'x';
+    require_error([&] { build_dataset({bad}, o2); }, {"comb_x.off", "half-turn:x", "does not hold"});
 }
 
 TEST_CASE("dataset builder: the default object list pins the first benchmark's split and adds the everyday objects", "[sim]") {

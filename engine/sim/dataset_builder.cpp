@@ -73,12 +73,23 @@ std::vector<ObjectSource> read_object_list(const std::string& path, const std::s
         in >> s.source;
         const std::string where = path + ":" + std::to_string(lineno);
         for (std::string word; in >> word;) {
+            if (word.rfind("half-turn:", 0) == 0) {
+                const std::string a = word.substr(10);
+                if (a != "x" && a != "y" && a != "z") throw Error(where + ": '" + word + "': the axis must be x, y or z");
+                if (s.half_turn) throw Error(where + ": the half turn is given twice");
+                if (!s.split.empty()) throw Error(where + ": expected '<source> [scale_mm] [half-turn:x|y|z] [seen|unseen]'");
+                if (s.source.rfind("shape:", 0) == 0)
+                    throw Error(where + ": '" + word + "': a procedural shape declares its own symmetry");
+                s.half_turn = a[0];
+                continue;
+            }
             if (word == "seen" || word == "unseen") {
                 if (!s.split.empty()) throw Error(where + ": the split is given twice");
                 s.split = word;
                 continue;
             }
-            if (s.scale_mm || !s.split.empty()) throw Error(where + ": expected '<source> [scale_mm] [seen|unseen]'");
+            if (s.scale_mm || !s.split.empty() || s.half_turn)
+                throw Error(where + ": expected '<source> [scale_mm] [half-turn:x|y|z] [seen|unseen]'");
             char* end = nullptr;
             double v = std::strtod(word.c_str(), &end);
             if (*end || !(v > 0) || !std::isfinite(v))

@@ -18,9 +18,14 @@ struct ObjectSource {
     // split among the objects left unpinned (so a benchmark can grow without
     // moving an object a model was trained on into its unknown set).
     std::string split;
+    // A mesh file's half turn about x, y or z of its frame through its bounding box's centre
+    // (`half-turn:x`): its symmetry group (a procedural shape's is declared in symmetry.cpp);
+    // 0: none. The builder checks it holds within symmetry_residual_mm's 0.2 mm.
+    char half_turn = 0;
 };
 
-// One object per line: `<source> [scale_mm] [seen|unseen]`, `#` starts a comment. Relative
+// One object per line: `<source> [scale_mm] [half-turn:x|y|z] [seen|unseen]`, `#` starts a
+// comment. Relative
 // mesh paths resolve against mesh_dir (default: the list's folder). Throws
 // vtloc::Error naming the file and line.
 std::vector<ObjectSource> read_object_list(const std::string& path, const std::string& mesh_dir = "");

@@ -147,6 +147,16 @@ io::TriangleMesh object_mesh(const Job& job, io::SplitMix64& rng, double& scale,
     Vec3d centre{};
     io::TriangleMesh out = scaled(std::move(mesh), scale, &f, &centre);
     if (symmetry && shape) *symmetry = scaled_symmetry(shape_symmetry(job.name), f, centre);
+    if (symmetry && job.src.half_turn) {  // about the scaled mesh's bounding-box centre, the origin
+        *symmetry = Symmetry{};
+        symmetry->order = 2;
+        symmetry->axis = {job.src.half_turn == 'x' ? 1.0 : 0.0, job.src.half_turn == 'y' ? 1.0 : 0.0,
+                          job.src.half_turn == 'z' ? 1.0 : 0.0};
+        const double r = symmetry_residual_mm(*symmetry, out, 400);
+        if (!(r <= 0.2))
+            throw Error(job.src.source + ": half-turn:" + std::string(1, job.src.half_turn) + " does not hold: the turned mesh lies " +
+                        std::to_string(r) + " mm off itself (at most 0.2)");
+    }
     return out;
 }
 
