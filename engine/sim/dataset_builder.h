@@ -25,8 +25,7 @@ struct ObjectSource {
 };
 
 // One object per line: `<source> [scale_mm] [half-turn:x|y|z] [seen|unseen]`, `#` starts a
-// comment. Relative
-// mesh paths resolve against mesh_dir (default: the list's folder). Throws
+// comment. Relative mesh paths resolve against mesh_dir (default: the list's folder). Throws
 // vtloc::Error naming the file and line.
 std::vector<ObjectSource> read_object_list(const std::string& path, const std::string& mesh_dir = "");
 

@@ -130,7 +130,8 @@ void write_touch(const fs::path& dir, const TouchRecord& r, const Touch& t, int 
 namespace {
 
 // The object's mesh, scaled so its largest side is the given or drawn size (mm).
-// A procedural shape's symmetry group moves with it (`symmetry`, else none).
+// A procedural shape's symmetry group moves with it, a mesh file's listed half turn is checked
+// (`symmetry`; else none).
 io::TriangleMesh object_mesh(const Job& job, io::SplitMix64& rng, double& scale, Symmetry* symmetry = nullptr) {
     io::TriangleMesh mesh;
     const bool shape = job.src.source.rfind("shape:", 0) == 0;
