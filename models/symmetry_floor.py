@@ -26,6 +26,9 @@ import sys
 
 import numpy as np
 
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."))
+from weights_tools import ply  # noqa: E402 (the repository root, put on the path above)
+
 
 
 def rotation(axis, angle):
@@ -57,13 +60,11 @@ def geometric_median_mean_distance(P, iters=500):
 def read_mesh(path):
     """Vertices and triangles of the benchmark's mesh.ply (binary, float xyz, uchar-int lists)."""
     with open(path, "rb") as f:
-        header = []
-        while not header or header[-1] != "end_header":
-            header.append(f.readline().decode("ascii").strip())
-        nv = int(next(h for h in header if h.startswith("element vertex")).split()[-1])
-        nf = int(next(h for h in header if h.startswith("element face")).split()[-1])
-        if sum(h.startswith("property float") for h in header) != 3 or "property list uchar int vertex_indices" not in header:
-            raise SystemExit(f"{path}: expected float x, y, z and uchar-int face lists")
+        fmt, elements = ply._parse_header(f)  # the header as weights_tools reads a cloud's
+        shape = [(name, [t for _, t in props]) for name, _, props in elements]
+        if fmt != "binary_little_endian" or shape != [("vertex", ["f4"] * 3), ("face", [("list", "u1", "i4")])]:
+            raise SystemExit(f"{path}: expected binary float x, y, z vertices and uchar-int face lists")
+        nv, nf = elements[0][1], elements[1][1]
         V = np.frombuffer(f.read(12 * nv), dtype="<f4").reshape(nv, 3).astype(float)
         F = np.frombuffer(f.read(13 * nf), dtype=np.uint8).reshape(nf, 13)
         if np.any(F[:, 0] != 3):
