@@ -65,6 +65,20 @@ TEST_CASE("surface sampling is deterministic and depends on the seed", "[io]") {
     CHECK(a.data != c.data);
 }
 
+TEST_CASE("a mesh's bounds: its vertices' box, its centre and largest side", "[io]") {
+    TriangleMesh m;
+    m.positions = {-2, 1, 0.5f, 3, -1, 0.5f, 0, 4, -0.25f};
+    m.triangles = {0, 1, 2};
+    const MeshBounds b = bounds(m);
+    CHECK(b.lo == std::array<double, 3>{-2, -1, -0.25});
+    CHECK(b.hi == std::array<double, 3>{3, 4, 0.5});
+    CHECK(b.centre() == std::array<double, 3>{0.5, 1.5, 0.125});
+    CHECK(b.largest_side() == 5.0);
+    const MeshBounds none = bounds(TriangleMesh{});  // no vertex: an empty box, lo above hi
+    CHECK(none.lo[0] > none.hi[0]);
+    CHECK(none.largest_side() < 0);
+}
+
 TEST_CASE("surface sampling weights triangles by area", "[io]") {
     // Two triangles in z = 0 with areas 1 : 3 (x < 0 and x > 1 apart), face normal +z.
     TriangleMesh m;

@@ -106,12 +106,8 @@ Row measure(const sim::EverydayShape& e) {
     Row r;
     const io::TriangleMesh m = e.build();
     r.triangles = m.triangle_count();
-    float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-    for (size_t i = 0; i < m.positions.size(); ++i) {
-        lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
-        hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
-    }
-    for (int k = 0; k < 3; ++k) r.extent[size_t(k)] = hi[k] - lo[k];
+    const io::MeshBounds b = io::bounds(m);
+    for (size_t k = 0; k < 3; ++k) r.extent[k] = b.hi[k] - b.lo[k];
     const sim::Uniformity u = sim::measure_uniformity(io::sample_surface(m, 1024, io::kDefaultSampleSeed, e.name));
     r.share = u.share_below;
     r.uniform = u.uniform;

@@ -45,12 +45,7 @@ TEST_CASE("shapes: every name builds a closed outward mesh at its design size", 
         // Counted, then asserted once: an assertion per coordinate and index made millions.
         REQUIRE(std::count_if(m.positions.begin(), m.positions.end(), [](float x) { return !std::isfinite(x); }) == 0);
         REQUIRE(std::count_if(m.triangles.begin(), m.triangles.end(), [&](uint32_t v) { return v >= m.vertex_count(); }) == 0);
-        float lo[3] = {1e30f, 1e30f, 1e30f}, hi[3] = {-1e30f, -1e30f, -1e30f};
-        for (size_t i = 0; i < m.positions.size(); ++i) {
-            lo[i % 3] = std::min(lo[i % 3], m.positions[i]);
-            hi[i % 3] = std::max(hi[i % 3], m.positions[i]);
-        }
-        double extent = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
+        const double extent = io::bounds(m).largest_side();
         CHECK(extent == Approx(sim::shape_scale_mm(name)).epsilon(0.01));
         CHECK(sim::shape_scale_mm(name) >= 50);
         CHECK(sim::shape_scale_mm(name) <= 250);
@@ -166,14 +161,12 @@ TEST_CASE("no shape has a half turn about its frame's axes that its group lacks"
         const sim::Symmetry s = sim::shape_symmetry(name);
         if (s.all) continue;
         const io::TriangleMesh mesh = sim::make_shape(name);
-        sim::Vec3d lo{1e30, 1e30, 1e30}, hi{-1e30, -1e30, -1e30};
-        for (size_t i = 0; i < mesh.positions.size(); ++i)
-            lo[i % 3] = std::min(lo[i % 3], double(mesh.positions[i])), hi[i % 3] = std::max(hi[i % 3], double(mesh.positions[i]));
+        const sim::Vec3d centre = io::bounds(mesh).centre();
         for (int a = 0; a < 3; ++a) {
             sim::Symmetry half;
             half.order = 2;
             half.axis = {a == 0 ? 1.0 : 0.0, a == 1 ? 1.0 : 0.0, a == 2 ? 1.0 : 0.0};
-            half.point = {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
+            half.point = centre;
             if (sim::symmetry_residual_mm(half, mesh, 400) > 0.2) continue;
             ++found;
             // The group holds the turn where one of its elements moves two generic points alike

@@ -2,6 +2,7 @@
 // Triangle meshes: glTF 2.0 (.gltf with its buffers, or .glb) flattened into
 // one list of triangles in the object's frame, and area-weighted surface
 // sampling that turns a mesh into the model's point cloud (SPEC section 1).
+#include <array>
 #include <cstdint>
 #include <string>
 #include <vector>
@@ -46,6 +47,14 @@ HostTensor sample_surface(const TriangleMesh& mesh, int64_t n, uint64_t seed = k
 
 // The mesh's total triangle area (object units squared).
 double surface_area(const TriangleMesh& mesh);
+
+// The axis-aligned box of a mesh's vertices (object units; lo > hi where it has none).
+struct MeshBounds {
+    std::array<double, 3> lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
+    std::array<double, 3> centre() const { return {(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2}; }
+    double largest_side() const;
+};
+MeshBounds bounds(const TriangleMesh& mesh);
 
 // Signed volume (object units cubed): positive when a closed mesh is wound outward
 // (counter-clockwise seen from outside), negative when wound inward.

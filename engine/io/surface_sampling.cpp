@@ -88,6 +88,17 @@ double surface_area(const TriangleMesh& mesh) {
     return area;
 }
 
+double MeshBounds::largest_side() const { return std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]}); }
+
+MeshBounds bounds(const TriangleMesh& mesh) {
+    MeshBounds b;
+    for (size_t i = 0; i < mesh.positions.size(); ++i) {
+        b.lo[i % 3] = std::min(b.lo[i % 3], double(mesh.positions[i]));
+        b.hi[i % 3] = std::max(b.hi[i % 3], double(mesh.positions[i]));
+    }
+    return b;
+}
+
 double signed_volume(const TriangleMesh& mesh) {
     double v = 0;
     for (size_t t = 0; t < mesh.triangle_count(); ++t) v += dot(corner(mesh, t, 0), cross(corner(mesh, t, 1), corner(mesh, t, 2)));

@@ -28,20 +28,15 @@ namespace {
 
 // Mesh scaled so its largest bounding-box side is scale_mm, centred on its box.
 io::TriangleMesh scaled(io::TriangleMesh m, double scale_mm, double* f_out = nullptr, Vec3d* centre_out = nullptr) {
-    double lo[3] = {1e300, 1e300, 1e300}, hi[3] = {-1e300, -1e300, -1e300};
-    for (size_t i = 0; i < m.vertex_count(); ++i)
-        for (int k = 0; k < 3; ++k) {
-            lo[k] = std::min(lo[k], double(m.positions[i * 3 + size_t(k)]));
-            hi[k] = std::max(hi[k], double(m.positions[i * 3 + size_t(k)]));
-        }
-    double side = std::max({hi[0] - lo[0], hi[1] - lo[1], hi[2] - lo[2]});
-    double f = scale_mm / side;
+    const io::MeshBounds b = io::bounds(m);
+    const std::array<double, 3> c = b.centre();
+    const double f = scale_mm / b.largest_side();
     if (f_out) *f_out = f;
-    if (centre_out) *centre_out = {0.5 * (lo[0] + hi[0]), 0.5 * (lo[1] + hi[1]), 0.5 * (lo[2] + hi[2])};
+    if (centre_out) *centre_out = {c[0], c[1], c[2]};
     for (size_t i = 0; i < m.vertex_count(); ++i)
         for (int k = 0; k < 3; ++k) {
             float& v = m.positions[i * 3 + size_t(k)];
-            v = float((v - 0.5 * (lo[k] + hi[k])) * f);
+            v = float((v - c[size_t(k)]) * f);
         }
     return m;
 }
