@@ -25,13 +25,14 @@ done
 # Several touches (SPEC 6, docs/multitouch.md): both protocols, geometry alone, with the first
 # model's heat-maps and with render-and-compare (SPEC 9; its oracle rows where the benchmark has
 # indentation maps), without and with odometry noise, on the default benchmark (its meshes:
-# data/synth/make_dataset.sh), known and unknown objects.
+# data/synth/make_dataset.sh), known and unknown objects; the per-window CSVs feed
+# models/symmetry_floor.py --per-touch.
 seqdata="${VTLOC_SEQUENCE_DATA:-$root/build/synth-default}"
 [ -d "$seqdata" ] || bash "$root/data/synth/make_dataset.sh" "$seqdata" 0
 for objects in known unknown; do
   build/vtloc eval --model "$1" --data "$seqdata" --objects "$objects" --sequence 1,2,3,4,6,8 \
     --odometry-noise 0.5,0.5 --render-compare --json "$out/sequence.$objects.json" --markdown "$out/sequence.$objects.md" \
-    --plot "$out/sequence.$objects.png"
+    --plot "$out/sequence.$objects.png" --per-touch "$out/sequence.$objects.csv"
 done
 # ILU N ablation on the first model: accuracy per N and this engine's time per touch.
 model="$1"; name="$(basename "$model" .safetensors)"

@@ -423,8 +423,10 @@ int run_sequence(Session& s, const Args& a) {
                 }
             }
         }
-        std::printf("object    %-14s %s, spacing %.2f mm, %zu tour touches, surface tables %.1f MiB\n", o.name.c_str(),
-                    o.subset.c_str(), clean.spacing_mm(), tour.size(), double(clean.device_bytes()) / 1048576.0);
+        // device_bytes counts the codebook too where render-and-compare is on (most of it then).
+        std::printf("object    %-14s %s, spacing %.2f mm, %zu tour touches, on the GPU %.1f MiB%s\n", o.name.c_str(),
+                    o.subset.c_str(), clean.spacing_mm(), tour.size(), double(clean.device_bytes()) / 1048576.0,
+                    render_compare ? " (surface tables and codebook)" : " (surface tables)");
         std::fflush(stdout);
     }
     if (per_object.empty()) throw api::Error(data + ": no test touch with order >= 7 to end a window at");
