@@ -286,7 +286,7 @@ TriangleMesh potato() {
         }
         for (int k = 0; k < 3; ++k) p[k] = float(p[k] * r * axes[k]);
     }
-    // The side rounded to float as it was when computed in float: the benchmark's meshes stay bit for bit.
+    // The side rounded to float, as when it was computed in float: the demo's potato stays bit for bit.
     const double f = 100.0 / double(float(io::bounds(m).largest_side()));
     for (float& x : m.positions) x = float(x * f);
     m.normals.clear();  // face normals, like every other shape
