@@ -30,7 +30,6 @@ sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), ".."
 from weights_tools import ply  # noqa: E402 (the repository root, put on the path above)
 
 
-
 def rotation(axis, angle):
     a = np.asarray(axis, float)
     a = a / np.linalg.norm(a)

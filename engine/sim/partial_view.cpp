@@ -8,6 +8,7 @@
 
 #include "base/error.h"
 #include "engine/io/file_bytes.h"
+#include "engine/io/mesh.h"
 #include "engine/io/splitmix64.h"
 #include "engine/model/cloud_reduce.h"
 #include "engine/sensor/height_field.h"
@@ -30,9 +31,7 @@ PartialView render_partial_view(const io::TriangleMesh& mesh, uint64_t seed, int
     if (n_points < 1 || pixels < 8) throw Error("partial view: n_points >= 1 and pixels >= 8 needed");
     const sensor::MeshCache m(mesh);
     // The bounding sphere (centre of the box, farthest vertex).
-    V3 lo{1e300, 1e300, 1e300}, hi{-1e300, -1e300, -1e300};
-    for (size_t i = 0; i < m.pos.size(); ++i) lo[i % 3] = std::min(lo[i % 3], m.pos[i]), hi[i % 3] = std::max(hi[i % 3], m.pos[i]);
-    const V3 c{(lo[0] + hi[0]) / 2, (lo[1] + hi[1]) / 2, (lo[2] + hi[2]) / 2};
+    const V3 c = io::bounds(mesh).centre();
     double r = 0;
     for (size_t i = 0; i + 2 < m.pos.size(); i += 3)
         r = std::max(r, std::sqrt(std::pow(m.pos[i] - c[0], 2) + std::pow(m.pos[i + 1] - c[1], 2) + std::pow(m.pos[i + 2] - c[2], 2)));
