@@ -111,6 +111,7 @@ void plot_sequence(const std::string& path, const nlohmann::json& rows, const st
     chart.title = "ND against the number of touches (" + data + ", all objects, surface protocol)";
     chart.x_label = "touches T (the window ending at each test touch)";
     chart.y_label = "ND (%)";
+    chart.width = 1300;  // room for the legend's longest method name beside the plot
     std::vector<int> Ts;
     for (const nlohmann::json& r : rows) Ts.push_back(r.at("T").get<int>());
     std::sort(Ts.begin(), Ts.end());
