@@ -57,18 +57,11 @@ def geometric_median_mean_distance(P, iters=500):
 
 
 def read_mesh(path):
-    """Vertices and triangles of the benchmark's mesh.ply (binary, float xyz, uchar-int lists)."""
-    with open(path, "rb") as f:
-        fmt, elements = ply._parse_header(f)  # the header as weights_tools reads a cloud's
-        shape = [(name, [t for _, t in props]) for name, _, props in elements]
-        if fmt != "binary_little_endian" or shape != [("vertex", ["f4"] * 3), ("face", [("list", "u1", "i4")])]:
-            raise SystemExit(f"{path}: expected binary float x, y, z vertices and uchar-int face lists")
-        nv, nf = elements[0][1], elements[1][1]
-        V = np.frombuffer(f.read(12 * nv), dtype="<f4").reshape(nv, 3).astype(float)
-        F = np.frombuffer(f.read(13 * nf), dtype=np.uint8).reshape(nf, 13)
-        if np.any(F[:, 0] != 3):
-            raise SystemExit(f"{path}: faces must be triangles")
-        return V, F[:, 1:].copy().view("<i4").reshape(nf, 3)
+    """Vertices and triangles of a mesh.ply (weights_tools.ply's reader; errors exit naming the file)."""
+    try:
+        return ply.read_ply_triangles(path)
+    except (ValueError, OSError) as e:
+        raise SystemExit(str(e))
 
 
 def surface_samples(V, T, spacing_mm=0.5, seed=0):

@@ -1,5 +1,5 @@
-"""PLY point clouds: read the vertex element (ascii / binary, either endianness),
-write binary little-endian x y z nx ny nz."""
+"""PLY point clouds and meshes: read the vertex element, or vertices and triangles
+(ascii / binary, either endianness); write binary little-endian x y z nx ny nz."""
 
 import numpy as np
 
@@ -82,6 +82,76 @@ def read_ply(path):
                 cols += ["nx", "ny", "nz"]
             return np.stack([data[c] for c in cols], axis=1).astype(np.float32)
     raise ValueError("PLY file has no vertex element")
+
+
+def _read_rows_binary(f, count, props, endian):
+    """An element with list properties -> {name: values (rows of int arrays for lists)}: at once
+    where every list holds 3 items (a triangle mesh's faces), else row by row."""
+    fields = []
+    for p, t in props:
+        fields += [(p + "#n", endian + t[1]), (p, endian + t[2], (3,))] if isinstance(t, tuple) else [(p, endian + t)]
+    dt, start = np.dtype(fields), f.tell()
+    arr = np.frombuffer(f.read(count * dt.itemsize), dtype=dt)
+    if len(arr) == count and all(np.all(arr[p + "#n"] == 3) for p, t in props if isinstance(t, tuple)):
+        return {p: arr[p] for p, _ in props}
+    f.seek(start)
+    cols = {p: [] for p, _ in props}
+    for _ in range(count):
+        for p, t in props:
+            if isinstance(t, tuple):
+                n = int(np.frombuffer(f.read(np.dtype(t[1]).itemsize), endian + t[1])[0])
+                cols[p].append(np.frombuffer(f.read(n * np.dtype(t[2]).itemsize), endian + t[2], count=n))
+            else:
+                cols[p].append(np.frombuffer(f.read(np.dtype(t).itemsize), endian + t)[0])
+    return cols
+
+
+def read_ply_triangles(path):
+    """Return (V, T) of a triangle mesh: V an N x 3 float64 array of x y z, T an M x 3 int64
+    array of vertex indices. ValueError naming the file for a face that is not a triangle, an
+    index out of range, or a file without vertices or faces."""
+    with open(path, "rb") as f:
+        fmt, elements = _parse_header(f)
+        endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
+        if fmt != "ascii" and endian is None:
+            raise ValueError(f"{path}: unsupported PLY format {fmt!r}")
+        tokens = iter(f.read().decode("ascii").split()) if fmt == "ascii" else None
+        V = faces = None
+        for name, count, props in elements:
+            if tokens is not None:  # ascii: one row per element, lists as count then items
+                cols = {p: [] for p, _ in props}
+                for _ in range(count):
+                    for p, t in props:
+                        if isinstance(t, tuple):
+                            n = int(next(tokens))
+                            cols[p].append(np.array([int(next(tokens)) for _ in range(n)], np.int64))
+                        else:
+                            cols[p].append(float(next(tokens)))
+            elif all(not isinstance(t, tuple) for _, t in props):
+                dt = np.dtype([(p, endian + t) for p, t in props])
+                arr = np.frombuffer(f.read(count * dt.itemsize), dtype=dt, count=count)
+                cols = {p: arr[p] for p, _ in props}
+            elif name == "face":
+                cols = _read_rows_binary(f, count, props, endian)
+            else:
+                _skip_binary(f, count, props, endian)
+                continue
+            if name == "vertex":
+                if not all(c in cols for c in "xyz"):
+                    raise ValueError(f"{path}: PLY vertices need x, y, z")
+                V = np.stack([np.asarray(cols[c], np.float64) for c in "xyz"], axis=1).reshape(count, 3)
+            elif name == "face":
+                lists = next((cols[p] for p, t in props if isinstance(t, tuple)), None)
+                if lists is None:
+                    raise ValueError(f"{path}: the face element has no list of vertex indices")
+                if any(len(r) != 3 for r in lists):
+                    raise ValueError(f"{path}: faces must be triangles")
+                faces = np.array(lists, np.int64).reshape(count, 3)
+    if V is None or faces is None:
+        raise ValueError(f"{path}: a mesh needs a vertex and a face element")
+    if faces.size and (faces.min() < 0 or faces.max() >= len(V)):
+        raise ValueError(f"{path}: a face names a vertex out of range (0..{len(V) - 1})")
+    return V, faces
 
 
 def write_ply(path, points):
