@@ -5,6 +5,7 @@
 
 #include "engine/io/colormap.h"
 #include "engine/io/heatmap_ply.h"
+#include "engine/io/mesh_formats.h"
 #include "engine/io/object.h"
 #include "engine/io/ply.h"
 #include "tests/io_test_util.h"
@@ -137,4 +138,35 @@ TEST_CASE("PLY errors name the file and the problem", "[io]") {
         require_error([&] { require_points(c, 1024, "two.ply"); },
                       {"two.ply", "the object has 2 points, the model needs at least 1024"});
     }
+}
+
+TEST_CASE("the cloud and mesh readers read one PLY header: the same errors, the same leniencies", "[io]") {
+    // Until 2026-12-06 each reader parsed the header its own way (the mesh reader's errors did
+    // not quote the line; only it took a last header line without a newline, only the cloud
+    // reader a format line without its version).
+    const std::string body = "element vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                             "element face 1\nproperty list uchar int vertex_indices\nend_header\n";
+    const std::string data = "0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n";
+    struct Bad {
+        std::string text, expect;
+    };
+    for (const Bad& b : {Bad{"ply\nformat ascii 1.0\nelement vertex many\n", "line 3 'element vertex many': element count"},
+                         Bad{"ply\nformat ascii 1.0\nelement vertex 1\nproperty list float int v\n",
+                             "line 4 'property list float int v': a list count must have an integer type"},
+                         Bad{"ply\nformat utf8 1.0\n", "line 2 'format utf8 1.0': unknown format 'utf8'"},
+                         Bad{"ply\nformat ascii 1.0\nvertices 3\n", "line 3 'vertices 3': unknown keyword 'vertices'"},
+                         Bad{"ply\nformat ascii 1.0\nelement vertex 1\n", "no end_header"},
+                         Bad{"ply \nformat ascii 1.0\n", "not a PLY file"}}) {
+        const std::string path = write_temp("shared_header.ply", b.text);
+        INFO(b.text);
+        require_error([&] { load_ply_cloud(path); }, {"shared_header.ply", b.expect});
+        require_error([&] { load_mesh(path); }, {"shared_header.ply", b.expect});
+    }
+    // A format line without its version; the header's last line without a newline (no data).
+    const std::string lenient = write_temp("lenient.ply", "ply\r\nformat ascii\r\n" + body + data);
+    CHECK(read_ply_vertices(lenient).count == 3);
+    CHECK(load_mesh(lenient).triangle_count() == 1);
+    const std::string empty_cloud = write_temp("empty_cloud.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\n"
+                                                                  "property float y\nproperty float z\nend_header");
+    CHECK(read_ply_vertices(empty_cloud).count == 0);
 }

@@ -3,6 +3,7 @@
 // text scanning, number parsing, and the builder that validates vertices and
 // polygons, fan-triangulates and drops degenerate triangles in one place so
 // that every format gives the same errors and the same cleaning.
+#include <algorithm>
 #include <cstdint>
 #include <string>
 #include <string_view>
@@ -17,6 +18,11 @@ class LineReader {
 public:
     LineReader(const std::vector<uint8_t>& bytes, bool hash_comments)
         : all_(reinterpret_cast<const char*>(bytes.data()), bytes.size()), comments_(hash_comments) {}
+    // From byte `start`, the lines before it counted as `lines_before` (a PLY file's data after its header).
+    LineReader(const std::vector<uint8_t>& bytes, bool hash_comments, size_t start, int64_t lines_before)
+        : LineReader(bytes, hash_comments) {
+        pos_ = std::min(start, all_.size()), line_ = lines_before;
+    }
     // Next line's tokens that has any (blank and comment-only lines skipped);
     // false at the end of the file.
     bool next(std::vector<std::string_view>& tokens);

@@ -3,174 +3,28 @@
 #include <algorithm>
 #include <bit>
 #include <charconv>
-#include <cstring>
 #include <string_view>
 
 #include "base/error.h"
 #include "engine/io/file_bytes.h"
+#include "engine/io/mesh_formats_detail.h"
+#include "engine/io/ply_header.h"
 
 namespace vtloc::io {
 
 namespace {
 
-enum class PType { I8, U8, I16, U16, I32, U32, F32, F64 };
-
-bool parse_type(std::string_view s, PType& t) {
-    static const struct {
-        const char* name;
-        PType type;
-    } table[] = {{"char", PType::I8},    {"int8", PType::I8},     {"uchar", PType::U8},   {"uint8", PType::U8},
-                 {"short", PType::I16},  {"int16", PType::I16},   {"ushort", PType::U16}, {"uint16", PType::U16},
-                 {"int", PType::I32},    {"int32", PType::I32},   {"uint", PType::U32},   {"uint32", PType::U32},
-                 {"float", PType::F32},  {"float32", PType::F32}, {"double", PType::F64}, {"float64", PType::F64}};
-    for (auto& e : table)
-        if (s == e.name) {
-            t = e.type;
-            return true;
-        }
-    return false;
-}
-
-size_t type_size(PType t) {
-    switch (t) {
-        case PType::I8: case PType::U8: return 1;
-        case PType::I16: case PType::U16: return 2;
-        case PType::I32: case PType::U32: case PType::F32: return 4;
-        case PType::F64: return 8;
-    }
-    return 0;
-}
-
-struct Prop {
-    std::string name;
-    PType type = PType::F32;
-    bool is_list = false;
-    PType count_type = PType::U8;
-};
-
-struct Elem {
-    std::string name;
-    int64_t count = 0;
-    std::vector<Prop> props;
-};
-
-enum class Format { Ascii, Little, Big };
-
-struct Header {
-    Format format = Format::Ascii;
-    std::vector<Elem> elems;
-    size_t data_start = 0;
-};
-
-std::vector<std::string_view> split_ws(std::string_view line) {
-    std::vector<std::string_view> out;
-    size_t i = 0;
-    while (i < line.size()) {
-        while (i < line.size() && (line[i] == ' ' || line[i] == '\t' || line[i] == '\r')) ++i;
-        size_t j = i;
-        while (j < line.size() && line[j] != ' ' && line[j] != '\t' && line[j] != '\r') ++j;
-        if (j > i) out.push_back(line.substr(i, j - i));
-        i = j;
-    }
-    return out;
-}
-
-Header parse_header(const std::vector<uint8_t>& bytes, const std::string& path) {
-    std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
-    size_t pos = 0;
-    int line_no = 0;
-    bool have_format = false;
-    Header h;
-    auto bad = [&](std::string_view line, const std::string& why) {
-        fail(path, "malformed PLY header, line " + std::to_string(line_no) + " '" + std::string(line) + "': " + why);
-    };
-    while (true) {
-        size_t nl = all.find('\n', pos);
-        if (nl == std::string_view::npos) {
-            if (line_no == 0) fail(path, "not a PLY file (no 'ply' line)");
-            fail(path, "malformed PLY header: no end_header line");
-        }
-        std::string_view line = all.substr(pos, nl - pos);
-        if (!line.empty() && line.back() == '\r') line.remove_suffix(1);
-        pos = nl + 1;
-        ++line_no;
-        if (line_no == 1) {
-            if (line != "ply") fail(path, "not a PLY file (it does not start with a 'ply' line)");
-            continue;
-        }
-        auto w = split_ws(line);
-        if (w.empty() || w[0] == "comment" || w[0] == "obj_info") continue;
-        if (w[0] == "end_header") break;
-        if (w[0] == "format") {
-            if (w.size() < 2) bad(line, "format without a name");
-            if (w[1] == "ascii") h.format = Format::Ascii;
-            else if (w[1] == "binary_little_endian") h.format = Format::Little;
-            else if (w[1] == "binary_big_endian") h.format = Format::Big;
-            else bad(line, "unknown format '" + std::string(w[1]) + "'");
-            have_format = true;
-        } else if (w[0] == "element") {
-            if (w.size() != 3) bad(line, "expected 'element <name> <count>'");
-            Elem e;
-            e.name = std::string(w[1]);
-            auto r = std::from_chars(w[2].data(), w[2].data() + w[2].size(), e.count);
-            if (r.ec != std::errc() || r.ptr != w[2].data() + w[2].size() || e.count < 0)
-                bad(line, "element count is not a non-negative integer");
-            h.elems.push_back(std::move(e));
-        } else if (w[0] == "property") {
-            if (h.elems.empty()) bad(line, "property before any element");
-            Prop p;
-            if (w.size() == 5 && w[1] == "list") {
-                p.is_list = true;
-                if (!parse_type(w[2], p.count_type) || !parse_type(w[3], p.type)) bad(line, "unknown type");
-                if (p.count_type == PType::F32 || p.count_type == PType::F64) bad(line, "list count must be an integer type");
-                p.name = std::string(w[4]);
-            } else if (w.size() == 3) {
-                if (!parse_type(w[1], p.type)) bad(line, "unknown type '" + std::string(w[1]) + "'");
-                p.name = std::string(w[2]);
-            } else {
-                bad(line, "expected 'property <type> <name>' or 'property list <type> <type> <name>'");
-            }
-            h.elems.back().props.push_back(std::move(p));
-        } else {
-            bad(line, "unknown keyword '" + std::string(w[0]) + "'");
-        }
-    }
-    if (!have_format) fail(path, "malformed PLY header: no format line");
-    h.data_start = pos;
-    return h;
-}
-
-// Reads one binary value and widens it to double (byte order from the header).
-double read_binary(const uint8_t* p, PType t, bool big) {
-    uint8_t b[8];
-    size_t n = type_size(t);
-    std::memcpy(b, p, n);
-    if (big != (std::endian::native == std::endian::big))
-        for (size_t i = 0; i < n / 2; ++i) std::swap(b[i], b[n - 1 - i]);
-    switch (t) {
-        case PType::I8: { int8_t v; std::memcpy(&v, b, 1); return v; }
-        case PType::U8: return b[0];
-        case PType::I16: { int16_t v; std::memcpy(&v, b, 2); return v; }
-        case PType::U16: { uint16_t v; std::memcpy(&v, b, 2); return v; }
-        case PType::I32: { int32_t v; std::memcpy(&v, b, 4); return v; }
-        case PType::U32: { uint32_t v; std::memcpy(&v, b, 4); return v; }
-        case PType::F32: { float v; std::memcpy(&v, b, 4); return v; }
-        case PType::F64: { double v; std::memcpy(&v, b, 8); return v; }
-    }
-    return 0;
-}
-
 // Binary data: walks the elements in order, keeping the vertex element's scalars.
-void read_binary_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVertices& out, const std::string& path) {
-    bool big = h.format == Format::Big;
+void read_binary_data(const std::vector<uint8_t>& bytes, const ply::Header& h, PlyVertices& out, const std::string& path) {
+    bool big = h.encoding == ply::Encoding::Big;
     size_t pos = h.data_start;
-    for (const Elem& e : h.elems) {
+    for (const ply::Elem& e : h.elems) {
         bool is_vertex = e.name == "vertex";
         bool fixed = true;
         size_t row = 0;
         for (auto& p : e.props) {
-            fixed = fixed && !p.is_list;
-            row += type_size(p.type);
+            fixed = fixed && !p.list;
+            row += ply::type_size(p.type);
         }
         auto truncated = [&](int64_t i) {
             fail(path, "truncated PLY data: element '" + e.name + "' ends after " + std::to_string(i) + " of " +
@@ -183,19 +37,19 @@ void read_binary_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVer
         if (is_vertex) out.values.reserve(size_t(std::min<uint64_t>(uint64_t(e.count), bytes.size())) * out.names.size());
         for (int64_t i = 0; i < e.count; ++i) {
             for (auto& p : e.props) {
-                if (p.is_list) {
-                    size_t cs = type_size(p.count_type);
+                if (p.list) {
+                    size_t cs = ply::type_size(p.count_type);
                     if (bytes.size() - pos < cs) truncated(i);
-                    double n = read_binary(&bytes[pos], p.count_type, big);
+                    double n = ply::read_binary(&bytes[pos], p.count_type, big);
                     pos += cs;
                     if (n < 0) fail(path, "element '" + e.name + "' row " + std::to_string(i) + ": negative list length");
-                    size_t skip = size_t(n) * type_size(p.type);
+                    size_t skip = size_t(n) * ply::type_size(p.type);
                     if (bytes.size() - pos < skip) truncated(i);
                     pos += skip;
                 } else {
-                    size_t n = type_size(p.type);
+                    size_t n = ply::type_size(p.type);
                     if (bytes.size() - pos < n) truncated(i);
-                    if (is_vertex) out.values.push_back(read_binary(&bytes[pos], p.type, big));
+                    if (is_vertex) out.values.push_back(ply::read_binary(&bytes[pos], p.type, big));
                     pos += n;
                 }
             }
@@ -206,12 +60,12 @@ void read_binary_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVer
 
 // Ascii data: one element row per line (blank lines tolerated), values
 // separated by white space.
-void read_ascii_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVertices& out, const std::string& path,
-                     int header_lines) {
+void read_ascii_data(const std::vector<uint8_t>& bytes, const ply::Header& h, PlyVertices& out, const std::string& path,
+                     int64_t header_lines) {
     std::string_view all(reinterpret_cast<const char*>(bytes.data()), bytes.size());
     size_t pos = h.data_start;
-    int line_no = header_lines;
-    for (const Elem& e : h.elems) {
+    int64_t line_no = header_lines;
+    for (const ply::Elem& e : h.elems) {
         bool is_vertex = e.name == "vertex";
         for (int64_t i = 0; i < e.count; ++i) {
             std::vector<std::string_view> w;
@@ -221,7 +75,7 @@ void read_ascii_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVert
                                    " of " + std::to_string(e.count) + " rows");
                 size_t nl = all.find('\n', pos);
                 if (nl == std::string_view::npos) nl = all.size();
-                w = split_ws(all.substr(pos, nl - pos));
+                detail::split_tokens(all.substr(pos, nl - pos), w);
                 pos = nl + 1;
                 ++line_no;
             }
@@ -239,7 +93,7 @@ void read_ascii_data(const std::vector<uint8_t>& bytes, const Header& h, PlyVert
                 return v;
             };
             for (auto& p : e.props) {
-                if (p.is_list) {
+                if (p.list) {
                     double n = next();
                     if (n < 0 || n != double(int64_t(n))) fail(path, where() + ": bad list length");
                     for (int64_t j = 0; j < int64_t(n); ++j) next();
@@ -273,8 +127,8 @@ int PlyVertices::column(const std::string& name) const {
 PlyVertices read_ply_vertices(const std::string& path) {
     std::vector<uint8_t> bytes = read_file_bytes(path);
     if (bytes.empty()) fail(path, "file is empty, not a PLY file");
-    Header h = parse_header(bytes, path);
-    const Elem* vertex = nullptr;
+    const ply::Header h = ply::parse_header(bytes, path);
+    const ply::Elem* vertex = nullptr;
     for (auto& e : h.elems)
         if (e.name == "vertex") {
             vertex = &e;
@@ -285,17 +139,15 @@ PlyVertices read_ply_vertices(const std::string& path) {
     out.count = vertex->count;
     for (auto& e : h.elems) out.elements.push_back(e.name);
     for (auto& p : vertex->props)
-        if (!p.is_list && out.column(p.name) < 0) out.names.push_back(p.name);
+        if (!p.list && out.column(p.name) < 0) out.names.push_back(p.name);
     if (out.names.size() != [&] {
             size_t n = 0;
-            for (auto& p : vertex->props) n += !p.is_list;
+            for (auto& p : vertex->props) n += !p.list;
             return n;
         }())
         fail(path, "malformed PLY header: a vertex property name appears twice");
-    if (h.format == Format::Ascii) {
-        int header_lines = 0;
-        for (size_t i = 0; i < h.data_start; ++i) header_lines += bytes[i] == '\n';
-        read_ascii_data(bytes, h, out, path, header_lines);
+    if (h.encoding == ply::Encoding::Ascii) {
+        read_ascii_data(bytes, h, out, path, h.lines);
     } else {
         read_binary_data(bytes, h, out, path);
     }
