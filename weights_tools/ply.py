@@ -84,6 +84,13 @@ def read_ply(path):
     raise ValueError("PLY file has no vertex element")
 
 
+def _read_exact(f, n):
+    b = f.read(n)
+    if len(b) != n:
+        raise EOFError
+    return b
+
+
 def _read_rows_binary(f, count, props, endian):
     """An element with list properties -> {name: values (rows of int arrays for lists)}: at once
     where every list holds 3 items (a triangle mesh's faces), else row by row."""
@@ -91,25 +98,38 @@ def _read_rows_binary(f, count, props, endian):
     for p, t in props:
         fields += [(p + "#n", endian + t[1]), (p, endian + t[2], (3,))] if isinstance(t, tuple) else [(p, endian + t)]
     dt, start = np.dtype(fields), f.tell()
-    arr = np.frombuffer(f.read(count * dt.itemsize), dtype=dt)
-    if len(arr) == count and all(np.all(arr[p + "#n"] == 3) for p, t in props if isinstance(t, tuple)):
-        return {p: arr[p] for p, _ in props}
+    buf = f.read(count * dt.itemsize)
+    if len(buf) == count * dt.itemsize:
+        arr = np.frombuffer(buf, dtype=dt)
+        if all(np.all(arr[p + "#n"] == 3) for p, t in props if isinstance(t, tuple)):
+            return {p: arr[p] for p, _ in props}
     f.seek(start)
     cols = {p: [] for p, _ in props}
     for _ in range(count):
         for p, t in props:
             if isinstance(t, tuple):
-                n = int(np.frombuffer(f.read(np.dtype(t[1]).itemsize), endian + t[1])[0])
-                cols[p].append(np.frombuffer(f.read(n * np.dtype(t[2]).itemsize), endian + t[2], count=n))
+                n = int(np.frombuffer(_read_exact(f, np.dtype(t[1]).itemsize), endian + t[1])[0])
+                cols[p].append(np.frombuffer(_read_exact(f, n * np.dtype(t[2]).itemsize), endian + t[2], count=n))
             else:
-                cols[p].append(np.frombuffer(f.read(np.dtype(t).itemsize), endian + t)[0])
+                cols[p].append(np.frombuffer(_read_exact(f, np.dtype(t).itemsize), endian + t)[0])
     return cols
 
 
 def read_ply_triangles(path):
     """Return (V, T) of a triangle mesh: V an N x 3 float64 array of x y z, T an M x 3 int64
-    array of vertex indices. ValueError naming the file for a face that is not a triangle, an
-    index out of range, or a file without vertices or faces."""
+    array of vertex indices. ValueError naming the file for a file that is not a PLY mesh, data
+    that ends early or is not numbers, a face that is not a triangle or an index out of range."""
+    try:
+        return _read_triangles(path)
+    except (StopIteration, EOFError):
+        raise ValueError(f"{path}: the PLY data ends before the header's counts do") from None
+    except ValueError as e:
+        if str(e).startswith(f"{path}:"):
+            raise
+        raise ValueError(f"{path}: {e}") from None
+
+
+def _read_triangles(path):
     with open(path, "rb") as f:
         fmt, elements = _parse_header(f)
         endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
@@ -129,7 +149,7 @@ def read_ply_triangles(path):
                             cols[p].append(float(next(tokens)))
             elif all(not isinstance(t, tuple) for _, t in props):
                 dt = np.dtype([(p, endian + t) for p, t in props])
-                arr = np.frombuffer(f.read(count * dt.itemsize), dtype=dt, count=count)
+                arr = np.frombuffer(_read_exact(f, count * dt.itemsize), dtype=dt, count=count)
                 cols = {p: arr[p] for p, _ in props}
             elif name == "face":
                 cols = _read_rows_binary(f, count, props, endian)

@@ -61,3 +61,21 @@ def test_a_binary_quad_is_an_error_too(tmp_path):
     p.write_bytes(_head("binary_little_endian", "property list uchar uint vertex_indices\n") + body)
     with pytest.raises(ValueError, match="faces must be triangles"):
         read_ply_triangles(str(p))
+
+
+@pytest.mark.parametrize("fmt", ["ascii", "binary_little_endian"])
+def test_data_that_ends_early_or_is_not_a_ply_is_an_error_naming_the_file(tmp_path, fmt):
+    p = tmp_path / "short.ply"
+    if fmt == "ascii":
+        body = "".join(f"{x:g} {y:g} {z:g} 7\n" for x, y, z in V).encode("ascii") + b"3 0 2 1\n3 0 1"
+    else:
+        body = b"".join(struct.pack("<3fB", *v, 7) for v in V) + struct.pack("<B3I", 3, 0, 2, 1) + b"\x03\x00"
+    p.write_bytes(_head(fmt, "property list uchar uint vertex_indices\n") + body)
+    with pytest.raises(ValueError, match="ends before") as e:
+        read_ply_triangles(str(p))
+    assert str(p) in str(e.value)
+    q = tmp_path / "not.ply"
+    q.write_bytes(b"solid cube\n")
+    with pytest.raises(ValueError, match="not a PLY file") as e:
+        read_ply_triangles(str(q))
+    assert str(q) in str(e.value)
