@@ -1,5 +1,6 @@
 #include "engine/io/ply_header.h"
 
+#include <algorithm>
 #include <bit>
 #include <charconv>
 #include <cstring>
