@@ -311,9 +311,16 @@ int cmd_eval(Session& s, int argc, char** argv) {
         std::ifstream in(*r);
         if (!in) throw api::Error(*r + ": cannot open");
         const nlohmann::json j = nlohmann::json::parse(in, nullptr, false);
-        if (j.is_discarded() || !j.is_object() || j.value("format", "") != "vtloc-eval-sequence/1" || !j.contains("rows"))
+        if (j.is_discarded() || !j.is_object() || j.value("format", "") != "vtloc-eval-sequence/1" || !j.contains("rows") ||
+            !j["rows"].is_array())
             throw api::Error(*r + ": not a vtloc-eval-sequence/1 report");
-        eval::plot_sequence(a.required("--plot"), j["rows"], j.value("data", std::string()));
+        const std::string plot = a.required("--plot");
+        try {  // a row without its keys, or of other types: the report's fault, not an internal error
+            eval::plot_sequence(plot, j["rows"], j.contains("data") && j["data"].is_string() ? j["data"].get<std::string>() : "");
+        } catch (const nlohmann::json::exception& e) {
+            const std::string what = e.what();
+            throw api::Error(*r + ": a row of this vtloc-eval-sequence/1 report is incomplete (" + what.substr(what.find(']') + 2) + ")");
+        }
         return 0;
     }
     if (a.get("--sequence")) return eval::run_sequence(s, a);
