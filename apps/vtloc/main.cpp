@@ -7,6 +7,7 @@
 #include <string>
 
 #include "apps/vtloc/cli.h"
+#include "base/error.h"
 
 using namespace vtloc;
 
@@ -80,6 +81,9 @@ int main(int argc, char** argv) {
         std::fprintf(stderr, "vtloc %s: %s (see 'vtloc %s --help')\n", name.c_str(), e.what(), name.c_str());
         rc = 2;
     } catch (const api::Error& e) {
+        std::fprintf(stderr, "vtloc: %s\n", e.what());
+        rc = 1;
+    } catch (const vtloc::Error& e) {  // the engine's own layers' user-facing errors (a touches file, ...)
         std::fprintf(stderr, "vtloc: %s\n", e.what());
         rc = 1;
     } catch (const std::exception& e) {

@@ -7,7 +7,9 @@
 #   usage text); a success prints nothing on stderr, unless EXPECT_STDERR says
 #   what it prints (a trace the environment asked for);
 # - no validation-layer message, whatever the status (the tests set
-#   VTLOC_VALIDATION=1, and the CLI reports each message on stderr).
+#   VTLOC_VALIDATION=1, and the CLI reports each message on stderr);
+# - no "internal error": every case here is a user's mistake, which the CLI
+#   reports as such (its last resort names exceptions it did not expect).
 set(cmd)
 set(after_dashes FALSE)
 math(EXPR last "${CMAKE_ARGC} - 1")
@@ -32,6 +34,9 @@ set(report "command: ${shown}\nexit status: ${rc}\n--- stdout ---\n${out}--- std
 
 if(err MATCHES "vtloc[-a-z]*: validation layer:")
   message(FATAL_ERROR "the validation layer reported problems\n${report}")
+endif()
+if(err MATCHES "internal error")
+  message(FATAL_ERROR "a user's mistake reported as an internal error\n${report}")
 endif()
 if(NOT rc STREQUAL "${EXPECT_RC}")
   message(FATAL_ERROR "expected exit status ${EXPECT_RC}\n${report}")
