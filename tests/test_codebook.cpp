@@ -387,6 +387,9 @@ TEST_CASE("the codebook cache round-trips and refuses stale, foreign and corrupt
     // Truncated.
     std::filesystem::resize_file(path, std::filesystem::file_size(path) / 2);
     test::require_error([&] { track::load_codebook(path, s); }, {path});
+    // Not tensors at all (a JSON given as the cache): the error says what it likely is.
+    const std::string json = test::write_temp("not.codebook", "{\"x\": 1}\n");
+    test::require_error([&] { track::load_codebook(json, s); }, {json, "not a codebook cache?"});
     test::require_no_validation_messages();
 }
 

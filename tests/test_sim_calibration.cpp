@@ -108,7 +108,12 @@ TEST_CASE("sim: calibration loader errors name the file and the tensor", "[sim]"
         FAIL("no error");
     } catch (const Error& e) {
         CHECK(std::string(e.what()).find(nofile) != std::string::npos);
+        CHECK(std::string(e.what()).find("not a calibration") == std::string::npos);  // it is no file at all
     }
+    // A file that is not tensors at all (a JSON given as the calibration) says what it likely is.
+    const std::string json = test::temp_path("sim_calib_not.json");
+    std::ofstream(json) << "{\"x\": 1}\n";
+    CHECK_THROWS_WITH(load_calibration(json), Catch::Contains(json) && Catch::Contains("(not a calibration file?)"));
 }
 
 TEST_CASE("sim: a calibration parsed from bytes equals the file's, and bad bytes name their source", "[sim]") {

@@ -1,7 +1,6 @@
 // vtloc info (a weight file) and vtloc devices (Vulkan devices).
 #include <cstdio>
 #include <fstream>
-#include <stdexcept>
 
 #include "apps/vtloc/report.h"
 
@@ -86,7 +85,7 @@ int cmd_devices(Session& s, int argc, char** argv) {
     if (auto path = a.get("--save-profile")) {
         std::ofstream f(*path, std::ios::binary);
         if (!(f << api::device_profile(chosen)) || !(f.close(), f))
-            throw std::runtime_error("cannot write the device profile to " + *path);
+            throw api::Error(*path + ": cannot write the device profile there");
         std::printf("wrote %s (device %d)\n", path->c_str(), chosen);
         return 0;
     }
