@@ -1,12 +1,22 @@
 #include "engine/weights.h"
 
+#include <filesystem>
+#include <optional>
+
 #include "base/error.h"
 #include "engine/safetensors.h"
 
 namespace vtloc {
 
 WeightStore WeightStore::load(const std::string& path) {
-    return from_file(SafetensorsFile::load(path));
+    std::optional<SafetensorsFile> f;
+    try {
+        f.emplace(SafetensorsFile::load(path));
+    } catch (const Error& e) {  // a file read but not tensors at all: most likely not weights
+        if (!std::filesystem::is_regular_file(path)) throw;
+        throw Error(std::string(e.what()) + " (not a safetensors weight file?)");
+    }
+    return from_file(*f);
 }
 
 WeightStore WeightStore::from_file(const SafetensorsFile& file) {

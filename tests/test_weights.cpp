@@ -161,3 +161,14 @@ TEST_CASE("an unreadable weight file is named", "[weights]") {
     REQUIRE_THROWS_WITH(WeightStore::load("/nonexistent/model.safetensors"),
                         Catch::Contains("/nonexistent/model.safetensors: cannot open file"));
 }
+
+TEST_CASE("WeightStore::load: a file that is not tensors says it is likely no weight file; a missing one does not",
+          "[weights]") {
+    // vtloc-bench loads weights this way: a calibration or JSON given as --weights printed only
+    // the header length it read from the first 8 bytes.
+    const std::string text = test::temp_path("weights_text.safetensors");
+    std::ofstream(text) << "{\"not\": \"weights\"}\n";
+    REQUIRE_THROWS_WITH(WeightStore::load(text), Catch::Contains(text) && Catch::Contains("(not a safetensors weight file?)"));
+    const std::string missing = test::temp_path("weights_missing.safetensors");
+    REQUIRE_THROWS_WITH(WeightStore::load(missing), Catch::Contains(missing) && !Catch::Contains("not a safetensors"));
+}
