@@ -60,6 +60,9 @@ inline void check_rigid(const Rigid& m, const std::string& what) {
 // A 4x4 matrix given row by row as a checked rigid transform: its last row must be
 // 0 0 0 1 and its 3x3 part a rotation (check_rigid). Throws naming `what`.
 inline Rigid rigid_from_rows(const std::array<double, 16>& v, const std::string& what) {
+    for (size_t i = 0; i < 16; ++i)  // first, so that a NaN in the last row is named as one
+        if (!std::isfinite(v[i]))
+            throw Error(what + ": row " + std::to_string(i / 4) + ", column " + std::to_string(i % 4) + " holds NaN or inf");
     if (v[12] != 0 || v[13] != 0 || v[14] != 0 || v[15] != 1) throw Error(what + ": the last row must be 0 0 0 1");
     Rigid out;
     for (size_t r = 0; r < 3; ++r) {

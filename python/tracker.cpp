@@ -1,6 +1,9 @@
 // vtloc.Tracker: the multi-touch filter (SPEC section 6), numpy in and out.
 // Motions and poses are 4 x 4 homogeneous float arrays (the rotation in the
 // upper left, the translation in the last column, object units).
+#include <cmath>
+#include <string>
+
 #include <pybind11/stl.h>
 
 #include "arrays.h"
@@ -16,6 +19,10 @@ api::Motion to_motion(const py::handle& obj, const std::string& what) {
         throw api::Error(what + ": expected a float32 or float64 4 x 4 array, got " + (a ? describe(a) : "something else"));
     py::array_t<double, py::array::c_style | py::array::forcecast> d(a);
     auto r = d.unchecked<2>();
+    for (int i = 0; i < 4; ++i)  // first, so that a NaN in the last row is named as one
+        for (int j = 0; j < 4; ++j)
+            if (!std::isfinite(r(i, j)))
+                throw api::Error(what + ": row " + std::to_string(i) + ", column " + std::to_string(j) + " holds NaN or inf");
     for (int i = 0; i < 3; ++i)
         if (r(3, i) != 0) throw api::Error(what + ": the last row must be 0 0 0 1");
     if (r(3, 3) != 1) throw api::Error(what + ": the last row must be 0 0 0 1");

@@ -4,6 +4,7 @@
 #include <cmath>
 
 #include "engine/io/touch_sequence.h"
+#include "engine/rigid.h"
 #include "tests/io_test_util.h"
 
 using namespace vtloc;
@@ -94,4 +95,14 @@ TEST_CASE("touches file: bad files fail in one line naming the file and the touc
     require_error([] { parse(R"({"format": "vtloc-touches/2", "touches": [{"tactile": "a.png", "contact": [1, 2]}]})"); },
                   {"touch 1", "\"contact\" must be [x, y, z]"});
     require_error([] { io::read_touch_sequence("/no/such/seq.json"); }, {"/no/such/seq.json", "cannot open"});
+}
+
+TEST_CASE("a 4x4 given row by row: a NaN or inf anywhere is named as one, before the last row's check", "[io][touches][errors]") {
+    // JSON cannot hold one and the CLI's --tool refuses 'nan' when parsing; the check guards other callers.
+    std::array<double, 16> v{1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1};
+    CHECK(rigid_from_rows(v, "m").t == std::array<double, 3>{0, 0, 0});
+    v[15] = NAN;
+    test::require_error([&] { rigid_from_rows(v, "m"); }, {"m: row 3, column 3 holds NaN or inf"});
+    v[15] = 1, v[6] = INFINITY;
+    test::require_error([&] { rigid_from_rows(v, "m"); }, {"m: row 1, column 2 holds NaN or inf"});
 }

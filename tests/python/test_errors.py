@@ -88,4 +88,7 @@ def test_bad_tracker_inputs(ctx, root):
     nan = np.eye(4)
     nan[1, 3] = np.nan
     expect("NaN or inf", tr.add_touch, nan)
+    last = np.eye(4)
+    last[3, 3] = np.inf  # named as such, not as a last row that is not 0 0 0 1
+    expect("motion: row 3, column 3 holds NaN or inf", tr.add_touch, last)
     expect("needs a normal per point", vtloc.Tracker, ctx, np.zeros((10, 3), np.float32))
