@@ -89,6 +89,36 @@ TEST_CASE("gel shape reader: a larger frame of the same aspect is resampled, oth
     CHECK_THROWS_WITH(api::GelShapeReader(ctx, bad), Catch::Contains("/no/such/calib.safetensors"));
 }
 
+TEST_CASE("gel shape reader: black, over-exposed and flat frames are refused, naming which frame", "[api][sensor][errors]") {
+    // Until 2026-12-06 an all-black or all-white frame read as a 140 mm^2 contact 7 mm deep.
+    const sensor::Calibration c = sensor::load_calibration(sensor::default_calibration_path());
+    api::Context ctx;
+    api::GelShapeReader reader(ctx);
+    auto flat = [&](uint8_t v) {
+        api::TactileImage im;
+        im.height = c.height, im.width = c.width;
+        im.rgb.assign(size_t(c.height) * size_t(c.width) * 3, v);
+        return im;
+    };
+    const api::TactileImage real = press(c, 8);
+    CHECK_THROWS_WITH(reader.read(flat(0)), Catch::Contains("frame: the frame is black (its brightest value is 0 of 255)"));
+    CHECK_THROWS_WITH(reader.read(flat(255)), Catch::Contains("frame: 100 % of the frame is white"));
+    CHECK_THROWS_WITH(reader.read(flat(128)), Catch::Contains("frame: the frame is one flat colour (values 128..128)"));
+    const api::TactileImage dark = flat(3);
+    CHECK_THROWS_WITH(reader.read(real, &dark), Catch::StartsWith("empty frame: the frame is black"));
+    // Half a real press painted white: over half the pixels clipped is refused, under half read.
+    api::TactileImage half = real;
+    for (size_t p = 0; p < half.rgb.size() / 3 / 2 + 1; ++p) half.rgb[3 * p] = half.rgb[3 * p + 1] = half.rgb[3 * p + 2] = 255;
+    CHECK_THROWS_WITH(reader.read(half), Catch::Contains("50 % of the frame is white"));
+    for (size_t p = half.rgb.size() / 3 / 2 - 200; p < half.rgb.size() / 3 / 2 + 1; ++p)
+        for (int k = 0; k < 3; ++k) half.rgb[3 * p + size_t(k)] = real.rgb[3 * p + size_t(k)];
+    CHECK(reader.read(half).depth_mm.size() == size_t(c.height) * size_t(c.width));
+    // A dim frame still reads (its brightest value 32 and more).
+    api::TactileImage dim = real;
+    for (uint8_t& v : dim.rgb) v = uint8_t(v / 7);
+    CHECK(reader.read(dim).depth_mm.size() == size_t(c.height) * size_t(c.width));
+}
+
 TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the shapes themselves", "[api][tracker]") {
     // Two gentle caps pressed into the gel, one motion between them, on the potato; the terms are
     // computed once (touch_term) and reused, as vtloc eval does across windows.
