@@ -11,6 +11,7 @@
 #include "engine/io/image.h"
 #include "engine/sensor/ball_press.h"
 #include "engine/sensor/calibrate.h"
+#include "engine/sensor/frame_check.h"
 
 namespace vtloc::cli {
 
@@ -164,6 +165,7 @@ int run_calibrate(int argc, char** argv) {
         const std::string empty_path = a.required("--empty");
         const io::RgbImage e = io::load_tactile_image(empty_path);
         H = e.height, W = e.width, empty = stored_order(e);
+        sensor::check_gel_frame(empty, empty_path);
         for (const std::string& f : press_files(*a.get("--presses"), empty_path)) {
             const io::RgbImage im = io::load_tactile_image(f);
             if (im.height != H || im.width != W)
@@ -171,6 +173,7 @@ int run_calibrate(int argc, char** argv) {
                             " is " + std::to_string(W) + "x" + std::to_string(H));
             BallPress p;
             p.frame = stored_order(im);
+            sensor::check_gel_frame(p.frame, f);
             presses.push_back(std::move(p));
         }
         source = *a.get("--presses");

@@ -11,6 +11,7 @@
 #include "engine/api/api_internal.h"
 #include "engine/io/image.h"
 #include "engine/io/image_mat.h"
+#include "engine/sensor/frame_check.h"
 #include "engine/sensor/gel_shape_gpu.h"
 #include "engine/sensor/lighting.h"
 
@@ -39,26 +40,6 @@ std::vector<uint8_t> to_calibration(const TactileImage& im, const sensor::Calibr
     cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
     if (im.width != c.width) cv::resize(bgr, bgr, cv::Size(c.width, c.height), 0, 0, cv::INTER_AREA);
     return std::vector<uint8_t>(bgr.datastart, bgr.dataend);
-}
-
-// A frame that cannot show the gel: black (lights off, lens covered), mostly white (over-exposed)
-// or one flat colour. Not fitted knobs but wide margins: the 49 real presses, their empty frame,
-// 300 of the benchmark's rendered touches and every shipped example have their brightest value
-// at 205 or more, no white-clipped pixel and a spread of 27 or more (2026-12-06).
-void check_frame(const std::vector<uint8_t>& bgr, const char* what) {
-    const auto [lo, hi] = std::minmax_element(bgr.begin(), bgr.end());
-    size_t white = 0;
-    for (size_t i = 0; i + 2 < bgr.size(); i += 3) white += bgr[i] >= 250 && bgr[i + 1] >= 250 && bgr[i + 2] >= 250;
-    const size_t pixels = bgr.size() / 3;
-    if (*hi < 32)
-        throw Error(std::string(what) + ": the frame is black (its brightest value is " + std::to_string(*hi) +
-                    " of 255): the sensor's lights off or its camera covered?");
-    if (2 * white > pixels)
-        throw Error(std::string(what) + ": " + std::to_string(100 * white / pixels) +
-                    " % of the frame is white (every channel >= 250): over-exposed, it cannot show the gel");
-    if (*hi - *lo <= 2)
-        throw Error(std::string(what) + ": the frame is one flat colour (values " + std::to_string(*lo) + ".." +
-                    std::to_string(*hi) + "): no image of the gel");
 }
 
 }  // namespace
@@ -93,8 +74,8 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
         std::vector<uint8_t> f = to_calibration(frame, c, "frame");
         std::vector<uint8_t> e = empty ? to_calibration(*empty, c, "empty frame") : c.press_f0;
         if (e.empty()) throw Error("gel shape: this calibration has no empty frame; give the sensor's own");
-        check_frame(f, "frame");
-        if (empty) check_frame(e, "empty frame");
+        sensor::check_gel_frame(f, "frame");
+        if (empty) sensor::check_gel_frame(e, "empty frame");
         if (impl_->match_lighting) f = sensor::match_lighting(f, e);
         const sensor::GelShape s = impl_->gpu.run(f, e);
         GelShape out;
