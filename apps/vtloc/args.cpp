@@ -163,6 +163,18 @@ void make_folder(const std::string& path) {
     if (ec) throw api::Error(path + ": cannot create the folder (" + ec.message() + ")");
 }
 
+api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
+                             const api::TactileImage* empty, const std::string& empty_path, const std::string& where) {
+    try {
+        return reader.read(frame, empty);
+    } catch (const api::Error& e) {
+        const std::string m = e.what();
+        for (const auto& [role, path] : {std::pair<std::string, std::string>{"empty frame: ", empty_path}, {"frame: ", frame_path}})
+            if (m.rfind(role, 0) == 0 && !path.empty()) throw api::Error(path + ": " + m.substr(role.size()) + where);
+        throw;
+    }
+}
+
 std::string point_str(const std::array<double, 3>& p, int digits) {
     char buf[128];
     std::snprintf(buf, sizeof buf, "(%.*f, %.*f, %.*f)", digits, p[0], digits, p[1], digits, p[2]);

@@ -92,6 +92,12 @@ api::Model load_model(Session& s, const std::string& path, api::Backend backend)
 // Creates a folder (and its parents); throws api::Error naming it when it cannot.
 void make_folder(const std::string& path);
 
+// The gel shape of a frame read from `frame_path` (the empty frame from `empty_path`, or the
+// calibration's with none): the reader's refusal of either ("frame: ...", "empty frame: ...")
+// names that frame's file, then `where` (e.g. " (touch 2 of tour.json)").
+api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
+                             const api::TactileImage* empty, const std::string& empty_path, const std::string& where = "");
+
 // Formats a point "(x, y, z)" with `digits` decimals.
 std::string point_str(const std::array<double, 3>& p, int digits = 2);
 

@@ -113,11 +113,12 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     if (!render_compare && a.flag("--rendered")) throw UsageError("--rendered is for --render-compare");
     std::optional<api::GelShapeReader> reader;
     std::optional<api::TactileImage> empty;
+    const std::string background = a.get("--background").value_or("");
     if (render_compare) {
         api::GelShapeOptions go = a.flag("--rendered") ? api::GelShapeOptions::rendered_frames() : api::GelShapeOptions{};
         go.calibration = a.get("--calibration").value_or("");
         reader.emplace(s.gpu(), go);
-        if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
+        if (!background.empty()) empty = api::load_tactile_image(background);
         to.codebook_cache = a.get("--codebook-cache").value_or("");
     }
 
@@ -150,7 +151,9 @@ int cmd_sequence(Session& s, int argc, char** argv) {
             throw api::Error(file.touches[i].tactile + ": no such file (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
         }
         std::optional<api::GelShape> shape;
-        if (reader) shape = reader->read(api::load_tactile_image(file.touches[i].tactile), empty ? &*empty : nullptr);
+        if (reader)
+            shape = read_gel_shape(*reader, file.touches[i].tactile, api::load_tactile_image(file.touches[i].tactile), empty ? &*empty : nullptr,
+                                   background, " (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
         tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, shape ? &*shape : nullptr);
         const api::TrackerEstimate e = tracker.estimate();
         steps.push_back(e);

@@ -57,9 +57,10 @@ int cmd_shape(Session& s, int argc, char** argv) {
     o.coarse_iterations = a.integer("--coarse-sweeps", o.coarse_iterations, 1, 10000);
     const api::TactileImage frame = api::load_tactile_image(tactile);
     std::optional<api::TactileImage> empty;
-    if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
+    const std::string background = a.get("--background").value_or("");
+    if (!background.empty()) empty = api::load_tactile_image(background);
     api::GelShapeReader reader(s.gpu(), o);
-    const api::GelShape g = reader.read(frame, empty ? &*empty : nullptr);
+    const api::GelShape g = read_gel_shape(reader, tactile, frame, empty ? &*empty : nullptr, background);
     double deepest = 0, cx = 0, cy = 0, area = 0;
     for (int r = 0; r < g.height; ++r)
         for (int c = 0; c < g.width; ++c) {

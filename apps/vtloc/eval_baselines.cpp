@@ -133,7 +133,9 @@ MethodResult run_codebook(Session& s, const std::vector<Job>& jobs, api::Backend
         if (o.has_background) empty = api::load_tactile_image((dir / "background.png").string());
         std::vector<sim::TouchScore> scores;
         for (const sim::TouchRecord* t : job.touches) {
-            const api::GelShape shape = reader.read(api::load_tactile_image(image_path(o, *t)), empty ? &*empty : nullptr);
+            const std::string frame = image_path(o, *t);
+            const api::GelShape shape = read_gel_shape(reader, frame, api::load_tactile_image(frame), empty ? &*empty : nullptr,
+                                                       o.has_background ? (dir / "background.png").string() : "");
             blind += std::none_of(shape.mask.begin(), shape.mask.end(), [](uint8_t m) { return m != 0; });
             ++touches;
             const api::TrackerEstimate e = tracker.evaluate_window({}, {}, nullptr, {&shape});

@@ -330,7 +330,8 @@ int run_sequence(Session& s, const Args& a) {
                             auto& cache = rc ? measured : oracle;
                             if (!cache.count(i)) {
                                 const std::string img = image_path(o, *tour[i]);
-                                cache[i] = rc ? reader->read(api::load_tactile_image(img), &*empty_frame)
+                                cache[i] = rc ? read_gel_shape(*reader, img, api::load_tactile_image(img), &*empty_frame,
+                                                               (fs::path(o.folder) / "background.png").string())
                                               : api::load_indentation(fs::path(img).replace_extension(".depth.png").string(), d.sensor.mm_per_px);
                             }
                             return &cache[i];

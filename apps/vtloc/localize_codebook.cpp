@@ -44,7 +44,8 @@ int localize_codebook(Session& s, int argc, char** argv) {
     if (topk < 1 || topk > 64) throw UsageError("--topk must be 1..64");
     const api::TactileImage frame = api::load_tactile_image(tactile);
     std::optional<api::TactileImage> empty;
-    if (auto b = a.get("--background")) empty = api::load_tactile_image(*b);
+    const std::string background = a.get("--background").value_or("");
+    if (!background.empty()) empty = api::load_tactile_image(background);
     api::GelShapeOptions go;
     go.calibration = a.get("--calibration").value_or("");
     api::TrackerOptions to;
@@ -54,7 +55,7 @@ int localize_codebook(Session& s, int argc, char** argv) {
 
     const auto t0 = std::chrono::steady_clock::now();
     api::GelShapeReader reader(s.gpu(), go);
-    const api::GelShape shape = reader.read(frame, empty ? &*empty : nullptr);
+    const api::GelShape shape = read_gel_shape(reader, tactile, frame, empty ? &*empty : nullptr, background);
     api::Tracker tracker(s.gpu(), object, to);
     const auto t1 = std::chrono::steady_clock::now();
     tracker.shape_term(shape);  // renders (or reads) the codebook once
