@@ -49,13 +49,19 @@ def _skip_binary(f, count, props, endian):
                 f.read(np.dtype(t).itemsize)
 
 
+def _header_and_endian(f):
+    """(format, elements, '<' / '>' or None for ascii) of an open file, its header read."""
+    fmt, elements = _parse_header(f)
+    endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
+    if fmt != "ascii" and endian is None:
+        raise ValueError(f"unsupported PLY format {fmt!r}")
+    return fmt, elements, endian
+
+
 def read_ply(path):
     """Return an N x 3 or N x 6 float32 array: x y z, plus nx ny nz when present."""
     with open(path, "rb") as f:
-        fmt, elements = _parse_header(f)
-        endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
-        if fmt != "ascii" and endian is None:
-            raise ValueError(f"unsupported PLY format {fmt!r}")
+        fmt, elements, endian = _header_and_endian(f)
         ascii_lines = f.read().decode("ascii").splitlines() if fmt == "ascii" else None
         row = 0
         for name, count, props in elements:
@@ -131,10 +137,7 @@ def read_ply_triangles(path):
 
 def _read_triangles(path):
     with open(path, "rb") as f:
-        fmt, elements = _parse_header(f)
-        endian = {"binary_little_endian": "<", "binary_big_endian": ">"}.get(fmt)
-        if fmt != "ascii" and endian is None:
-            raise ValueError(f"{path}: unsupported PLY format {fmt!r}")
+        fmt, elements, endian = _header_and_endian(f)
         tokens = iter(f.read().decode("ascii").split()) if fmt == "ascii" else None
         V = faces = None
         for name, count, props in elements:
