@@ -58,7 +58,7 @@ float half_to_float(uint16_t h) {
     return std::bit_cast<float>(bits);
 }
 
-SafetensorsFile SafetensorsFile::load(const std::string& path) {
+SafetensorsFile SafetensorsFile::load(const std::string& path, const std::string& kind) {
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw Error(path + ": cannot open file");
     std::streamsize size = in.tellg();
@@ -67,7 +67,7 @@ SafetensorsFile SafetensorsFile::load(const std::string& path) {
     in.seekg(0);
     if (size > 0 && !in.read(reinterpret_cast<char*>(bytes.data()), size))
         throw Error(path + ": read failed");
-    return parse(std::move(bytes), path);
+    return parse(std::move(bytes), path, kind);
 }
 
 namespace {
@@ -133,7 +133,16 @@ void check_tiling(const std::string& source, const std::vector<TensorInfo>& tens
 
 }  // namespace
 
-SafetensorsFile SafetensorsFile::parse(std::vector<uint8_t> bytes, const std::string& source) {
+SafetensorsFile SafetensorsFile::parse(std::vector<uint8_t> bytes, const std::string& source, const std::string& kind) {
+    if (kind.empty()) return parse_tensors(std::move(bytes), source);
+    try {
+        return parse_tensors(std::move(bytes), source);
+    } catch (const Error& e) {
+        throw Error(std::string(e.what()) + " (not a " + kind + "?)");
+    }
+}
+
+SafetensorsFile SafetensorsFile::parse_tensors(std::vector<uint8_t> bytes, const std::string& source) {
     auto fail = [&](const std::string& msg) { return Error(source + ": " + msg); };
     SafetensorsFile f;
     f.source_ = source;

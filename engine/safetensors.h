@@ -30,9 +30,11 @@ class SafetensorsFile {
 public:
     static constexpr uint64_t kMaxHeaderBytes = 100ull * 1000 * 1000;
 
-    static SafetensorsFile load(const std::string& path);
+    // `kind` says what the file should be ("calibration file"): bytes that are not safetensors
+    // at all then add "(not a <kind>?)" to the error; a file that cannot be opened does not.
+    static SafetensorsFile load(const std::string& path, const std::string& kind = "");
     // `source` names the data in error messages (usually the path).
-    static SafetensorsFile parse(std::vector<uint8_t> bytes, const std::string& source);
+    static SafetensorsFile parse(std::vector<uint8_t> bytes, const std::string& source, const std::string& kind = "");
 
     const std::string& source() const { return source_; }
     const std::vector<TensorInfo>& tensors() const { return tensors_; }  // ordered by offset
@@ -47,6 +49,7 @@ public:
     std::vector<int32_t> to_i32(const TensorInfo& t) const;
 
 private:
+    static SafetensorsFile parse_tensors(std::vector<uint8_t> bytes, const std::string& source);
     std::string source_;
     std::vector<uint8_t> file_;
     uint64_t data_start_ = 0;

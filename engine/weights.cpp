@@ -1,22 +1,12 @@
 #include "engine/weights.h"
 
-#include <filesystem>
-#include <optional>
-
 #include "base/error.h"
 #include "engine/safetensors.h"
 
 namespace vtloc {
 
 WeightStore WeightStore::load(const std::string& path) {
-    std::optional<SafetensorsFile> f;
-    try {
-        f.emplace(SafetensorsFile::load(path));
-    } catch (const Error& e) {  // a file read but not tensors at all: most likely not weights
-        if (!std::filesystem::is_regular_file(path)) throw;
-        throw Error(std::string(e.what()) + " (not a safetensors weight file?)");
-    }
-    return from_file(*f);
+    return from_file(SafetensorsFile::load(path, "safetensors weight file"));
 }
 
 WeightStore WeightStore::from_file(const SafetensorsFile& file) {

@@ -41,13 +41,8 @@ void check_finite(const WeightStore& w) {
 ModelFile load_model_file(const std::string& path) {
     if (!std::filesystem::exists(path)) throw Error(path + ": no such file");
     if (std::filesystem::is_directory(path)) throw Error(path + ": is a directory, not a weight file");
-    std::optional<SafetensorsFile> loaded;
-    try {
-        loaded.emplace(SafetensorsFile::load(path));
-    } catch (const Error& e) {
-        throw Error(std::string(e.what()) + " (not a safetensors weight file?)");
-    }
-    const WeightStore file = WeightStore::from_file(*loaded);
+    const SafetensorsFile loaded = SafetensorsFile::load(path, "safetensors weight file");
+    const WeightStore file = WeightStore::from_file(loaded);
     ModelConfig config = ModelConfig::parse(file.config(), path);
     try {
         check_finite(file);
@@ -64,7 +59,7 @@ ModelFile load_model_file(const std::string& path) {
         throw Error(path + ": " + msg + " (the tensors do not fit the file's config '" + config.name + "')");
     }
     ModelFile m{std::move(*prepared), std::move(config), {}, std::filesystem::file_size(path)};
-    for (const TensorInfo& t : loaded->tensors())
+    for (const TensorInfo& t : loaded.tensors())
         m.tensors.push_back(
             {t.name, dtype_name(t.dtype), t.shape, t.dtype == DType::F32 || t.dtype == DType::F16 || t.dtype == DType::BF16});
     return m;

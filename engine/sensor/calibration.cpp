@@ -51,27 +51,15 @@ std::vector<uint8_t> bytes_u8(const SafetensorsFile& f, const std::string& name,
 
 Calibration from_file(const SafetensorsFile& f);
 
-// The reader's messages usually name the file already; a file it opened but cannot read as
-// tensors at all (a JSON, an image) is most likely not a calibration: say so.
-template <class Load>
-SafetensorsFile open_tensors(const std::string& source, bool opened, Load load) {
-    try {
-        return load();
-    } catch (const Error& e) {
-        std::string m = e.what();
-        if (m.find(source) == std::string::npos) m = source + ": " + m;
-        throw Error(opened || std::filesystem::is_regular_file(source) ? m + " (not a calibration file?)" : m);
-    }
-}
 
 }  // namespace
 
 Calibration load_calibration(const std::string& path) {
-    return from_file(open_tensors(path, false, [&] { return SafetensorsFile::load(path); }));
+    return from_file(SafetensorsFile::load(path, "calibration file"));
 }
 
 Calibration parse_calibration(std::vector<uint8_t> bytes, const std::string& source) {
-    return from_file(open_tensors(source, true, [&] { return SafetensorsFile::parse(std::move(bytes), source); }));
+    return from_file(SafetensorsFile::parse(std::move(bytes), source, "calibration file"));
 }
 
 namespace {

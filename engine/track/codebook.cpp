@@ -4,7 +4,6 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
-#include <optional>
 #include <tuple>
 
 #include "base/error.h"
@@ -122,13 +121,7 @@ void save_codebook(const std::string& path, const Codebook& b) {
 }
 
 Codebook load_codebook(const std::string& path, const Surface& s, const CodebookOptions& o) {
-    std::optional<SafetensorsFile> f;
-    try {
-        f.emplace(SafetensorsFile::load(path));
-    } catch (const Error& e) {  // not tensors at all: most likely another file given as the cache
-        throw Error(std::string(e.what()) + " (not a codebook cache?)");
-    }
-    return parse_codebook(*f, path, s, o);
+    return parse_codebook(SafetensorsFile::load(path, "codebook cache"), path, s, o);
 }
 
 Codebook parse_codebook(const SafetensorsFile& f, const std::string& path, const Surface& s, const CodebookOptions& o) {
