@@ -12,6 +12,8 @@
 #include "engine/io/mesh.h"
 #include "engine/ops/pose_evidence.h"
 #include "engine/sim/mesh_builder.h"
+#include "engine/track/nearest_facing.h"
+#include "engine/track/registration.h"
 #include "engine/track/tracker.h"
 #include "tests/harness.h"
 #include "tests/io_test_util.h"
@@ -184,6 +186,7 @@ TEST_CASE("climbing from the nearest touches outward never loses fit and finds t
     track::FilterOptions off, on;
     off.refine_reach_mm = 0;
     on.refine_reach_mm = 15;
+    off.register_rounds = on.register_rounds = 0;  // the reach alone (the registration: below)
     track::Tracker a(test::gpu(), prism_surface(), off), b(test::gpu(), prism_surface(), on);
     int better = 0, reached = 0;
     for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
@@ -213,6 +216,105 @@ TEST_CASE("climbing from the nearest touches outward never loses fit and finds t
     bad.refine_reach_mm = NAN;
     CHECK_THROWS_WITH(track::Tracker(test::gpu(), prism_surface(), bad), Catch::Contains("refine_reach_mm"));
     test::require_no_validation_messages();
+}
+
+TEST_CASE("the nearest facing point matches a brute-force search", "[track]") {
+    // Random points and normals, odd sizes (a leaf, one split, deep trees), fixed seeds;
+    // the index must match exactly (the lowest index on a tie, as the brute force takes).
+    for (int64_t n : {1, 7, 9, 100, 1001, 4099}) {
+        std::mt19937 rng{uint32_t(n)};
+        std::uniform_real_distribution<float> u(-50, 50);
+        std::normal_distribution<float> g;
+        std::vector<float> dense;
+        for (int64_t i = 0; i < n; ++i) {
+            float nv[3] = {g(rng), g(rng), g(rng)};
+            const float l = std::sqrt(nv[0] * nv[0] + nv[1] * nv[1] + nv[2] * nv[2]);
+            // Some points repeated: ties between equal distances.
+            if (i > 0 && i % 5 == 0) {
+                dense.insert(dense.end(), dense.end() - 6, dense.end() - 3);
+            } else {
+                for (int k = 0; k < 3; ++k) dense.push_back(std::round(u(rng)));
+            }
+            for (int k = 0; k < 3; ++k) dense.push_back(nv[k] / l);
+        }
+        const track::NearestFacing nf(dense);
+        for (int q = 0; q < 200; ++q) {
+            const float p[3] = {u(rng) * 1.5f, u(rng) * 1.5f, u(rng) * 1.5f};
+            float z[3] = {g(rng), g(rng), g(rng)};
+            const float l = std::sqrt(z[0] * z[0] + z[1] * z[1] + z[2] * z[2]);
+            for (float& v : z) v /= l;
+            for (float max_dot : {-0.5f, 1.5f, -1.5f}) {
+                int32_t best = -1;
+                float best_d2 = INFINITY;
+                for (int64_t i = 0; i < n; ++i) {
+                    const float* d = &dense[size_t(i * 6)];
+                    if (d[3] * z[0] + d[4] * z[1] + d[5] * z[2] > max_dot) continue;
+                    const float dx = d[0] - p[0], dy = d[1] - p[1], dz = d[2] - p[2], d2 = dx * dx + dy * dy + dz * dz;
+                    if (d2 < best_d2) best = int32_t(i), best_d2 = d2;
+                }
+                INFO("n " << n << ", query " << q << ", max_dot " << max_dot);
+                REQUIRE(nf.query(p, z, max_dot) == best);
+            }
+        }
+    }
+    CHECK(track::NearestFacing().query(std::array<float, 3>{0, 0, 0}.data(), std::array<float, 3>{0, 0, 1}.data(), 1) == -1);
+}
+
+TEST_CASE("registration never loses fit and reaches the truth from farther off than the climbs", "[track]") {
+    // window_fit refines from a given pose as the estimate's modes are: from the truth of a
+    // 12-touch tour turned 8-20 degrees about a tilted axis and shifted 3 mm, the far touches
+    // start beyond the lookup grid's band, where the climbs find no slope; the registration
+    // matches them to the nearest facing surface at any distance.
+    track::FilterOptions off, on;
+    off.register_rounds = 0;
+    track::Tracker a(test::gpu(), prism_surface(), off), b(test::gpu(), prism_surface(), on);
+    int better = 0, reached = 0, starts = 0;
+    for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
+        Tour t = tour(prism_dense(40000), 12, seed);
+        std::vector<Rigid> motions;
+        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        const double truth = b.window_fit(motions, t.poses.back());
+        for (double deg : {8.0, -12.0, 16.0, -20.0}) {
+            const double th = deg * M_PI / 180, k[3] = {0.6, 0.0, 0.8}, c = std::cos(th), s = std::sin(th), v = 1 - c;
+            Rigid off_pose;
+            off_pose.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
+                          k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
+                          k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+            off_pose.t = {3, -2, 0};
+            const Rigid start = track::compose(t.poses.back(), off_pose);
+            const double fa = a.window_fit(motions, start), fb = b.window_fit(motions, start);
+            INFO("seed " << seed << ", turn " << deg << " deg: climbs " << fa << ", with registration " << fb << ", truth " << truth);
+            // The climbs' pose stays where it fits better: the fit never drops.
+            CHECK(fb >= fa - 1e-9);
+            ++starts;
+            better += fb > fa + 0.5;
+            reached += fa < truth - 0.5 && fb > truth - 0.1;
+        }
+    }
+    WARN("registration gained more than half a nat from " << better << " of " << starts << " starts, reached the truth's fit from "
+                                                          << reached);
+    CHECK(better >= 4);
+    CHECK(reached >= 2);
+    track::FilterOptions bad;
+    bad.register_rounds = -1;
+    CHECK_THROWS_WITH(track::Tracker(test::gpu(), prism_surface(), bad), Catch::Contains("register_rounds"));
+    bad.register_rounds = 12, bad.register_scale = NAN;
+    CHECK_THROWS_WITH(track::Tracker(test::gpu(), prism_surface(), bad), Catch::Contains("register_scale"));
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("solve6 solves a well-posed system and refuses a singular one", "[track]") {
+    double H[6][6] = {}, g[6], d[6], x[6] = {1, -2, 0.5, 3, -0.25, 2};
+    for (int a = 0; a < 6; ++a)
+        for (int b = 0; b < 6; ++b) H[a][b] = (a == b ? 10.0 : 0.0) + 1.0 / (1 + a + b);
+    for (int a = 0; a < 6; ++a) {
+        g[a] = 0;
+        for (int b = 0; b < 6; ++b) g[a] -= H[a][b] * x[b];
+    }
+    REQUIRE(track::solve6(H, g, 0, d));
+    for (int a = 0; a < 6; ++a) CHECK(d[a] == Approx(x[a]).epsilon(1e-12).margin(1e-12));
+    double Z[6][6] = {};
+    CHECK_FALSE(track::solve6(Z, g, 0, d));
 }
 
 TEST_CASE("free space behind the gel tells a stud's head from its flipped image", "[track]") {

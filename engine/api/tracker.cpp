@@ -60,6 +60,7 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.refine_reach_mm = o.refine_reach_mm;
     f.rescue_fit = o.rescue_fit;
     f.rescue_modes = o.rescue_modes;
+    f.register_rounds = o.register_rounds;
     f.free_space_mm = o.free_space_mm;
     f.free_space_w_mm = o.free_space_w_mm;
     f.free_space_h_mm = o.free_space_h_mm;

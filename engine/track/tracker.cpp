@@ -13,7 +13,9 @@
 #include "engine/ops/build.h"
 #include "engine/ops/pose_evidence.h"
 #include "engine/resident_weights.h"
+#include "engine/track/nearest_facing.h"
 #include "engine/track/parallel.h"
+#include "engine/track/registration.h"
 #include "engine/weights.h"
 
 namespace vtloc::track {
@@ -35,6 +37,7 @@ struct Tracker::Impl {
     std::shared_ptr<ResidentWeights> resident;
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
+    NearestFacing nearest;                                                     // the refinement's registration
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -49,6 +52,9 @@ void Tracker::check_options(const FilterOptions& opt_) {
         throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
     if (!(opt_.refine_reach_mm >= 0))
         throw Error("filter options: refine_reach_mm must be >= 0 (0: off), got " + std::to_string(opt_.refine_reach_mm));
+    if (opt_.register_rounds < 0 || opt_.register_rounds > 64 || !(opt_.register_scale >= 1) || !(opt_.register_scale <= 1e3))
+        throw Error("filter options: register_rounds must be 0..64 (0: off) and register_scale 1..1000, got " +
+                    std::to_string(opt_.register_rounds) + " and " + std::to_string(opt_.register_scale));
     if (!(opt_.free_space_mm >= 0) || !(opt_.free_space_w_mm > 0) || !(opt_.free_space_h_mm > 0))
         throw Error("filter options: free_space_mm must be >= 0 (0: off) and the pad's size positive");
     if (opt_.shape_climb_rounds < 0 || opt_.shape_climb_rounds > 8 || opt_.shape_climb_modes < 0 || opt_.shape_climb_modes > 256)
@@ -65,6 +71,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
     const Surface& s = surface_;
+    if (opt_.register_rounds > 0) impl_->nearest = NearestFacing(s.dense);
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
     w.add("surface.dense", HostTensor({s.n_dense(), 8}, ops::pose::evidence_dense(s.dense, s.dense_sample)));
@@ -322,9 +329,10 @@ struct Refiner {
     // current touch (lever arm = the motion's translation), each a proper subset.
     std::vector<std::vector<ops::pose::Term>> stages;
     bool slide = true;  // false: the candidates protocol (climb_on)
+    const NearestFacing* nearest = nullptr;  // the registration's (null or empty: off)
     Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin,
-            bool slide_)
-        : grid(g), o(opt), tight(fit_terms(to_window, opt)), slide(slide_) {
+            bool slide_, const NearestFacing* nf = nullptr)
+        : grid(g), o(opt), tight(fit_terms(to_window, opt)), slide(slide_), nearest(nf) {
         const double f = opt.refine_widen * opt.grid_allowance;
         if (opt.refine_widen > 0) wide = fit_terms(to_window, opt, f * spacing, f * 2 * M_PI / n_spin);
         if (opt.refine_reach_mm > 0)
@@ -345,6 +353,22 @@ struct Refiner {
         double v = free_space_log(grid, f, o);
         for (const ops::pose::Term& t : tight) v += free_space_log(grid, ops::pose::moved(f, t), o);
         return v;
+    }
+    Rigid registered(const Rigid& x) const { return register_window(*nearest, grid.dense, tight, o, x); }
+    bool can_register() const { return slide && nearest && !nearest->empty() && o.register_rounds > 0 && o.refine > 0; }
+    // A refined pose x (fit fx, free space included) registered and climbed again; the
+    // better of the two kept.
+    Rigid reregister(const Rigid& x, double& fx) const {
+        if (!can_register()) return x;
+        Rigid y = registered(x);
+        double fy = fit(y);
+        y = climb(grid, tight, o, y, fy, nullptr);
+        fy += free_space(y);
+        if (fy > fx) {
+            fx = fy;
+            return y;
+        }
+        return x;
     }
     // x refined (when o.refine > 0); fx: its tight fit plus its free space. Without slide the
     // climbs turn about x's contact (its axis at the press) and keep it there.
@@ -532,7 +556,9 @@ double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose)
     check_rigid(pose, "the pose to fit");
     const ops::pose::Grid grid = surface_.grid();
     double f = 0;
-    Refiner(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin(), !surface_.from_candidates).refine(pose, f);
+    const Refiner r(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin(), !surface_.from_candidates, &impl_->nearest);
+    const Rigid x = r.refine(pose, f);
+    if (f < opt_.rescue_fit) r.reregister(x, f);
     return f;
 }
 
@@ -578,7 +604,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
-    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS), !s.from_candidates);
+    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS), !s.from_candidates, &impl_->nearest);
     // The refined modes share the grid mass they hold by their refined fit (the
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
@@ -616,6 +642,14 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         refine_modes(int(mode_sample.size()));
     }
     const int n_refine = int(fit.size());
+    // Where nothing refined fits the window (the rescue's threshold), the first modes are also
+    // registered onto the surface (Refiner::registered): the rescued ones gained nothing on the
+    // train windows and cost four times the time.
+    if (refiner.can_register() && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit)
+        parallel_for(size_t(n_first), opt_.threads, [&](size_t m) {
+            const Rigid y = refiner.reregister(refined[m], fit[m]);
+            if (y.t != refined[m].t || y.R != refined[m].R) refined[m] = y, refined_contact[m] = axis_contact(s, grid, y, opt_.press_mm);
+        });
     if (any_pose_term) {
         // With odometry noise each earlier touch's term is aligned within its slack (the
         // offsets found per mode and touch, align[m]); the climb holds them, then they are found

@@ -420,6 +420,13 @@ struct TrackerOptions {
     // about 2.7 ms more on one thread, 1 ms on two (docs/multitouch.md, "Refining more modes").
     double rescue_fit = -1;
     int rescue_modes = 24;
+    // > 0: where the best refined mode fits below rescue_fit, the first modes are also
+    // registered onto the surface in this many Gauss-Newton rounds (each touch's contact
+    // matched to the nearest facing surface point at any distance), climbed again, and the
+    // better fit kept: at long lever arms a pose a few degrees off carries the far touches
+    // beyond the climb's reach. 12 fitted on train windows (docs/multitouch.md,
+    // "Registration"); 0: off.
+    int register_rounds = 12;
     // > 0: the refinement also asks that the sensor's pad (free_space_w_mm x free_space_h_mm,
     // its window and a margin) be clear of the object this far behind the gel plane (the
     // sensor cannot pass through the object; docs/multitouch.md, "Free space"). 1.5 fitted on

@@ -1,0 +1,29 @@
+#pragma once
+// The nearest surface point facing a gel, at any distance (a k-d tree over the
+// filter's dense points). The lookup grid names points only within its band
+// (a few mm); the refinement's registration step (tracker.cpp) needs where a
+// touch carried 10-20 mm off by a pose error would land.
+#include <cstdint>
+#include <vector>
+
+namespace vtloc::track {
+
+class NearestFacing {
+public:
+    NearestFacing() = default;
+    // dense [D, 6]: point, outward unit normal; kept by pointer (the Surface's own table).
+    explicit NearestFacing(const std::vector<float>& dense);
+    // The index of the dense point nearest q whose outward normal n has n . z <= max_dot
+    // (z: the gel's axis, into the object), -1 where none does or the tree is empty.
+    int32_t query(const float q[3], const float z[3], float max_dot) const;
+    bool empty() const { return order_.empty(); }
+
+private:
+    const float* dense_ = nullptr;
+    std::vector<int32_t> order_;  // the points, each subrange's median at its middle
+    std::vector<uint8_t> axis_;   // per middle position: the axis its subrange was split on
+    void build(int64_t lo, int64_t hi);
+    void search(int64_t lo, int64_t hi, const float q[3], const float z[3], float max_dot, int32_t& best, float& best_d2) const;
+};
+
+}  // namespace vtloc::track
