@@ -18,6 +18,9 @@ it, ..., the better fit kept (docs/multitouch.md, "Climbing from the nearest tou
 
 With --free-space, the knob is how far behind the gel plane the sensor's pad must be clear of
 the object (free_space, mm; 0: off), scored on each refined mode (docs/multitouch.md, "Free space").
+With --register, the knob is how many Gauss-Newton rounds register the first modes onto the
+surface where nothing refined fits (register; 0: off), scored on the seen objects and, with
+--objects all, on a dataset of the smooth objects' windows (docs/multitouch.md, "Registration").
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
 and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
 render_quadratic, was fitted before on the same windows, and the press percentile
@@ -28,7 +31,7 @@ renderer's true indentation maps: what a perfect gel-shape reader would allow), 
 beside the shipped weight, never shipped.
 
     python3 -m weights_tools.fit_filter --vtloc build/vtloc --data DIR
-        [--refine | --reach | --free-space | --rescue | --render | --oracle]
+        [--refine | --reach | --free-space | --rescue | --register | --render | --oracle]
         [--sequence 4,8] [--out fit.json]
 """
 import argparse
@@ -52,6 +55,7 @@ GRID_FREE = {"free_space": [0, 0.5, 1, 1.5, 2, 3, 4, 6]}
 # threshold, log; -1e9: never; 0: always, since a fit is at most 0).
 GRID_RESCUE = {"rescue_fit": [0, -1, -1e9], "rescue_modes": [24]}
 # render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
+GRID_REGISTER = {"register": [0, 8, 12, 20]}
 GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
@@ -77,12 +81,13 @@ def main():
     ap.add_argument("--reach", action="store_true", help="fit refine_reach (the refinement's climb from the nearest touches)")
     ap.add_argument("--free-space", action="store_true", help="fit free_space (the pad's clearance behind the gel)")
     ap.add_argument("--rescue", action="store_true", help="fit rescue_fit and rescue_modes (more modes refined where none fits)")
+    ap.add_argument("--register", action="store_true", help="fit register (rounds of the registration where none fits)")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
     ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_FREE if a.free_space else GRID_RESCUE if a.rescue else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_FREE if a.free_space else GRID_RESCUE if a.rescue else GRID_REGISTER if a.register else GRID
     row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):

@@ -182,7 +182,10 @@ int run_sequence(Session& s, const Args& a) {
             else if (k == "refine_reach") to.refine_reach_mm = v;
             else if (k == "rescue_fit") to.rescue_fit = v;
             else if (k == "rescue_modes") to.rescue_modes = int(v);
-            else if (k == "register") to.register_rounds = int(v);
+            else if (k == "register") {
+                if (!(v >= 0 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: register is an integer in [0, 64] (0: off)");
+                to.register_rounds = int(v);
+            }
             else if (k == "free_space") to.free_space_mm = v;
             else if (k == "network_weight") to.network_weight = v;
             else if (k == "render_weight") to.render_weight = v;
