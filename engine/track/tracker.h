@@ -63,7 +63,7 @@ struct FilterOptions {
     // through the sensor), which the touches' own contacts cannot. 1.5 fitted on train windows
     // (docs/multitouch.md, "Free space"); 0: off.
     double free_space_mm = 1.5;
-    double free_space_w_mm = 24, free_space_h_mm = 19;
+    double free_space_w_mm = 24, free_space_h_mm = 19;  // the dataset sensor's 19.9 x 14.9 mm window, + 2 mm a side
     // > 0: where the best refined fit is below rescue_fit, the first `refine` modes are also
     // registered onto the surface (point-to-plane Gauss-Newton over the window's contacts, each
     // matched to the nearest dense point facing its gel at any distance) in this many rounds,
