@@ -39,10 +39,13 @@ void bind_gel_shape(py::module_& m) {
                 const api::TactileImage f = to_image(frame, "frame");
                 std::optional<api::TactileImage> e;
                 if (!empty.is_none()) e = to_image(empty, "empty");
+                // A frame given as a path names its file in the reader's errors.
+                const std::string fname = py::isinstance<py::str>(frame) ? frame.cast<std::string>() : "frame";
+                const std::string ename = py::isinstance<py::str>(empty) ? empty.cast<std::string>() : "empty frame";
                 api::GelShape s;
                 {
                     py::gil_scoped_release release;
-                    s = r.read(f, e ? &*e : nullptr);
+                    s = r.read(f, e ? &*e : nullptr, fname, ename);
                 }
                 py::dict d;
                 d["depth_mm"] = grid(s.depth_mm, s.height, s.width);

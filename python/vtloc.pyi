@@ -128,6 +128,7 @@ class GelShapeReader:
     def read(self, frame: Union[str, npt.NDArray[np.uint8]],
              empty: Optional[Union[str, npt.NDArray[np.uint8]]] = None) -> Dict[str, Any]: ...
     # depth_mm, grad_row, grad_col: H x W float32; mask: H x W uint8; mm_per_px: float
+    # errors about a frame begin with its path where it is given as one ("frame" / "empty frame" otherwise)
     @property
     def height(self) -> int: ...
     @property

@@ -84,6 +84,7 @@ TEST_CASE("gel shape reader: a larger frame of the same aspect is resampled, oth
     tiny.rgb.assign(60 * 80 * 3, 100);
     CHECK_THROWS_WITH(reader.read(tiny), Catch::Contains("smaller than the calibration"));
     CHECK_THROWS_WITH(reader.read(small, &square), Catch::Contains("empty frame: 120x120"));
+    CHECK_THROWS_WITH(reader.read(square, nullptr, "sq.png"), Catch::StartsWith("sq.png: 120x120 for the calibration's"));
     api::GelShapeOptions bad;
     bad.calibration = "/no/such/calib.safetensors";
     CHECK_THROWS_WITH(api::GelShapeReader(ctx, bad), Catch::Contains("/no/such/calib.safetensors"));
@@ -106,6 +107,9 @@ TEST_CASE("gel shape reader: black, over-exposed and flat frames are refused, na
     CHECK_THROWS_WITH(reader.read(flat(128)), Catch::Contains("frame: the frame is one flat colour (values 128..128)"));
     const api::TactileImage dark = flat(3);
     CHECK_THROWS_WITH(reader.read(real, &dark), Catch::StartsWith("empty frame: the frame is black"));
+    // Named frames (a caller's file paths) head their errors instead.
+    CHECK_THROWS_WITH(reader.read(flat(0), nullptr, "touches/3.png"), Catch::StartsWith("touches/3.png: the frame is black"));
+    CHECK_THROWS_WITH(reader.read(real, &dark, "touches/3.png", "bg.png"), Catch::StartsWith("bg.png: the frame is black"));
     // Half a real press painted white: over half the pixels clipped is refused, under half read.
     api::TactileImage half = real;
     for (size_t p = 0; p < half.rgb.size() / 3 / 2 + 1; ++p) half.rgb[3 * p] = half.rgb[3 * p + 1] = half.rgb[3 * p + 2] = 255;

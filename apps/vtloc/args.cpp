@@ -166,12 +166,10 @@ void make_folder(const std::string& path) {
 api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
                              const api::TactileImage* empty, const std::string& empty_path, const std::string& where) {
     try {
-        return reader.read(frame, empty);
+        return reader.read(frame, empty, frame_path.empty() ? "frame" : frame_path, empty_path.empty() ? "empty frame" : empty_path);
     } catch (const api::Error& e) {
-        const std::string m = e.what();
-        for (const auto& [role, path] : {std::pair<std::string, std::string>{"empty frame: ", empty_path}, {"frame: ", frame_path}})
-            if (m.rfind(role, 0) == 0 && !path.empty()) throw api::Error(path + ": " + m.substr(role.size()) + where);
-        throw;
+        if (where.empty()) throw;
+        throw api::Error(e.what() + where);
     }
 }
 

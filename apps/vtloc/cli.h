@@ -93,8 +93,8 @@ api::Model load_model(Session& s, const std::string& path, api::Backend backend)
 void make_folder(const std::string& path);
 
 // The gel shape of a frame read from `frame_path` (the empty frame from `empty_path`, or the
-// calibration's with none): the reader's refusal of either ("frame: ...", "empty frame: ...")
-// names that frame's file, then `where` (e.g. " (touch 2 of tour.json)").
+// calibration's with none): the reader's refusal of either begins with that frame's file, and
+// every refusal ends with `where` (e.g. " (touch 2 of tour.json)").
 api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
                              const api::TactileImage* empty, const std::string& empty_path, const std::string& where = "");
 

@@ -28,14 +28,14 @@ namespace {
 
 // An RGB frame as the calibration's stored channel order (BGR) at its size: resampled (area) when
 // larger with the same aspect; any other size is an error naming both.
-std::vector<uint8_t> to_calibration(const TactileImage& im, const sensor::Calibration& c, const char* what) {
+std::vector<uint8_t> to_calibration(const TactileImage& im, const sensor::Calibration& c, const std::string& what) {
     if (im.height <= 0 || im.width <= 0 || im.rgb.size() != size_t(im.height) * size_t(im.width) * 3)
-        throw Error(std::string(what) + ": not an RGB image");
+        throw Error(what + ": not an RGB image");
     const std::string sizes = std::to_string(im.width) + "x" + std::to_string(im.height) + " for the calibration's " +
                               std::to_string(c.width) + "x" + std::to_string(c.height);
     if (int64_t(im.width) * c.height != int64_t(im.height) * c.width)
-        throw Error(std::string(what) + ": " + sizes + ": another aspect (crop it to the sensor's)");
-    if (im.width < c.width) throw Error(std::string(what) + ": " + sizes + ": smaller than the calibration");
+        throw Error(what + ": " + sizes + ": another aspect (crop it to the sensor's)");
+    if (im.width < c.width) throw Error(what + ": " + sizes + ": smaller than the calibration");
     cv::Mat rgb(im.height, im.width, CV_8UC3, const_cast<uint8_t*>(im.rgb.data())), bgr;
     cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
     if (im.width != c.width) cv::resize(bgr, bgr, cv::Size(c.width, c.height), 0, 0, cv::INTER_AREA);
@@ -68,14 +68,15 @@ GelShapeReader& GelShapeReader::operator=(GelShapeReader&&) noexcept = default;
 int GelShapeReader::height() const { return impl_->gpu.calibration().height; }
 int GelShapeReader::width() const { return impl_->gpu.calibration().width; }
 
-GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* empty) {
+GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
+                              const std::string& empty_name) {
     return guarded([&] {
         const sensor::Calibration& c = impl_->gpu.calibration();
-        std::vector<uint8_t> f = to_calibration(frame, c, "frame");
-        std::vector<uint8_t> e = empty ? to_calibration(*empty, c, "empty frame") : c.press_f0;
+        std::vector<uint8_t> f = to_calibration(frame, c, frame_name);
+        std::vector<uint8_t> e = empty ? to_calibration(*empty, c, empty_name) : c.press_f0;
         if (e.empty()) throw Error("gel shape: this calibration has no empty frame; give the sensor's own");
-        sensor::check_gel_frame(f, "frame");
-        if (empty) sensor::check_gel_frame(e, "empty frame");
+        sensor::check_gel_frame(f, frame_name);
+        if (empty) sensor::check_gel_frame(e, empty_name);
         if (impl_->match_lighting) f = sensor::match_lighting(f, e);
         const sensor::GelShape s = impl_->gpu.run(f, e);
         GelShape out;

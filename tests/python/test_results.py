@@ -3,10 +3,12 @@ bit for bit, and arrays in give the same results as files in."""
 
 import json
 import os
+import re
 import subprocess
 
 import numpy as np
 import pytest
+from PIL import Image
 
 import vtloc
 from weights_tools import safetensors_io
@@ -222,7 +224,7 @@ def test_tracker_candidates_protocol(ctx, root):
         vtloc.Tracker(ctx, mug_path, candidates=np.zeros((4, 2)))
 
 
-def test_gel_shape_reader(ctx, root):
+def test_gel_shape_reader(ctx, root, tmp_path):
     reader = vtloc.GelShapeReader(ctx)
     frame = os.path.join(root, "examples", "touch_01.png")  # a real 4 mm ball press
     s = reader.read(frame)
@@ -231,8 +233,16 @@ def test_gel_shape_reader(ctx, root):
     assert np.all(s["depth_mm"][s["mask"] == 0] == 0)
     none = reader.read(frame, empty=frame)  # the frame as its own background: nothing pressed
     assert none["mask"].sum() == 0
-    with pytest.raises(vtloc.Error, match="another aspect"):
+    with pytest.raises(vtloc.Error, match="^frame: 100x100 .*another aspect"):
         reader.read(np.zeros((100, 100, 3), np.uint8))
+    # A frame given by its path is named in the error (a square crop of the press: another aspect).
+    crop = os.path.join(str(tmp_path), "square.png")
+    with Image.open(frame) as im:
+        im.crop((0, 0, im.size[1], im.size[1])).save(crop)
+    with pytest.raises(vtloc.Error, match="^" + re.escape(crop) + ": .*another aspect"):
+        reader.read(crop)
+    with pytest.raises(vtloc.Error, match="^" + re.escape(crop) + ": .*another aspect"):
+        reader.read(frame, empty=crop)
     # The solve from a coarse start (the rendered frames' reader): the same contact, the same
     # depth within 3 % of the deepest point (measured 1.5 %: 54 um of 3.6 mm; the 50 sweeps from
     # zeros are within 3 um of 1000 on this small contact, where the coarse grids see little).

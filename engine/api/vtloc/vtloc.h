@@ -585,8 +585,10 @@ public:
     ~GelShapeReader();
     GelShapeReader(GelShapeReader&&) noexcept;
     GelShapeReader& operator=(GelShapeReader&&) noexcept;
-    // empty: the sensor's frame with nothing pressed; null: the calibration's own.
-    GelShape read(const TactileImage& frame, const TactileImage* empty = nullptr);
+    // empty: the sensor's frame with nothing pressed; null: the calibration's own. A frame's
+    // errors begin with its name (give its file's path where it came from one).
+    GelShape read(const TactileImage& frame, const TactileImage* empty = nullptr, const std::string& frame_name = "frame",
+                  const std::string& empty_name = "empty frame");
     int height() const;
     int width() const;
 
