@@ -73,6 +73,16 @@ inline Rigid rigid_from_rows(const std::array<double, 16>& v, const std::string&
     return out;
 }
 
+// The rotation by the angle |w| about the axis w (Rodrigues), row-major; the identity for w = 0.
+inline std::array<double, 9> rotation_of(const double w[3]) {
+    const double th = std::sqrt(w[0] * w[0] + w[1] * w[1] + w[2] * w[2]);
+    if (!(th > 0)) return {1, 0, 0, 0, 1, 0, 0, 0, 1};
+    const double k[3] = {w[0] / th, w[1] / th, w[2] / th}, c = std::cos(th), s = std::sin(th), v = 1 - c;
+    return {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
+            k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
+            k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+}
+
 // The sensor's motion between two flange poses (robot frame) with the flange-to-sensor
 // tool: sensor_k = flange_k tool, motion = sensor_a^-1 sensor_b.
 inline Rigid sensor_motion(const Rigid& flange_a, const Rigid& flange_b, const Rigid& tool) {

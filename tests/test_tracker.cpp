@@ -275,11 +275,9 @@ TEST_CASE("registration never loses fit and reaches the truth from farther off t
         for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
         const double truth = b.window_fit(motions, t.poses.back());
         for (double deg : {8.0, -12.0, 16.0, -20.0}) {
-            const double th = deg * M_PI / 180, k[3] = {0.6, 0.0, 0.8}, c = std::cos(th), s = std::sin(th), v = 1 - c;
+            const double th = deg * M_PI / 180, w[3] = {0.6 * th, 0.0, 0.8 * th};
             Rigid off_pose;
-            off_pose.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
-                          k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
-                          k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
+            off_pose.R = rotation_of(w);
             off_pose.t = {3, -2, 0};
             const Rigid start = track::compose(t.poses.back(), off_pose);
             const double fa = a.window_fit(motions, start), fb = b.window_fit(motions, start);

@@ -32,13 +32,7 @@ double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) { ret
 // The turn w (Rodrigues) about the world point ctr, then the shift v: y = Rw (x - ctr) + ctr + v.
 Rigid turned(const Rigid& x, const double d[6], const std::array<double, 3>& ctr) {
     Rigid m;
-    const double th = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
-    if (th > 0) {
-        const double k[3] = {d[0] / th, d[1] / th, d[2] / th}, c = std::cos(th), s = std::sin(th), v = 1 - c;
-        m.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
-               k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
-               k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
-    }
+    m.R = rotation_of(d);
     for (size_t i = 0; i < 3; ++i)
         m.t[i] = ctr[i] + d[3 + i] - (m.R[i * 3] * ctr[0] + m.R[i * 3 + 1] * ctr[1] + m.R[i * 3 + 2] * ctr[2]);
     return compose(m, x);

@@ -157,14 +157,8 @@ Rigid rigid_of(const ops::pose::Frame& f) {
 // A small rotation about the pose's own axes (Rodrigues) and a shift in its frame; with a
 // pivot (a world point), the rotation turns about the pivot instead of the pose's origin.
 Rigid perturb(const Rigid& x, const double d[6], const std::array<double, 3>* pivot = nullptr) {
-    const double th = std::sqrt(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
     Rigid m;
-    if (th > 0) {
-        const double k[3] = {d[0] / th, d[1] / th, d[2] / th}, c = std::cos(th), s = std::sin(th), v = 1 - c;
-        m.R = {c + k[0] * k[0] * v,        k[0] * k[1] * v - k[2] * s, k[0] * k[2] * v + k[1] * s,
-               k[1] * k[0] * v + k[2] * s, c + k[1] * k[1] * v,        k[1] * k[2] * v - k[0] * s,
-               k[2] * k[0] * v - k[1] * s, k[2] * k[1] * v + k[0] * s, c + k[2] * k[2] * v};
-    }
+    m.R = rotation_of(d);
     m.t = {d[3], d[4], d[5]};
     if (pivot) {  // the pivot, in the pose's frame, is where m leaves it: m.t += c - m.R c
         std::array<double, 3> c{};
@@ -358,11 +352,12 @@ struct Refiner {
     bool can_register() const { return slide && nearest && !nearest->empty() && o.register_rounds > 0 && o.refine > 0; }
     // A refined pose x (fit fx, free space included) registered and climbed again; the
     // better of the two kept.
-    Rigid reregister(const Rigid& x, double& fx) const {
-        if (!can_register()) return x;
-        Rigid y = registered(x);
+    Rigid reregister(const Rigid& x, double& fx) const { return can_register() ? climbed_if_better(registered(x), x, fx, nullptr) : x; }
+    // y climbed at the tight widths where it then fits (free space included) better than x
+    // does (fx, updated), else x.
+    Rigid climbed_if_better(Rigid y, const Rigid& x, double& fx, const std::array<double, 3>* pv) const {
         double fy = fit(y);
-        y = climb(grid, tight, o, y, fy, nullptr);
+        y = climb(grid, tight, o, y, fy, pv);
         fy += free_space(y);
         if (fy > fx) {
             fx = fy;
@@ -396,14 +391,7 @@ struct Refiner {
             double fn = pose_fit(grid, near, o, x);
             x = climb(grid, near, o, x, fn, pv);
         }
-        double fc = fit(x);
-        x = climb(grid, tight, o, x, fc, pv);
-        fc += free_space(x);
-        if (fc > fx) {
-            fx = fc;
-            return x;
-        }
-        return direct;
+        return climbed_if_better(x, direct, fx, pv);
     }
 };
 
