@@ -71,7 +71,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
     const Surface& s = surface_;
-    if (opt_.register_rounds > 0) impl_->nearest = NearestFacing(s.dense);
+    if (opt_.register_rounds > 0 && !s.from_candidates) impl_->nearest = NearestFacing(s.dense);  // a candidate keeps its place
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
     w.add("surface.dense", HostTensor({s.n_dense(), 8}, ops::pose::evidence_dense(s.dense, s.dense_sample)));
