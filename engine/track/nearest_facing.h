@@ -17,6 +17,7 @@ public:
     // (z: the gel's axis, into the object), -1 where none does or the tree is empty.
     int32_t query(const float q[3], const float z[3], float max_dot) const;
     bool empty() const { return order_.empty(); }
+    const float* point(int32_t i) const { return dense_ + int64_t(i) * 6; }  // point, normal
 
 private:
     const float* dense_ = nullptr;

@@ -62,8 +62,7 @@ bool solve6(const double H[6][6], const double g[6], double damping, double d[6]
     return true;
 }
 
-Rigid register_window(const NearestFacing& nearest, const float* dense, const std::vector<ops::pose::Term>& terms,
-                      const FilterOptions& o, Rigid x) {
+Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x) {
     std::vector<Contact> cs;
     cs.push_back({{0, 0, -o.press_mm}, {0, 0, 1}, o.sigma_d_mm, o.sigma_a_deg * M_PI / 180});
     for (const ops::pose::Term& t : terms) {
@@ -89,7 +88,7 @@ Rigid register_window(const NearestFacing& nearest, const float* dense, const st
             const float zf[3] = {float(wz[k][0]), float(wz[k][1]), float(wz[k][2])};
             const int32_t j = nearest.query(q, zf, -0.5f);  // a face within 60 degrees of the gel's
             if (j < 0) continue;
-            const float* pn = dense + int64_t(j) * 6;
+            const float* pn = nearest.point(j);
             const std::array<double, 3> p{pn[0], pn[1], pn[2]}, n{pn[3], pn[4], pn[5]}, z = wz[k];
             const std::array<double, 3> r{wc[k][0] - ctr[0], wc[k][1] - ctr[1], wc[k][2] - ctr[2]};
             const double sd = cs[k].sd * scale, sa = cs[k].sa * scale;

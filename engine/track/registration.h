@@ -14,14 +14,12 @@
 namespace vtloc::track {
 
 // x: a pose of the current touch; terms: the window's earlier touches seen from it (the
-// refinement's tight terms: their relative poses and widths); dense: the surface's [D, 6]
-// table `nearest` was built on. o.register_rounds steps, the widths from
+// refinement's tight terms: their relative poses and widths). o.register_rounds steps, the widths from
 // o.register_scale times each touch's own halving down to them; each step weighs a touch
 // by the robust Gaussian's own weight at those widths (an outlier beyond the floor pulls
 // nothing) and is capped at 10 degrees and 10 mm. Returns x moved (x itself where fewer
 // than two touches find a facing point).
-Rigid register_window(const NearestFacing& nearest, const float* dense, const std::vector<ops::pose::Term>& terms,
-                      const FilterOptions& o, Rigid x);
+Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x);
 
 // The 6 x 6 system (H + damping) d = -g by Gaussian elimination with partial pivoting;
 // false where it is singular.

@@ -348,11 +348,12 @@ struct Refiner {
         for (const ops::pose::Term& t : tight) v += free_space_log(grid, ops::pose::moved(f, t), o);
         return v;
     }
-    Rigid registered(const Rigid& x) const { return register_window(*nearest, grid.dense, tight, o, x); }
     bool can_register() const { return slide && nearest && !nearest->empty() && o.register_rounds > 0 && o.refine > 0; }
-    // A refined pose x (fit fx, free space included) registered and climbed again; the
-    // better of the two kept.
-    Rigid reregister(const Rigid& x, double& fx) const { return can_register() ? climbed_if_better(registered(x), x, fx, nullptr) : x; }
+    // A refined pose x (fit fx, free space included) registered onto the surface
+    // (register_window) and climbed again; the better of the two kept.
+    Rigid reregister(const Rigid& x, double& fx) const {
+        return can_register() ? climbed_if_better(register_window(*nearest, tight, o, x), x, fx, nullptr) : x;
+    }
     // y climbed at the tight widths where it then fits (free space included) better than x
     // does (fx, updated), else x.
     Rigid climbed_if_better(Rigid y, const Rigid& x, double& fx, const std::array<double, 3>* pv) const {
@@ -631,12 +632,12 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     }
     const int n_refine = int(fit.size());
     // Where nothing refined fits the window (the rescue's threshold), the first modes are also
-    // registered onto the surface (Refiner::registered): the rescued ones gained nothing on the
+    // registered onto the surface (Refiner::reregister): the rescued ones gained nothing on the
     // train windows and cost four times the time.
     if (refiner.can_register() && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit)
         parallel_for(size_t(n_first), opt_.threads, [&](size_t m) {
-            const Rigid y = refiner.reregister(refined[m], fit[m]);
-            if (y.t != refined[m].t || y.R != refined[m].R) refined[m] = y, refined_contact[m] = axis_contact(s, grid, y, opt_.press_mm);
+            refined[m] = refiner.reregister(refined[m], fit[m]);
+            refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
         });
     if (any_pose_term) {
         // With odometry noise each earlier touch's term is aligned within its slack (the
