@@ -21,6 +21,9 @@ the object (free_space, mm; 0: off), scored on each refined mode (docs/multitouc
 With --register, the knob is how many Gauss-Newton rounds register the first modes onto the
 surface where nothing refined fits (register; 0: off), scored on the seen objects and, with
 --objects all, on a dataset of the smooth objects' windows (docs/multitouch.md, "Registration").
+With --deep, the knobs are when the search counts as lost (deep_fit: the best refined fit
+after the registration below it) and how many modes the deep search then refines (deep_modes;
+0: off), every unrefined mode registered from its best spin (docs/multitouch.md, "Deep search").
 With --render, the knobs are render-and-compare's inverse temperature (render_weight, SPEC 9)
 and the comparison's cell (render_cell_mm; whether its error also drops a quadratic bowl,
 render_quadratic, was fitted before on the same windows, and the press percentile
@@ -56,6 +59,7 @@ GRID_FREE = {"free_space": [0, 0.5, 1, 1.5, 2, 3, 4, 6]}
 GRID_RESCUE = {"rescue_fit": [0, -1, -1e9], "rescue_modes": [24]}
 # render_quadratic (1) was fitted before on the same windows: {1, 0} x render_weight {4, 16, 0.25}.
 GRID_REGISTER = {"register": [0, 8, 12, 20]}
+GRID_DEEP = {"deep_modes": [0, 8, 16], "deep_fit": [-20, -10, -5]}
 GRID_RENDER = {"render_cell_mm": [3, 2, 1], "render_weight": [0.25, 1]}
 GRID_ORACLE = {"render_weight": [16, 64, 256]}
 
@@ -82,18 +86,21 @@ def main():
     ap.add_argument("--free-space", action="store_true", help="fit free_space (the pad's clearance behind the gel)")
     ap.add_argument("--rescue", action="store_true", help="fit rescue_fit and rescue_modes (more modes refined where none fits)")
     ap.add_argument("--register", action="store_true", help="fit register (rounds of the registration where none fits)")
+    ap.add_argument("--deep", action="store_true", help="fit deep_fit and deep_modes (the deep search where the registered modes fit poorly)")
     ap.add_argument("--render", action="store_true", help="fit render_weight on the render-and-compare row")
     ap.add_argument("--oracle", action="store_true", help="fit render_weight on the oracle-maps row (not shipped)")
     ap.add_argument("--sequence", default="4,8", help="window lengths T scored (default 4,8)")
     ap.add_argument("--out")
     a = ap.parse_args()
-    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_FREE if a.free_space else GRID_RESCUE if a.rescue else GRID_REGISTER if a.register else GRID
+    grid = GRID_ORACLE if a.oracle else GRID_RENDER if a.render else GRID_REFINE if a.refine else GRID_REACH if a.reach else GRID_FREE if a.free_space else GRID_RESCUE if a.rescue else GRID_REGISTER if a.register else GRID_DEEP if a.deep else GRID
     row = "oracle" if a.oracle else "render" if a.render else None
     results = []
     for values in itertools.product(*grid.values()):
         knobs = dict(zip(grid, values))
         if a.rescue and knobs["rescue_fit"] < -1e8 and knobs["rescue_modes"] != grid["rescue_modes"][0]:
             continue  # never rescued: one run is enough
+        if a.deep and knobs["deep_modes"] == 0 and knobs["deep_fit"] != grid["deep_fit"][0]:
+            continue  # off: one run is enough
         r = run(a.vtloc, a.data, a.objects, knobs, row, a.sequence)
         score = sum(v["nd_symmetry"] for v in r.values()) / len(r)
         results.append({"knobs": knobs, "score": score, "rows": r})

@@ -66,9 +66,9 @@ void NearestFacing::search(int64_t lo, int64_t hi, const float q[3], const float
     }
 }
 
-int32_t NearestFacing::query(const float q[3], const float z[3], float max_dot) const {
+int32_t NearestFacing::query(const float q[3], const float z[3], float max_dot, float max_d2) const {
     int32_t best = -1;
-    float best_d2 = std::numeric_limits<float>::infinity();
+    float best_d2 = max_d2;
     if (!order_.empty()) search(0, int64_t(order_.size()), q, z, max_dot, best, best_d2);
     return best;
 }

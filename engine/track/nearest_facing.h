@@ -4,6 +4,7 @@
 // (a few mm); the refinement's registration step (tracker.cpp) needs where a
 // touch carried 10-20 mm off by a pose error would land.
 #include <cstdint>
+#include <limits>
 #include <vector>
 
 namespace vtloc::track {
@@ -14,8 +15,10 @@ public:
     // dense [D, 6]: point, outward unit normal; kept by pointer (the Surface's own table).
     explicit NearestFacing(const std::vector<float>& dense);
     // The index of the dense point nearest q whose outward normal n has n . z <= max_dot
-    // (z: the gel's axis, into the object), -1 where none does or the tree is empty.
-    int32_t query(const float q[3], const float z[3], float max_dot) const;
+    // (z: the gel's axis, into the object) and whose squared distance is below max_d2; -1
+    // where none does or the tree is empty.
+    int32_t query(const float q[3], const float z[3], float max_dot,
+                  float max_d2 = std::numeric_limits<float>::infinity()) const;
     bool empty() const { return order_.empty(); }
     const float* point(int32_t i) const { return dense_ + int64_t(i) * 6; }  // point, normal
 

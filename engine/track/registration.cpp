@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <array>
 #include <cmath>
+#include <limits>
 #include <utility>
 
 namespace vtloc::track {
@@ -62,7 +63,8 @@ bool solve6(const double H[6][6], const double g[6], double damping, double d[6]
     return true;
 }
 
-Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x) {
+Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x,
+                      double cap) {
     std::vector<Contact> cs;
     cs.push_back({{0, 0, -o.press_mm}, {0, 0, 1}, o.sigma_d_mm, o.sigma_a_deg * M_PI / 180});
     for (const ops::pose::Term& t : terms) {
@@ -86,7 +88,9 @@ Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose:
         for (size_t k = 0; k < cs.size(); ++k) {
             const float q[3] = {float(wc[k][0]), float(wc[k][1]), float(wc[k][2])};
             const float zf[3] = {float(wz[k][0]), float(wz[k][1]), float(wz[k][2])};
-            const int32_t j = nearest.query(q, zf, -0.5f);  // a face within 60 degrees of the gel's
+            const double reach = cap * cs[k].sd * scale;
+            const float max_d2 = cap > 0 ? float(reach * reach) : std::numeric_limits<float>::infinity();
+            const int32_t j = nearest.query(q, zf, -0.5f, max_d2);  // a face within 60 degrees of the gel's
             if (j < 0) continue;
             const float* pn = nearest.point(j);
             const std::array<double, 3> p{pn[0], pn[1], pn[2]}, n{pn[3], pn[4], pn[5]}, z = wz[k];

@@ -18,8 +18,11 @@ namespace vtloc::track {
 // o.register_scale times each touch's own halving down to them; each step weighs a touch
 // by the robust Gaussian's own weight at those widths (an outlier beyond the floor pulls
 // nothing) and is capped at 10 degrees and 10 mm. Returns x moved (x itself where fewer
-// than two touches find a facing point).
-Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x);
+// than two touches find a facing point). cap > 0: a touch's match is searched only within cap
+// times its width at the round's scale (beyond about 6.7 its weight is under the step's
+// cut-off anyway; the search far off the surface is most of the cost); 0: at any distance.
+Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, Rigid x,
+                      double cap = 0);
 
 // The 6 x 6 system (H + damping) d = -g by Gaussian elimination with partial pivoting;
 // false where it is singular.

@@ -62,6 +62,9 @@ void Tracker::check_options(const FilterOptions& opt_) {
                     std::to_string(opt_.shape_climb_rounds) + " and " + std::to_string(opt_.shape_climb_modes));
     if (opt_.shape_slack_rounds < 0 || opt_.shape_slack_rounds > 8)
         throw Error("filter options: shape_slack_rounds must be 0..8, got " + std::to_string(opt_.shape_slack_rounds));
+    if (std::isnan(opt_.deep_fit) || opt_.deep_modes < 0 || opt_.deep_modes > 64 || !(opt_.register_cap >= 0) || !std::isfinite(opt_.register_cap))
+        throw Error("filter options: deep_fit must not be NaN, deep_modes must be 0..64 (0: off) and register_cap finite and >= 0 (0: no cap), got " +
+                    std::to_string(opt_.deep_modes) + " and " + std::to_string(opt_.register_cap));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
@@ -603,6 +606,13 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     std::vector<double> fit, shape;
     std::vector<Rigid> refined;
     std::vector<std::array<double, 3>> refined_contact;
+    // The hypothesis of sample smp at its most likely spin (the first on ties).
+    auto best_spin_pose = [&](int64_t smp) {
+        int64_t hb = smp * NS;
+        for (int64_t j = 1; j < NS; ++j)
+            if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
+        return rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm)));
+    };
     const bool any_pose_term = std::any_of(pose_terms.begin(), pose_terms.end(), [](const PoseTerm& t) { return bool(t); });
     auto refine_modes = [&](int upto) {
         const size_t from = fit.size(), n = size_t(std::max<int>(0, upto - int(from)));
@@ -615,10 +625,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         // so the result is the same with any number of threads.
         auto climb_mode = [&](size_t m) {
             const int64_t smp = mode_sample[m];
-            int64_t hb = smp * NS;
-            for (int64_t j = 1; j < NS; ++j)
-                if (log[size_t(smp * NS + j)] > log[size_t(hb)]) hb = smp * NS + j;
-            refined[m] = refiner.refine(rigid_of(ops::pose::hypothesis_frame(grid, hb, float(opt_.press_mm))), fit[m]);
+            refined[m] = refiner.refine(best_spin_pose(smp), fit[m]);
             // A candidate's refined pose turns about the candidate and keeps it (climb_on's pivot).
             refined_contact[m] = s.from_candidates ? point(smp) : axis_contact(s, grid, refined[m], opt_.press_mm);
         };
@@ -630,7 +637,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         more_modes(int(mode_sample.size()) + opt_.rescue_modes);
         refine_modes(int(mode_sample.size()));
     }
-    const int n_refine = int(fit.size());
+    int n_refine = int(fit.size());
     // Where nothing refined fits the window (the rescue's threshold), the first modes are also
     // registered onto the surface (Refiner::reregister): the rescued ones gained nothing on the
     // train windows and cost four times the time.
@@ -639,6 +646,44 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             refined[m] = refiner.reregister(refined[m], fit[m]);
             refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
         });
+    // Deep search: where even the registered modes leave touches off the surface, the truth's
+    // mode may rank anywhere on the grid (at the truth's nearest hypothesis the far touches
+    // miss by more than the grid's widths), so every mode not yet refined is registered from
+    // its best spin and the best by fit are climbed and refined beside the others.
+    const int n_before_deep = n_refine;
+    if (refiner.can_register() && opt_.deep_modes > 0 && *std::max_element(fit.begin(), fit.end()) < opt_.deep_fit) {
+        more_modes(int(S));
+        const size_t first = size_t(n_refine), n_seeds = mode_sample.size() - first;
+        std::vector<double> seed_fit(n_seeds);
+        std::vector<Rigid> seed_pose(n_seeds);
+        parallel_for(n_seeds, opt_.threads, [&](size_t i) {
+            seed_pose[i] = register_window(*refiner.nearest, refiner.tight, opt_, best_spin_pose(mode_sample[first + i]), opt_.register_cap);
+            seed_fit[i] = refiner.fit(seed_pose[i]);
+        });
+        std::vector<size_t> by(n_seeds);
+        std::iota(by.begin(), by.end(), size_t(0));
+        const size_t D = std::min(n_seeds, size_t(opt_.deep_modes));
+        std::partial_sort(by.begin(), by.begin() + long(D), by.end(),
+                          [&](size_t a, size_t b) { return seed_fit[a] > seed_fit[b] || (seed_fit[a] == seed_fit[b] && a < b); });
+        // The chosen modes move to the front of the unrefined ones: mode indices swapped, with
+        // the samples each owns.
+        std::vector<int64_t> chosen(D);
+        for (size_t k = 0; k < D; ++k) chosen[k] = mode_sample[first + by[k]];
+        for (size_t k = 0; k < D; ++k) {
+            const int a = int(first + k);
+            const int b = int(std::find(mode_sample.begin() + long(first), mode_sample.end(), chosen[k]) - mode_sample.begin());
+            std::swap(mode_sample[size_t(a)], mode_sample[size_t(b)]);
+            for (int& ow : owner) ow = ow == a ? b : ow == b ? a : ow;
+        }
+        fit.resize(first + D), shape.resize(first + D), refined.resize(first + D), refined_contact.resize(first + D);
+        parallel_for(D, opt_.threads, [&](size_t k) {
+            const Rigid& y = seed_pose[by[k]];
+            fit[first + k] = -INFINITY;
+            refined[first + k] = refiner.climbed_if_better(y, y, fit[first + k], nullptr);
+            refined_contact[first + k] = axis_contact(s, grid, refined[first + k], opt_.press_mm);
+        });
+        n_refine = int(first + D);
+    }
     if (any_pose_term) {
         // With odometry noise each earlier touch's term is aligned within its slack (the
         // offsets found per mode and touch, align[m]); the climb holds them, then they are found
@@ -703,7 +748,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     // suppression radius of its own sample: else it would lend another place's fit to its own.
     std::vector<char> ok(static_cast<size_t>(n_refine), 1);
     for (int m = n_first; m < n_refine; ++m)
-        ok[size_t(m)] = dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
+        ok[size_t(m)] = m >= n_before_deep || dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
     e.modes.assign(mode_sample.size(), Mode{});
     for (size_t m = 0; m < mode_sample.size(); ++m) e.modes[m].contact = point(mode_sample[m]);
     // owner is -1 for samples no mode claimed: test the bounds before reading ok.
@@ -731,6 +776,13 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
                            : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(share[size_t(m)] - fmax) / z;
         total += w[size_t(i)];
     }
+    // A deep mode may hold no grid mass at all (its samples' beliefs underflowed): its share
+    // then sits at its own sample, whose place is its refined contact.
+    for (int m = n_before_deep; m < n_refine; ++m)
+        if (grid_mass[size_t(m)] <= 0) {
+            const double v = held * std::exp(share[size_t(m)] - fmax) / z;
+            w[size_t(mode_sample[size_t(m)])] += v, total += v;
+        }
     for (double& v : w) v /= total;
     // Mode masses under the re-weighted belief; the pose is the heaviest refined mode's.
     for (int64_t i = 0; i < S; ++i)

@@ -71,6 +71,17 @@ struct FilterOptions {
     // the better fit kept. 12 and 8 fitted on train windows (docs/multitouch.md, "Registration").
     int register_rounds = 12;
     double register_scale = 8;
+    // Where the best refined fit is still below deep_fit (log; -inf: never) after the
+    // registration, the search has lost the touch: every suppression mode not yet refined is
+    // registered from its best spin (each match searched within register_cap times its touch's
+    // width at the round's scale; 0: at any distance), and the deep_modes best by fit are
+    // climbed and refined beside the others (credited wherever they land). At the truth's
+    // nearest hypothesis the far touches can miss by more than the grid's widths, so its mode
+    // may rank anywhere on the grid. -5, 8 and 7 fitted on train windows
+    // (docs/multitouch.md, "Deep search"); 0.02-0.4 s where it runs.
+    double deep_fit = -5;
+    int deep_modes = 8;
+    double register_cap = 7;
     // Rounds of the climb on geometry + the touches' pose terms after the geometry's own
     // (steps from 2 degrees and 0.8 mm, halved each round); 0: the pose terms only score.
     int shape_climb_rounds = 3;

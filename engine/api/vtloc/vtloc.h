@@ -427,6 +427,13 @@ struct TrackerOptions {
     // beyond the climb's reach. 12 fitted on train windows (docs/multitouch.md,
     // "Registration"); 0: off.
     int register_rounds = 12;
+    // Where the best refined mode still fits below deep_fit (log; -inf: never) after that, the
+    // search has lost the touch: every mode not yet refined is registered from its best spin
+    // and the deep_modes best by fit are refined too (the truth's mode can rank anywhere on the
+    // grid then). -5 and 8 fitted on train windows (docs/multitouch.md, "Deep search"); it
+    // costs 0.02-0.4 s where it runs; deep_modes 0: off.
+    double deep_fit = -5;
+    int deep_modes = 8;
     // > 0: the refinement also asks that the sensor's pad (free_space_w_mm x free_space_h_mm,
     // its window and a margin) be clear of the object this far behind the gel plane (the
     // sensor cannot pass through the object; docs/multitouch.md, "Free space"). 1.5 fitted on
