@@ -346,6 +346,49 @@ TEST_CASE("the deep search where nothing fits never loses fit and finds what one
     test::require_no_validation_messages();
 }
 
+TEST_CASE("where the deep search finds a place the grid holds no mass, the belief follows the geometry there", "[track]") {
+    // Every touch's term vetoes the places within 30 mm of its own truth (-30 a touch, the
+    // field's floor), so the grid's belief there underflows to 0 while the geometry fits
+    // there best. The deep search (forced on) registers the truth's mode anyway. Where it
+    // reaches a pose fitting the window (fit > -1), the belief must follow that pose: its
+    // share, by fit, sits at its own sample (it owns no grid mass to scale), and the samples
+    // no refined mode holds lose mass as the grid's first modes did (else the vetoed grid's
+    // rest outweighs it: mass within 5 mm 0.001-0.2 in two of these windows before).
+    track::FilterOptions on, off;
+    on.n_modes = off.n_modes = 1, on.refine = off.refine = 1, on.rescue_modes = off.rescue_modes = 0, on.deep_fit = 0;
+    off.deep_modes = 0;
+    track::Tracker tr(test::gpu(), prism_surface(), on), grid_only(test::gpu(), prism_surface(), off);
+    const track::Surface& s = tr.surface();
+    const int64_t S = s.n_samples(), NS = s.n_spin();
+    int fitting = 0;
+    for (uint32_t seed = 1; seed <= 6; ++seed) {
+        Tour t = tour(prism_dense(40000), 8, seed);
+        std::vector<Rigid> motions;
+        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        std::vector<std::vector<float>> terms(t.poses.size(), std::vector<float>(size_t(S * NS), 0.0f));
+        for (size_t k = 0; k < t.poses.size(); ++k)
+            for (int64_t i = 0; i < S; ++i) {
+                const std::array<double, 3> p{s.samples[size_t(9 * i)], s.samples[size_t(9 * i + 1)], s.samples[size_t(9 * i + 2)]};
+                if (dist(p, t.contacts[k]) <= 30)
+                    for (int64_t j = 0; j < NS; ++j) terms[k][size_t(i * NS + j)] = -30;
+            }
+        const track::Estimate e = tr.evaluate_window(motions, terms), g = grid_only.evaluate_window(motions, terms);
+        INFO("seed " << seed << ": fit " << g.fit << " without the deep search, " << e.fit << " with; Bayes contact "
+                     << dist(e.contact, e.pose_contact) << " mm from the pose's, mass within 5 mm " << e.mass_within_5mm);
+        double sum = 0;
+        for (float v : e.sample_belief) sum += v;
+        CHECK(std::abs(sum - 1) < 1e-6);
+        CHECK(e.fit >= g.fit - 1e-9);
+        if (g.fit < -5 && e.fit > -1) {  // the veto held (the grid's own search found nothing that fits); the deep search did
+            ++fitting;
+            CHECK(dist(e.contact, e.pose_contact) <= 5);
+            CHECK(e.mass_within_5mm >= 0.5);
+        }
+    }
+    CHECK(fitting >= 2);
+    test::require_no_validation_messages();
+}
+
 TEST_CASE("solve6 solves a well-posed system and refuses a singular one", "[track]") {
     double H[6][6] = {}, g[6], d[6], x[6] = {1, -2, 0.5, 3, -0.25, 2};
     for (int a = 0; a < 6; ++a)

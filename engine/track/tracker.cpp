@@ -44,9 +44,11 @@ struct Tracker::Impl {
 Tracker::Tracker(rt::Context& ctx, Surface surface, FilterOptions options) : Tracker(&ctx, std::move(surface), options) {}
 
 void Tracker::check_options(const FilterOptions& opt_) {
+    if (!(opt_.mode_radius_mm > 0) || !std::isfinite(opt_.mode_radius_mm))
+        throw Error("filter options: mode_radius_mm must be positive and finite, got " + std::to_string(opt_.mode_radius_mm));
     if (!(opt_.sigma_d_mm > 0) || !(opt_.sigma_a_deg > 0) || !(opt_.odometry_mm >= 0) || !(opt_.odometry_deg >= 0) ||
         !(opt_.odometry_mm <= 1e6) || !(opt_.odometry_deg <= 1e6) || !std::isfinite(opt_.sigma_d_mm) || !std::isfinite(opt_.sigma_a_deg) ||
-        !std::isfinite(opt_.press_mm) || !(opt_.mode_radius_mm > 0) || opt_.n_modes < 1 || opt_.refine < 0)
+        !std::isfinite(opt_.press_mm) || opt_.n_modes < 1 || opt_.refine < 0)
         throw Error("filter options: widths must be positive and finite, odometry noise finite and >= 0 (at most 1e6), n_modes >= 1");
     if (opt_.threads < 0 || opt_.threads > 256)
         throw Error("filter options: threads must be 0 (up to 4) or 1..256, got " + std::to_string(opt_.threads));
@@ -767,11 +769,22 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     double held = 0, z = 0;
     for (int m = 0; m < n_refine; ++m)
         if (ok[size_t(m)]) held += grid_mass[size_t(m)], z += std::exp(share[size_t(m)] - fmax);
+    // Where the deep search found a mode that fits better than every mode the grid ranked
+    // first, the samples no refined mode holds (ranked below those) lose mass as those modes
+    // did: else a deep mode with little or no grid mass gets a share of the refined modes'
+    // mass only, and the unrefined rest outweighs the place the geometry found.
+    double rest = 1;
+    if (n_refine > n_before_deep) {
+        double fpre = -INFINITY;
+        for (int m = 0; m < n_before_deep; ++m)
+            if (ok[size_t(m)]) fpre = std::max(fpre, share[size_t(m)]);
+        rest = std::exp(std::min(0.0, fpre - fmax));
+    }
     std::vector<double> w(static_cast<size_t>(S));
     double total = 0;
     for (int64_t i = 0; i < S; ++i) {
         const int m = refined_mode(i);
-        w[size_t(i)] = m < 0 || grid_mass[size_t(m)] <= 0
+        w[size_t(i)] = m < 0 ? rest * double(marginal[size_t(i)]) : grid_mass[size_t(m)] <= 0
                            ? double(marginal[size_t(i)])
                            : double(marginal[size_t(i)]) / grid_mass[size_t(m)] * held * std::exp(share[size_t(m)] - fmax) / z;
         total += w[size_t(i)];
