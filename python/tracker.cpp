@@ -85,6 +85,32 @@ py::dict estimate_dict(const api::TrackerEstimate& e) {
     return d;
 }
 
+py::dict options_dict(const api::TrackerOptions& o) {
+    py::dict d;
+    d["press_mm"] = o.press_mm, d["sigma_d_mm"] = o.sigma_d_mm, d["sigma_a_deg"] = o.sigma_a_deg;
+    d["odometry_mm"] = o.odometry_mm, d["odometry_deg"] = o.odometry_deg, d["window"] = o.window, d["n_spin"] = o.n_spin;
+    d["hypotheses"] = o.hypotheses, d["network_weight"] = o.network_weight, d["object_units"] = o.object_units;
+    d["render_weight"] = o.render_weight, d["render_quadratic"] = o.render_quadratic;
+    d["render_press_percentile"] = o.render_press_percentile, d["render_cell_mm"] = o.render_cell_mm;
+    d["render_refined_weight"] = o.render_refined_weight, d["render_refined_floor"] = o.render_refined_floor;
+    d["render_slack_rounds"] = o.render_slack_rounds, d["field_slack"] = o.field_slack, d["codebook_cache"] = o.codebook_cache;
+    d["threads"] = o.threads, d["free_space_mm"] = o.free_space_mm, d["free_space_w_mm"] = o.free_space_w_mm;
+    d["free_space_h_mm"] = o.free_space_h_mm, d["mode_radius_mm"] = o.mode_radius_mm, d["grid_allowance"] = o.grid_allowance;
+    d["refine_widen"] = o.refine_widen, d["refine_reach_mm"] = o.refine_reach_mm, d["rescue_fit"] = o.rescue_fit;
+    d["rescue_modes"] = o.rescue_modes, d["register_rounds"] = o.register_rounds, d["deep_fit"] = o.deep_fit;
+    d["deep_modes"] = o.deep_modes;
+    if (o.candidates.empty()) {
+        d["candidates"] = py::none();
+    } else {
+        py::array_t<double> c({py::ssize_t(o.candidates.size()), py::ssize_t(3)});
+        auto r = c.mutable_unchecked<2>();
+        for (size_t i = 0; i < o.candidates.size(); ++i)
+            for (int k = 0; k < 3; ++k) r(py::ssize_t(i), k) = o.candidates[i][size_t(k)];
+        d["candidates"] = c;
+    }
+    return d;
+}
+
 const char* kTrackerDoc =
     "The multi-touch filter (SPEC section 6): a belief over sensor poses on the object's surface.\n"
     "Tracker(context, object) with object a mesh or cloud path, or an N x 6 array (points and\n"
@@ -245,7 +271,19 @@ void bind_tracker(py::module_& m) {
                         else if (k == "n_spin") o.n_spin = value.cast<int>();  // refused by the engine if it differs
                         else if (k == "hypotheses") o.hypotheses = value.cast<int64_t>();
                         else if (k == "object_units") o.object_units = value.cast<double>();
-                        else throw api::Error("with_options: no option '" + k + "' (the constructor's, but object and candidates)");
+                        // The search's knobs (the constructor leaves them at their fitted values).
+                        else if (k == "mode_radius_mm") o.mode_radius_mm = value.cast<double>();
+                        else if (k == "grid_allowance") o.grid_allowance = value.cast<double>();
+                        else if (k == "refine_widen") o.refine_widen = value.cast<double>();
+                        else if (k == "refine_reach_mm") o.refine_reach_mm = value.cast<double>();
+                        else if (k == "rescue_fit") o.rescue_fit = value.cast<double>();
+                        else if (k == "rescue_modes") o.rescue_modes = value.cast<int>();
+                        else if (k == "register_rounds") o.register_rounds = value.cast<int>();
+                        else if (k == "deep_fit") o.deep_fit = value.cast<double>();
+                        else if (k == "deep_modes") o.deep_modes = value.cast<int>();
+                        else if (k == "free_space_w_mm") o.free_space_w_mm = value.cast<double>();
+                        else if (k == "free_space_h_mm") o.free_space_h_mm = value.cast<double>();
+                        else throw api::Error("with_options: no option '" + k + "' (Tracker.options names them all but candidates)");
                     } catch (const py::cast_error&) {
                         throw api::Error("with_options: " + k + " has the wrong type");
                     }
@@ -257,6 +295,8 @@ void bind_tracker(py::module_& m) {
             "not built again; options that shape the surface (n_spin, hypotheses, object_units) must stay. "
             "It keeps this tracker (and so its context) alive.",
             py::keep_alive<0, 1>())
+        .def_property_readonly("options", [](const api::Tracker& t) { return options_dict(t.options()); },
+                               "Every option of this tracker by name (candidates as a C x 3 array or None).")
         .def("reset", &api::Tracker::reset, "Forgets every touch (a new grasp); the object's tables stay.")
         .def_property_readonly("touches", &api::Tracker::touches)
         .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })

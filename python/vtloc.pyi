@@ -106,7 +106,9 @@ class Tracker:
                        term: Optional[npt.NDArray[np.float32]] = None,  # a precomputed shape_term
                        shape: Optional[Dict[str, Any]] = None) -> None: ...  # and the shape, for the refined poses
     def reset(self) -> None: ...  # forgets every touch; the object's tables stay
-    def with_options(self, **options: Any) -> "Tracker": ...  # the constructor's names; the surface reused
+    def with_options(self, **options: Any) -> "Tracker": ...  # options' names but candidates; the surface reused
+    @property
+    def options(self) -> Dict[str, Any]: ...  # every option by name (the search's knobs too)
     @property
     def touches(self) -> int: ...
     @property

@@ -96,6 +96,19 @@ def test_tracker_with_options_equals_one_made_so(ctx, root):
         t.with_options(window=0)
     with pytest.raises(vtloc.Error, match="odometry_mm has the wrong type"):
         t.with_options(odometry_mm="far")
+    # options names every knob with_options takes: each goes back in as it came out.
+    opts = t.options
+    assert opts["hypotheses"] == 5000 and opts["candidates"] is None and u.options["window"] == 2
+    for k, v in opts.items():
+        if k != "candidates":
+            assert t.with_options(**{k: v}).options == opts, k
+    # The search's knobs, which only with_options sets, reach the engine.
+    quick = t.with_options(deep_modes=0, register_rounds=0, rescue_modes=4, refine_reach_mm=0)
+    assert (quick.options["deep_modes"], quick.options["register_rounds"], quick.options["rescue_modes"]) == (0, 0, 4)
+    for bad, name in (({"deep_modes": 65}, "deep_modes"), ({"register_rounds": -1}, "register_rounds"),
+                      ({"rescue_fit": float("nan")}, "rescue_fit"), ({"mode_radius_mm": 0.0}, "mode_radius_mm")):
+        with pytest.raises(vtloc.Error, match=name):
+            t.with_options(**bad)
 
 
 def test_batch_equals_single_touches(tiny, mug, root):
