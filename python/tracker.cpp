@@ -1,8 +1,12 @@
 // vtloc.Tracker: the multi-touch filter (SPEC section 6), numpy in and out.
 // Motions and poses are 4 x 4 homogeneous float arrays (the rotation in the
 // upper left, the translation in the last column, object units).
+#include <algorithm>
 #include <cmath>
+#include <iterator>
 #include <string>
+#include <type_traits>
+#include <variant>
 
 #include <pybind11/stl.h>
 
@@ -85,20 +89,31 @@ py::dict estimate_dict(const api::TrackerEstimate& e) {
     return d;
 }
 
+// Every option but candidates, once: Tracker.options reads this table and with_options writes it.
+using Member = std::variant<double api::TrackerOptions::*, int api::TrackerOptions::*, int64_t api::TrackerOptions::*,
+                            bool api::TrackerOptions::*, std::string api::TrackerOptions::*>;
+struct NamedOption {
+    const char* name;
+    Member member;
+};
+#define VTLOC_OPTION(n) NamedOption{#n, &api::TrackerOptions::n}
+const NamedOption kOptions[] = {
+    VTLOC_OPTION(press_mm), VTLOC_OPTION(sigma_d_mm), VTLOC_OPTION(sigma_a_deg), VTLOC_OPTION(odometry_mm),
+    VTLOC_OPTION(odometry_deg), VTLOC_OPTION(window), VTLOC_OPTION(n_spin), VTLOC_OPTION(hypotheses),
+    VTLOC_OPTION(network_weight), VTLOC_OPTION(object_units), VTLOC_OPTION(render_weight),
+    VTLOC_OPTION(render_quadratic), VTLOC_OPTION(render_press_percentile), VTLOC_OPTION(render_cell_mm),
+    VTLOC_OPTION(render_refined_weight), VTLOC_OPTION(render_refined_floor), VTLOC_OPTION(render_slack_rounds),
+    VTLOC_OPTION(field_slack), VTLOC_OPTION(codebook_cache), VTLOC_OPTION(threads), VTLOC_OPTION(free_space_mm),
+    VTLOC_OPTION(free_space_w_mm), VTLOC_OPTION(free_space_h_mm), VTLOC_OPTION(mode_radius_mm),
+    VTLOC_OPTION(grid_allowance), VTLOC_OPTION(refine_widen), VTLOC_OPTION(refine_reach_mm),
+    VTLOC_OPTION(rescue_fit), VTLOC_OPTION(rescue_modes), VTLOC_OPTION(register_rounds), VTLOC_OPTION(deep_fit),
+    VTLOC_OPTION(deep_modes),
+};
+#undef VTLOC_OPTION
+
 py::dict options_dict(const api::TrackerOptions& o) {
     py::dict d;
-    d["press_mm"] = o.press_mm, d["sigma_d_mm"] = o.sigma_d_mm, d["sigma_a_deg"] = o.sigma_a_deg;
-    d["odometry_mm"] = o.odometry_mm, d["odometry_deg"] = o.odometry_deg, d["window"] = o.window, d["n_spin"] = o.n_spin;
-    d["hypotheses"] = o.hypotheses, d["network_weight"] = o.network_weight, d["object_units"] = o.object_units;
-    d["render_weight"] = o.render_weight, d["render_quadratic"] = o.render_quadratic;
-    d["render_press_percentile"] = o.render_press_percentile, d["render_cell_mm"] = o.render_cell_mm;
-    d["render_refined_weight"] = o.render_refined_weight, d["render_refined_floor"] = o.render_refined_floor;
-    d["render_slack_rounds"] = o.render_slack_rounds, d["field_slack"] = o.field_slack, d["codebook_cache"] = o.codebook_cache;
-    d["threads"] = o.threads, d["free_space_mm"] = o.free_space_mm, d["free_space_w_mm"] = o.free_space_w_mm;
-    d["free_space_h_mm"] = o.free_space_h_mm, d["mode_radius_mm"] = o.mode_radius_mm, d["grid_allowance"] = o.grid_allowance;
-    d["refine_widen"] = o.refine_widen, d["refine_reach_mm"] = o.refine_reach_mm, d["rescue_fit"] = o.rescue_fit;
-    d["rescue_modes"] = o.rescue_modes, d["register_rounds"] = o.register_rounds, d["deep_fit"] = o.deep_fit;
-    d["deep_modes"] = o.deep_modes;
+    for (const NamedOption& n : kOptions) std::visit([&](auto m) { d[n.name] = o.*m; }, n.member);
     if (o.candidates.empty()) {
         d["candidates"] = py::none();
     } else {
@@ -250,40 +265,12 @@ void bind_tracker(py::module_& m) {
                 for (const auto& [key, value] : kw) {
                     const std::string k = key.cast<std::string>();
                     try {
-                        if (k == "press_mm") o.press_mm = value.cast<double>();
-                        else if (k == "sigma_d_mm") o.sigma_d_mm = value.cast<double>();
-                        else if (k == "sigma_a_deg") o.sigma_a_deg = value.cast<double>();
-                        else if (k == "odometry_mm") o.odometry_mm = value.cast<double>();
-                        else if (k == "odometry_deg") o.odometry_deg = value.cast<double>();
-                        else if (k == "window") o.window = value.cast<int>();
-                        else if (k == "network_weight") o.network_weight = value.cast<double>();
-                        else if (k == "render_weight") o.render_weight = value.cast<double>();
-                        else if (k == "render_quadratic") o.render_quadratic = value.cast<bool>();
-                        else if (k == "render_press_percentile") o.render_press_percentile = value.cast<double>();
-                        else if (k == "render_cell_mm") o.render_cell_mm = value.cast<double>();
-                        else if (k == "render_refined_weight") o.render_refined_weight = value.cast<double>();
-                        else if (k == "render_refined_floor") o.render_refined_floor = value.cast<double>();
-                        else if (k == "render_slack_rounds") o.render_slack_rounds = value.cast<int>();
-                        else if (k == "field_slack") o.field_slack = value.cast<bool>();
-                        else if (k == "codebook_cache") o.codebook_cache = value.cast<std::string>();
-                        else if (k == "threads") o.threads = value.cast<int>();
-                        else if (k == "free_space_mm") o.free_space_mm = value.cast<double>();
-                        else if (k == "n_spin") o.n_spin = value.cast<int>();  // refused by the engine if it differs
-                        else if (k == "hypotheses") o.hypotheses = value.cast<int64_t>();
-                        else if (k == "object_units") o.object_units = value.cast<double>();
-                        // The search's knobs (the constructor leaves them at their fitted values).
-                        else if (k == "mode_radius_mm") o.mode_radius_mm = value.cast<double>();
-                        else if (k == "grid_allowance") o.grid_allowance = value.cast<double>();
-                        else if (k == "refine_widen") o.refine_widen = value.cast<double>();
-                        else if (k == "refine_reach_mm") o.refine_reach_mm = value.cast<double>();
-                        else if (k == "rescue_fit") o.rescue_fit = value.cast<double>();
-                        else if (k == "rescue_modes") o.rescue_modes = value.cast<int>();
-                        else if (k == "register_rounds") o.register_rounds = value.cast<int>();
-                        else if (k == "deep_fit") o.deep_fit = value.cast<double>();
-                        else if (k == "deep_modes") o.deep_modes = value.cast<int>();
-                        else if (k == "free_space_w_mm") o.free_space_w_mm = value.cast<double>();
-                        else if (k == "free_space_h_mm") o.free_space_h_mm = value.cast<double>();
-                        else throw api::Error("with_options: no option '" + k + "' (Tracker.options names them all but candidates)");
+                        const NamedOption* n = std::find_if(std::begin(kOptions), std::end(kOptions),
+                                                            [&](const NamedOption& x) { return k == x.name; });
+                        if (n == std::end(kOptions))
+                            throw api::Error("with_options: no option '" + k + "' (Tracker.options names them all but candidates)");
+                        // n_spin, hypotheses and object_units are refused by the engine where they differ.
+                        std::visit([&](auto m) { o.*m = value.cast<std::remove_reference_t<decltype(o.*m)>>(); }, n->member);
                     } catch (const py::cast_error&) {
                         throw api::Error("with_options: " + k + " has the wrong type");
                     }
