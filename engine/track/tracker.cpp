@@ -654,6 +654,14 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
     // its best spin and the best by fit are climbed and refined beside the others.
     const int n_before_deep = n_refine;
     if (refiner.can_register() && opt_.deep_modes > 0 && *std::max_element(fit.begin(), fit.end()) < opt_.deep_fit) {
+        // The deep modes are registered, so the rescued ones are too (the first were above):
+        // a mode climbed alone would lose to a registered one that fits no better than it could.
+        if (opt_.deep_registers_rescued)
+            parallel_for(size_t(n_refine - n_first), opt_.threads, [&](size_t i) {
+                const size_t m = size_t(n_first) + i;
+                refined[m] = refiner.reregister(refined[m], fit[m]);
+                refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
+            });
         more_modes(int(S));
         const size_t first = size_t(n_refine), n_seeds = mode_sample.size() - first;
         std::vector<double> seed_fit(n_seeds);
@@ -746,11 +754,14 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
                 }
             });
     }
-    // A rescued mode is credited with its refined fit only while its pose stays within the
-    // suppression radius of its own sample: else it would lend another place's fit to its own.
+    // The modes are in three runs: the first [0, n_first), the rescued [n_first, n_before_deep)
+    // and the deep [n_before_deep, n_refine). A rescued mode is credited with its refined fit
+    // only while its pose stays within the suppression radius of its own sample: else it would
+    // lend another place's fit to its own. A deep mode was chosen by where it lands, and is
+    // credited there.
     std::vector<char> ok(static_cast<size_t>(n_refine), 1);
-    for (int m = n_first; m < n_refine; ++m)
-        ok[size_t(m)] = m >= n_before_deep || dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
+    for (int m = n_first; m < n_before_deep; ++m)
+        ok[size_t(m)] = dist(refined_contact[size_t(m)], point(mode_sample[size_t(m)])) <= opt_.mode_radius_mm;
     e.modes.assign(mode_sample.size(), Mode{});
     for (size_t m = 0; m < mode_sample.size(); ++m) e.modes[m].contact = point(mode_sample[m]);
     // owner is -1 for samples no mode claimed: test the bounds before reading ok.
