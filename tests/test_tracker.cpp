@@ -65,6 +65,33 @@ double dist(const std::array<double, 3>& a, const std::array<double, 3>& b) {
     return std::sqrt((a[0] - b[0]) * (a[0] - b[0]) + (a[1] - b[1]) * (a[1] - b[1]) + (a[2] - b[2]) * (a[2] - b[2]));
 }
 
+// The tour's relative motions, each pose in the previous one's frame.
+std::vector<Rigid> motions_of(const Tour& t) {
+    std::vector<Rigid> m;
+    for (size_t i = 0; i + 1 < t.poses.size(); ++i) m.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+    return m;
+}
+
+// Two trackers on the last touch of 12-touch prism tour `seed`: their estimates and errors.
+struct Compared {
+    track::Estimate a, b;
+    double error_a, error_b;
+};
+Compared compare_on_tour(track::Tracker& a, track::Tracker& b, uint32_t seed) {
+    const Tour t = tour(prism_dense(40000), 12, seed);
+    const std::vector<Rigid> motions = motions_of(t);
+    Compared c{a.evaluate_window(motions), b.evaluate_window(motions), 0, 0};
+    c.error_a = dist(c.a.contact, t.contacts.back()), c.error_b = dist(c.b.contact, t.contacts.back());
+    return c;
+}
+
+// Samples about 5 mm apart and 10-degree spins: the truth's nearest hypothesis is far off.
+track::Surface coarse_prism() {
+    track::SurfaceOptions so;
+    so.target_hypotheses = 6000;
+    return track::build_surface(prism_dense(40000), true, so, "prism");
+}
+
 track::Surface prism_surface() {
     track::SurfaceOptions o;
     o.target_hypotheses = 40000;  // about 2 mm apart on this 10,000 mm^2 prism
@@ -124,8 +151,7 @@ TEST_CASE("window_fit tells a missed search from an ambiguity: the truth fits, a
     track::Tracker tr(test::gpu(), prism_surface());
     const HostTensor dense = prism_dense(40000);
     Tour t = tour(dense, 12, 1);  // 12 touches: no second place (at 8 a near tie: two places fit alike)
-    std::vector<Rigid> motions;
-    for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+    std::vector<Rigid> motions = motions_of(t);
     const track::Estimate e = tr.evaluate_window(motions);
     const double truth = tr.window_fit(motions, t.poses.back());
     INFO("estimate fit " << e.fit << ", truth " << truth << ", contact error " << dist(e.contact, t.contacts.back()) << " mm");
@@ -164,8 +190,7 @@ TEST_CASE("refining more modes where the best fits poorly never loses fit", "[tr
     int better = 0;
     for (uint32_t seed : {1u, 4u, 5u}) {
         Tour t = tour(prism_dense(40000), 5, seed);  // short windows: near ties, modes the first eight may miss
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        std::vector<Rigid> motions = motions_of(t);
         const track::Estimate ea = a.evaluate_window(motions), eb = b.evaluate_window(motions);
         INFO("seed " << seed << ": fit " << ea.fit << " -> " << eb.fit);
         CHECK(eb.fit >= ea.fit - 1e-9);
@@ -191,8 +216,7 @@ TEST_CASE("climbing from the nearest touches outward never loses fit and finds t
     int better = 0, reached = 0;
     for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
         Tour t = tour(prism_dense(40000), 12, seed);
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        std::vector<Rigid> motions = motions_of(t);
         const double truth = b.window_fit(motions, t.poses.back());
         for (double deg : {6.0, -9.0, 12.0, -15.0, 20.0}) {
             const double th = deg * M_PI / 180, c = std::cos(th), s = std::sin(th);
@@ -272,8 +296,7 @@ TEST_CASE("registration never loses fit and reaches the truth from farther off t
     int better = 0, reached = 0, starts = 0;
     for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
         Tour t = tour(prism_dense(40000), 12, seed);
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        std::vector<Rigid> motions = motions_of(t);
         const double truth = b.window_fit(motions, t.poses.back());
         for (double deg : {8.0, -12.0, 16.0, -20.0}) {
             const double th = deg * M_PI / 180, w[3] = {0.6 * th, 0.0, 0.8 * th};
@@ -312,23 +335,16 @@ TEST_CASE("the deep search where nothing fits never loses fit and finds what one
     off.n_modes = on.n_modes = 1, off.refine = on.refine = 1, off.rescue_modes = on.rescue_modes = 0;
     off.deep_modes = 0;
     on.deep_fit = 0;
-    track::SurfaceOptions so;
-    so.target_hypotheses = 6000;  // samples about 5 mm apart, 10-degree spins: the truth's nearest hypothesis far off
-    auto coarse = [&] { return track::build_surface(prism_dense(40000), true, so, "prism"); };
-    track::Tracker a(test::gpu(), coarse(), off), b(test::gpu(), coarse(), on);
+    track::Tracker a(test::gpu(), coarse_prism(), off), b(test::gpu(), coarse_prism(), on);
     int better = 0, found = 0, windows = 0;
     for (uint32_t seed = 1; seed <= 16; ++seed) {
-        Tour t = tour(prism_dense(40000), 12, seed);
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
-        const track::Estimate ea = a.evaluate_window(motions), eb = b.evaluate_window(motions);
-        const double ma = dist(ea.contact, t.contacts.back()), mb = dist(eb.contact, t.contacts.back());
-        INFO("seed " << seed << ": fit " << ea.fit << " -> " << eb.fit << ", error " << ma << " -> " << mb << " mm");
-        CHECK(eb.fit >= ea.fit - 1e-9);
-        CHECK(eb.modes.size() <= size_t(on.n_modes));
+        const Compared c = compare_on_tour(a, b, seed);
+        INFO("seed " << seed << ": fit " << c.a.fit << " -> " << c.b.fit << ", error " << c.error_a << " -> " << c.error_b << " mm");
+        CHECK(c.b.fit >= c.a.fit - 1e-9);
+        CHECK(c.b.modes.size() <= size_t(on.n_modes));
         ++windows;
-        better += eb.fit > ea.fit + 0.5;
-        found += ma > 5 && mb <= 5;
+        better += c.b.fit > c.a.fit + 0.5;
+        found += c.error_a > 5 && c.error_b <= 5;
     }
     // Here 3 of 16 fit better by more than half a nat (-40, -14 and -3.8 to -0.7, -0.14 and
     // -0.10), and 3 windows more than 5 mm off come within 0.5 mm; one better fit lands
@@ -355,20 +371,13 @@ TEST_CASE("where the deep search runs the rescued modes are registered too", "[t
     off.n_modes = on.n_modes = 1, off.refine = on.refine = 1, off.rescue_modes = on.rescue_modes = 8;
     off.rescue_fit = on.rescue_fit = 0, off.deep_fit = on.deep_fit = 0, off.deep_modes = on.deep_modes = 1;
     off.deep_registers_rescued = false;
-    track::SurfaceOptions so;
-    so.target_hypotheses = 6000;
-    auto coarse = [&] { return track::build_surface(prism_dense(40000), true, so, "prism"); };
-    track::Tracker a(test::gpu(), coarse(), off), b(test::gpu(), coarse(), on);
+    track::Tracker a(test::gpu(), coarse_prism(), off), b(test::gpu(), coarse_prism(), on);
     int better = 0;
     for (uint32_t seed = 1; seed <= 16; ++seed) {
-        Tour t = tour(prism_dense(40000), 12, seed);
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
-        const track::Estimate ea = a.evaluate_window(motions), eb = b.evaluate_window(motions);
-        const double ma = dist(ea.contact, t.contacts.back()), mb = dist(eb.contact, t.contacts.back());
-        INFO("seed " << seed << ": fit " << ea.fit << " -> " << eb.fit << ", error " << ma << " -> " << mb << " mm");
-        CHECK(eb.fit >= ea.fit - 1e-9);
-        better += eb.fit > ea.fit + 0.25;
+        const Compared c = compare_on_tour(a, b, seed);
+        INFO("seed " << seed << ": fit " << c.a.fit << " -> " << c.b.fit << ", error " << c.error_a << " -> " << c.error_b << " mm");
+        CHECK(c.b.fit >= c.a.fit - 1e-9);
+        better += c.b.fit > c.a.fit + 0.25;
     }
     CHECK(better >= 1);
     test::require_no_validation_messages();
@@ -391,8 +400,7 @@ TEST_CASE("where the deep search finds a place the grid holds no mass, the belie
     int fitting = 0;
     for (uint32_t seed = 1; seed <= 6; ++seed) {
         Tour t = tour(prism_dense(40000), 8, seed);
-        std::vector<Rigid> motions;
-        for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+        std::vector<Rigid> motions = motions_of(t);
         std::vector<std::vector<float>> terms(t.poses.size(), std::vector<float>(size_t(S * NS), 0.0f));
         for (size_t k = 0; k < t.poses.size(); ++k)
             for (int64_t i = 0; i < S; ++i) {
@@ -540,8 +548,7 @@ TEST_CASE("the candidates protocol: hypotheses only at the candidates, the true 
         const int64_t i = int64_t(rng() % uint32_t(dense.shape[0]));
         o.candidates.insert(o.candidates.end(), &dense.data[size_t(i * 6)], &dense.data[size_t(i * 6 + 3)]);
     }
-    std::vector<Rigid> motions;
-    for (size_t i = 0; i + 1 < t.poses.size(); ++i) motions.push_back(track::compose(track::inverse(t.poses[i]), t.poses[i + 1]));
+    std::vector<Rigid> motions = motions_of(t);
     // With the rescue too (every candidate refined): a wrong candidate whose pose climbs away
     // from it is not credited with the fit it found elsewhere (it took the belief before).
     for (bool rescue : {false, true}) {
