@@ -640,28 +640,33 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         refine_modes(int(mode_sample.size()));
     }
     int n_refine = int(fit.size());
-    // Where nothing refined fits the window (the rescue's threshold), the first modes are also
-    // registered onto the surface (Refiner::reregister): the rescued ones gained nothing on the
-    // train windows and cost four times the time.
-    if (refiner.can_register() && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit)
-        parallel_for(size_t(n_first), opt_.threads, [&](size_t m) {
+    // Registers (Refiner::reregister) the refined modes below upto not registered yet; each
+    // keeps the better fit, so a mode is registered at most once.
+    std::vector<char> registered(fit.size(), 0);
+    auto register_modes = [&](int upto) {
+        std::vector<size_t> todo;
+        for (size_t m = 0; m < size_t(upto); ++m)
+            if (!registered[m]) todo.push_back(m), registered[m] = 1;
+        parallel_for(todo.size(), opt_.threads, [&](size_t i) {
+            const size_t m = todo[i];
             refined[m] = refiner.reregister(refined[m], fit[m]);
             refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
         });
+    };
+    // Where nothing refined fits the window (the rescue's threshold), the first modes are also
+    // registered onto the surface: the rescued ones gained nothing on the train windows and
+    // cost four times the time.
+    if (refiner.can_register() && *std::max_element(fit.begin(), fit.end()) < opt_.rescue_fit) register_modes(n_first);
     // Deep search: where even the registered modes leave touches off the surface, the truth's
     // mode may rank anywhere on the grid (at the truth's nearest hypothesis the far touches
     // miss by more than the grid's widths), so every mode not yet refined is registered from
     // its best spin and the best by fit are climbed and refined beside the others.
     const int n_before_deep = n_refine;
     if (refiner.can_register() && opt_.deep_modes > 0 && *std::max_element(fit.begin(), fit.end()) < opt_.deep_fit) {
-        // The deep modes are registered, so the rescued ones are too (the first were above):
-        // a mode climbed alone would lose to a registered one that fits no better than it could.
-        if (opt_.deep_registers_rescued)
-            parallel_for(size_t(n_refine - n_first), opt_.threads, [&](size_t i) {
-                const size_t m = size_t(n_first) + i;
-                refined[m] = refiner.reregister(refined[m], fit[m]);
-                refined_contact[m] = axis_contact(s, grid, refined[m], opt_.press_mm);
-            });
+        // The deep modes are registered, so every refined mode is too (with the fitted
+        // thresholds the first ones were above, so these are the rescued): a mode climbed alone
+        // would lose to a registered one that fits no better than it could.
+        if (opt_.deep_registers_refined) register_modes(n_refine);
         more_modes(int(S));
         const size_t first = size_t(n_refine), n_seeds = mode_sample.size() - first;
         std::vector<double> seed_fit(n_seeds);

@@ -82,11 +82,12 @@ struct FilterOptions {
     double deep_fit = -5;
     int deep_modes = 8;
     double register_cap = 7;
-    // Where the deep search runs, the rescued modes are registered first, as the first modes
-    // were: the deep ones are, and a mode only climbed can lose to one that fits no better than
-    // it would registered. On train windows: 48 seen objects' score 14.638 -> 14.588
+    // Where the deep search runs, every refined mode not registered yet (with the fitted
+    // thresholds: the rescued ones) is registered first, as the first modes were: the deep
+    // ones are, and a mode only climbed can lose to one that fits no better than it would
+    // registered. On train windows: 48 seen objects' score 14.638 -> 14.588
     // (docs/multitouch.md, "Deep search"); false: only the first modes, as before 2026-12-06.
-    bool deep_registers_rescued = true;
+    bool deep_registers_refined = true;
     // Rounds of the climb on geometry + the touches' pose terms after the geometry's own
     // (steps from 2 degrees and 0.8 mm, halved each round); 0: the pose terms only score.
     int shape_climb_rounds = 3;
