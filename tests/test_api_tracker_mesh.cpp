@@ -59,26 +59,40 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     other.odometry_mm = 0.5, other.odometry_deg = 0.5, other.window = 2, other.sigma_d_mm = 1.3, other.rescue_fit = 0;
     api::Tracker a(ctx, path, o);
     a.add_touch(std::nullopt);  // a's touches are its own: the new tracker starts with none
-    api::Tracker b = a.with_options(other), made(ctx, path, other);
-    CHECK(b.touches() == 0);
-    CHECK(b.options().odometry_mm == 0.5);
-    CHECK(b.options().window == 2);
-    CHECK(a.options().window == o.window);
-    CHECK(b.sample_points() == made.sample_points());
     const api::Motion m1{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}}, m2{{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}};
-    for (api::Tracker* t : {&b, &made}) {
-        t->add_touch(std::nullopt);
-        t->add_touch(m1);
-        t->add_touch(m2);  // past the window of 2: the prior takes the first
-    }
-    const api::TrackerEstimate eb = b.estimate(), em = made.estimate();
-    CHECK(eb.sample_belief == em.sample_belief);
-    CHECK(eb.contact == em.contact);
-    CHECK(eb.pose.R == em.pose.R);
-    CHECK(eb.pose.t == em.pose.t);
-    CHECK(eb.fit == em.fit);
-    CHECK(eb.heatmap == em.heatmap);
-    CHECK(b.evaluate_window({m1, m2}).sample_belief == made.evaluate_window({m1, m2}).sample_belief);
+    // The new tracker copies what the surface alone shapes (its tables, the registration's
+    // k-d tree) where `from` has it and makes what it lacks: both ways must match a tracker
+    // made from the file.
+    auto same_as_made = [&](const api::Tracker& from, const api::TrackerOptions& opt) {
+        api::Tracker b = from.with_options(opt), made(ctx, path, opt);
+        CHECK(b.touches() == 0);
+        CHECK(b.options().odometry_mm == opt.odometry_mm);
+        CHECK(b.options().window == opt.window);
+        CHECK(b.sample_points() == made.sample_points());
+        for (api::Tracker* t : {&b, &made}) {
+            t->add_touch(std::nullopt);
+            t->add_touch(m1);
+            t->add_touch(m2);  // past the window of 2: the prior takes the first
+        }
+        const api::TrackerEstimate eb = b.estimate(), em = made.estimate();
+        CHECK(eb.sample_belief == em.sample_belief);
+        CHECK(eb.contact == em.contact);
+        CHECK(eb.pose.R == em.pose.R);
+        CHECK(eb.pose.t == em.pose.t);
+        CHECK(eb.fit == em.fit);
+        CHECK(eb.heatmap == em.heatmap);
+        CHECK(b.evaluate_window({m1, m2}).sample_belief == made.evaluate_window({m1, m2}).sample_belief);
+    };
+    same_as_made(a, other);
+    CHECK(a.options().window == o.window);
+    // From a tracker with neither (no registration, no field slack) to one that needs both,
+    // and back.
+    api::TrackerOptions bare = o, both = other;
+    bare.register_rounds = 0;
+    both.field_slack = true;
+    const api::Tracker a_bare(ctx, path, bare), a_both(ctx, path, both);
+    same_as_made(a_bare, both);
+    same_as_made(a_both, bare);
     CHECK(a.touches() == 1);
     // What shapes the surface stays; a bad option is refused as the constructor refuses it.
     auto refused = [&](api::TrackerOptions x, const char* name) {

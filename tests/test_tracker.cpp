@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <optional>
 #include <random>
 
 #include "base/error.h"
@@ -261,7 +262,15 @@ TEST_CASE("the nearest facing point matches a brute-force search", "[track]") {
             }
             for (int k = 0; k < 3; ++k) dense.push_back(nv[k] / l);
         }
-        const track::NearestFacing nf(dense);
+        // Built on a table that is then destroyed, the tree rebound to a copy of it (as
+        // with_options' tracker holds its own copy of the surface) must answer alike.
+        std::optional<track::NearestFacing> built;
+        {
+            const std::vector<float> original = dense;
+            built.emplace(original);
+            CHECK_THROWS_WITH(built->rebound(std::vector<float>(original.begin(), original.end() - 6)), Catch::Contains("rebound"));
+        }
+        const track::NearestFacing nf = built->rebound(dense);
         for (int q = 0; q < 200; ++q) {
             const float p[3] = {u(rng) * 1.5f, u(rng) * 1.5f, u(rng) * 1.5f};
             float z[3] = {g(rng), g(rng), g(rng)};

@@ -102,6 +102,11 @@ struct Tracker::Impl {
         }
         display_tensor = HostTensor({int64_t(display.size()), n ? 6 : 3}, std::move(rows));
     }
+    // `like`'s object under other options (with_options): its surface's tables and display copied.
+    Impl(const Impl& like, const TrackerOptions& o)
+        : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), display_tensor(like.display_tensor),
+          network_weight(o.network_weight), object_units(o.object_units), options(o), score(score_options(o)),
+          codebook_cache(o.codebook_cache) {}
 
     static void check_shape(const GelShape& g, size_t touch) {
         if (g.height < 1 || g.width < 1 || g.depth_mm.size() != size_t(g.height) * size_t(g.width))
@@ -274,7 +279,7 @@ Tracker Tracker::with_options(const TrackerOptions& o) const {
         same("hypotheses", o.hypotheses == mine.hypotheses);
         same("candidates", o.candidates == mine.candidates);
         same("object_units", o.object_units == mine.object_units);
-        auto impl = std::make_unique<Impl>(*impl_->ctx, impl_->tracker.surface(), o, impl_->display);
+        auto impl = std::make_unique<Impl>(*impl_, o);
         impl->object_units = impl_->object_units;  // a PointCloud's tracker works in the cloud's units
         return Tracker(std::move(impl));
     });

@@ -2,6 +2,9 @@
 
 #include <algorithm>
 #include <limits>
+#include <string>
+
+#include "base/error.h"
 
 namespace vtloc::track {
 
@@ -15,6 +18,15 @@ NearestFacing::NearestFacing(const std::vector<float>& dense) : dense_(dense.dat
     for (int64_t i = 0; i < D; ++i) order_[size_t(i)] = int32_t(i);
     axis_.assign(size_t(D), 0);
     build(0, D);
+}
+
+NearestFacing NearestFacing::rebound(const std::vector<float>& dense) const {
+    if (dense.size() != order_.size() * 6)
+        throw Error("nearest facing: a tree over " + std::to_string(order_.size()) + " points cannot be rebound to " +
+                    std::to_string(dense.size() / 6));
+    NearestFacing t = *this;
+    t.dense_ = dense.data();
+    return t;
 }
 
 // Split on the subrange's widest axis at its median: the tree stays balanced on thin,

@@ -19,6 +19,9 @@ public:
     // where none does or the tree is empty.
     int32_t query(const float q[3], const float z[3], float max_dot,
                   float max_d2 = std::numeric_limits<float>::infinity()) const;
+    // This tree over `dense`, a copy of the table it was built on (another Surface holding the
+    // same points): the order copied, not built again. Throws where the sizes differ.
+    NearestFacing rebound(const std::vector<float>& dense) const;
     bool empty() const { return order_.empty(); }
     const float* point(int32_t i) const { return dense_ + int64_t(i) * 6; }  // point, normal
 

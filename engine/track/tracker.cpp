@@ -26,6 +26,8 @@ namespace {
 using P = ops::pose::V3;
 constexpr int64_t kMaxAnswers = 512;
 bool slack_on(const FilterOptions& o) { return o.field_slack && (o.odometry_mm > 0 || o.odometry_deg > 0); }
+// The refinement registers onto the dense points; a candidate keeps its place.
+bool registers(const FilterOptions& o, const Surface& s) { return o.register_rounds > 0 && !s.from_candidates; }
 
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
@@ -75,8 +77,26 @@ void Tracker::check_options(const FilterOptions& opt_) {
 Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
+    if (registers(opt_, surface_)) impl_->nearest = NearestFacing(surface_.dense);
+    add_tables();
+}
+
+Tracker::Tracker(const Tracker& like, FilterOptions options) : surface_(like.surface_), opt_(options), impl_(std::make_unique<Impl>(like.impl_->ctx)) {
+    check_options(opt_);
+    if (registers(opt_, surface_))
+        impl_->nearest = like.impl_->nearest.empty() ? NearestFacing(surface_.dense) : like.impl_->nearest.rebound(surface_.dense);
+    // The tables hang on the surface alone: what `like` made is reused, the neighbours made
+    // where these options need them and `like`'s did not.
+    impl_->weights = like.impl_->weights;
+    if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
+}
+
+void Tracker::add_neighbours() {
+    impl_->weights.add("surface.neighbours", slack_neighbours(surface_, kSlackNeighbours, slack_radius(surface_)));
+}
+
+void Tracker::add_tables() {
     const Surface& s = surface_;
-    if (opt_.register_rounds > 0 && !s.from_candidates) impl_->nearest = NearestFacing(s.dense);  // a candidate keeps its place
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
     w.add("surface.dense", HostTensor({s.n_dense(), 8}, ops::pose::evidence_dense(s.dense, s.dense_sample)));
@@ -90,7 +110,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     std::vector<float> ans;
     for (int64_t i = 0; i < s.n_samples(); i += answer_stride(s)) ans.insert(ans.end(), &pts[size_t(3 * i)], &pts[size_t(3 * i + 3)]);
     w.add("surface.answers", HostTensor({int64_t(ans.size() / 3), 3}, ans));
-    if (slack_on(opt_)) w.add("surface.neighbours", slack_neighbours(s, kSlackNeighbours, slack_radius(s)));
+    if (slack_on(opt_)) add_neighbours();
 }
 
 Tracker::~Tracker() = default;

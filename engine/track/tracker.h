@@ -150,6 +150,9 @@ public:
     Tracker(rt::Context& ctx, Surface surface, FilterOptions options = {});
     // ctx null: every step runs on the ops' CPU references (the oracle; vtloc-bench times it).
     Tracker(rt::Context* ctx, Surface surface, FilterOptions options = {});
+    // `like`'s surface and context under other options, no touches (with_options): the
+    // surface's tables and the registration's k-d tree copied, not built again.
+    Tracker(const Tracker& like, FilterOptions options);
     ~Tracker();
     // What the constructor refuses, without a surface (callers check before building one).
     static void check_options(const FilterOptions& options);
@@ -200,6 +203,8 @@ private:
     Step run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
                   const Rigid* prior_motion, const std::vector<float>* prior);
     void check_term(const std::vector<float>& term, size_t touch) const;
+    void add_tables();      // the surface's tables the step graphs read
+    void add_neighbours();  // the field slack's, where the options ask for it
     Estimate finish(const std::vector<float>& log, const std::vector<float>& marginal, const std::vector<float>& cost,
                     const std::vector<Rigid>& to_window, const std::vector<PoseTerm>& pose_terms) const;
     Surface surface_;
