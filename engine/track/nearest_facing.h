@@ -29,8 +29,11 @@ private:
     const float* dense_ = nullptr;
     std::vector<int32_t> order_;  // the points, each subrange's median at its middle
     std::vector<uint8_t> axis_;   // per middle position: the axis its subrange was split on
+    std::vector<float> node_;     // [D, 6] the points in order_'s order (point, normal)
+    std::vector<float> normals_;  // [D, 6] per middle position: its subrange's normals' least and most per axis
     void build(int64_t lo, int64_t hi);
-    void search(int64_t lo, int64_t hi, const float q[3], const float z[3], float max_dot, int32_t& best, float& best_d2) const;
+    void search(int64_t lo, int64_t hi, const float q[3], const float z[3], float max_dot, float off[3], int32_t& best,
+                float& best_d2) const;
 };
 
 }  // namespace vtloc::track
