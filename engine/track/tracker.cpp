@@ -81,7 +81,8 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     add_tables();
 }
 
-Tracker::Tracker(const Tracker& like, FilterOptions options) : surface_(like.surface_), opt_(options), impl_(std::make_unique<Impl>(like.impl_->ctx)) {
+Tracker::Tracker(const Tracker& like, FilterOptions options)
+    : surface_(like.surface_), opt_(options), impl_(std::make_unique<Impl>(like.impl_->ctx)) {
     check_options(opt_);
     if (registers(opt_, surface_))
         impl_->nearest = like.impl_->nearest.empty() ? NearestFacing(surface_.dense) : like.impl_->nearest.rebound(surface_.dense);
