@@ -26,7 +26,7 @@ WeightStore WeightStore::from_file(const SafetensorsFile& file) {
     for (const TensorInfo& t : file.tensors()) {
         switch (t.dtype) {
             case DType::F32: case DType::F16: case DType::BF16:
-                w.tensors_[t.name] = HostTensor(t.shape, file.to_f32(t));
+                w.tensors_[t.name] = std::make_shared<const HostTensor>(t.shape, file.to_f32(t));
                 break;
             case DType::I64:
                 break;  // bookkeeping such as BatchNorm's num_batches_tracked
@@ -41,13 +41,13 @@ WeightStore WeightStore::from_file(const SafetensorsFile& file) {
 void WeightStore::add(const std::string& name, HostTensor t) {
     if (int64_t(t.data.size()) != numel(t.shape))
         throw Error("weight '" + name + "': data size does not match shape " + shape_str(t.shape));
-    tensors_[name] = std::move(t);
+    tensors_[name] = std::make_shared<const HostTensor>(std::move(t));
 }
 
 const HostTensor& WeightStore::get(const std::string& name) const {
     auto it = tensors_.find(name);
     if (it == tensors_.end()) throw Error(source_ + ": weight '" + name + "' is missing");
-    return it->second;
+    return *it->second;
 }
 
 const HostTensor& WeightStore::get(const std::string& name, const Shape& expected) const {
@@ -66,7 +66,7 @@ std::vector<std::string> WeightStore::names() const {
 
 size_t WeightStore::parameter_count() const {
     size_t n = 0;
-    for (auto& [k, v] : tensors_) n += v.data.size();
+    for (auto& [k, v] : tensors_) n += v->data.size();
     return n;
 }
 

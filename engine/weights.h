@@ -2,6 +2,7 @@
 // Named fp32 weights plus the model config, read from a safetensors file
 // (F32 kept, F16/BF16 widened on load, I64 such as num_batches_tracked ignored).
 #include <map>
+#include <memory>
 #include <nlohmann/json.hpp>
 #include <string>
 #include <vector>
@@ -34,7 +35,9 @@ public:
 
 private:
     std::string source_ = "weights";
-    std::map<std::string, HostTensor> tensors_;
+    // Read-only once added: a copy of the store shares them (a tracker made by with_options
+    // shares its object's tables).
+    std::map<std::string, std::shared_ptr<const HostTensor>> tensors_;
     nlohmann::json config_ = nlohmann::json::object();
 };
 

@@ -3,6 +3,7 @@
 // vetoed on every touch; io::orient_outward by the signed volume.
 #include <catch2/catch.hpp>
 
+#include <memory>
 #include <utility>
 
 #include "engine/io/mesh.h"
@@ -60,11 +61,8 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     api::Tracker a(ctx, path, o);
     a.add_touch(std::nullopt);  // a's touches are its own: the new tracker starts with none
     const api::Motion m1{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}}, m2{{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}};
-    // The new tracker copies what the surface alone shapes (its tables, the registration's
-    // k-d tree) where `from` has it and makes what it lacks: both ways must match a tracker
-    // made from the file.
-    auto same_as_made = [&](const api::Tracker& from, const api::TrackerOptions& opt) {
-        api::Tracker b = from.with_options(opt), made(ctx, path, opt);
+    // b (made by with_options) against a tracker made from the file with b's options.
+    auto same = [&](api::Tracker& b, api::Tracker& made, const api::TrackerOptions& opt) {
         CHECK(b.touches() == 0);
         CHECK(b.options().odometry_mm == opt.odometry_mm);
         CHECK(b.options().window == opt.window);
@@ -83,6 +81,13 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
         CHECK(eb.heatmap == em.heatmap);
         CHECK(b.evaluate_window({m1, m2}).sample_belief == made.evaluate_window({m1, m2}).sample_belief);
     };
+    // The new tracker shares what the surface alone shapes (the surface, its tables, the
+    // registration's k-d tree) where `from` has it and makes what it lacks: both ways must
+    // match a tracker made from the file.
+    auto same_as_made = [&](const api::Tracker& from, const api::TrackerOptions& opt) {
+        api::Tracker b = from.with_options(opt), made(ctx, path, opt);
+        same(b, made, opt);
+    };
     same_as_made(a, other);
     CHECK(a.options().window == o.window);
     // From a tracker with neither (no registration, no field slack) to one that needs both,
@@ -94,6 +99,15 @@ TEST_CASE("tracker: with_options is a tracker made with those options, its surfa
     same_as_made(a_bare, both);
     same_as_made(a_both, bare);
     CHECK(a.touches() == 1);
+    {
+        // What it shares outlives the tracker it came from (ASan in CI would catch a read of
+        // freed tables).
+        auto from = std::make_unique<api::Tracker>(ctx, path, both);
+        api::Tracker b = from->with_options(other);
+        from.reset();
+        api::Tracker made(ctx, path, other);
+        same(b, made, other);
+    }
     // What shapes the surface stays; a bad option is refused as the constructor refuses it.
     auto refused = [&](api::TrackerOptions x, const char* name) {
         INFO(name);

@@ -82,31 +82,34 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
 struct Tracker::Impl {
     rt::Context* ctx;
     track::Tracker tracker;
-    PointCloud display;
-    HostTensor display_tensor;
-    double network_weight, object_units;
+    // The display cloud and its rows for Tracker::heatmap: read-only, shared by with_options' trackers.
+    struct Display {
+        PointCloud cloud;
+        HostTensor rows;
+    };
+    std::shared_ptr<const Display> display;
     TrackerOptions options;  // as made (with_options compares what shapes the surface)
+    double object_units;     // options' for a file; 1 for a PointCloud, given in the tracker's units
     track::ScoreOptions score;  // render-and-compare's, checked with the others (check_options): the scorer is made at the first gel shape
-    std::string codebook_cache;
     std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
-    std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0
+    std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0; hangs on the surface alone
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
-        : ctx(&c), tracker(c, std::move(s), filter_options(o)), display(std::move(disp)), network_weight(o.network_weight),
-          object_units(o.object_units), options(o), score(score_options(o)), codebook_cache(o.codebook_cache) {
+        : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)) {
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
-        const bool n = display.normals.size() == display.xyz.size();
+        const bool n = disp.normals.size() == disp.xyz.size();
         std::vector<float> rows;
-        for (size_t i = 0; i < display.size(); ++i) {
-            rows.insert(rows.end(), &display.xyz[3 * i], &display.xyz[3 * i + 3]);
-            if (n) rows.insert(rows.end(), &display.normals[3 * i], &display.normals[3 * i + 3]);
+        for (size_t i = 0; i < disp.size(); ++i) {
+            rows.insert(rows.end(), &disp.xyz[3 * i], &disp.xyz[3 * i + 3]);
+            if (n) rows.insert(rows.end(), &disp.normals[3 * i], &disp.normals[3 * i + 3]);
         }
-        display_tensor = HostTensor({int64_t(display.size()), n ? 6 : 3}, std::move(rows));
+        const int64_t count = int64_t(disp.size());
+        display = std::make_shared<const Display>(Display{std::move(disp), HostTensor({count, n ? 6 : 3}, std::move(rows))});
     }
-    // `like`'s object under other options (with_options): its surface's tables and display copied.
+    // `like`'s object under other options (with_options): its surface, tables, display and
+    // pose scorer shared, not copied or made again.
     Impl(const Impl& like, const TrackerOptions& o)
-        : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), display_tensor(like.display_tensor),
-          network_weight(o.network_weight), object_units(o.object_units), options(o), score(score_options(o)),
-          codebook_cache(o.codebook_cache) {}
+        : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), options(o), object_units(like.object_units),
+          score(score_options(o)), pose_scorer(like.pose_scorer) {}
 
     static void check_shape(const GelShape& g, size_t touch) {
         if (g.height < 1 || g.width < 1 || g.depth_mm.size() != size_t(g.height) * size_t(g.width))
@@ -119,7 +122,7 @@ struct Tracker::Impl {
         if (!g) return {};
         check_shape(*g, touch);
         if (!scorer) {
-            const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, codebook_cache);
+            const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, options.codebook_cache);
             scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), score);
         }
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
@@ -176,7 +179,7 @@ struct Tracker::Impl {
                                 (xyz[3 * j + 2] - p[2]) * (xyz[3 * j + 2] - p[2]);
                 if (d < bd) bd = d, best = j;
             }
-            const float v = float(network_weight * std::log(double(r->heatmap[best]) + 0.05));
+            const float v = float(options.network_weight * std::log(double(r->heatmap[best]) + 0.05));
             std::fill(f.begin() + i * NS, f.begin() + (i + 1) * NS, v);
         }
         return f;
@@ -193,7 +196,7 @@ struct Tracker::Impl {
         o.mass_within_5mm = e.mass_within_5mm;
         o.fit = e.fit;
         o.pose_terms = e.pose_terms;
-        o.heatmap = tracker.heatmap(e, display_tensor);
+        o.heatmap = tracker.heatmap(e, display->rows);
         o.sample_belief = e.sample_belief;
         return o;
     }
@@ -279,9 +282,7 @@ Tracker Tracker::with_options(const TrackerOptions& o) const {
         same("hypotheses", o.hypotheses == mine.hypotheses);
         same("candidates", o.candidates == mine.candidates);
         same("object_units", o.object_units == mine.object_units);
-        auto impl = std::make_unique<Impl>(*impl_, o);
-        impl->object_units = impl_->object_units;  // a PointCloud's tracker works in the cloud's units
-        return Tracker(std::move(impl));
+        return Tracker(std::make_unique<Impl>(*impl_, o));  // object_units as this tracker's (1 for a PointCloud's)
     });
 }
 
@@ -378,7 +379,7 @@ std::vector<float> Tracker::sample_points() const {
 }
 
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
-const PointCloud& Tracker::display_cloud() const { return impl_->display; }
+const PointCloud& Tracker::display_cloud() const { return impl_->display->cloud; }
 uint64_t Tracker::device_bytes() const {
     return impl_->tracker.device_bytes() + (impl_->scorer ? impl_->scorer->device_bytes() : 0);
 }

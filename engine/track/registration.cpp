@@ -90,9 +90,9 @@ Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose:
             const float zf[3] = {float(wz[k][0]), float(wz[k][1]), float(wz[k][2])};
             const double reach = cap * cs[k].sd * scale;
             const float max_d2 = cap > 0 ? float(reach * reach) : std::numeric_limits<float>::infinity();
-            const int32_t j = nearest.query(q, zf, -0.5f, max_d2);  // a face within 60 degrees of the gel's
-            if (j < 0) continue;
-            const float* pn = nearest.point(j);
+            const NearestFacing::Match m = nearest.query(q, zf, -0.5f, max_d2);  // a face within 60 degrees of the gel's
+            if (m.index < 0) continue;
+            const float* pn = m.point;
             const std::array<double, 3> p{pn[0], pn[1], pn[2]}, n{pn[3], pn[4], pn[5]}, z = wz[k];
             const std::array<double, 3> r{wc[k][0] - ctr[0], wc[k][1] - ctr[1], wc[k][2] - ctr[2]};
             const double sd = cs[k].sd * scale, sa = cs[k].sa * scale;

@@ -39,7 +39,7 @@ struct Tracker::Impl {
     std::shared_ptr<ResidentWeights> resident;
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
-    NearestFacing nearest;                                                     // the refinement's registration
+    std::shared_ptr<const NearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -75,29 +75,30 @@ void Tracker::check_options(const FilterOptions& opt_) {
 }
 
 Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
-    : surface_(std::move(surface)), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
+    : surface_(std::make_shared<const Surface>(std::move(surface))), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
-    if (registers(opt_, surface_)) impl_->nearest = NearestFacing(surface_.dense);
+    if (registers(opt_, *surface_)) impl_->nearest = std::make_shared<const NearestFacing>(surface_->dense);
     add_tables();
 }
 
 Tracker::Tracker(const Tracker& like, FilterOptions options)
     : surface_(like.surface_), opt_(options), impl_(std::make_unique<Impl>(like.impl_->ctx)) {
     check_options(opt_);
-    if (registers(opt_, surface_))
-        impl_->nearest = like.impl_->nearest.empty() ? NearestFacing(surface_.dense) : like.impl_->nearest.rebound(surface_.dense);
-    // The tables hang on the surface alone: what `like` made is reused, the neighbours made
-    // where these options need them and `like`'s did not.
+    // The surface, its tree and its tables are read-only once made: shared with `like`, not
+    // copied (the weight store's tensors are shared too). The tree is made where these options
+    // need it and `like`'s did not, the neighbours likewise.
+    if (registers(opt_, *surface_))
+        impl_->nearest = like.impl_->nearest ? like.impl_->nearest : std::make_shared<const NearestFacing>(surface_->dense);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
 }
 
 void Tracker::add_neighbours() {
-    impl_->weights.add("surface.neighbours", slack_neighbours(surface_, kSlackNeighbours, slack_radius(surface_)));
+    impl_->weights.add("surface.neighbours", slack_neighbours(*surface_, kSlackNeighbours, slack_radius(*surface_)));
 }
 
 void Tracker::add_tables() {
-    const Surface& s = surface_;
+    const Surface& s = *surface_;
     WeightStore& w = impl_->weights;
     w.add("surface.samples", HostTensor({s.n_samples(), 12}, ops::pose::evidence_samples(s.samples)));
     w.add("surface.dense", HostTensor({s.n_dense(), 8}, ops::pose::evidence_dense(s.dense, s.dense_sample)));
@@ -443,7 +444,7 @@ std::array<float, 2> slack_widths(const Rigid& rel, int steps, const FilterOptio
 }
 
 void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
-    const int64_t H = surface_.n_hypotheses();
+    const int64_t H = surface_->n_hypotheses();
     if (!term.empty() && int64_t(term.size()) != H)
         throw Error("touch " + std::to_string(touch) + ": its term has " + std::to_string(term.size()) + " values for " +
                     std::to_string(H) + " hypotheses");
@@ -453,22 +454,22 @@ void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
 
 Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::vector<const std::vector<float>*>& terms,
                                 const Rigid* prior_motion, const std::vector<float>* prior) {
-    const int64_t m = int64_t(motions.size()) + 1, H = surface_.n_hypotheses();
+    const int64_t m = int64_t(motions.size()) + 1, H = surface_->n_hypotheses();
     bool any_term = false;
     for (const auto* t : terms) any_term = any_term || (t && !t->empty());
     const int64_t n_term_fields = any_term ? m : 0, F = n_term_fields + (prior ? 1 : 0), K = m - 1 + (prior ? 1 : 0);
     const std::pair<int64_t, int64_t> key{K, F};
     if (impl_->ctx && !impl_->exec.count(key))
-        impl_->exec[key] = std::make_unique<GpuExecutor>(*impl_->ctx, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1),
+        impl_->exec[key] = std::make_unique<GpuExecutor>(*impl_->ctx, step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1),
                                                          impl_->weights, impl_->resident);
-    if (!impl_->ctx && !impl_->graphs.count(key)) impl_->graphs.emplace(key, step_graph(surface_, opt_, K, F, any_term ? m - 1 : -1));
+    if (!impl_->ctx && !impl_->graphs.count(key)) impl_->graphs.emplace(key, step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1));
     Step st;
     st.to_window = window_in_current(motions);
     HostTensor tr({K, 16}), fields({F, H});
     for (int64_t k = 0; k < m - 1; ++k) {
         const bool has = any_term && terms[size_t(k)] && !terms[size_t(k)]->empty();
         term_row(&tr.data[size_t(16 * k)], st.to_window[size_t(k)], int(m - 1 - k), opt_, has ? int(k) : -1, opt_.term_weight,
-                 opt_.grid_allowance * surface_.spacing_mm, opt_.grid_allowance * 2 * M_PI / surface_.n_spin());
+                 opt_.grid_allowance * surface_->spacing_mm, opt_.grid_allowance * 2 * M_PI / surface_->n_spin());
     }
     // field_slack's widths: a_t = 1 / (2 sigma_t^2), a_r = 1 / (2 sigma_r^2) of each earlier field's
     // odometry slack; the current touch's own field has none (0).
@@ -544,7 +545,7 @@ void Tracker::reset() {
 uint64_t Tracker::device_bytes() const {
     uint64_t arenas = 0;  // the tables go up with the first step graph; count them from the start
     for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes + ex->memory_plan().scratch_bytes;
-    return std::max(surface_.device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
+    return std::max(surface_->device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
 }
 
 Estimate Tracker::estimate() const {
@@ -569,9 +570,9 @@ Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::
 double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const {
     for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
     check_rigid(pose, "the pose to fit");
-    const ops::pose::Grid grid = surface_.grid();
+    const ops::pose::Grid grid = surface_->grid();
     double f = 0;
-    const Refiner r(grid, window_in_current(motions), opt_, surface_.spacing_mm, surface_.n_spin(), !surface_.from_candidates, &impl_->nearest);
+    const Refiner r(grid, window_in_current(motions), opt_, surface_->spacing_mm, surface_->n_spin(), !surface_->from_candidates, impl_->nearest.get());
     const Rigid x = r.refine(pose, f);
     if (f < opt_.rescue_fit) r.reregister(x, f);
     return f;
@@ -579,7 +580,7 @@ double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose)
 
 Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>& marginal, const std::vector<float>& cost,
                          const std::vector<Rigid>& to_window, const std::vector<PoseTerm>& pose_terms) const {
-    const Surface& s = surface_;
+    const Surface& s = *surface_;
     const int64_t S = s.n_samples(), NS = s.n_spin();
     const ops::pose::Grid grid = s.grid();
     auto point = [&](int64_t i) { return std::array<double, 3>{s.samples[size_t(9 * i)], s.samples[size_t(9 * i + 1)], s.samples[size_t(9 * i + 2)]}; };
@@ -619,7 +620,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
 
     // Refinement: the best spin at each of the best modes, then a pattern search
     // over six degrees of freedom on the window's geometry (the current touch's too).
-    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS), !s.from_candidates, &impl_->nearest);
+    const Refiner refiner(grid, to_window, opt_, s.spacing_mm, int(NS), !s.from_candidates, impl_->nearest.get());
     // The refined modes share the grid mass they hold by their refined fit (the
     // window's geometry at the tight widths): the grid, whose widths must cover
     // its own spacing, cannot tell a true pose between its hypotheses from a
@@ -900,13 +901,13 @@ std::vector<float> Tracker::heatmap(const Estimate& e, const HostTensor& cloud) 
     if (cloud.shape.size() != 2 || cloud.shape[1] < 3) throw Error("heat-map: the cloud must be [N, >= 3]");
     const int64_t N = cloud.shape[0], C = cloud.shape[1];
     std::vector<float> h(static_cast<size_t>(N), 0.0f);
-    const ops::pose::Grid grid = surface_.grid();
+    const ops::pose::Grid grid = surface_->grid();
     for (int64_t i = 0; i < N; ++i) {
         const float* q = &cloud.data[size_t(i * C)];
-        const int64_t cell = surface_.cell_of(q);
+        const int64_t cell = surface_->cell_of(q);
         const int32_t near = C >= 6 ? ops::pose::pressed_point(grid, cell, P{-q[3], -q[4], -q[5]})
-                             : cell < 0 ? -1 : surface_.cells[size_t(2 * cell)];
-        const int32_t smp = near < 0 ? -1 : surface_.dense_sample[size_t(near)];
+                             : cell < 0 ? -1 : surface_->cells[size_t(2 * cell)];
+        const int32_t smp = near < 0 ? -1 : surface_->dense_sample[size_t(near)];
         if (smp >= 0) h[size_t(i)] = e.sample_belief[size_t(smp)];
     }
     if (h.empty()) return h;

@@ -151,7 +151,7 @@ public:
     // ctx null: every step runs on the ops' CPU references (the oracle; vtloc-bench times it).
     Tracker(rt::Context* ctx, Surface surface, FilterOptions options = {});
     // `like`'s surface and context under other options, no touches (with_options): the
-    // surface's tables and the registration's k-d tree copied, not built again.
+    // surface, its tables and the registration's k-d tree shared with `like`, not built again.
     Tracker(const Tracker& like, FilterOptions options);
     ~Tracker();
     // What the constructor refuses, without a surface (callers check before building one).
@@ -181,7 +181,7 @@ public:
     // ambiguity (a wrong pose fits as well).
     double window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const;
 
-    const Surface& surface() const { return surface_; }
+    const Surface& surface() const { return *surface_; }
     // What the tracker holds on the GPU now: the surface tables (resident) and
     // the arenas of the step graphs built so far (one per window length); the
     // CPU reference counts the same bytes, as what the GPU would hold.
@@ -207,7 +207,7 @@ private:
     void add_neighbours();  // the field slack's, where the options ask for it
     Estimate finish(const std::vector<float>& log, const std::vector<float>& marginal, const std::vector<float>& cost,
                     const std::vector<Rigid>& to_window, const std::vector<PoseTerm>& pose_terms) const;
-    Surface surface_;
+    std::shared_ptr<const Surface> surface_;  // read-only: with_options' trackers share it
     FilterOptions opt_;
     std::unique_ptr<Impl> impl_;
     int touches_ = 0;
