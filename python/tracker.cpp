@@ -108,6 +108,7 @@ const NamedOption kOptions[] = {
     VTLOC_OPTION(grid_allowance), VTLOC_OPTION(refine_widen), VTLOC_OPTION(refine_reach_mm),
     VTLOC_OPTION(rescue_fit), VTLOC_OPTION(rescue_modes), VTLOC_OPTION(register_rounds), VTLOC_OPTION(deep_fit),
     VTLOC_OPTION(deep_modes),
+    VTLOC_OPTION(pair_modes),
 };
 #undef VTLOC_OPTION
 

@@ -49,7 +49,7 @@ const char* kHelp =
     "  --odometry-noise MM,DEG   with --sequence: also rows with seeded Gaussian noise on every motion\n"
     "  --filter K=V,...          with --sequence: the filter's knobs (press, sigma_d, sigma_a, allowance,\n"
     "                            refine_widen, refine_reach, rescue_fit, rescue_modes, register, deep_fit,\n"
-    "                            deep_modes, free_space, network_weight, render_weight, render_quadratic,\n"
+    "                            deep_modes, pair_modes, free_space, network_weight, render_weight, render_quadratic,\n"
     "                            render_press_percentile, render_cell_mm, render_refined_weight,\n"
     "                            render_refined_floor (none: off), render_slack_rounds, field_slack,\n"
     "                            hypotheses, n_spin;\n"

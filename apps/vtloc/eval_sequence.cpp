@@ -187,7 +187,10 @@ int run_sequence(Session& s, const Args& a) {
                 to.register_rounds = int(v);
             }
             else if (k == "deep_fit") to.deep_fit = v;
-            else if (k == "deep_modes") {
+            else if (k == "pair_modes") {
+                if (!(v >= 0 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: pair_modes is an integer in [0, 64] (0: off)");
+                to.pair_modes = int(v);
+            } else if (k == "deep_modes") {
                 if (!(v >= 0 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: deep_modes is an integer in [0, 64] (0: off)");
                 to.deep_modes = int(v);
             }
@@ -213,7 +216,7 @@ int run_sequence(Session& s, const Args& a) {
                 if (!(v >= 1 && v <= 64) || v != std::floor(v)) throw UsageError("--filter: online_window is an integer in [1, 64]");
                 online_window = int(v), to.window = int(v);
             }
-            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, register, deep_fit, deep_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_refined_floor, render_slack_rounds, field_slack, hypotheses, n_spin, online_window)");
+            else throw UsageError("--filter: unknown knob '" + k + "' (press, sigma_d, sigma_a, allowance, refine_widen, refine_reach, rescue_fit, rescue_modes, register, deep_fit, deep_modes, pair_modes, free_space, network_weight, render_weight, render_quadratic, render_press_percentile, render_cell_mm, render_refined_weight, render_refined_floor, render_slack_rounds, field_slack, hypotheses, n_spin, online_window)");
         }
     }
     const std::string end_split = a.get("--end-split").value_or("test");

@@ -63,6 +63,7 @@ track::FilterOptions filter_options(const TrackerOptions& o) {
     f.register_rounds = o.register_rounds;
     f.deep_fit = o.deep_fit;
     f.deep_modes = o.deep_modes;
+    f.pair_modes = o.pair_modes;
     f.free_space_mm = o.free_space_mm;
     f.free_space_w_mm = o.free_space_w_mm;
     f.free_space_h_mm = o.free_space_h_mm;

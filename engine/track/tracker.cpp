@@ -14,6 +14,7 @@
 #include "engine/ops/pose_evidence.h"
 #include "engine/resident_weights.h"
 #include "engine/track/nearest_facing.h"
+#include "engine/track/pair_search.h"
 #include "engine/track/parallel.h"
 #include "engine/track/registration.h"
 #include "engine/weights.h"
@@ -28,6 +29,8 @@ constexpr int64_t kMaxAnswers = 512;
 bool slack_on(const FilterOptions& o) { return o.field_slack && (o.odometry_mm > 0 || o.odometry_deg > 0); }
 // The refinement registers onto the dense points; a candidate keeps its place.
 bool registers(const FilterOptions& o, const Surface& s) { return o.register_rounds > 0 && !s.from_candidates; }
+// The pair search seeds the deep search, which registers.
+bool pairs_on(const FilterOptions& o, const Surface& s) { return registers(o, s) && o.deep_modes > 0 && o.pair_modes > 0; }
 
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
@@ -40,6 +43,7 @@ struct Tracker::Impl {
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
     std::shared_ptr<const NearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
+    std::shared_ptr<const PairIndex> pairs;        // the deep search's pair search (null: off); shared likewise
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -69,6 +73,8 @@ void Tracker::check_options(const FilterOptions& opt_) {
     if (std::isnan(opt_.deep_fit) || opt_.deep_modes < 0 || opt_.deep_modes > 64 || !(opt_.register_cap >= 0) || !std::isfinite(opt_.register_cap))
         throw Error("filter options: deep_fit must not be NaN, deep_modes must be 0..64 (0: off) and register_cap finite and >= 0 (0: no cap), got " +
                     std::to_string(opt_.deep_modes) + " and " + std::to_string(opt_.register_cap));
+    if (opt_.pair_modes < 0 || opt_.pair_modes > 64)
+        throw Error("filter options: pair_modes must be 0..64 (0: off), got " + std::to_string(opt_.pair_modes));
     if (std::isnan(opt_.rescue_fit) || opt_.rescue_modes < 0 || opt_.rescue_modes > 256)
         throw Error("filter options: rescue_fit must not be NaN and rescue_modes must be 0..256, got " +
                     std::to_string(opt_.rescue_modes));
@@ -78,6 +84,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::make_shared<const Surface>(std::move(surface))), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
     if (registers(opt_, *surface_)) impl_->nearest = std::make_shared<const NearestFacing>(surface_->dense);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = std::make_shared<const PairIndex>(surface_->dense);
     add_tables();
 }
 
@@ -89,6 +96,7 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     // need it and `like`'s did not, the neighbours likewise.
     if (registers(opt_, *surface_))
         impl_->nearest = like.impl_->nearest ? like.impl_->nearest : std::make_shared<const NearestFacing>(surface_->dense);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : std::make_shared<const PairIndex>(surface_->dense);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
 }
@@ -697,6 +705,32 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             seed_pose[i] = register_window(*refiner.nearest, refiner.tight, opt_, best_spin_pose(mode_sample[first + i]), opt_.register_cap);
             seed_fit[i] = refiner.fit(seed_pose[i]);
         });
+        // The pair search's poses, each the seed of its nearest unsearched mode where it fits
+        // better than that mode's registered seed (as it is or registered, the better).
+        if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0) {
+            std::vector<ops::pose::Term> touches = refiner.tight;
+            float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
+            touches.push_back(ops::pose::term_from_row(own));
+            PairSearchOptions po;
+            po.top = opt_.pair_modes;
+            po.threads = opt_.threads;
+            const std::vector<Rigid> cands = pair_candidates(*impl_->pairs, grid, touches, opt_.press_mm, opt_.log_floor,
+                                                             [&](const Rigid& x) { return refiner.fit(x); }, po);
+            std::vector<double> cand_fit(cands.size());
+            std::vector<Rigid> cand_pose(cands.size());
+            parallel_for(cands.size(), opt_.threads, [&](size_t i) {
+                const Rigid y = register_window(*refiner.nearest, refiner.tight, opt_, cands[i], opt_.register_cap);
+                const double fx = refiner.fit(cands[i]), fy = refiner.fit(y);
+                cand_pose[i] = fy > fx ? y : cands[i], cand_fit[i] = std::max(fx, fy);
+            });
+            for (size_t i = 0; i < cands.size(); ++i) {
+                const std::array<double, 3> at = axis_contact(s, grid, cand_pose[i], opt_.press_mm);
+                size_t near = 0;
+                for (size_t k = 1; k < n_seeds; ++k)
+                    if (dist(point(mode_sample[first + k]), at) < dist(point(mode_sample[first + near]), at)) near = k;
+                if (cand_fit[i] > seed_fit[near]) seed_fit[near] = cand_fit[i], seed_pose[near] = cand_pose[i];
+            }
+        }
         std::vector<size_t> by(n_seeds);
         std::iota(by.begin(), by.end(), size_t(0));
         const size_t D = std::min(n_seeds, size_t(opt_.deep_modes));

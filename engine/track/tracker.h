@@ -88,6 +88,13 @@ struct FilterOptions {
     // registered. On train windows: 48 seen objects' score 14.638 -> 14.588
     // (docs/multitouch.md, "Deep search"); false: only the first modes, as before 2026-12-06.
     bool deep_registers_refined = true;
+    // Where the deep search runs on a window spanning 60 mm or more, the pair search
+    // (engine/track/pair_search.h) offers this many more seeds: poses that put the window's two
+    // farthest contacts on surface points as far apart, with normals at the same angles, rolled
+    // to a third touch. Each replaces the seed of its nearest unsearched mode where it fits
+    // better (docs/multitouch.md, "Pair search": 48 seen objects' train score 14.588 -> 14.356);
+    // 0: off.
+    int pair_modes = 8;
     // Rounds of the climb on geometry + the touches' pose terms after the geometry's own
     // (steps from 2 degrees and 0.8 mm, halved each round); 0: the pose terms only score.
     int shape_climb_rounds = 3;

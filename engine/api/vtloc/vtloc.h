@@ -434,6 +434,11 @@ struct TrackerOptions {
     // costs 0.02-0.4 s where it runs; deep_modes 0: off.
     double deep_fit = -5;
     int deep_modes = 8;
+    // Where the deep search runs on a window spanning 60 mm or more, this many seeds more from
+    // the pair search: poses that put the window's two farthest contacts on surface points as
+    // far apart, with normals at the same angles (docs/multitouch.md, "Pair search"; 8, on
+    // train windows); 0: off.
+    int pair_modes = 8;
     // > 0: the refinement also asks that the sensor's pad (free_space_w_mm x free_space_h_mm,
     // its window and a margin) be clear of the object this far behind the gel plane (the
     // sensor cannot pass through the object; docs/multitouch.md, "Free space"). 1.5 fitted on
