@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <random>
 #include <utility>
@@ -46,6 +47,26 @@ ops::pose::Term term_of(const Rigid& rel) {
     return ops::pose::term_from_row(r);
 }
 
+// Eight touches anywhere on the tube, each pose tilted 3 degrees about a random axis in the
+// gel's plane, about its contact (0, 0, -press) in the pose's frame (t = c - R c), as real
+// presses are. contact: the last touch's surface point.
+std::vector<Rigid> tilted_window(const HostTensor& dense, std::mt19937& rng, std::array<double, 3>& contact) {
+    std::uniform_real_distribution<double> spin(0, 2 * M_PI), press(0.5, 1.1), u(-1, 1);
+    std::vector<Rigid> poses;
+    for (int k = 0; k < 8; ++k) {
+        const float* p = &dense.data[size_t(6 * (rng() % uint32_t(dense.shape[0])))];
+        const double pr = press(rng);
+        const Rigid x = test::pose_at(p, spin(rng), pr);
+        const double a = u(rng) * M_PI, w[3] = {3 * M_PI / 180 * std::cos(a), 3 * M_PI / 180 * std::sin(a), 0};
+        Rigid tilt;
+        tilt.R = rotation_of(w);
+        for (int i = 0; i < 3; ++i) tilt.t[size_t(i)] = (i == 2 ? -pr : 0) + pr * tilt.R[size_t(3 * i + 2)];
+        poses.push_back(track::compose(x, tilt));
+        contact = {p[0], p[1], p[2]};
+    }
+    return poses;
+}
+
 double angle_deg(const Rigid& a, const Rigid& b) {
     double tr = 0;
     for (int i = 0; i < 3; ++i)
@@ -65,20 +86,8 @@ TEST_CASE("the pair search finds a window's pose from its farthest contacts", "[
     const float floor = -9, exp_floor = std::exp(floor);
     for (uint32_t seed = 1; seed <= 6; ++seed) {
         std::mt19937 rng(seed);
-        std::uniform_real_distribution<double> spin(0, 2 * M_PI), press(0.5, 1.1), u(-1, 1);
-        std::vector<Rigid> poses;
-        for (int k = 0; k < 8; ++k) {
-            const float* p = &dense.data[size_t(6 * (rng() % uint32_t(dense.shape[0])))];
-            const double pr = press(rng);
-            const Rigid x = test::pose_at(p, spin(rng), pr);
-            // Tilted 3 degrees about a random axis in the gel's plane, about the contact
-            // (0, 0, -press) of the pose's frame: t = c - R c.
-            const double a = u(rng) * M_PI, w[3] = {3 * M_PI / 180 * std::cos(a), 3 * M_PI / 180 * std::sin(a), 0};
-            Rigid tilt;
-            tilt.R = rotation_of(w);
-            for (int i = 0; i < 3; ++i) tilt.t[size_t(i)] = (i == 2 ? -pr : 0) + pr * tilt.R[size_t(3 * i + 2)];
-            poses.push_back(track::compose(x, tilt));
-        }
+        std::array<double, 3> contact{};
+        const std::vector<Rigid> poses = tilted_window(dense, rng, contact);
         const Rigid cur = poses.back();
         std::vector<ops::pose::Term> touches;
         for (const Rigid& x : poses) touches.push_back(term_of(track::compose(track::inverse(cur), x)));
@@ -174,20 +183,8 @@ TEST_CASE("the pair search's seeds find windows the deep search alone misses", "
     int found = 0, right_on = 0, right_off = 0, windows = 0;
     for (uint32_t seed = 1; seed <= 8; ++seed) {
         std::mt19937 rng(100 + seed);
-        std::uniform_real_distribution<double> spin(0, 2 * M_PI), press(0.5, 1.1), u(-1, 1);
-        std::vector<Rigid> poses;
         std::array<double, 3> truth{};
-        for (int k = 0; k < 8; ++k) {
-            const float* p = &dense.data[size_t(6 * (rng() % uint32_t(dense.shape[0])))];
-            const double pr = press(rng);
-            const Rigid x = test::pose_at(p, spin(rng), pr);
-            const double ang = u(rng) * M_PI, w[3] = {3 * M_PI / 180 * std::cos(ang), 3 * M_PI / 180 * std::sin(ang), 0};
-            Rigid tilt;
-            tilt.R = rotation_of(w);
-            for (int i = 0; i < 3; ++i) tilt.t[size_t(i)] = (i == 2 ? -pr : 0) + pr * tilt.R[size_t(3 * i + 2)];
-            poses.push_back(track::compose(x, tilt));
-            truth = {p[0], p[1], p[2]};
-        }
+        const std::vector<Rigid> poses = tilted_window(dense, rng, truth);
         std::vector<Rigid> motions;
         for (size_t i = 0; i + 1 < poses.size(); ++i) motions.push_back(track::compose(track::inverse(poses[i]), poses[i + 1]));
         const track::Estimate ea = a.evaluate_window(motions), eb = b.evaluate_window(motions);
