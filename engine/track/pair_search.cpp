@@ -1,6 +1,7 @@
 #include "engine/track/pair_search.h"
 
 #include "engine/track/parallel.h"
+#include "engine/track/vec3d.h"
 
 #include <algorithm>
 #include <array>
@@ -12,33 +13,9 @@ namespace vtloc::track {
 
 namespace {
 
-using V = std::array<double, 3>;
+using namespace v3d;
 
-V sub(const V& a, const V& b) { return {a[0] - b[0], a[1] - b[1], a[2] - b[2]}; }
-V add(const V& a, const V& b) { return {a[0] + b[0], a[1] + b[1], a[2] + b[2]}; }
-V mul(const V& a, double s) { return {a[0] * s, a[1] * s, a[2] * s}; }
-double dot(const V& a, const V& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
-V cross(const V& a, const V& b) { return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]}; }
-double norm(const V& a) { return std::sqrt(dot(a, a)); }
 V row3(const float* p) { return {p[0], p[1], p[2]}; }
-
-using M = std::array<double, 9>;  // row-major
-V rotate(const M& R, const V& v) {
-    return {R[0] * v[0] + R[1] * v[1] + R[2] * v[2], R[3] * v[0] + R[4] * v[1] + R[5] * v[2], R[6] * v[0] + R[7] * v[1] + R[8] * v[2]};
-}
-M matmul(const M& a, const M& b) {
-    M o{};
-    for (int i = 0; i < 3; ++i)
-        for (int j = 0; j < 3; ++j) o[size_t(3 * i + j)] = a[size_t(3 * i)] * b[size_t(j)] + a[size_t(3 * i + 1)] * b[size_t(3 + j)] + a[size_t(3 * i + 2)] * b[size_t(6 + j)];
-    return o;
-}
-// The turn by ang about the unit axis e (Rodrigues).
-M turn_about(const V& e, double ang) {
-    const double c = std::cos(ang), s = std::sin(ang), k = 1 - c;
-    return {c + k * e[0] * e[0],        k * e[0] * e[1] - s * e[2], k * e[0] * e[2] + s * e[1],
-            k * e[1] * e[0] + s * e[2], c + k * e[1] * e[1],        k * e[1] * e[2] - s * e[0],
-            k * e[2] * e[0] - s * e[1], k * e[2] * e[1] + s * e[0], c + k * e[2] * e[2]};
-}
 
 // One point per voxel (the first in row order), the voxel doubled until at most cap remain.
 std::vector<float> voxel_subset(const std::vector<float>& dense, double voxel, size_t cap) {
@@ -70,7 +47,41 @@ ops::pose::Frame frame(const M& R, const V& t) {
             P{float(R[2]), float(R[5]), float(R[8])}, P{float(t[0]), float(t[1]), float(t[2])}};
 }
 
+// Each touch's contact and outward normal in the current touch's frame (c, m), and the two
+// farthest apart (ri, ji): their distance.
+double farthest_pair(const std::vector<ops::pose::Term>& touches, double press, std::vector<V>& c, std::vector<V>& m, size_t& ri,
+                     size_t& ji) {
+    const size_t n = touches.size();
+    c.resize(n), m.resize(n);
+    for (size_t k = 0; k < n; ++k) {
+        const float* r = touches[k].rel;
+        const V z{r[2], r[5], r[8]};
+        c[k] = sub(V{touches[k].trel[0], touches[k].trel[1], touches[k].trel[2]}, mul(z, press));
+        m[k] = mul(z, -1);
+    }
+    ri = 0, ji = 1;
+    if (n < 2) return 0;
+    for (size_t a = 0; a < n; ++a)
+        for (size_t b = a + 1; b < n; ++b)
+            if (norm(sub(c[b], c[a])) > norm(sub(c[ji], c[ri]))) ri = a, ji = b;
+    return norm(sub(c[ji], c[ri]));
+}
+
 }  // namespace
+
+const PairIndex& LazyPairIndex::get() const {
+    std::call_once(once_, [this] {
+        index_ = PairIndex(*dense_);
+        built_ = true;
+    });
+    return index_;
+}
+
+double pair_span(const std::vector<ops::pose::Term>& touches, double press) {
+    std::vector<V> c, m;
+    size_t ri = 0, ji = 1;
+    return farthest_pair(touches, press, c, m, ri, ji);
+}
 
 PairIndex::PairIndex(const std::vector<float>& dense, double anchor_mm, double partner_mm) {
     if (dense.size() < 12) return;
@@ -124,19 +135,9 @@ std::vector<Rigid> pair_candidates(const PairIndex& index, const ops::pose::Grid
                                    const std::function<double(const Rigid&)>& fit, const PairSearchOptions& o) {
     const size_t n = touches.size();
     if (index.empty() || n < 3) return {};
-    // Each touch's contact and outward normal in the current touch's frame.
-    std::vector<V> c(n), m(n);
-    for (size_t k = 0; k < n; ++k) {
-        const float* r = touches[k].rel;
-        const V z{r[2], r[5], r[8]};
-        c[k] = sub(V{touches[k].trel[0], touches[k].trel[1], touches[k].trel[2]}, mul(z, press));
-        m[k] = mul(z, -1);
-    }
+    std::vector<V> c, m;
     size_t ri = 0, ji = 1;
-    for (size_t a = 0; a < n; ++a)
-        for (size_t b = a + 1; b < n; ++b)
-            if (norm(sub(c[b], c[a])) > norm(sub(c[ji], c[ri]))) ri = a, ji = b;
-    const double d = norm(sub(c[ji], c[ri]));
+    const double d = farthest_pair(touches, press, c, m, ri, ji);
     if (!(d >= o.min_span_mm)) return {};
     const V e = mul(sub(c[ji], c[ri]), 1 / d);
     const double f1 = dot(m[ri], e), f2 = dot(m[ji], e), f3 = dot(m[ri], m[ji]);
@@ -180,15 +181,9 @@ std::vector<Rigid> pair_candidates(const PairIndex& index, const ops::pose::Grid
             const V E = mul(sub(B, A), 1 / dab);
             if (std::abs(dot(na, E) - f1) > o.tol_dot || std::abs(dot(nb, E) - f2) > o.tol_dot || std::abs(dot(na, nb) - f3) > o.tol_dot)
                 return;
-            // R0: the least turn taking e to E; then the roll about E that best lines the two
-            // touches' normals up with the points'.
-            const V v = cross(e, E);
-            const double cth = dot(e, E);
-            if (cth < -0.999) return;
-            const M K{0, -v[2], v[1], v[2], 0, -v[0], -v[1], v[0], 0};
-            const M K2 = matmul(K, K);
-            M R0{};
-            for (size_t i = 0; i < 9; ++i) R0[i] = (i % 4 == 0 ? 1.0 : 0.0) + K[i] + K2[i] / (1 + cth);
+            // R0: a turn taking e to E; then the roll about E that best lines the two touches'
+            // normals up with the points'.
+            const M R0 = align(e, E);
             double s = 0, cc = 0;
             for (const auto& [u0, w] : {std::pair<V, V>{m[ri], na}, std::pair<V, V>{m[ji], nb}}) {
                 const V u = rotate(R0, u0);

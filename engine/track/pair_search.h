@@ -7,8 +7,11 @@
 // same angles. Each such pair fixes a pose up to a roll about the line between them, which a
 // third touch fixes; the whole window then scores each pose. Exact to the surface sampling
 // (1.5 mm), not to the grid's.
+#include <atomic>
 #include <cstdint>
 #include <functional>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 #include "engine/ops/pose_evidence.h"
@@ -41,6 +44,22 @@ private:
     float cell_mm_ = 8;
 };
 
+// A PairIndex made on first use: most trackers never run the pair search (it needs a window
+// spanning min_span_mm), so they should not pay for its index (tens of milliseconds and about
+// a megabyte per object). get() is safe to call from several threads at once.
+class LazyPairIndex {
+public:
+    explicit LazyPairIndex(std::shared_ptr<const std::vector<float>> dense) : dense_(std::move(dense)) {}
+    const PairIndex& get() const;
+    bool built() const { return built_; }
+
+private:
+    std::shared_ptr<const std::vector<float>> dense_;
+    mutable std::once_flag once_;
+    mutable PairIndex index_;
+    mutable std::atomic<bool> built_{false};
+};
+
 struct PairSearchOptions {
     double tol_mm = 1.5;      // the pair's distance against the contacts' (the partners' voxel)
     double tol_dot = 0.2;     // each of the three normal angles' cosines (tilts of a few degrees)
@@ -50,6 +69,11 @@ struct PairSearchOptions {
     int top = 8;              // candidates returned, best first, 3 mm apart
     int threads = 1;          // host threads (track::parallel_for's; the result does not depend on it)
 };
+
+// The distance between the window's two farthest contacts (each touch's contact: its origin
+// pressed press along its gel axis), in mm; pair_candidates runs on windows spanning
+// min_span_mm or more.
+double pair_span(const std::vector<ops::pose::Term>& touches, double press);
 
 // Candidates for the current touch's pose. touches: every touch of the window as a term (its
 // pose in the current touch's frame and its widths; the current one's rel the identity);

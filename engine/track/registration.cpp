@@ -1,5 +1,7 @@
 #include "engine/track/registration.h"
 
+#include "engine/track/vec3d.h"
+
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -9,6 +11,9 @@
 namespace vtloc::track {
 
 namespace {
+
+using v3d::cross;
+using v3d::dot;
 
 // A touch as the registration sees it: its contact and gel axis in the current touch's
 // frame, and its widths.
@@ -23,12 +28,6 @@ std::array<double, 3> apply(const Rigid& x, const std::array<double, 3>& v, bool
         o[i] = (point ? x.t[i] : 0) + x.R[i * 3] * v[0] + x.R[i * 3 + 1] * v[1] + x.R[i * 3 + 2] * v[2];
     return o;
 }
-
-std::array<double, 3> cross(const std::array<double, 3>& a, const std::array<double, 3>& b) {
-    return {a[1] * b[2] - a[2] * b[1], a[2] * b[0] - a[0] * b[2], a[0] * b[1] - a[1] * b[0]};
-}
-
-double dot(const std::array<double, 3>& a, const std::array<double, 3>& b) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2]; }
 
 // The turn w (Rodrigues) about the world point ctr, then the shift v: y = Rw (x - ctr) + ctr + v.
 Rigid turned(const Rigid& x, const double d[6], const std::array<double, 3>& ctr) {

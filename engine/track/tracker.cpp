@@ -32,6 +32,10 @@ bool registers(const FilterOptions& o, const Surface& s) { return o.register_rou
 // The pair search seeds the deep search, which registers.
 bool pairs_on(const FilterOptions& o, const Surface& s) { return registers(o, s) && o.deep_modes > 0 && o.pair_modes > 0; }
 
+std::shared_ptr<const LazyPairIndex> lazy_pairs(const std::shared_ptr<const Surface>& s) {
+    return std::make_shared<const LazyPairIndex>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
+}
+
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
 }  // namespace
@@ -43,7 +47,7 @@ struct Tracker::Impl {
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
     std::shared_ptr<const NearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
-    std::shared_ptr<const PairIndex> pairs;        // the deep search's pair search (null: off); shared likewise
+    std::shared_ptr<const LazyPairIndex> pairs;    // the deep search's pair search (null: off); shared likewise
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -84,7 +88,7 @@ Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::make_shared<const Surface>(std::move(surface))), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
     if (registers(opt_, *surface_)) impl_->nearest = std::make_shared<const NearestFacing>(surface_->dense);
-    if (pairs_on(opt_, *surface_)) impl_->pairs = std::make_shared<const PairIndex>(surface_->dense);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = lazy_pairs(surface_);
     add_tables();
 }
 
@@ -96,7 +100,7 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     // need it and `like`'s did not, the neighbours likewise.
     if (registers(opt_, *surface_))
         impl_->nearest = like.impl_->nearest ? like.impl_->nearest : std::make_shared<const NearestFacing>(surface_->dense);
-    if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : std::make_shared<const PairIndex>(surface_->dense);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : lazy_pairs(surface_);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
 }
@@ -707,14 +711,14 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         });
         // The pair search's poses, each the seed of its nearest unsearched mode where it fits
         // better than that mode's registered seed (as it is or registered, the better).
-        if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0) {
-            std::vector<ops::pose::Term> touches = refiner.tight;
-            float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
-            touches.push_back(ops::pose::term_from_row(own));
-            PairSearchOptions po;
-            po.top = opt_.pair_modes;
-            po.threads = opt_.threads;
-            const std::vector<Rigid> cands = pair_candidates(*impl_->pairs, grid, touches, opt_.press_mm, opt_.log_floor,
+        std::vector<ops::pose::Term> touches = refiner.tight;
+        float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
+        touches.push_back(ops::pose::term_from_row(own));
+        PairSearchOptions po;
+        po.top = opt_.pair_modes;
+        po.threads = opt_.threads;
+        if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0 && pair_span(touches, opt_.press_mm) >= po.min_span_mm) {
+            const std::vector<Rigid> cands = pair_candidates(impl_->pairs->get(), grid, touches, opt_.press_mm, opt_.log_floor,
                                                              [&](const Rigid& x) { return refiner.fit(x); }, po);
             std::vector<double> cand_fit(cands.size());
             std::vector<Rigid> cand_pose(cands.size());
