@@ -150,10 +150,11 @@ void backend(std::FILE* f, const std::string& name, const json& b) {
 void tracker(std::FILE* f, const json& t) {
     const json& any = t.contains("gpu") ? t["gpu"] : t["cpu"];
     std::fprintf(f, "\n== multi-touch filter (%s: %lld hypotheses = %lld samples x %d spins, %.2f mm apart; "
-                 "window %d, touches %d..%d of %d timed) ==\n",
+                 "window %d, touches %d..%d of %d timed, the tour continued by %s) ==\n",
                  any["object"].get<std::string>().c_str(), any["hypotheses"].get<long long>(), any["samples"].get<long long>(),
                  any["spins"].get<int>(), any["spacing_mm"].get<double>(), any["window"].get<int>(), any["window"].get<int>() + 1,
-                 any["touches"].get<int>(), any["touches"].get<int>());
+                 any["touches"].get<int>(), any["touches"].get<int>(),
+                 any.contains("cycle") ? any["cycle"].get<std::string>().c_str() : "repeat");
     std::fprintf(f, "  %-16s %12s %12s %12s %10s %12s\n", "backend", "touch (ms)", "add_touch", "estimate", "runs", "memory (MiB)");
     for (const char* b : {"gpu", "cpu"}) {
         if (!t.contains(b)) continue;

@@ -6,6 +6,7 @@
 #include "base/error.h"
 #include "bench/clock.h"
 #include "bench/model_bench.h"
+#include "bench/tour_cycle.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/object.h"
 #include "engine/io/touch_sequence.h"
@@ -13,17 +14,14 @@
 
 namespace vtloc::bench {
 
-namespace {
-
-}  // namespace
-
 nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     const io::TouchSequence seq = io::read_touch_sequence(o.tour);
     if (seq.object.empty()) throw Error(o.tour + ": the tracker bench needs the file's \"object\"");
-    std::vector<Rigid> cycle;  // the tour's motions, repeated for a steady state past the window
+    std::vector<Rigid> tour;  // the tour's motions, continued by o.cycle for a steady state past the window
     for (const auto& m : seq.relative_motions(o.tour))
-        if (m) cycle.push_back(*m);
-    if (cycle.empty()) throw Error(o.tour + ": the tracker bench needs at least two touches");
+        if (m) tour.push_back(*m);
+    if (tour.empty()) throw Error(o.tour + ": the tracker bench needs at least two touches");
+    tour_motion(tour, o.cycle, 1);  // an unknown cycle fails before any work
     // The surface as api::Tracker builds it from a mesh.
     const auto t0 = std::chrono::steady_clock::now();
     io::TriangleMesh mesh = io::load_mesh(seq.object);
@@ -42,7 +40,7 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
         window = tr.options().online_window;
         for (int i = 0; i < o.touches; ++i) {
             std::optional<Rigid> m;
-            if (i) m = cycle[size_t(i - 1) % cycle.size()];
+            if (i) m = tour_motion(tour, o.cycle, i);
             const auto a0 = std::chrono::steady_clock::now();
             tr.add_touch(m);
             const double a_ms = ms_since(a0);
@@ -56,7 +54,7 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     }
     return {{"object", seq.object}, {"hypotheses", surface.n_hypotheses()}, {"samples", surface.n_samples()},
             {"spins", surface.n_spin()}, {"spacing_mm", surface.spacing_mm}, {"window", window},
-            {"touches", o.touches}, {"reps", o.reps}, {"surface_build_ms", build_ms},
+            {"touches", o.touches}, {"cycle", o.cycle}, {"reps", o.reps}, {"surface_build_ms", build_ms},
             {"add_touch_ms", stats_json(add)}, {"estimate_ms", stats_json(est)}, {"touch_ms", stats_json(both)},
             {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}};
 }

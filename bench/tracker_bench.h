@@ -15,15 +15,22 @@ namespace bench {
 
 struct TrackerBenchOptions {
     std::string tour;   // a touches file with "object" (default: examples/potato_tour.json)
-    int touches = 12;   // the tour's motions repeated up to this many touches
+    int touches = 12;   // the tour continued (cycle) up to this many touches
+    // Past the tour's last touch: "return" goes back over its touches in reverse (each motion
+    // inverted), then forward again, so every pose is one the tour pressed on the object, as a
+    // robot's would be; "repeat" starts its motions over from the last pose, which puts the
+    // later touches off the object (the filter's rescue and deep searches then run at every
+    // steady touch: their cost, not a tour's; the only cycle before 2026-12-07).
+    std::string cycle = "return";
     int reps = 5;       // trackers run from the first touch
     int window = 8;     // the online window (touches scored exactly; its cost is the evidence's)
 };
 
-// JSON: object, hypotheses, samples, spins, spacing_mm, window, touches, reps,
+// JSON: object, hypotheses, samples, spins, spacing_mm, window, touches, cycle, reps,
 // surface_build_ms, add_touch_ms / estimate_ms / touch_ms (stats over the
 // steady-state touches of every rep), first_touch_ms, device_bytes.
 nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o);
+
 
 }  // namespace bench
 }  // namespace vtloc

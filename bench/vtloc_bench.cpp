@@ -64,8 +64,11 @@ const char* kUsage = R"(usage: vtloc-bench [options]
   --tracker FILE       the multi-touch filter's stage: a touches file with its "object" (default:
                        examples/potato_tour.json), geometry only, on the GPU (--reps trackers) and
                        on the CPU reference (--cpu-reps)
-  --tracker-touches N  touches per tracker run, the tour's motions repeated (default 12; the
-                       steady state past the window is what is timed)
+  --tracker-touches N  touches per tracker run, the tour continued (default 12; the steady
+                       state past the window is what is timed)
+  --tracker-cycle C    how the tour goes on past its last touch: return (default: back over its
+                       touches, then forward, every pose one on the object) or repeat (its motions
+                       again from the last pose: off the object, the filter's rescue searched)
   --tracker-window W   the tracker's online window, 1-8 (default 8, the shipped one): the
                        touches scored exactly, older ones through the prior
   --no-tracker         skip the tracker stage
@@ -90,6 +93,7 @@ struct Args {
     std::string weights, config, image, object, backend = "gpu", json_path, plot_path;
     bench::ModelBenchOptions opt;
     int cpu_reps = 2, tracker_touches = 12, tracker_window = 8;
+    std::string tracker_cycle = "return";
     bool probe = true, vs_pytorch = false, tracker = true, gel = true;
     std::string tracker_tour, plan_for, torch_device = "cpu";
 };
@@ -156,6 +160,7 @@ Args parse(int argc, char** argv) {
         else if (f == "--tracker") a.tracker_tour = v;
         else if (f == "--tracker-touches") a.tracker_touches = one_int(f, v, 2);
         else if (f == "--tracker-window") a.tracker_window = one_int(f, v, 1);
+        else if (f == "--tracker-cycle") a.tracker_cycle = v;
         else if (f == "--stepped") a.opt.stepped_iters = one_int(f, v, 0);
         else if (f == "--json") a.json_path = v;
         else if (f == "--plot") a.plot_path = v;
@@ -172,6 +177,8 @@ Args parse(int argc, char** argv) {
     for (int n : a.opt.iters)
         if (n > 64) throw Error("--iters: N must be in 0..64, got " + std::to_string(n));
     if (a.opt.stepped_iters > 64) throw Error("--stepped: N must be in 0..64");
+    if (a.tracker_cycle != "return" && a.tracker_cycle != "repeat")
+        throw Error("--tracker-cycle takes return or repeat, got '" + a.tracker_cycle + "'");
     if (a.tracker_window > 8) throw Error("--tracker-window: 1 to 8 touches, got " + std::to_string(a.tracker_window));
     if (a.tracker_touches <= a.tracker_window)
         throw Error("--tracker-touches (" + std::to_string(a.tracker_touches) + ") must exceed the tracker's window (" +
@@ -381,7 +388,7 @@ int run(int argc, char** argv) {
     if (a.tracker) {
         bench::TrackerBenchOptions t;
         t.tour = !a.tracker_tour.empty() ? a.tracker_tour : (data_dir() / "examples" / "potato_tour.json").string();
-        t.touches = a.tracker_touches, t.window = a.tracker_window;
+        t.touches = a.tracker_touches, t.window = a.tracker_window, t.cycle = a.tracker_cycle;
         json& tr = report["tracker"];
         if (ctx) {
             t.reps = a.opt.reps;

@@ -1,0 +1,25 @@
+#pragma once
+// How vtloc-bench's tracker stage goes on past a tour's last touch (bench/README.md).
+// Header-only: tests/test_tour_cycle.cpp checks it without the bench.
+#include <string>
+#include <vector>
+
+#include "base/error.h"
+#include "engine/rigid.h"
+
+namespace vtloc::bench {
+
+// The motion into touch i (i >= 1; touch 0 has none) of a tour of n >= 1 motions, continued:
+// "return" goes back over the tour's touches in reverse (each motion inverted) and then forward
+// again, period 2n, so every pose is one the tour pressed on the object; "repeat" starts the
+// motions over from the last pose (which leaves the object). Throws on anything else.
+inline Rigid tour_motion(const std::vector<Rigid>& tour, const std::string& cycle, int i) {
+    if (tour.empty() || i < 1) throw Error("tour_motion: needs a motion and i >= 1");
+    const size_t n = tour.size(), k = size_t(i - 1);
+    if (cycle == "repeat") return tour[k % n];
+    if (cycle != "return") throw Error("the tracker bench's cycle is return or repeat, got '" + cycle + "'");
+    const size_t j = k % (2 * n);
+    return j < n ? tour[j] : inverse(tour[2 * n - 1 - j]);
+}
+
+}  // namespace vtloc::bench
