@@ -31,6 +31,5 @@ struct TrackerBenchOptions {
 // steady-state touches of every rep), first_touch_ms, device_bytes.
 nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o);
 
-
 }  // namespace bench
 }  // namespace vtloc
