@@ -150,6 +150,10 @@ TEST_CASE("the pair search finds a window's pose from its farthest contacts", "[
     auto zero = [](const Rigid&) { return 0.0; };
     CHECK(track::pair_candidates(index, grid, close, 0.8, floor, zero).empty());
     CHECK(track::pair_candidates(track::PairIndex(), grid, close, 0.8, floor, zero).empty());
+    // From an index made on first use, a short window never asks for it.
+    const track::LazyPairIndex lazy(std::make_shared<const std::vector<float>>(dense.data));
+    CHECK(track::pair_candidates(lazy, grid, close, 0.8, floor, zero).empty());
+    CHECK(!lazy.built());
 }
 
 TEST_CASE("the pair index's shell query matches a brute-force one", "[track]") {

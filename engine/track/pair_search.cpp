@@ -77,12 +77,6 @@ const PairIndex& LazyPairIndex::get() const {
     return index_;
 }
 
-double pair_span(const std::vector<ops::pose::Term>& touches, double press) {
-    std::vector<V> c, m;
-    size_t ri = 0, ji = 1;
-    return farthest_pair(touches, press, c, m, ri, ji);
-}
-
 PairIndex::PairIndex(const std::vector<float>& dense, double anchor_mm, double partner_mm) {
     if (dense.size() < 12) return;
     anchors_ = voxel_subset(dense, anchor_mm, 20000);
@@ -223,6 +217,15 @@ std::vector<Rigid> pair_candidates(const PairIndex& index, const ops::pose::Grid
         if (apart) out.push_back(x);
     }
     return out;
+}
+
+std::vector<Rigid> pair_candidates(const LazyPairIndex& index, const ops::pose::Grid& grid,
+                                   const std::vector<ops::pose::Term>& touches, double press, double log_floor,
+                                   const std::function<double(const Rigid&)>& fit, const PairSearchOptions& o) {
+    std::vector<V> c, m;
+    size_t ri = 0, ji = 1;
+    if (touches.size() < 3 || !(farthest_pair(touches, press, c, m, ri, ji) >= o.min_span_mm)) return {};
+    return pair_candidates(index.get(), grid, touches, press, log_floor, fit, o);
 }
 
 }  // namespace vtloc::track

@@ -70,16 +70,16 @@ struct PairSearchOptions {
     int threads = 1;          // host threads (track::parallel_for's; the result does not depend on it)
 };
 
-// The distance between the window's two farthest contacts (each touch's contact: its origin
-// pressed press along its gel axis), in mm; pair_candidates runs on windows spanning
-// min_span_mm or more.
-double pair_span(const std::vector<ops::pose::Term>& touches, double press);
-
 // Candidates for the current touch's pose. touches: every touch of the window as a term (its
 // pose in the current touch's frame and its widths; the current one's rel the identity);
 // fit: the window's fit of a pose (the refinement's). Empty where the span is too short or no
 // pair matches.
 std::vector<Rigid> pair_candidates(const PairIndex& index, const ops::pose::Grid& grid,
+                                   const std::vector<ops::pose::Term>& touches, double press, double log_floor,
+                                   const std::function<double(const Rigid&)>& fit, const PairSearchOptions& o = {});
+// The same from an index made on first use: a window spanning less than min_span_mm returns
+// before the index is asked for, so a tracker whose windows never span that never builds it.
+std::vector<Rigid> pair_candidates(const LazyPairIndex& index, const ops::pose::Grid& grid,
                                    const std::vector<ops::pose::Term>& touches, double press, double log_floor,
                                    const std::function<double(const Rigid&)>& fit, const PairSearchOptions& o = {});
 

@@ -711,14 +711,14 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         });
         // The pair search's poses, each the seed of its nearest unsearched mode where it fits
         // better than that mode's registered seed (as it is or registered, the better).
-        std::vector<ops::pose::Term> touches = refiner.tight;
-        float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
-        touches.push_back(ops::pose::term_from_row(own));
-        PairSearchOptions po;
-        po.top = opt_.pair_modes;
-        po.threads = opt_.threads;
-        if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0 && pair_span(touches, opt_.press_mm) >= po.min_span_mm) {
-            const std::vector<Rigid> cands = pair_candidates(impl_->pairs->get(), grid, touches, opt_.press_mm, opt_.log_floor,
+        if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0) {
+            std::vector<ops::pose::Term> touches = refiner.tight;
+            float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
+            touches.push_back(ops::pose::term_from_row(own));
+            PairSearchOptions po;
+            po.top = opt_.pair_modes;
+            po.threads = opt_.threads;
+            const std::vector<Rigid> cands = pair_candidates(*impl_->pairs, grid, touches, opt_.press_mm, opt_.log_floor,
                                                              [&](const Rigid& x) { return refiner.fit(x); }, po);
             std::vector<double> cand_fit(cands.size());
             std::vector<Rigid> cand_pose(cands.size());
