@@ -1,5 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // pose_evidence.glsl with its tables (samples, dense surface, cells, spins, fields) read through
 // uniform texel buffers: on a CPU driver a texel fetch is a gather, where a storage-buffer
 // read at an offset Mesa cannot prove uniform is a loop over the lanes that puts each

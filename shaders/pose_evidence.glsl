@@ -12,10 +12,13 @@
 // (gathers) where the device allows, and the storage form reads the cells, dense points
 // and spins as vectors (one loop where there were two or six); and (2) the code of
 // an `if` runs (masked) even when no lane takes it, so the terms go in segments (below)
-// and a term without a field never runs the field's code. NS is a specialization
-// constant (h / NS by a constant). The arithmetic and the order of the sum are as before.
+// and a term without a field never runs the field's code; (3) one SIMD stream waits on
+// each gather in turn, so an invocation runs M hypotheses step by step (main). NS and M
+// are specialization constants (h / NS by a constant; M's loops unrolled). Each
+// hypothesis's arithmetic and the order of its sum are the mirror's, whatever M.
 layout(local_size_x_id = 0) in;
 layout(constant_id = 1) const int NS = 1;  // spins (p.n_spin)
+layout(constant_id = 2) const int M = 1;  // hypotheses an invocation runs side by side
 
 // [K, 16] as 4 RGBA32F texels a term: a texel fetch is a branch-free gather on a CPU
 // driver, where a storage-buffer read at the loop's offset was a loop over the lanes
@@ -84,18 +87,27 @@ float geometry_log(vec3 q, vec3 n, vec3 t, vec3 z, float sd, float sa) {
 }
 
 void main() {
+    // M hypotheses an invocation, interleaved step by step: each term's reads are a chain of
+    // three dependent gathers (cell, the nearest's normal, the pressed point), latency-bound
+    // on a CPU driver; M independent chains in one instruction stream overlap their misses.
+    // Hypothesis h0 + m * stride for m < M: every h once over all invocations.
     const uint stride = gl_NumWorkGroups.x * gl_WorkGroupSize.x;
-    uint h = gl_GlobalInvocationID.x;
-    if (h < p.H) do {
-        const uint s = h / uint(NS), j = h % uint(NS);
-        precise vec3 z = load_smp(s, 1u) * -1.0;
-        vec3 t1 = load_smp(s, 2u);
-        precise vec3 t2 = cross3(z, t1);
-        const vec2 cs = LOAD_SPIN(j);
-        precise vec3 x = t1 * cs.x + t2 * cs.y;
-        precise vec3 y = cross3(z, x);
-        precise vec3 t = load_smp(s, 0u) + z * p.press;
-        float acc = p.own_field >= 0 ? p.own_weight * LOAD_FIELD(uint(p.own_field) * p.H + h) : 0.0;
+    for (uint h0 = gl_GlobalInvocationID.x; h0 < p.H; h0 += stride * uint(M)) {
+        uint hm[M];
+        precise vec3 z[M], x[M], y[M], t[M];
+        float acc[M];
+        [[unroll]] for (int m = 0; m < M; ++m) {
+            hm[m] = min(h0 + uint(m) * stride, p.H - 1u);  // past H: H - 1 again, not written
+            const uint h = hm[m], s = h / uint(NS), j = h % uint(NS);
+            z[m] = load_smp(s, 1u) * -1.0;
+            const vec3 t1 = load_smp(s, 2u);
+            precise vec3 t2 = cross3(z[m], t1);
+            const vec2 cs = LOAD_SPIN(j);
+            x[m] = t1 * cs.x + t2 * cs.y;
+            y[m] = cross3(z[m], x[m]);
+            t[m] = load_smp(s, 0u) + z[m] * p.press;
+            acc[m] = p.own_field >= 0 ? p.own_weight * LOAD_FIELD(uint(p.own_field) * p.H + h) : 0.0;
+        }
         // The terms in order, in segments: the terms up to the next one that reads a field,
         // then that field. A mask-executing driver (lavapipe) runs the code of an `if` even
         // when no lane takes it, so the field's code only runs where a term has one (and
@@ -105,39 +117,50 @@ void main() {
             do {
                 uint kf = k;  // the segment's last term: the next one with a field, or the last
                 while (kf + 1u < p.K && int(round(texelFetch(Terms, int(kf * 4u + 3u)).z)) < 0) ++kf;
-                vec3 xf = vec3(0.0);
-                int sf = -1;  // the segment's last term: its x axis and the sample it reads
+                vec3 xf[M];
+                int sf[M];  // the segment's last term: its x axis and the sample it reads
+                [[unroll]] for (int m = 0; m < M; ++m) xf[m] = vec3(0.0), sf[m] = -1;
                 do {
                     // Row k: R (row-major, 9), t (3), sigma_d, sigma_a, field, weight.
                     const vec4 r0 = texelFetch(Terms, int(k * 4u)), r1 = texelFetch(Terms, int(k * 4u + 1u));
                     const vec4 r2 = texelFetch(Terms, int(k * 4u + 2u)), r3 = texelFetch(Terms, int(k * 4u + 3u));
-                    precise vec3 zk = x * r0.z + y * r1.y + z * r2.x;
-                    precise vec3 xk = x * r0.x + y * r0.w + z * r1.z;
-                    precise vec3 tk = t + x * r2.y + y * r2.z + z * r2.w;
-                    const int cell = cell_of(tk);
-                    ivec2 near = ivec2(-1);  // the cell's dense point and its far-face counterpart
-                    if (cell >= 0) near = LOAD_CELL(cell);
+                    precise vec3 zk[M], tk[M], xk[M];
+                    ivec2 near[M];  // the cell's dense point and its far-face counterpart
+                    [[unroll]] for (int m = 0; m < M; ++m) {
+                        zk[m] = x[m] * r0.z + y[m] * r1.y + z[m] * r2.x;
+                        xk[m] = x[m] * r0.x + y[m] * r0.w + z[m] * r1.z;
+                        tk[m] = t[m] + x[m] * r2.y + y[m] * r2.z + z[m] * r2.w;
+                        const int cell = cell_of(tk[m]);
+                        near[m] = ivec2(-1);
+                        if (cell >= 0) near[m] = LOAD_CELL(cell);
+                    }
                     // The point the pose presses: the far one where the axis runs along the
                     // nearest's outward normal (pose_evidence.h). Four reads a term: the
                     // cell, that normal, the point (with its sample) and its normal.
-                    const int i = near.x >= 0 && near.y >= 0 && dot3(zk, LOAD_DENSE(uint(max(near.x, 0)) * 2u + 1u).xyz) > 0.0 ? near.y : near.x;
-                    const vec4 q = LOAD_DENSE(uint(max(i, 0)) * 2u);
-                    const vec3 n = LOAD_DENSE(uint(max(i, 0)) * 2u + 1u).xyz;
+                    int i[M];
+                    [[unroll]] for (int m = 0; m < M; ++m)
+                        i[m] = near[m].x >= 0 && near[m].y >= 0 && dot3(zk[m], LOAD_DENSE(uint(max(near[m].x, 0)) * 2u + 1u).xyz) > 0.0 ? near[m].y : near[m].x;
                     const float sd = r3.x, sa = r3.y;
-                    if (sd > 0.0) acc += i < 0 ? p.log_floor : geometry_log(q.xyz, n, tk, zk, sd, sa);
-                    xf = xk;
-                    sf = i < 0 ? -1 : int(q.w);
+                    [[unroll]] for (int m = 0; m < M; ++m) {
+                        const vec4 q = LOAD_DENSE(uint(max(i[m], 0)) * 2u);
+                        const vec3 n = LOAD_DENSE(uint(max(i[m], 0)) * 2u + 1u).xyz;
+                        if (sd > 0.0) acc[m] += i[m] < 0 ? p.log_floor : geometry_log(q.xyz, n, tk[m], zk[m], sd, sa);
+                        xf[m] = xk[m];
+                        sf[m] = i[m] < 0 ? -1 : int(q.w);
+                    }
                     ++k;
                 } while (k <= kf);
                 const vec2 fw = texelFetch(Terms, int(kf * 4u + 3u)).zw;  // field, weight
                 const int field = int(round(fw.x));
                 if (field >= 0 && uint(field) < p.F) {  // a field past F (refused on the CPU) reads nothing
-                    const int hk = nearest_hypothesis(sf, xf);
-                    acc += fw.y * (hk < 0 ? p.field_floor : LOAD_FIELD(uint(field) * p.H + uint(hk)));
+                    [[unroll]] for (int m = 0; m < M; ++m) {
+                        const int hk = nearest_hypothesis(sf[m], xf[m]);
+                        acc[m] += fw.y * (hk < 0 ? p.field_floor : LOAD_FIELD(uint(field) * p.H + uint(hk)));
+                    }
                 }
             } while (k < p.K);
         }
-        outv[h] = acc;
-        h += stride;
-    } while (h < p.H);
+        [[unroll]] for (int m = 0; m < M; ++m)
+            if (h0 + uint(m) * stride < p.H) outv[hm[m]] = acc[m];
+    }
 }

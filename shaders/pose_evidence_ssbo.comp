@@ -1,5 +1,6 @@
 #version 450
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 // pose_evidence.glsl with its tables in storage buffers (past the device's texel-buffer limit).
 layout(std430, binding = 0) readonly buffer Samples_ { vec4 smp4[]; };  // [S, 12]: point, 0, normal, 0, t1, 0
 layout(std430, binding = 1) readonly buffer Dense_ { vec4 dense4[]; };  // [D, 8]: point, sample, normal, 0

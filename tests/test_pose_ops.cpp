@@ -132,19 +132,22 @@ TEST_CASE("the mirror's floor_of is std::floor, bit for bit", "[pose]") {
 
 TEST_CASE("pose_evidence matches the CPU reference on random scenes", "[op][pose][pose_evidence]") {
     struct Case { int64_t S, D, NS, K, F; };
-    // Both ways of reading the tables (texel buffers, storage buffers) on every scene: each
-    // against the reference, and the two bit for bit (the same values read, the same arithmetic).
+    // Both ways of reading the tables (texel buffers, storage buffers) and 1, 2, 3 and 5
+    // hypotheses an invocation (H a multiple of none but 1 on some scenes, below M on the
+    // first) on every scene: each against the reference, and all bit for bit (the same
+    // values read, each hypothesis's arithmetic the same).
     for (Case c : {Case{1, 1, 1, 1, 0}, Case{13, 29, 7, 3, 2}, Case{61, 17, 36, 8, 3}, Case{257, 101, 12, 0, 1},
                    Case{40, 9, 5, 5, 0}}) {
         INFO("S " << c.S << " D " << c.D << " NS " << c.NS << " K " << c.K << " F " << c.F);
         Scene sc = scene(c.S, c.D, c.NS, c.K, c.F, uint32_t(c.S * 31 + c.K));
         std::vector<std::vector<float>> got;
-        for (ops::BufferPath path : ops::kBufferPaths) {
-            INFO(ops::path_name(path));
-            sc.p.path = path;
-            got.push_back(test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in).at("score").data);
-        }
-        CHECK(got[0] == got[1]);
+        for (ops::BufferPath path : ops::kBufferPaths)
+            for (int64_t m : {1, 2, 3, 5}) {
+                INFO(ops::path_name(path) << ", interleave " << m);
+                sc.p.path = path, sc.p.interleave = m;
+                got.push_back(test::run_gpu_and_compare(evidence_graph(sc), WeightStore{}, sc.in).at("score").data);
+                CHECK(got.back() == got.front());
+            }
     }
 }
 
@@ -386,6 +389,12 @@ TEST_CASE("the filter's ops refuse bad shapes by name", "[pose]") {
     CHECK_THROWS_WITH(ops::pose_evidence(u, u.input("s", {5, 9}), u.input("d", {5, 8}), u.input("c", {7 * 5 * 6, 2}, ElemType::I32),
                                          u.input("sp", {3, 2}), u.input("t", {1, 16}), u.input("f", {1, 15}), sc.p),
                       Catch::Contains("samples must be [S > 0, 12]"));
+    Graph m;  // interleave past the shader's unrolled loops
+    ops::PoseEvidence nine = sc.p;
+    nine.interleave = 9;
+    CHECK_THROWS_WITH(ops::pose_evidence(m, m.input("s", {5, 12}), m.input("d", {5, 8}), m.input("c", {7 * 5 * 6, 2}, ElemType::I32),
+                                         m.input("sp", {3, 2}), m.input("t", {1, 16}), m.input("f", {1, 15}), nine),
+                      Catch::Contains("interleave must be 0 (the device's) or 1-8"));
     // Indices past the tables: the CPU reference names them (the GPU trusts the tracker's).
     Scene bad = scene(13, 29, 7, 3, 2, 11);
     bad.in["dense"].data[8 * 4 + 3] = 13.0f;  // point 4 names sample 13 of 13

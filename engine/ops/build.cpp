@@ -141,7 +141,7 @@ int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int te
     Params q{{"press", p.press}, {"log_floor", p.log_floor}, {"field_floor", p.field_floor}, {"ox", p.origin[0]},
              {"oy", p.origin[1]}, {"oz", p.origin[2]}, {"voxel", p.voxel}, {"nx", d(p.dims[0])},
              {"ny", d(p.dims[1])}, {"nz", d(p.dims[2])}, {"own_field", d(p.own_field)}, {"own_weight", p.own_weight},
-             {"texel", flag(p.path == BufferPath::Texel)}};
+             {"texel", flag(p.path == BufferPath::Texel)}, {"interleave", d(p.interleave)}};
     return g.add1("pose_evidence", {samples, dense, cells, spins, terms, fields}, q, name);
 }
 

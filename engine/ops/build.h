@@ -102,6 +102,7 @@ struct PoseEvidence {
     int64_t own_field = -1;  // a field added at the hypothesis itself, -1 none
     double own_weight = 1;
     BufferPath path = BufferPath::Texel;  // the tables as texel buffers where the device allows
+    int64_t interleave = 0;  // hypotheses an invocation runs side by side, 1-8 (0: the device's)
 };
 // samples [S, 12], dense [D, 8], cells [V, 2] I32, spins [NS, 2], terms [K, 16], fields [F, S*NS] -> score [S*NS].
 int pose_evidence(Graph& g, int samples, int dense, int cells, int spins, int terms, int fields,

@@ -27,7 +27,7 @@ namespace {
 struct Setup {
     float press, log_floor, field_floor, voxel, own_weight;
     pose::V3 origin;
-    int32_t nx, ny, nz, own_field;
+    int32_t nx, ny, nz, own_field, interleave;
 };
 
 int32_t int_param(const Params& p, const char* k, double fallback) {
@@ -40,9 +40,11 @@ Setup setup(const Params& p) {
     Setup s{float(p.get("press", 0.8)), float(p.get("log_floor", -12)), float(p.get("field_floor", -30)),
             float(p.get("voxel", 1)), float(p.get("own_weight", 1)),
             {float(p.get("ox", 0)), float(p.get("oy", 0)), float(p.get("oz", 0))},
-            int_param(p, "nx", 1), int_param(p, "ny", 1), int_param(p, "nz", 1), int_param(p, "own_field", -1)};
+            int_param(p, "nx", 1), int_param(p, "ny", 1), int_param(p, "nz", 1), int_param(p, "own_field", -1),
+            int_param(p, "interleave", 0)};
     if (!(s.voxel > 0) || !std::isfinite(s.voxel)) throw Error("voxel must be positive");
     if (s.nx < 1 || s.ny < 1 || s.nz < 1) throw Error("grid dims nx, ny, nz must be >= 1");
+    if (s.interleave < 0 || s.interleave > 8) throw Error("interleave must be 0 (the device's) or 1-8");
     if (!std::isfinite(s.press) || !std::isfinite(s.log_floor) || !std::isfinite(s.field_floor))
         throw Error("press, log_floor and field_floor must be finite");
     return s;
@@ -137,13 +139,22 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
     }
 }
 
+// Hypotheses an invocation runs side by side: 3 on a CPU driver, where a term's three
+// dependent gathers otherwise wait on memory one chain at a time (docs/multitouch.md,
+// "Three hypotheses a lane": 2 and 4 were slower on lavapipe); 1 on a GPU, which hides that
+// latency with other invocations. Param interleave (1-8) forces it.
+uint32_t interleave(const Setup& st, const rt::DeviceInfo& d) {
+    return st.interleave > 0 ? uint32_t(st.interleave) : d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 3u : 1u;
+}
+
 void gpu(const GpuOpArgs& a) {
     const Setup st = setup(a.params);
     const rt::DeviceInfo& d = a.ctx.info();
     const uint32_t H = uint32_t(a.out[0].shape[0]);
     const uint32_t K = uint32_t(a.in[4].shape[0]), F = uint32_t(a.in[5].shape[0]), NS = uint32_t(a.in[3].shape[0]);
-    const uint32_t local = elementwise_local_size(d), groups = grid_groups(H, local, d);
-    const uint64_t strides = (uint64_t(H) + uint64_t(groups) * local - 1) / (uint64_t(groups) * local);
+    const uint32_t M = interleave(st, d);
+    const uint32_t local = elementwise_local_size(d), groups = grid_groups((uint64_t(H) + M - 1) / M, local, d);
+    const uint64_t strides = (uint64_t(H) + uint64_t(groups) * local * M - 1) / (uint64_t(groups) * local * M);
     check_loop_budget(d, strides * (uint64_t(K) * (NS + 2) + 4), "pose_evidence (hypotheses x terms x spins)");
     struct {
         float ox, oy, oz, inv_voxel;
@@ -168,7 +179,7 @@ void gpu(const GpuOpArgs& a) {
     const rt::Access R = rt::Access::Read;
     // NS specialises the shader (shaders/pose_evidence.glsl).
     a.seq.dispatch(a.ctx.pipelines().get(rt::PipelineDesc{texel ? "pose_evidence" : "pose_evidence_ssbo", 7,
-                                                          uint32_t(sizeof(push)), {local, NS}, texel ? 0x3fu : 0x10u}),
+                                                          uint32_t(sizeof(push)), {local, NS, M}, texel ? 0x3fu : 0x10u}),
                    {{a.in[0].view, R, f4}, {a.in[1].view, R, f4},
                     {a.in[2].view, R, texel ? VK_FORMAT_R32_SINT : VK_FORMAT_UNDEFINED},
                     {a.in[3].view, R, texel ? VK_FORMAT_R32_SFLOAT : VK_FORMAT_UNDEFINED},
@@ -182,6 +193,6 @@ void gpu(const GpuOpArgs& a) {
 
 const OpDef op_pose_evidence{"pose_evidence", infer, cpu, gpu, 0,
                              {"press", "log_floor", "field_floor", "ox", "oy", "oz", "voxel", "nx", "ny", "nz",
-                              "own_field", "own_weight", "texel"}};
+                              "own_field", "own_weight", "texel", "interleave"}};
 
 }  // namespace vtloc::ops
