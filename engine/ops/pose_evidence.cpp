@@ -141,8 +141,8 @@ void cpu(const std::vector<const HostTensor*>& in, const std::vector<HostTensor*
 
 // Hypotheses an invocation runs side by side: 3 on a CPU driver, where a term's three
 // dependent gathers otherwise wait on memory one chain at a time (docs/multitouch.md,
-// "Three hypotheses an invocation": 2 and 4 were slower on lavapipe); 1 on a GPU, which hides that
-// latency with other invocations. Param interleave (1-8) forces it.
+// "Three hypotheses an invocation": 2 and 4 were slower on lavapipe); 1 on a GPU, which
+// hides that latency with other invocations. Param interleave (1-8) forces it.
 uint32_t interleave(const Setup& st, const rt::DeviceInfo& d) {
     return st.interleave > 0 ? uint32_t(st.interleave) : d.type == VK_PHYSICAL_DEVICE_TYPE_CPU ? 3u : 1u;
 }
