@@ -8,6 +8,7 @@
 #include <cmath>
 #include <optional>
 #include <random>
+#include <thread>
 
 #include "base/error.h"
 #include "engine/io/mesh.h"
@@ -301,6 +302,37 @@ TEST_CASE("the nearest facing point matches a brute-force search", "[track]") {
         }
     }
     CHECK(track::NearestFacing().query(std::array<float, 3>{0, 0, 0}.data(), std::array<float, 3>{0, 0, 1}.data(), 1).index == -1);
+}
+
+TEST_CASE("the registration's tree is made on first use, once, from any thread", "[track]") {
+    std::mt19937 rng{17};
+    std::uniform_real_distribution<float> u(-30, 30);
+    std::vector<float> dense;
+    for (int i = 0; i < 3001; ++i) {
+        const float p[3] = {u(rng), u(rng), u(rng)};
+        const float l = std::sqrt(p[0] * p[0] + p[1] * p[1] + p[2] * p[2]) + 1e-3f;
+        dense.insert(dense.end(), {p[0], p[1], p[2], p[0] / l, p[1] / l, p[2] / l});
+    }
+    const track::LazyNearestFacing lazy(std::make_shared<const std::vector<float>>(dense));
+    CHECK(!lazy.built());
+    CHECK(!lazy.empty());
+    std::vector<const track::NearestFacing*> got(4, nullptr);
+    std::vector<std::thread> threads;
+    for (size_t i = 0; i < got.size(); ++i) threads.emplace_back([&, i] { got[i] = &lazy.get(); });
+    for (std::thread& t : threads) t.join();
+    CHECK(lazy.built());
+    for (const track::NearestFacing* t : got) CHECK(t == got[0]);
+    const track::NearestFacing eager(dense);
+    CHECK(got[0]->bytes() == eager.bytes());
+    for (int q = 0; q < 50; ++q) {
+        const float p[3] = {u(rng), u(rng), u(rng)}, z[3] = {0, 0, 1};
+        CHECK(got[0]->query(p, z, -0.5f).index == eager.query(p, z, -0.5f).index);
+    }
+    // No points: empty without being made, as the tree would say.
+    const track::LazyNearestFacing none(std::make_shared<const std::vector<float>>());
+    CHECK(none.empty());
+    CHECK(!none.built());
+    CHECK(none.get().empty());
 }
 
 TEST_CASE("registration never loses fit and reaches the truth from farther off than the climbs", "[track]") {

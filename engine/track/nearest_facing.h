@@ -3,9 +3,12 @@
 // filter's dense points). The lookup grid names points only within its band
 // (a few mm); the refinement's registration step (tracker.cpp) needs where a
 // touch carried 10-20 mm off by a pose error would land.
+#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
+#include <memory>
+#include <mutex>
 #include <vector>
 
 namespace vtloc::track {
@@ -38,6 +41,23 @@ private:
     void build(const float* dense, int64_t lo, int64_t hi, size_t node);
     void search(int64_t lo, int64_t hi, size_t node, const float q[3], const float z[3], float max_dot, float off[3],
                 int64_t& best, float& best_d2) const;
+};
+
+// A NearestFacing made on first use: only a window that fits poorly registers (the rescue,
+// the deep search), so a tracker on a tour it follows should not pay for the tree at
+// construction (docs/multitouch.md, "Registration"). get() is safe from several threads.
+class LazyNearestFacing {
+public:
+    explicit LazyNearestFacing(std::shared_ptr<const std::vector<float>> dense) : dense_(std::move(dense)) {}
+    const NearestFacing& get() const;
+    bool empty() const { return dense_->size() < 6; }  // as the tree's empty(), without making it
+    bool built() const { return built_; }
+
+private:
+    std::shared_ptr<const std::vector<float>> dense_;
+    mutable std::once_flag once_;
+    mutable NearestFacing tree_;
+    mutable std::atomic<bool> built_{false};
 };
 
 }  // namespace vtloc::track

@@ -36,6 +36,10 @@ std::shared_ptr<const LazyPairIndex> lazy_pairs(const std::shared_ptr<const Surf
     return std::make_shared<const LazyPairIndex>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
 }
 
+std::shared_ptr<const LazyNearestFacing> lazy_nearest(const std::shared_ptr<const Surface>& s) {
+    return std::make_shared<const LazyNearestFacing>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
+}
+
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
 
 }  // namespace
@@ -46,7 +50,7 @@ struct Tracker::Impl {
     std::shared_ptr<ResidentWeights> resident;
     std::map<std::pair<int64_t, int64_t>, std::unique_ptr<GpuExecutor>> exec;  // by (K terms, F fields)
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
-    std::shared_ptr<const NearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
+    std::shared_ptr<const LazyNearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
     std::shared_ptr<const LazyPairIndex> pairs;    // the deep search's pair search (null: off); shared likewise
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
@@ -87,7 +91,7 @@ void Tracker::check_options(const FilterOptions& opt_) {
 Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::make_shared<const Surface>(std::move(surface))), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
-    if (registers(opt_, *surface_)) impl_->nearest = std::make_shared<const NearestFacing>(surface_->dense);
+    if (registers(opt_, *surface_)) impl_->nearest = lazy_nearest(surface_);
     if (pairs_on(opt_, *surface_)) impl_->pairs = lazy_pairs(surface_);
     add_tables();
 }
@@ -96,10 +100,11 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     : surface_(like.surface_), opt_(options), impl_(std::make_unique<Impl>(like.impl_->ctx)) {
     check_options(opt_);
     // The surface, its tree and its tables are read-only once made: shared with `like`, not
-    // copied (the weight store's tensors are shared too). The tree is made where these options
-    // need it and `like`'s did not, the neighbours likewise.
+    // copied (the weight store's tensors are shared too). The tree and the pair index (each made
+    // on first use) are set up where these options need them and `like`'s did not, the
+    // neighbours likewise.
     if (registers(opt_, *surface_))
-        impl_->nearest = like.impl_->nearest ? like.impl_->nearest : std::make_shared<const NearestFacing>(surface_->dense);
+        impl_->nearest = like.impl_->nearest ? like.impl_->nearest : lazy_nearest(surface_);
     if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : lazy_pairs(surface_);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
@@ -362,9 +367,9 @@ struct Refiner {
     // current touch (lever arm = the motion's translation), each a proper subset.
     std::vector<std::vector<ops::pose::Term>> stages;
     bool slide = true;  // false: the candidates protocol (climb_on)
-    const NearestFacing* nearest = nullptr;  // the registration's (null or empty: off)
+    const LazyNearestFacing* nearest = nullptr;  // the registration's (null or empty: off)
     Refiner(const ops::pose::Grid& g, const std::vector<Rigid>& to_window, const FilterOptions& opt, double spacing, int n_spin,
-            bool slide_, const NearestFacing* nf = nullptr)
+            bool slide_, const LazyNearestFacing* nf = nullptr)
         : grid(g), o(opt), tight(fit_terms(to_window, opt)), slide(slide_), nearest(nf) {
         const double f = opt.refine_widen * opt.grid_allowance;
         if (opt.refine_widen > 0) wide = fit_terms(to_window, opt, f * spacing, f * 2 * M_PI / n_spin);
@@ -391,7 +396,7 @@ struct Refiner {
     // A refined pose x (fit fx, free space included) registered onto the surface
     // (register_window) and climbed again; the better of the two kept.
     Rigid reregister(const Rigid& x, double& fx) const {
-        return can_register() ? climbed_if_better(register_window(*nearest, tight, o, x), x, fx, nullptr) : x;
+        return can_register() ? climbed_if_better(register_window(nearest->get(), tight, o, x), x, fx, nullptr) : x;
     }
     // y climbed at the tight widths where it then fits (free space included) better than x
     // does (fx, updated), else x.
@@ -706,7 +711,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         std::vector<double> seed_fit(n_seeds);
         std::vector<Rigid> seed_pose(n_seeds);
         parallel_for(n_seeds, opt_.threads, [&](size_t i) {
-            seed_pose[i] = register_window(*refiner.nearest, refiner.tight, opt_, best_spin_pose(mode_sample[first + i]), opt_.register_cap);
+            seed_pose[i] = register_window(refiner.nearest->get(), refiner.tight, opt_, best_spin_pose(mode_sample[first + i]), opt_.register_cap);
             seed_fit[i] = refiner.fit(seed_pose[i]);
         });
         // The pair search's poses, each the seed of its nearest unsearched mode where it fits
@@ -723,7 +728,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
             std::vector<double> cand_fit(cands.size());
             std::vector<Rigid> cand_pose(cands.size());
             parallel_for(cands.size(), opt_.threads, [&](size_t i) {
-                const Rigid y = register_window(*refiner.nearest, refiner.tight, opt_, cands[i], opt_.register_cap);
+                const Rigid y = register_window(refiner.nearest->get(), refiner.tight, opt_, cands[i], opt_.register_cap);
                 const double fx = refiner.fit(cands[i]), fy = refiner.fit(y);
                 cand_pose[i] = fy > fx ? y : cands[i], cand_fit[i] = std::max(fx, fy);
             });
