@@ -9,6 +9,9 @@
 
 namespace vtloc::bench {
 
+// The cycles tour_motion knows; the CLI asks before its first stage, minutes before the tracker's.
+inline bool known_tour_cycle(const std::string& cycle) { return cycle == "return" || cycle == "repeat"; }
+
 // The motion into touch i (i >= 1; touch 0 has none) of a tour of n >= 1 motions, continued:
 // "return" goes back over the tour's touches in reverse (each motion inverted) and then forward
 // again, period 2n, so every pose is one the tour pressed on the object; "repeat" starts the
@@ -16,8 +19,8 @@ namespace vtloc::bench {
 inline Rigid tour_motion(const std::vector<Rigid>& tour, const std::string& cycle, int i) {
     if (tour.empty() || i < 1) throw Error("tour_motion: needs a motion and i >= 1");
     const size_t n = tour.size(), k = size_t(i - 1);
+    if (!known_tour_cycle(cycle)) throw Error("the tracker bench's cycle is return or repeat, got '" + cycle + "'");
     if (cycle == "repeat") return tour[k % n];
-    if (cycle != "return") throw Error("the tracker bench's cycle is return or repeat, got '" + cycle + "'");
     const size_t j = k % (2 * n);
     return j < n ? tour[j] : inverse(tour[2 * n - 1 - j]);
 }

@@ -49,5 +49,9 @@ TEST_CASE("the bench's returning tour revisits only the tour's own poses", "[ben
     }
     std::vector<Rigid> one{Rigid{}};
     CHECK_THROWS_WITH(bench::tour_motion(one, "loop", 1), Catch::Contains("return or repeat"));
+    CHECK(bench::known_tour_cycle("return"));  // what the CLI accepts, before its first stage
+    CHECK(bench::known_tour_cycle("repeat"));
+    CHECK(!bench::known_tour_cycle("loop"));
+    CHECK(!bench::known_tour_cycle(""));
     CHECK_THROWS_WITH(bench::tour_motion({}, "return", 1), Catch::Contains("needs a motion"));
 }
