@@ -155,12 +155,15 @@ void tracker(std::FILE* f, const json& t) {
                  any["spins"].get<int>(), any["spacing_mm"].get<double>(), any["window"].get<int>(), any["window"].get<int>() + 1,
                  any["touches"].get<int>(), any["touches"].get<int>(),
                  any.contains("cycle") ? any["cycle"].get<std::string>().c_str() : "repeat");
-    std::fprintf(f, "  %-16s %12s %12s %12s %10s %12s\n", "backend", "touch (ms)", "add_touch", "estimate", "runs", "memory (MiB)");
+    std::fprintf(f, "  %-16s %12s %12s %12s %10s %12s %10s\n", "backend", "touch (ms)", "add_touch", "estimate", "runs", "memory (MiB)",
+                 "host (MiB)");
     for (const char* b : {"gpu", "cpu"}) {
         if (!t.contains(b)) continue;
         const json& x = t[b];
-        std::fprintf(f, "  %-16s %12.2f %12.2f %12.2f %10d %12.1f\n", b[0] == 'g' ? "GPU" : "CPU reference", med(x["touch_ms"]),
-                     med(x["add_touch_ms"]), med(x["estimate_ms"]), x["reps"].get<int>(), double(x["device_bytes"].get<uint64_t>()) / 1048576.0);
+        const double host = x.contains("host_bytes") ? double(x["host_bytes"].get<uint64_t>()) / 1048576.0 : 0.0;
+        std::fprintf(f, "  %-16s %12.2f %12.2f %12.2f %10d %12.1f %10.1f\n", b[0] == 'g' ? "GPU" : "CPU reference", med(x["touch_ms"]),
+                     med(x["add_touch_ms"]), med(x["estimate_ms"]), x["reps"].get<int>(), double(x["device_bytes"].get<uint64_t>()) / 1048576.0,
+                     host);
     }
     if (t.contains("cpu_over_gpu")) std::fprintf(f, "  CPU reference / GPU per touch: %.3gx\n", t["cpu_over_gpu"].get<double>());
     std::fprintf(f, "  surface built in %.0f ms (once per object)\n", any["surface_build_ms"].get<double>());

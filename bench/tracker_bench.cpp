@@ -31,7 +31,7 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     const double build_ms = ms_since(t0);
 
     std::vector<double> add, est, both, first;
-    uint64_t bytes = 0;
+    uint64_t bytes = 0, host = 0;
     int window = 0;
     for (int r = 0; r < o.reps; ++r) {
         track::FilterOptions fo;
@@ -51,12 +51,13 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
             if (i >= window) add.push_back(a_ms), est.push_back(e_ms), both.push_back(a_ms + e_ms);
         }
         bytes = tr.device_bytes();
+        host = std::max(host, tr.host_bytes());  // the tree and the pair index only where a rep made them
     }
     return {{"object", seq.object}, {"hypotheses", surface.n_hypotheses()}, {"samples", surface.n_samples()},
             {"spins", surface.n_spin()}, {"spacing_mm", surface.spacing_mm}, {"window", window},
             {"touches", o.touches}, {"cycle", o.cycle}, {"reps", o.reps}, {"surface_build_ms", build_ms},
             {"add_touch_ms", stats_json(add)}, {"estimate_ms", stats_json(est)}, {"touch_ms", stats_json(both)},
-            {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}};
+            {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}, {"host_bytes", host}};
 }
 
 }  // namespace vtloc::bench

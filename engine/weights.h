@@ -32,6 +32,7 @@ public:
     const std::string& source() const { return source_; }
     std::vector<std::string> names() const;
     size_t parameter_count() const;
+    uint64_t bytes() const { return 4 * uint64_t(parameter_count()); }  // the tensors' data
 
 private:
     std::string source_ = "weights";

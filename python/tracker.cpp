@@ -296,7 +296,8 @@ void bind_tracker(py::module_& m) {
         })
         .def_property_readonly("n_spin", &api::Tracker::n_spin)
         .def_property_readonly("spacing_mm", &api::Tracker::spacing_mm)
-        .def_property_readonly("device_bytes", &api::Tracker::device_bytes);
+        .def_property_readonly("device_bytes", &api::Tracker::device_bytes)
+        .def_property_readonly("host_bytes", &api::Tracker::host_bytes);
 }
 
 }  // namespace vtloc::python

@@ -121,6 +121,8 @@ class Tracker:
     def spacing_mm(self) -> float: ...
     @property
     def device_bytes(self) -> int: ...
+    @property
+    def host_bytes(self) -> int: ...  # the surface, its tables, the search's tree and index once made
 
 class GelShapeReader:
     """The gel's shape from a GelSight frame (SPEC section 9), on the GPU."""

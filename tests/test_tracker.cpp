@@ -343,6 +343,11 @@ TEST_CASE("registration never loses fit and reaches the truth from farther off t
     track::FilterOptions off, on;
     off.register_rounds = 0;
     track::Tracker a(test::gpu(), prism_surface(), off), b(test::gpu(), prism_surface(), on);
+    // The tree is made at the first registration, not with the tracker (host_bytes counts it
+    // once made: at least an index, a point and a normal, 28 bytes, a dense point).
+    const uint64_t host_before = b.host_bytes();
+    CHECK(host_before == a.host_bytes());
+    CHECK(host_before >= a.surface().host_bytes());
     int better = 0, reached = 0, starts = 0;
     for (uint32_t seed : {1u, 2u, 3u, 4u, 5u, 6u}) {
         Tour t = tour(prism_dense(40000), 12, seed);
@@ -367,6 +372,8 @@ TEST_CASE("registration never loses fit and reaches the truth from farther off t
                                                           << reached);
     CHECK(better >= 4);
     CHECK(reached >= 2);
+    CHECK(b.host_bytes() >= host_before + 28 * uint64_t(b.surface().n_dense()));
+    CHECK(a.host_bytes() == host_before);  // no registration: never made
     track::FilterOptions bad;
     bad.register_rounds = -1;
     CHECK_THROWS_WITH(track::Tracker(test::gpu(), prism_surface(), bad), Catch::Contains("register_rounds"));

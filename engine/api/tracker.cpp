@@ -384,6 +384,10 @@ const PointCloud& Tracker::display_cloud() const { return impl_->display->cloud;
 uint64_t Tracker::device_bytes() const {
     return impl_->tracker.device_bytes() + (impl_->scorer ? impl_->scorer->device_bytes() : 0);
 }
+uint64_t Tracker::host_bytes() const {
+    const Impl::Display& d = *impl_->display;
+    return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size());
+}
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,

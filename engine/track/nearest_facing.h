@@ -52,6 +52,7 @@ public:
     const NearestFacing& get() const;
     bool empty() const { return dense_->size() < 6; }  // as the tree's empty(), without making it
     bool built() const { return built_; }
+    uint64_t bytes() const { return built_ ? tree_.bytes() : 0; }  // 0 until made
 
 private:
     std::shared_ptr<const std::vector<float>> dense_;

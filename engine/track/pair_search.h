@@ -52,6 +52,7 @@ public:
     explicit LazyPairIndex(std::shared_ptr<const std::vector<float>> dense) : dense_(std::move(dense)) {}
     const PairIndex& get() const;
     bool built() const { return built_; }
+    uint64_t bytes() const { return built_ ? index_.bytes() : 0; }  // 0 until made
 
 private:
     std::shared_ptr<const std::vector<float>> dense_;

@@ -56,6 +56,9 @@ struct Surface {
     uint64_t device_bytes() const {
         return 4 * (8 * dense.size() / 6 + 12 * samples.size() / 9 + spins.size() + cells.size());
     }
+    uint64_t host_bytes() const {
+        return 4 * (dense.size() + samples.size() + spins.size() + cells.size() + dense_sample.size());
+    }
     // The grid cell holding q (-1 outside): the mirror's lookup (ops::pose::cell_of), so the
     // host and the evidence agree on every cell.
     int64_t cell_of(const float* q) const;

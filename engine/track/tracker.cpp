@@ -565,6 +565,11 @@ uint64_t Tracker::device_bytes() const {
     return std::max(surface_->device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
 }
 
+uint64_t Tracker::host_bytes() const {
+    return surface_->host_bytes() + impl_->weights.bytes() + (impl_->nearest ? impl_->nearest->bytes() : 0) +
+           (impl_->pairs ? impl_->pairs->bytes() : 0);
+}
+
 Estimate Tracker::estimate() const {
     if (touches_ == 0) throw Error("the tracker has no touch yet");
     return finish(last_.log, last_.marginal, last_.cost, last_.to_window, pose_terms_);

@@ -193,6 +193,10 @@ public:
     // the arenas of the step graphs built so far (one per window length); the
     // CPU reference counts the same bytes, as what the GPU would hold.
     uint64_t device_bytes() const;
+    // What it holds in host memory: the surface, its tables as the GPU reads them, and the
+    // registration's tree and the pair search's index once a window has made them (the first
+    // time one fits poorly). A tracker made by with_options shares these; each counts them.
+    uint64_t host_bytes() const;
     const FilterOptions& options() const { return opt_; }
     // A heat-map over `cloud` [N, 3] or [N, >= 6] (point, outward normal): the belief of the
     // sample of each point's cell's nearest dense point (with normals: of the point on the

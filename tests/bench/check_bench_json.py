@@ -164,6 +164,7 @@ def main(path, plot, reps, iters, batches, points, window):
             stats(x[k], f"tracker.{b}.{k}", steady)
         need(x["hypotheses"] == x["samples"] * x["spins"] and x["hypotheses"] >= 100000, f"tracker.{b} hypotheses")
         positive(x["device_bytes"], f"tracker.{b}.device_bytes")
+        positive(x["host_bytes"], f"tracker.{b}.host_bytes")
         need(x["cycle"] == "return", f"tracker.{b}.cycle {x.get('cycle')} (the default: return)")
         positive(x["surface_build_ms"], f"tracker.{b}.surface_build_ms")
     need(t["gpu"]["hypotheses"] == t["cpu"]["hypotheses"], "tracker: both backends run the same hypotheses")

@@ -275,6 +275,8 @@ def test_tracker_render_and_compare(ctx, root, tmp_path):
     cap = np.maximum(0.0, 0.8 - ((r - 7.5) ** 2 + (c - 10.0) ** 2) / 40.0).astype(np.float32)
     shape = {"depth_mm": cap, "mm_per_px": 0.1245}
     before = t.device_bytes
+    # Host memory: at least the hypotheses' samples (9 floats) and their points in the tables (3).
+    assert t.host_bytes >= len(t.sample_points) * 12 * 4
     term = t.shape_term(shape)
     assert t.device_bytes >= before + len(t.sample_points) * 27 * 27 * 4  # the codebook's maps are counted
     assert term.shape == (len(t.sample_points) * t.n_spin,) and np.all(term <= 0) and term.min() < term.max()

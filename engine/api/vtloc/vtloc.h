@@ -536,6 +536,9 @@ public:
     int n_spin() const;
     const PointCloud& display_cloud() const;  // the points heatmap values refer to
     uint64_t device_bytes() const;            // on the GPU now: the surface tables, the step graphs' arenas, the codebook
+    // In host memory: the surface and its tables, the registration's tree and the pair search's
+    // index once a poorly fitting window made them, the display cloud (shared with with_options').
+    uint64_t host_bytes() const;
     double spacing_mm() const;                // the hypothesis samples' spacing
 
     struct Impl;
