@@ -315,7 +315,7 @@ TEST_CASE("the registration's tree is made on first use, once, from any thread",
     }
     const track::LazyNearestFacing lazy(std::make_shared<const std::vector<float>>(dense));
     CHECK(!lazy.built());
-    CHECK(!lazy.empty());
+    CHECK(!lazy.no_points());
     std::vector<const track::NearestFacing*> got(4, nullptr);
     std::vector<std::thread> threads;
     for (size_t i = 0; i < got.size(); ++i) threads.emplace_back([&, i] { got[i] = &lazy.get(); });
@@ -330,7 +330,7 @@ TEST_CASE("the registration's tree is made on first use, once, from any thread",
     }
     // No points: empty without being made, as the tree would say.
     const track::LazyNearestFacing none(std::make_shared<const std::vector<float>>());
-    CHECK(none.empty());
+    CHECK(none.no_points());
     CHECK(!none.built());
     CHECK(none.get().empty());
 }

@@ -101,12 +101,4 @@ NearestFacing::Match NearestFacing::query(const float q[3], const float z[3], fl
     return {order_[size_t(best)], &node_[size_t(best) * 6]};
 }
 
-const NearestFacing& LazyNearestFacing::get() const {
-    std::call_once(once_, [this] {
-        tree_ = NearestFacing(*dense_);
-        built_ = true;
-    });
-    return tree_;
-}
-
 }  // namespace vtloc::track

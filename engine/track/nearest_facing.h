@@ -3,13 +3,12 @@
 // filter's dense points). The lookup grid names points only within its band
 // (a few mm); the refinement's registration step (tracker.cpp) needs where a
 // touch carried 10-20 mm off by a pose error would land.
-#include <atomic>
 #include <cstddef>
 #include <cstdint>
 #include <limits>
-#include <memory>
-#include <mutex>
 #include <vector>
+
+#include "engine/track/lazy_index.h"
 
 namespace vtloc::track {
 
@@ -45,20 +44,7 @@ private:
 
 // A NearestFacing made on first use: only a window that fits poorly registers (the rescue,
 // the deep search), so a tracker on a tour it follows should not pay for the tree at
-// construction (docs/multitouch.md, "Registration"). get() is safe from several threads.
-class LazyNearestFacing {
-public:
-    explicit LazyNearestFacing(std::shared_ptr<const std::vector<float>> dense) : dense_(std::move(dense)) {}
-    const NearestFacing& get() const;
-    bool empty() const { return dense_->size() < 6; }  // as the tree's empty(), without making it
-    bool built() const { return built_; }
-    uint64_t bytes() const { return built_ ? tree_.bytes() : 0; }  // 0 until made
-
-private:
-    std::shared_ptr<const std::vector<float>> dense_;
-    mutable std::once_flag once_;
-    mutable NearestFacing tree_;
-    mutable std::atomic<bool> built_{false};
-};
+// construction (docs/multitouch.md, "Registration").
+using LazyNearestFacing = LazyIndex<NearestFacing>;
 
 }  // namespace vtloc::track

@@ -69,14 +69,6 @@ double farthest_pair(const std::vector<ops::pose::Term>& touches, double press, 
 
 }  // namespace
 
-const PairIndex& LazyPairIndex::get() const {
-    std::call_once(once_, [this] {
-        index_ = PairIndex(*dense_);
-        built_ = true;
-    });
-    return index_;
-}
-
 PairIndex::PairIndex(const std::vector<float>& dense, double anchor_mm, double partner_mm) {
     if (dense.size() < 12) return;
     anchors_ = voxel_subset(dense, anchor_mm, 20000);

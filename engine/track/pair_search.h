@@ -7,15 +7,14 @@
 // same angles. Each such pair fixes a pose up to a roll about the line between them, which a
 // third touch fixes; the whole window then scores each pose. Exact to the surface sampling
 // (1.5 mm), not to the grid's.
-#include <atomic>
 #include <cstdint>
 #include <functional>
 #include <memory>
-#include <mutex>
 #include <vector>
 
 #include "engine/ops/pose_evidence.h"
 #include "engine/rigid.h"
+#include "engine/track/lazy_index.h"
 
 namespace vtloc::track {
 
@@ -46,20 +45,8 @@ private:
 
 // A PairIndex made on first use: most trackers never run the pair search (it needs a window
 // spanning min_span_mm), so they should not pay for its index (tens of milliseconds and about
-// a megabyte per object). get() is safe to call from several threads at once.
-class LazyPairIndex {
-public:
-    explicit LazyPairIndex(std::shared_ptr<const std::vector<float>> dense) : dense_(std::move(dense)) {}
-    const PairIndex& get() const;
-    bool built() const { return built_; }
-    uint64_t bytes() const { return built_ ? index_.bytes() : 0; }  // 0 until made
-
-private:
-    std::shared_ptr<const std::vector<float>> dense_;
-    mutable std::once_flag once_;
-    mutable PairIndex index_;
-    mutable std::atomic<bool> built_{false};
-};
+// a megabyte per object).
+using LazyPairIndex = LazyIndex<PairIndex>;
 
 struct PairSearchOptions {
     double tol_mm = 1.5;      // the pair's distance against the contacts' (the partners' voxel)

@@ -32,12 +32,10 @@ bool registers(const FilterOptions& o, const Surface& s) { return o.register_rou
 // The pair search seeds the deep search, which registers.
 bool pairs_on(const FilterOptions& o, const Surface& s) { return registers(o, s) && o.deep_modes > 0 && o.pair_modes > 0; }
 
-std::shared_ptr<const LazyPairIndex> lazy_pairs(const std::shared_ptr<const Surface>& s) {
-    return std::make_shared<const LazyPairIndex>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
-}
-
-std::shared_ptr<const LazyNearestFacing> lazy_nearest(const std::shared_ptr<const Surface>& s) {
-    return std::make_shared<const LazyNearestFacing>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
+// A search index over the surface's dense points, made on first use; it keeps the surface alive.
+template <class Index>
+std::shared_ptr<const LazyIndex<Index>> lazy_index(const std::shared_ptr<const Surface>& s) {
+    return std::make_shared<const LazyIndex<Index>>(std::shared_ptr<const std::vector<float>>(s, &s->dense));
 }
 
 int64_t answer_stride(const Surface& s) { return std::max<int64_t>(1, (s.n_samples() + kMaxAnswers - 1) / kMaxAnswers); }
@@ -91,8 +89,8 @@ void Tracker::check_options(const FilterOptions& opt_) {
 Tracker::Tracker(rt::Context* ctx, Surface surface, FilterOptions options)
     : surface_(std::make_shared<const Surface>(std::move(surface))), opt_(options), impl_(std::make_unique<Impl>(ctx)) {
     check_options(opt_);
-    if (registers(opt_, *surface_)) impl_->nearest = lazy_nearest(surface_);
-    if (pairs_on(opt_, *surface_)) impl_->pairs = lazy_pairs(surface_);
+    if (registers(opt_, *surface_)) impl_->nearest = lazy_index<NearestFacing>(surface_);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = lazy_index<PairIndex>(surface_);
     add_tables();
 }
 
@@ -104,8 +102,8 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     // on first use) are set up where these options need them and `like`'s did not, the
     // neighbours likewise.
     if (registers(opt_, *surface_))
-        impl_->nearest = like.impl_->nearest ? like.impl_->nearest : lazy_nearest(surface_);
-    if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : lazy_pairs(surface_);
+        impl_->nearest = like.impl_->nearest ? like.impl_->nearest : lazy_index<NearestFacing>(surface_);
+    if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : lazy_index<PairIndex>(surface_);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
 }
@@ -392,7 +390,7 @@ struct Refiner {
         for (const ops::pose::Term& t : tight) v += free_space_log(grid, ops::pose::moved(f, t), o);
         return v;
     }
-    bool can_register() const { return slide && nearest && !nearest->empty() && o.register_rounds > 0 && o.refine > 0; }
+    bool can_register() const { return slide && nearest && !nearest->no_points() && o.register_rounds > 0 && o.refine > 0; }
     // A refined pose x (fit fx, free space included) registered onto the surface
     // (register_window) and climbed again; the better of the two kept.
     Rigid reregister(const Rigid& x, double& fx) const {
