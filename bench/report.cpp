@@ -166,6 +166,14 @@ void tracker(std::FILE* f, const json& t) {
                      host);
     }
     if (t.contains("cpu_over_gpu")) std::fprintf(f, "  CPU reference / GPU per touch: %.3gx\n", t["cpu_over_gpu"].get<double>());
+    if (t.contains("gpu") && t["gpu"].contains("nodes_ms") && !t["gpu"]["nodes_ms"].empty()) {
+        std::vector<std::pair<double, std::string>> nodes;  // slowest first
+        for (const auto& [name, s] : t["gpu"]["nodes_ms"].items()) nodes.emplace_back(med(s), name);
+        std::sort(nodes.rbegin(), nodes.rend());
+        std::fprintf(f, "  a step's nodes (one profiled tracker, serial, medians):");
+        for (const auto& [ms, name] : nodes) std::fprintf(f, " %s %.2f ms;", name.c_str(), ms);
+        std::fprintf(f, "\n");
+    }
     std::fprintf(f, "  surface built in %.0f ms (once per object)\n", any["surface_build_ms"].get<double>());
 }
 

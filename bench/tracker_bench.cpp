@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <map>
 
 #include "base/error.h"
 #include "bench/clock.h"
@@ -53,11 +54,30 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
         bytes = tr.device_bytes();
         host = std::max(host, tr.host_bytes());  // the tree and the pair index only where a rep made them
     }
+    // On the GPU one more tracker, profiled (serial, GPU timestamps): each node's median over
+    // the steady touches, steadier than the wall clock on a shared host.
+    nlohmann::json nodes = nlohmann::json::object();
+    if (ctx) {
+        track::FilterOptions fo;
+        fo.online_window = o.window;
+        track::Tracker tr(ctx, surface, fo);
+        tr.profile_steps(true);
+        std::map<std::string, std::vector<double>> per;
+        for (int i = 0; i < o.touches; ++i) {
+            std::optional<Rigid> m;
+            if (i) m = tour_motion(tour, o.cycle, i);
+            tr.add_touch(m);
+            if (i >= tr.options().online_window)
+                for (const auto& [name, ms] : tr.step_node_times()) per[name].push_back(ms);
+        }
+        for (auto& [name, v] : per) nodes[name] = stats_json(v);
+    }
     return {{"object", seq.object}, {"hypotheses", surface.n_hypotheses()}, {"samples", surface.n_samples()},
             {"spins", surface.n_spin()}, {"spacing_mm", surface.spacing_mm}, {"window", window},
             {"touches", o.touches}, {"cycle", o.cycle}, {"reps", o.reps}, {"surface_build_ms", build_ms},
             {"add_touch_ms", stats_json(add)}, {"estimate_ms", stats_json(est)}, {"touch_ms", stats_json(both)},
-            {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}, {"host_bytes", host}};
+            {"first_touch_ms", first.empty() ? nlohmann::json(nullptr) : stats_json(first)}, {"device_bytes", bytes}, {"host_bytes", host},
+            {"nodes_ms", nodes}};
 }
 
 }  // namespace vtloc::bench

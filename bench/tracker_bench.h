@@ -28,7 +28,8 @@ struct TrackerBenchOptions {
 
 // JSON: object, hypotheses, samples, spins, spacing_mm, window, touches, cycle, reps,
 // surface_build_ms, add_touch_ms / estimate_ms / touch_ms (stats over the
-// steady-state touches of every rep), first_touch_ms, device_bytes, host_bytes (the most of any rep).
+// steady-state touches of every rep), first_touch_ms, device_bytes, host_bytes (the most of any rep), nodes_ms (on the GPU: stats per step node
+// of one more, profiled tracker's steady touches; {} on the CPU).
 nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o);
 
 }  // namespace bench

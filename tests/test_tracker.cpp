@@ -6,6 +6,7 @@
 #include <catch2/catch.hpp>
 
 #include <cmath>
+#include <map>
 #include <optional>
 #include <random>
 
@@ -301,6 +302,35 @@ TEST_CASE("the nearest facing point matches a brute-force search", "[track]") {
         }
     }
     CHECK(track::NearestFacing().query(std::array<float, 3>{0, 0, 0}.data(), std::array<float, 3>{0, 0, 1}.data(), 1).index == -1);
+}
+
+TEST_CASE("profiled steps time every node and change no bit of the belief", "[track]") {
+    // vtloc-bench's per-node times: the profiled executors run serially with timestamps; the
+    // belief must be the unprofiled one's, bit for bit (the same dispatches, the same order of
+    // every sum).
+    const Tour t = tour(prism_dense(40000), 4, 3);
+    const std::vector<Rigid> motions = motions_of(t);
+    track::Tracker plain(test::gpu(), prism_surface()), timed(test::gpu(), prism_surface()), cpu(nullptr, prism_surface());
+    timed.profile_steps(true);
+    cpu.profile_steps(true);
+    for (size_t i = 0; i < t.poses.size(); ++i) {
+        const std::optional<Rigid> m = i ? std::optional<Rigid>(motions[i - 1]) : std::nullopt;
+        plain.add_touch(m), timed.add_touch(m), cpu.add_touch(m);
+        CHECK(plain.belief() == timed.belief());
+        CHECK(plain.step_node_times().empty());
+        CHECK(cpu.step_node_times().empty());  // no GPU, no timestamps
+        const std::vector<std::pair<std::string, double>> times = timed.step_node_times();
+        std::map<std::string, double> got(times.begin(), times.end());
+        for (const char* node : {"track.evidence", "track.belief", "track.marginal", "track.risk"}) {
+            INFO("touch " << i << ", node " << node);
+            CHECK(got.count(node) == 1);
+            CHECK(got[node] > 0);
+        }
+    }
+    timed.profile_steps(false);  // off again: the next step's executors untimed
+    timed.add_touch(motions.back());
+    CHECK(timed.step_node_times().empty());
+    test::require_no_validation_messages();
 }
 
 TEST_CASE("the registration's tree is made on first use, as an eager one", "[track]") {

@@ -50,6 +50,8 @@ struct Tracker::Impl {
     std::map<std::pair<int64_t, int64_t>, Graph> graphs;                       // the CPU reference's
     std::shared_ptr<const LazyNearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
     std::shared_ptr<const LazyPairIndex> pairs;    // the deep search's pair search (null: off); shared likewise
+    bool profile = false;                          // profile_steps
+    std::vector<std::pair<std::string, double>> last_times;  // the last step's, while profiling
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -476,7 +478,7 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
     const std::pair<int64_t, int64_t> key{K, F};
     if (impl_->ctx && !impl_->exec.count(key))
         impl_->exec[key] = std::make_unique<GpuExecutor>(*impl_->ctx, step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1),
-                                                         impl_->weights, impl_->resident);
+                                                         impl_->weights, impl_->resident, impl_->profile);
     if (!impl_->ctx && !impl_->graphs.count(key)) impl_->graphs.emplace(key, step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1));
     Step st;
     st.to_window = window_in_current(motions);
@@ -510,6 +512,9 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
     TensorMap in{{"terms", std::move(tr)}, {"fields", std::move(fields)}};
     if (slack_on(opt_) && F > 0) in.emplace("widths", std::move(widths));
     TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
+    impl_->last_times.clear();
+    if (impl_->ctx && impl_->profile)
+        for (const auto& t : impl_->exec.at(key)->node_times()) impl_->last_times.emplace_back(t.label, t.ms);
     st.log = std::move(out.at("log").data);
     st.prob = std::move(out.at("prob").data);
     st.marginal = std::move(out.at("marginal").data);
@@ -562,6 +567,15 @@ uint64_t Tracker::device_bytes() const {
     for (const auto& [key, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes + ex->memory_plan().scratch_bytes;
     return std::max(surface_->device_bytes(), impl_->resident ? impl_->resident->bytes() : 0) + arenas;
 }
+
+void Tracker::profile_steps(bool on) {
+    if (on == impl_->profile) return;
+    impl_->profile = on;
+    impl_->exec.clear();  // made again, with or without timestamps, at their next step
+    impl_->last_times.clear();
+}
+
+std::vector<std::pair<std::string, double>> Tracker::step_node_times() const { return impl_->last_times; }
 
 uint64_t Tracker::host_bytes() const {
     return surface_->host_bytes() + impl_->weights.bytes() + (impl_->nearest ? impl_->nearest->bytes() : 0) +

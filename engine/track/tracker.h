@@ -14,6 +14,8 @@
 #include <functional>
 #include <memory>
 #include <optional>
+#include <string>
+#include <utility>
 #include <vector>
 
 #include "engine/rigid.h"
@@ -193,6 +195,11 @@ public:
     // the arenas of the step graphs built so far (one per window length); the
     // CPU reference counts the same bytes, as what the GPU would hold.
     uint64_t device_bytes() const;
+    // Profiling (vtloc-bench): while on, each step's graph runs serially with GPU timestamps
+    // (its executors are made again), and step_node_times() is the last step's time per node
+    // (node name, ms); empty while off or without a GPU.
+    void profile_steps(bool on);
+    std::vector<std::pair<std::string, double>> step_node_times() const;
     // What it holds in host memory: the surface, its tables as the GPU reads them, and the
     // registration's tree and the pair search's index once a window has made them (the first
     // time one fits poorly). A tracker made by with_options shares these; each counts them.

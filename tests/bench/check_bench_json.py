@@ -168,6 +168,11 @@ def main(path, plot, reps, iters, batches, points, window):
         need(x["cycle"] == "return", f"tracker.{b}.cycle {x.get('cycle')} (the default: return)")
         positive(x["surface_build_ms"], f"tracker.{b}.surface_build_ms")
     need(t["gpu"]["hypotheses"] == t["cpu"]["hypotheses"], "tracker: both backends run the same hypotheses")
+    nodes = t["gpu"]["nodes_ms"]  # one profiled tracker's steady touches, per step node
+    need("track.evidence" in nodes, f"tracker.gpu.nodes_ms names the evidence: {sorted(nodes)}")
+    for name, st in nodes.items():
+        stats(st, f"tracker.gpu.nodes_ms.{name}", t["gpu"]["touches"] - t["gpu"]["window"])
+    need(t["cpu"]["nodes_ms"] == {}, "tracker.cpu.nodes_ms: none on the CPU reference")
     positive(t["cpu_over_gpu"], "tracker.cpu_over_gpu")
     gl = r["gel"]  # the gel stage: a frame's shape on both backends, one touch's render-and-compare
     need(gl["size"] == [160, 120], f"gel.size {gl['size']}")
