@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <map>
 
 #include "base/error.h"
@@ -31,26 +32,32 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     const track::Surface surface = track::build_surface(dense, true, track::SurfaceOptions{}, seq.object);
     const double build_ms = ms_since(t0);
 
-    std::vector<double> add, est, both, first;
-    uint64_t bytes = 0, host = 0;
-    int window = 0;
-    for (int r = 0; r < o.reps; ++r) {
-        track::FilterOptions fo;
-        fo.online_window = o.window;
-        track::Tracker tr(ctx, surface, fo);
-        window = tr.options().online_window;
+    track::FilterOptions fo;
+    fo.online_window = o.window;
+    // A fresh tracker through the whole tour; after_touch(tracker, i, add_touch's ms) follows each touch.
+    const auto walk = [&](track::Tracker& tr, bool profiled, const std::function<void(track::Tracker&, int, double)>& after_touch) {
+        tr.profile_steps(profiled);
         for (int i = 0; i < o.touches; ++i) {
             std::optional<Rigid> m;
             if (i) m = tour_motion(tour, o.cycle, i);
             const auto a0 = std::chrono::steady_clock::now();
             tr.add_touch(m);
-            const double a_ms = ms_since(a0);
+            after_touch(tr, i, ms_since(a0));
+        }
+    };
+    std::vector<double> add, est, both, first;
+    uint64_t bytes = 0, host = 0;
+    int window = 0;
+    for (int r = 0; r < o.reps; ++r) {
+        track::Tracker tr(ctx, surface, fo);
+        window = tr.options().online_window;
+        walk(tr, false, [&](track::Tracker& t, int i, double a_ms) {
             const auto e0 = std::chrono::steady_clock::now();
-            const track::Estimate e = tr.estimate();
+            const track::Estimate e = t.estimate();
             const double e_ms = ms_since(e0);
             if (i == 0 && r > 0) first.push_back(a_ms + e_ms);  // rep 0 compiles the pipelines
             if (i >= window) add.push_back(a_ms), est.push_back(e_ms), both.push_back(a_ms + e_ms);
-        }
+        });
         bytes = tr.device_bytes();
         host = std::max(host, tr.host_bytes());  // the tree and the pair index only where a rep made them
     }
@@ -58,18 +65,12 @@ nlohmann::json measure_tracker(rt::Context* ctx, const TrackerBenchOptions& o) {
     // the steady touches, steadier than the wall clock on a shared host.
     nlohmann::json nodes = nlohmann::json::object();
     if (ctx) {
-        track::FilterOptions fo;
-        fo.online_window = o.window;
         track::Tracker tr(ctx, surface, fo);
-        tr.profile_steps(true);
         std::map<std::string, std::vector<double>> per;
-        for (int i = 0; i < o.touches; ++i) {
-            std::optional<Rigid> m;
-            if (i) m = tour_motion(tour, o.cycle, i);
-            tr.add_touch(m);
-            if (i >= tr.options().online_window)
-                for (const auto& [name, ms] : tr.step_node_times()) per[name].push_back(ms);
-        }
+        walk(tr, true, [&](track::Tracker& t, int i, double) {
+            if (i >= t.options().online_window)
+                for (const auto& [name, ms] : t.step_node_times()) per[name].push_back(ms);
+        });
         for (auto& [name, v] : per) nodes[name] = stats_json(v);
     }
     return {{"object", seq.object}, {"hypotheses", surface.n_hypotheses()}, {"samples", surface.n_samples()},
