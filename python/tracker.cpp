@@ -108,7 +108,7 @@ const NamedOption kOptions[] = {
     VTLOC_OPTION(grid_allowance), VTLOC_OPTION(refine_widen), VTLOC_OPTION(refine_reach_mm),
     VTLOC_OPTION(rescue_fit), VTLOC_OPTION(rescue_modes), VTLOC_OPTION(register_rounds), VTLOC_OPTION(deep_fit),
     VTLOC_OPTION(deep_modes),
-    VTLOC_OPTION(pair_modes),
+    VTLOC_OPTION(pair_modes), VTLOC_OPTION(profile),
 };
 #undef VTLOC_OPTION
 
@@ -145,14 +145,14 @@ void bind_tracker(py::module_& m) {
                          double network_weight, double object_units, const py::object& candidates, double render_weight,
                          const std::string& codebook_cache, bool render_quadratic, double render_press_percentile,
                          double render_cell_mm, int threads, double free_space_mm, double render_refined_weight,
-                         int render_slack_rounds, bool field_slack, double render_refined_floor) {
+                         int render_slack_rounds, bool field_slack, double render_refined_floor, bool profile) {
                  api::TrackerOptions o = options(press_mm, sigma_d_mm, sigma_a_deg, odometry_mm, odometry_deg, window,
                                                  n_spin, hypotheses, network_weight, object_units);
                  o.render_weight = render_weight, o.codebook_cache = codebook_cache, o.render_quadratic = render_quadratic;
                  o.render_press_percentile = render_press_percentile, o.render_cell_mm = render_cell_mm;
                  o.threads = threads, o.free_space_mm = free_space_mm, o.render_refined_weight = render_refined_weight;
                  o.render_slack_rounds = render_slack_rounds, o.field_slack = field_slack;
-                 o.render_refined_floor = render_refined_floor;
+                 o.render_refined_floor = render_refined_floor, o.profile = profile;
                  if (!candidates.is_none()) {  // C x 3, the candidates protocol
                      const auto c = candidates.cast<py::array_t<double, py::array::c_style | py::array::forcecast>>();
                      if (c.ndim() != 2 || c.shape(1) != 3)
@@ -176,7 +176,8 @@ void bind_tracker(py::module_& m) {
              py::arg("render_refined_weight") = api::TrackerOptions{}.render_refined_weight,
              py::arg("render_slack_rounds") = api::TrackerOptions{}.render_slack_rounds,
              py::arg("field_slack") = api::TrackerOptions{}.field_slack,
-             py::arg("render_refined_floor") = api::TrackerOptions{}.render_refined_floor, py::keep_alive<1, 2>())
+             py::arg("render_refined_floor") = api::TrackerOptions{}.render_refined_floor, py::arg("profile") = false,
+             py::keep_alive<1, 2>())
         .def(
             "add_touch",
             [](api::Tracker& t, const py::object& motion, const api::TouchResult* result, const api::Object* object,
@@ -297,7 +298,9 @@ void bind_tracker(py::module_& m) {
         .def_property_readonly("n_spin", &api::Tracker::n_spin)
         .def_property_readonly("spacing_mm", &api::Tracker::spacing_mm)
         .def_property_readonly("device_bytes", &api::Tracker::device_bytes)
-        .def_property_readonly("host_bytes", &api::Tracker::host_bytes);
+        .def_property_readonly("host_bytes", &api::Tracker::host_bytes)
+        .def_property_readonly("step_nodes", &api::Tracker::step_nodes,
+                               "The last step's GPU time per node: (name, ms) pairs in run order; profile=True only.");
 }
 
 }  // namespace vtloc::python

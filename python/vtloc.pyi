@@ -91,7 +91,8 @@ class Tracker:
                  render_refined_weight: float = 16.0,  # render-and-compare at the refined poses (0: off)
                  render_slack_rounds: int = 2,  # with odometry noise: earlier shapes aligned within it (0: off)
                  field_slack: bool = False,  # with odometry noise: the grid reads earlier terms within it
-                 render_refined_floor: float = -5.0) -> None: ...  # one touch's floor at the refined poses (-inf: none)
+                 render_refined_floor: float = -5.0,  # one touch's floor at the refined poses (-inf: none)
+                 profile: bool = False) -> None: ...  # each GPU step node by node, timed: step_nodes
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
                   object: Optional[Object] = None,
                   shape: Optional[Dict[str, Any]] = None) -> None: ...  # GelShapeReader.read's dict
@@ -123,6 +124,8 @@ class Tracker:
     def device_bytes(self) -> int: ...
     @property
     def host_bytes(self) -> int: ...  # the surface, its tables, the search's tree and index once made
+    @property
+    def step_nodes(self) -> List[Tuple[str, float]]: ...  # the last step's GPU ms per node (profile=True)
 
 class GelShapeReader:
     """The gel's shape from a GelSight frame (SPEC section 9), on the GPU."""

@@ -3,8 +3,13 @@
 // vetoed on every touch; io::orient_outward by the signed volume.
 #include <catch2/catch.hpp>
 
+#include <algorithm>
+#include <cmath>
 #include <memory>
+#include <optional>
+#include <string>
 #include <utility>
+#include <vector>
 
 #include "engine/io/mesh.h"
 #include "engine/io/mesh_formats.h"
@@ -48,6 +53,45 @@ TEST_CASE("tracker: a mesh file wound inward gives the estimate of the outward o
     CHECK(eb.sample_belief == ea.sample_belief);
     CHECK(eb.contact == ea.contact);
     CHECK(eb.heatmap == ea.heatmap);
+    CHECK(ctx.take_validation_messages().empty());
+}
+
+TEST_CASE("tracker: profile times each GPU step per node and changes no output", "[api][tracker]") {
+    const std::string path = std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply";
+    api::Context ctx;
+    api::TrackerOptions o;
+    o.hypotheses = 5000;
+    o.window = 2;  // the third touch's step has the prior's field too
+    api::TrackerOptions p = o;
+    p.profile = true;
+    api::Tracker plain(ctx, path, o), timed(ctx, path, p);
+    const api::Tracker timed_too = plain.with_options(p);
+    CHECK(timed_too.options().profile);
+    CHECK(timed.step_nodes().empty());  // no step yet
+    const api::Motion m1{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}}, m2{{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}};
+    const std::vector<std::optional<api::Motion>> tour{std::nullopt, m1, m2};
+    for (const auto& m : tour) {
+        plain.add_touch(m);
+        timed.add_touch(m);
+        CHECK(plain.step_nodes().empty());
+        const auto nodes = timed.step_nodes();
+        std::vector<std::string> names;
+        for (const auto& [name, ms] : nodes) {
+            names.push_back(name);
+            CHECK(ms >= 0);
+            CHECK(std::isfinite(ms));
+        }
+        // Every step scores the hypotheses and normalises the belief; the node names are the graph's.
+        CHECK(std::count(names.begin(), names.end(), "track.evidence") == 1);
+        CHECK(std::count(names.begin(), names.end(), "track.belief") == 1);
+        const api::TrackerEstimate a = plain.estimate(), b = timed.estimate();
+        CHECK(b.sample_belief == a.sample_belief);
+        CHECK(b.contact == a.contact);
+        CHECK(b.pose.R == a.pose.R);
+        CHECK(b.pose.t == a.pose.t);
+    }
+    CHECK_FALSE(timed.evaluate_window({m1}).sample_belief.empty());
+    CHECK_FALSE(timed.step_nodes().empty());  // a window's evaluation is a step too
     CHECK(ctx.take_validation_messages().empty());
 }
 

@@ -2,6 +2,7 @@
 // sensor's pose on the object after each touch (SPEC section 6, api::Tracker).
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 #include <cstdio>
 
@@ -54,6 +55,9 @@ const char* kHelp =
     "  --model M                 weight file for the network term (default: the shipped model)\n"
     "  --json                    print the result as JSON\n"
     "  --render OUT.png          the belief after each touch, side by side on the object\n"
+    "  --profile                 each touch's times: add_touch and estimate (wall clock, ms) and\n"
+    "                            the GPU step per node (run node by node with timestamps: slower,\n"
+    "                            the same outputs)\n"
     "\n"
     "Exit status: 0 ok, 1 bad input or runtime error, 2 usage error.\n";
 
@@ -72,7 +76,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     std::vector<OptionSpec> specs{{"--object"}, {"--touches"}, {"--tool"}, {"--object-units"}, {"--geometry-only", false},
                                   {"--window"}, {"--model"}, {"--json", false}, {"--render"}, {"--odometry-noise"},
                                   {"--render-compare", false}, {"--background"}, {"--calibration"}, {"--rendered", false},
-                                  {"--codebook-cache"}};
+                                  {"--codebook-cache"}, {"--profile", false}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -130,6 +134,8 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         model.emplace(load_model(s, model_file, api::Backend::Gpu));
         object = model->encode_object(object_path);
     }
+    const bool profile = a.flag("--profile");
+    to.profile = profile;
     api::Tracker tracker(s.gpu(), object_path, to);
     std::vector<api::TrackerEstimate> steps;
     nlohmann::json jt = nlohmann::json::array();
@@ -154,8 +160,11 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         if (reader)
             shape = read_gel_shape(*reader, file.touches[i].tactile, api::load_tactile_image(file.touches[i].tactile), empty ? &*empty : nullptr,
                                    background, " (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
+        const auto t0 = std::chrono::steady_clock::now();
         tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, shape ? &*shape : nullptr);
+        const auto t1 = std::chrono::steady_clock::now();
         const api::TrackerEstimate e = tracker.estimate();
+        const auto t2 = std::chrono::steady_clock::now();
         steps.push_back(e);
         nlohmann::json modes = nlohmann::json::array();
         for (const api::TrackerMode& m : e.modes) modes.push_back({{"contact", point_json(m.contact)}, {"probability", m.probability}});
@@ -164,12 +173,25 @@ int cmd_sequence(Session& s, int argc, char** argv) {
                          {"fit", e.fit}, {"pose_terms", e.pose_terms}};
         if (file.flange)  // the object in the robot's frame: flange * tool * inverse(sensor pose in the object)
             t["object_in_robot"] = matrix_json(api::compose(to_motion(compose(*file.touches[i].flange, *file.tool)), api::inverse(e.pose)));
+        const auto ms = [](auto a, auto b) { return std::chrono::duration<double, std::milli>(b - a).count(); };
+        const std::vector<std::pair<std::string, double>> nodes = profile ? tracker.step_nodes() : decltype(nodes){};
+        if (profile) {
+            nlohmann::json jn = nlohmann::json::array();
+            for (const auto& [name, t_ms] : nodes) jn.push_back({{"node", name}, {"ms", t_ms}});
+            t["ms"] = {{"add_touch", ms(t0, t1)}, {"estimate", ms(t1, t2)}, {"nodes", jn}};
+        }
         jt.push_back(t);
-        if (!json)
+        if (!json) {
             std::printf("touch %-3zu %s\n          contact %s, belief within 5 mm %.2f; best mode %s (p %.2f)\n", i + 1,
                         file.touches[i].tactile.c_str(), point_str(e.contact).c_str(), e.mass_within_5mm,
                         point_str(e.modes.empty() ? e.contact : e.modes[0].contact).c_str(),
                         e.modes.empty() ? 0.0 : e.modes[0].probability);
+            if (profile) {
+                std::printf("          add_touch %.1f ms, estimate %.1f ms; GPU step by node:", ms(t0, t1), ms(t1, t2));
+                for (const auto& [name, t_ms] : nodes) std::printf(" %s %.2f", name.c_str(), t_ms);
+                std::printf("\n");
+            }
+        }
     }
     nlohmann::json outputs = nlohmann::json::object();
     if (auto p = a.get("--render")) {

@@ -96,6 +96,7 @@ struct Tracker::Impl {
     std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0; hangs on the surface alone
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)) {
+        tracker.profile_steps(o.profile);
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
         const bool n = disp.normals.size() == disp.xyz.size();
         std::vector<float> rows;
@@ -110,7 +111,9 @@ struct Tracker::Impl {
     // pose scorer shared, not copied or made again.
     Impl(const Impl& like, const TrackerOptions& o)
         : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), options(o), object_units(like.object_units),
-          score(score_options(o)), pose_scorer(like.pose_scorer) {}
+          score(score_options(o)), pose_scorer(like.pose_scorer) {
+        tracker.profile_steps(o.profile);
+    }
 
     static void check_shape(const GelShape& g, size_t touch) {
         if (g.height < 1 || g.width < 1 || g.depth_mm.size() != size_t(g.height) * size_t(g.width))
@@ -389,6 +392,7 @@ uint64_t Tracker::host_bytes() const {
     return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size());
 }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
+std::vector<std::pair<std::string, double>> Tracker::step_nodes() const { return impl_->tracker.step_node_times(); }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
                         const std::vector<std::string>& captions, const std::vector<std::array<double, 3>>& truths) {

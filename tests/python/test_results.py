@@ -72,6 +72,29 @@ def test_tracker_equals_the_cli(cli, ctx, root):
         t.window_fit([np.eye(4)], bad)
 
 
+def test_tracker_profile_times_the_nodes_and_changes_nothing(cli, ctx, root):
+    seq = os.path.join(root, "tests", "cli", "data", "sequence.json")
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    args = ("sequence", "--object", mug_path, "--touches", seq, "--geometry-only", "--json")
+    plain = json.loads(run_cli(cli, *args))
+    timed = json.loads(run_cli(cli, *args, "--profile"))
+    for a, b in zip(plain["touches"], timed["touches"]):
+        assert "ms" not in a
+        assert b["contact"] == a["contact"] and b["pose"] == a["pose"]
+        assert b["ms"]["add_touch"] > 0 and b["ms"]["estimate"] >= 0
+        names = [n["node"] for n in b["ms"]["nodes"]]
+        assert names.count("track.evidence") == 1 and all(n["ms"] >= 0 for n in b["ms"]["nodes"])
+    t = vtloc.Tracker(ctx, mug_path, hypotheses=5000, profile=True)
+    u = t.with_options(profile=False)
+    assert t.options["profile"] and not u.options["profile"] and t.step_nodes == []
+    for tr in (t, u):
+        tr.add_touch(None)
+    nodes = t.step_nodes
+    assert [name for name, _ in nodes].count("track.evidence") == 1 and all(ms >= 0 for _, ms in nodes)
+    assert u.step_nodes == []
+    assert np.array_equal(t.estimate()["sample_belief"], u.estimate()["sample_belief"])
+
+
 def test_tracker_with_options_equals_one_made_so(ctx, root):
     mug_path = os.path.join(root, "examples", "mug.glb")
     t = vtloc.Tracker(ctx, mug_path, hypotheses=5000)

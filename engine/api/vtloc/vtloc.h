@@ -453,6 +453,10 @@ struct TrackerOptions {
     // the tracker's units, after object_units), n_spin each; empty: the whole surface. The
     // refinement turns and presses the gel at each candidate but never slides it off.
     std::vector<std::array<double, 3>> candidates;
+    // Each step on the GPU (add_touch, a window's evaluation) runs node by node with GPU
+    // timestamps, so step_nodes() says where its time went: slower (no overlap between the
+    // nodes), the outputs the same bits.
+    bool profile = false;
 };
 
 struct TrackerMode {
@@ -540,6 +544,9 @@ public:
     // index once a poorly fitting window made them, the display cloud (shared with with_options').
     uint64_t host_bytes() const;
     double spacing_mm() const;                // the hypothesis samples' spacing
+    // The last step's GPU time per node (name, ms), in run order, with options().profile
+    // (empty without it); the estimate's refinement runs on the host and is not in it.
+    std::vector<std::pair<std::string, double>> step_nodes() const;
 
     struct Impl;
 
