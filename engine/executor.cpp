@@ -199,20 +199,19 @@ GpuExecutor::GpuExecutor(rt::Context& ctx, const Graph& g, const WeightStore& we
     const uint64_t align = ctx_.info().tensor_alignment();
     seq_ = std::make_unique<rt::Sequence>(ctx_, profile);
 
-    const size_t mark = resident_->batches();
     try {
         build(weights, align, keep_all, profile ? Schedule::Serial : schedule);
     } catch (...) {
         // What this build made is freed by the members' own destructors; the
         // weights it alone uploaded go back too.
         seq_.reset();
-        resident_->forget_since(mark);
+        if (uploaded_ != ResidentWeights::kNone) resident_->forget(uploaded_);
         throw;
     }
 }
 
 void GpuExecutor::build(const WeightStore& weights, uint64_t align, bool keep_all, Schedule schedule) {
-    resident_->ensure(graph_, weights);
+    uploaded_ = resident_->ensure(graph_, weights);
     std::set<std::string> read;
     for (const Value& v : graph_.values())
         if (v.kind == ValueKind::Weight && read.insert(v.name).second) weight_bytes_ += resident_->view(v.name).size;

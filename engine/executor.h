@@ -98,6 +98,7 @@ private:
     std::vector<int> order_, step_;  // the schedule's order, and each position's step
     MemoryPlan plan_;
     std::shared_ptr<ResidentWeights> resident_;
+    size_t uploaded_ = ResidentWeights::kNone;  // the batch this build's ensure() added
     uint64_t weight_bytes_ = 0;
     rt::Buffer arena_;
     rt::Buffer scratch_;  // shared by the nodes that ask for scratch (OpDef::scratch_bytes)

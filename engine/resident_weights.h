@@ -3,10 +3,13 @@
 // by every executor (graph shape) of that model on one context: a new shape
 // (image size, batch, K, symmetry, profiling) adds only its activation arena
 // and staging. Slots are immutable once written, so executors read them with
-// no barrier beyond the upload's own wait.
+// no barrier beyond the upload's own wait. Trackers of one object share one too
+// (track::Tracker's with_options form), possibly from several threads: every
+// call takes the lock.
 #include <cstdint>
 #include <map>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <vector>
 
@@ -28,19 +31,20 @@ public:
     ResidentWeights& operator=(const ResidentWeights&) = delete;
 
     // Uploads the weights `g` reads that are not resident yet (one buffer set
-    // and one submit for all of them). Throws naming a missing weight, or one
-    // whose shape differs from its resident copy's.
-    void ensure(const Graph& g, const WeightStore& weights);
+    // and one submit for all of them) and returns that batch's number (kNone:
+    // all were resident). Throws naming a missing weight, or one whose shape
+    // differs from its resident copy's.
+    static constexpr size_t kNone = size_t(-1);
+    size_t ensure(const Graph& g, const WeightStore& weights);
     rt::BufferView view(const std::string& name) const;
-    bool has(const std::string& name) const { return slots_.count(name) != 0; }
+    bool has(const std::string& name) const;
     // Device bytes of every resident weight (slots, alignment included).
     uint64_t bytes() const;
-    size_t count() const { return slots_.size(); }
-    // Batches so far; forget_since(mark) frees what ensure() added after
-    // batches() returned mark (a graph build that failed later gives its new
-    // weights back, so a failed build holds no memory).
-    size_t batches() const { return batches_.size(); }
-    void forget_since(size_t mark);
+    size_t count() const;
+    // A graph build that failed after its ensure() gives that batch back (so a failed
+    // build holds no memory), unless a later ensure() found one of its weights resident:
+    // then another executor reads it, and it stays.
+    void forget(size_t batch);
 
 private:
     struct Slot {
@@ -48,9 +52,14 @@ private:
         rt::ChunkedBuffers::Slot slot;
         Shape shape;
     };
+    struct Batch {
+        std::unique_ptr<rt::ChunkedBuffers> buffers;  // null once forgotten
+        bool shared = false;                          // a later ensure() relies on it
+    };
     rt::Context& ctx_;
     uint64_t align_ = 16;
-    std::vector<std::unique_ptr<rt::ChunkedBuffers>> batches_;  // one per ensure() that added weights
+    mutable std::mutex mutex_;
+    std::vector<Batch> batches_;  // one per ensure() that added weights
     std::map<std::string, Slot> slots_;
 };
 

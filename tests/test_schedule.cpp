@@ -5,7 +5,9 @@
 
 #include <algorithm>
 #include <climits>
+#include <initializer_list>
 #include <map>
+#include <utility>
 
 #include "engine/ops/build.h"
 #include "tests/harness.h"
@@ -158,4 +160,46 @@ TEST_CASE("every schedule gives the same bits with fewer barriers in steps", "[g
     GpuExecutor profiled(test::gpu(), g, w, resident, true, false, Schedule::Steps);
     CHECK(profiled.sequence().barrier_count() == serial.sequence().barrier_count());
     test::require_no_validation_messages();
+}
+
+TEST_CASE("resident weights: a failed build's batch goes back unless another build reads it", "[graph]") {
+    rt::Context& ctx = test::gpu();
+    WeightStore w;
+    w.add("a", random_tensor({1000}, 1, -1.f, 1.f));
+    w.add("b", random_tensor({2000}, 2, -1.f, 1.f));
+    w.add("c", random_tensor({3000}, 3, -1.f, 1.f));
+    auto reading = [](std::initializer_list<std::pair<const char*, int64_t>> names) {
+        Graph g;
+        for (const auto& [name, n] : names) g.weight(name, {n});
+        return g;
+    };
+    ResidentWeights r(ctx);
+    const uint64_t start = ctx.memory_in_use();
+    const size_t first = r.ensure(reading({{"a", 1000}}), w);
+    CHECK(first != ResidentWeights::kNone);
+    const uint64_t with_a = ctx.memory_in_use();
+    CHECK(with_a > start);
+    // A second graph reading "a" and "b": only "b" is uploaded, and "a"'s batch is now read by two.
+    const size_t second = r.ensure(reading({{"a", 1000}, {"b", 2000}}), w);
+    CHECK(second != first);
+    CHECK(r.ensure(reading({{"b", 2000}}), w) == ResidentWeights::kNone);  // nothing new
+    CHECK(r.count() == 2);
+    r.forget(first);  // shared: stays
+    CHECK(r.has("a"));
+    CHECK(ctx.memory_in_use() > with_a);
+    const uint64_t with_ab = ctx.memory_in_use();
+    // A batch nobody else read goes back whole.
+    const size_t third = r.ensure(reading({{"c", 3000}}), w);
+    CHECK(ctx.memory_in_use() > with_ab);
+    r.forget(third);
+    CHECK(!r.has("c"));
+    CHECK(ctx.memory_in_use() == with_ab);
+    CHECK_THROWS_WITH(r.view("c"), Catch::Contains("'c' is not resident"));
+    r.forget(third);  // twice, or a batch that never was: nothing
+    r.forget(99);
+    CHECK(r.has("a"));
+    CHECK(r.has("b"));
+    CHECK(r.view("a").size >= 4000);
+    // Its shape is checked against the resident copy's.
+    CHECK_THROWS_WITH(r.ensure(reading({{"a", 999}}), w), Catch::Contains("resident as"));
 }

@@ -7,6 +7,7 @@
 
 #include <cmath>
 #include <map>
+#include <memory>
 #include <optional>
 #include <random>
 
@@ -330,6 +331,34 @@ TEST_CASE("profiled steps time every node and change no bit of the belief", "[tr
     timed.profile_steps(false);  // off again: the next step's executors untimed
     timed.add_touch(motions.back());
     CHECK(timed.step_node_times().empty());
+    test::require_no_validation_messages();
+}
+
+TEST_CASE("trackers made like another hold the surface's tables on the device once", "[track]") {
+    // with_options' trackers (vtloc eval's noisy rows) share the resident tables: a second
+    // tracker's first step adds its step graph's arena and staging, not the tables again.
+    const Tour t = tour(prism_dense(40000), 4, 3);
+    const std::vector<Rigid> motions = motions_of(t);
+    rt::Context& ctx = test::gpu();
+    auto a = std::make_unique<track::Tracker>(ctx, prism_surface());
+    a->add_touch(std::nullopt);
+    const uint64_t tables = a->surface().device_bytes();
+    REQUIRE(tables > 0);
+    track::FilterOptions other;
+    other.online_window = 2, other.sigma_d_mm = 1.3, other.odometry_mm = 0.5, other.field_slack = true;  // slack adds a table
+    track::Tracker b(*a, other), made(ctx, prism_surface(), other);
+    const uint64_t before = ctx.memory_in_use();
+    b.add_touch(std::nullopt);
+    const uint64_t grew = ctx.memory_in_use() - before;
+    INFO("the surface's tables " << tables << " bytes; the second tracker's first step added " << grew);
+    CHECK(grew > 0);
+    CHECK(grew < tables / 2);
+    // The tracker it came from may go first: what b reads stays until b goes.
+    a.reset();
+    made.add_touch(std::nullopt);
+    for (size_t i = 1; i < t.poses.size(); ++i) b.add_touch(motions[i - 1]), made.add_touch(motions[i - 1]);
+    CHECK(b.belief() == made.belief());
+    CHECK(b.estimate().contact == made.estimate().contact);
     test::require_no_validation_messages();
 }
 

@@ -108,6 +108,10 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     if (pairs_on(opt_, *surface_)) impl_->pairs = like.impl_->pairs ? like.impl_->pairs : lazy_index<PairIndex>(surface_);
     impl_->weights = like.impl_->weights;
     if (slack_on(opt_) && !impl_->weights.has("surface.neighbours")) add_neighbours();
+    // Their device copies too: every table is the surface's alone, whatever the options, so
+    // the trackers of one object hold them once (a failed build gives back only what no other
+    // executor reads: ResidentWeights::forget).
+    impl_->resident = like.impl_->resident;
 }
 
 void Tracker::add_neighbours() {

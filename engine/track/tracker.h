@@ -191,9 +191,10 @@ public:
     double window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const;
 
     const Surface& surface() const { return *surface_; }
-    // What the tracker holds on the GPU now: the surface tables (resident) and
-    // the arenas of the step graphs built so far (one per window length); the
-    // CPU reference counts the same bytes, as what the GPU would hold.
+    // What the tracker holds on the GPU now: the surface tables (resident; one copy for
+    // the trackers made from one another, each counting it) and the arenas of the step
+    // graphs built so far (one per window length); the CPU reference counts the same
+    // bytes, as what the GPU would hold.
     uint64_t device_bytes() const;
     // Profiling (vtloc-bench): while on, each step's graph runs serially with GPU timestamps
     // (its executors are made again), and step_node_times() is the last step's time per node

@@ -539,7 +539,9 @@ public:
     std::vector<float> sample_points() const; // the hypotheses' surface samples, 3 floats each
     int n_spin() const;
     const PointCloud& display_cloud() const;  // the points heatmap values refer to
-    uint64_t device_bytes() const;            // on the GPU now: the surface tables, the step graphs' arenas, the codebook
+    // On the GPU now: the surface tables (one copy for a tracker and those with_options made
+    // from it, each counting it), the step graphs' arenas, the codebook.
+    uint64_t device_bytes() const;
     // In host memory: the surface and its tables, the registration's tree and the pair search's
     // index once a poorly fitting window made them, the display cloud (shared with with_options').
     uint64_t host_bytes() const;
