@@ -1,8 +1,13 @@
 // api::GelShapeReader: the GPU pipeline equals engine/sensor's CPU one on real presses,
 // larger frames of the same aspect are resampled, other sizes are errors.
 #include <catch2/catch.hpp>
+#include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <string>
+#include <vector>
 
+#include "engine/api/api_internal.h"
 #include "engine/sensor/gel_shape.h"
 #include "engine/sensor/lighting.h"
 #include "engine/track/codebook.h"
@@ -265,5 +270,51 @@ TEST_CASE("tracker: the shape term's press percentile, quadratic fit and cell ar
     CHECK(to.render_quadratic == so.quadratic);
     CHECK(to.render_press_percentile == so.press_percentile);
     CHECK(to.render_cell_mm == so.cell_mm);
+    CHECK(ctx.take_validation_messages().empty());
+}
+
+TEST_CASE("tracker: with_options' trackers share the codebook, each scoring with its own options", "[api][tracker]") {
+    // Rendering an object's codebook is seconds (the potato at 120,000 hypotheses: 1.5 s) and
+    // its maps are most of a render-and-compare tracker's device memory: a tracker made by
+    // with_options reuses both, unless it names another cache file.
+    const std::string potato = std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply";
+    api::Context ctx;
+    rt::Context& rtc = api::ContextAccess::rt(ctx);
+    api::TrackerOptions o;
+    o.hypotheses = 5000;
+    api::GelShape g;
+    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
+    for (int r = 0; r < g.height; ++r)
+        for (int c = 0; c < g.width; ++c) {
+            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
+            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
+        }
+    api::Tracker a(ctx, potato, o);
+    const std::vector<float> ta = a.shape_term(g);
+    api::TrackerOptions other = o;  // the comparison's own knobs differ, and a filter option
+    other.render_weight = 0.5, other.render_quadratic = false, other.render_press_percentile = 90, other.render_cell_mm = 2;
+    other.odometry_mm = 0.5;
+    const api::Tracker b = a.with_options(other);
+    const uint64_t before = rtc.memory_in_use();
+    const std::vector<float> tb = const_cast<api::Tracker&>(b).shape_term(g);
+    const uint64_t grew = rtc.memory_in_use() - before;
+    // The maps alone: a map of at least 25 x 25 cells (the window's 12.5 mm reach at 1 mm) a
+    // sample; the device holds them as quads, 4.4 times that.
+    const uint64_t maps = 4 * 25 * 25 * uint64_t(a.sample_points().size() / 3);
+    INFO("the second tracker's first gel shape added " << grew << " bytes; the maps are at least " << maps);
+    CHECK(grew < maps / 2);
+    api::Tracker made(ctx, potato, other), like_a(ctx, potato, o);
+    CHECK(tb == made.shape_term(g));  // as a tracker rendering its own, bit for bit
+    CHECK(ta == like_a.shape_term(g));
+    CHECK(tb != ta);
+    CHECK(a.shape_term(g) == ta);  // a's own options still a's
+    // Another cache file is read or written by the tracker that names it.
+    const std::string cache = test::temp_path("with-options-codebook.safetensors");
+    std::filesystem::remove(cache);
+    api::TrackerOptions cached = o;
+    cached.codebook_cache = cache;
+    api::Tracker c = a.with_options(cached);
+    CHECK(c.shape_term(g) == ta);
+    CHECK(std::filesystem::exists(cache));
     CHECK(ctx.take_validation_messages().empty());
 }

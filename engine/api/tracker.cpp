@@ -2,6 +2,8 @@
 #include <algorithm>
 #include <cmath>
 #include <cstring>
+#include <memory>
+#include <mutex>
 
 #include "base/error.h"
 #include "engine/api/api_internal.h"
@@ -92,10 +94,20 @@ struct Tracker::Impl {
     TrackerOptions options;  // as made (with_options compares what shapes the surface)
     double object_units;     // options' for a file; 1 for a PointCloud, given in the tracker's units
     track::ScoreOptions score;  // render-and-compare's, checked with the others (check_options): the scorer is made at the first gel shape
-    std::unique_ptr<track::CodebookScorer> scorer;  // made at the first gel shape
+    // The object's codebook on the device, made at the first gel shape of any tracker sharing
+    // it: with_options' trackers share it unless they name another codebook_cache, whose file
+    // must then be read (and checked) or written. Scores with each tracker's own options.
+    struct Book {
+        std::mutex mutex;
+        std::string cache;  // the codebook_cache it is read from or written to
+        std::shared_ptr<track::CodebookScorer> scorer;
+    };
+    std::shared_ptr<Book> book;
     std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0; hangs on the surface alone
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
-        : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)) {
+        : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)),
+          book(std::make_shared<Book>()) {
+        book->cache = o.codebook_cache;
         tracker.profile_steps(o.profile);
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
         const bool n = disp.normals.size() == disp.xyz.size();
@@ -107,11 +119,17 @@ struct Tracker::Impl {
         const int64_t count = int64_t(disp.size());
         display = std::make_shared<const Display>(Display{std::move(disp), HostTensor({count, n ? 6 : 3}, std::move(rows))});
     }
-    // `like`'s object under other options (with_options): its surface, tables, display and
-    // pose scorer shared, not copied or made again.
+    // `like`'s object under other options (with_options): its surface, tables, display, pose
+    // scorer and codebook (the same cache) shared, not copied or made again.
     Impl(const Impl& like, const TrackerOptions& o)
         : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), options(o), object_units(like.object_units),
           score(score_options(o)), pose_scorer(like.pose_scorer) {
+        if (o.codebook_cache.empty() || o.codebook_cache == like.book->cache) {
+            book = like.book;
+        } else {
+            book = std::make_shared<Book>();
+            book->cache = o.codebook_cache;
+        }
         tracker.profile_steps(o.profile);
     }
 
@@ -125,12 +143,17 @@ struct Tracker::Impl {
     std::vector<float> shape_field(const GelShape* g, size_t touch) {
         if (!g) return {};
         check_shape(*g, touch);
-        if (!scorer) {
-            const track::Codebook book = track::cached_codebook(ctx, tracker.surface(), {}, options.codebook_cache);
-            scorer = std::make_unique<track::CodebookScorer>(ctx, book, tracker.surface(), score);
+        std::shared_ptr<track::CodebookScorer> scorer;
+        {
+            std::lock_guard<std::mutex> lock(book->mutex);
+            if (!book->scorer) {
+                const track::Codebook b = track::cached_codebook(ctx, tracker.surface(), {}, book->cache);
+                book->scorer = std::make_shared<track::CodebookScorer>(ctx, b, tracker.surface(), score);
+            }
+            scorer = book->scorer;
         }
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
-        return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px);
+        return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px, score);
     }
 
     // Render-and-compare at the refined poses for one touch's gel shape, or none.
@@ -385,7 +408,12 @@ std::vector<float> Tracker::sample_points() const {
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
 const PointCloud& Tracker::display_cloud() const { return impl_->display->cloud; }
 uint64_t Tracker::device_bytes() const {
-    return impl_->tracker.device_bytes() + (impl_->scorer ? impl_->scorer->device_bytes() : 0);
+    std::shared_ptr<track::CodebookScorer> scorer;
+    {
+        std::lock_guard<std::mutex> lock(impl_->book->mutex);
+        scorer = impl_->book->scorer;
+    }
+    return impl_->tracker.device_bytes() + (scorer ? scorer->device_bytes() : 0);
 }
 uint64_t Tracker::host_bytes() const {
     const Impl::Display& d = *impl_->display;

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <filesystem>
 #include <map>
+#include <mutex>
 #include <tuple>
 
 #include "base/error.h"
@@ -184,9 +185,11 @@ struct CodebookScorer::Impl {
     CodebookOptions options;
     int64_t S, G, Q, NS;  // Q = G + 1: a map's quads per side
     ScoreOptions score;
+    std::mutex mutex;
     using Key = std::tuple<int64_t, int64_t, double>;  // the window: R, C, cell size
-    std::map<Key, std::unique_ptr<GpuExecutor>> exec;
-    std::map<Key, Graph> graphs;
+    using GraphKey = std::tuple<int64_t, int64_t, double, double, bool>;  // the window, the weight, quadratic
+    std::map<GraphKey, std::unique_ptr<GpuExecutor>> exec;
+    std::map<GraphKey, Graph> graphs;
     uint64_t wmin_bytes = 0;
     static std::string wmin_name(const Key& k) {
         return "codebook.wmin." + std::to_string(std::get<0>(k)) + "x" + std::to_string(std::get<1>(k)) + "@" + num(std::get<2>(k));
@@ -202,12 +205,12 @@ struct CodebookScorer::Impl {
         weights.add(wmin_name(k), std::move(out.at("wmin")));
         if (ctx) wmin_bytes += 4 * uint64_t(S) * uint64_t(NS);
     }
-    Graph graph(const Key& k) const {
+    Graph graph(const GraphKey& gk) const {
         Graph g;
-        const auto [R, C, win] = k;
+        const auto [R, C, win, weight, quadratic] = gk;
         g.output(ops::codebook_score(g, g.weight("codebook.quads", {S, 4 * Q * Q}), g.weight("codebook.spins", {NS, 2}),
-                                     g.input("measured", {R, C}), g.weight(wmin_name(k), {S * NS}), g.input("press", {1}), options.cell_mm,
-                                     win, options.cap_mm, score.weight, score.quadratic, "codebook.score"),
+                                     g.input("measured", {R, C}), g.weight(wmin_name(Key{R, C, win}), {S * NS}), g.input("press", {1}),
+                                     options.cell_mm, win, options.cap_mm, weight, quadratic, "codebook.score"),
                  "term");
         return g;
     }
@@ -237,20 +240,28 @@ CodebookScorer::CodebookScorer(rt::Context* ctx, const Codebook& book, const Sur
 CodebookScorer::~CodebookScorer() = default;
 
 std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px) {
+    return term(depth_mm, H, W, mm_per_px, impl_->score);
+}
+
+std::vector<float> CodebookScorer::term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px, const ScoreOptions& o) {
+    check_score_options(o);
     Impl& m = *impl_;
+    std::lock_guard<std::mutex> lock(m.mutex);
     double win = 0;
-    HostTensor meas = window_map(depth_mm, H, W, mm_per_px, m.score.cell_mm, &win);
+    HostTensor meas = window_map(depth_mm, H, W, mm_per_px, o.cell_mm, &win);
     const Impl::Key key{meas.shape[0], meas.shape[1], win};  // one executor serves every touch of a sensor
+    const Impl::GraphKey gk{meas.shape[0], meas.shape[1], win, o.weight, o.quadratic};
     if (!m.weights.has(Impl::wmin_name(key))) m.add_window_min(key);
-    if (m.ctx && !m.exec.count(key)) m.exec[key] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(key), m.weights, m.resident);
-    if (!m.ctx && !m.graphs.count(key)) m.graphs.emplace(key, m.graph(key));
-    const float press = ops::book::measured_press(meas.data.data(), int32_t(meas.data.size()), m.score.press_percentile);
+    if (m.ctx && !m.exec.count(gk)) m.exec[gk] = std::make_unique<GpuExecutor>(*m.ctx, m.graph(gk), m.weights, m.resident);
+    if (!m.ctx && !m.graphs.count(gk)) m.graphs.emplace(gk, m.graph(gk));
+    const float press = ops::book::measured_press(meas.data.data(), int32_t(meas.data.size()), o.press_percentile);
     const TensorMap in{{"measured", meas}, {"press", HostTensor({1}, {press})}};
-    TensorMap out = m.ctx ? m.exec.at(key)->run(in) : run_cpu(m.graphs.at(key), m.weights, in);
+    TensorMap out = m.ctx ? m.exec.at(gk)->run(in) : run_cpu(m.graphs.at(gk), m.weights, in);
     return std::move(out.at("term").data);
 }
 
 uint64_t CodebookScorer::device_bytes() const {
+    std::lock_guard<std::mutex> lock(impl_->mutex);
     uint64_t arenas = 0;
     for (const auto& [k, ex] : impl_->exec) arenas += ex->memory_plan().arena_bytes + ex->memory_plan().scratch_bytes;
     return 4 * (uint64_t(impl_->S) * uint64_t(4 * impl_->Q * impl_->Q) + 2 * uint64_t(impl_->NS)) + impl_->wmin_bytes + arenas;

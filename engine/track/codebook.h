@@ -77,13 +77,17 @@ struct ScoreOptions {
 // render_press_percentile, render_cell_mm): the tracker checks at construction, the scorer when made.
 void check_score_options(const ScoreOptions& o);
 
-// Scores touches against a codebook on the GPU (ctx null: the CPU reference).
+// Scores touches against a codebook on the GPU (ctx null: the CPU reference). One scorer
+// serves any score options (the trackers with_options makes of one object share it, the
+// maps on the device once), from several threads: each call takes its lock.
 class CodebookScorer {
 public:
     CodebookScorer(rt::Context* ctx, const Codebook& book, const Surface& s, const ScoreOptions& o);
     ~CodebookScorer();
-    // The log term over the hypotheses [S * NS] for one touch's indentation.
+    // The log term over the hypotheses [S * NS] for one touch's indentation, scored as the
+    // constructor's options say, or as `o` says.
     std::vector<float> term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px);
+    std::vector<float> term(const std::vector<float>& depth_mm, int H, int W, double mm_per_px, const ScoreOptions& o);
     uint64_t device_bytes() const;
 
 private:
