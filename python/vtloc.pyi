@@ -123,7 +123,7 @@ class Tracker:
     @property
     def device_bytes(self) -> int: ...
     @property
-    def host_bytes(self) -> int: ...  # the surface, its tables, the search's tree and index once made
+    def host_bytes(self) -> int: ...  # the surface, its tables, the search's tree and index, the binned points once made
     @property
     def step_nodes(self) -> List[Tuple[str, float]]: ...  # the last step's GPU ms per node (profile=True)
 

@@ -289,7 +289,10 @@ TEST_CASE("tracker: with_options' trackers share the codebook, each scoring with
             const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
             g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
         }
+    o.register_rounds = 0, o.deep_modes = 0;  // no search tree: host_bytes moves by the pose scorer's bins alone
     api::Tracker a(ctx, potato, o);
+    const api::Tracker early = a.with_options(o);  // made before any gel shape
+    const uint64_t a_host = a.host_bytes(), early_host = early.host_bytes();
     const std::vector<float> ta = a.shape_term(g);
     api::TrackerOptions other = o;  // the comparison's own knobs differ, and a filter option
     other.render_weight = 0.5, other.render_quadratic = false, other.render_press_percentile = 90, other.render_cell_mm = 2;
@@ -308,6 +311,13 @@ TEST_CASE("tracker: with_options' trackers share the codebook, each scoring with
     CHECK(ta == like_a.shape_term(g));
     CHECK(tb != ta);
     CHECK(a.shape_term(g) == ta);  // a's own options still a's
+    // Render-and-compare at the refined poses bins the dense points once, for every tracker of
+    // the object, even one made before the first gel shape.
+    const api::Motion m{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {3, 0, 0}};
+    CHECK(a.evaluate_window({m}, {}, nullptr, {&g, &g}).pose_terms < 0);
+    const uint64_t bins = a.host_bytes() - a_host;
+    CHECK(bins >= 24 * uint64_t(a.sample_points().size() / 3));  // a point and its normal, at least a sample's worth
+    CHECK(early.host_bytes() - early_host == bins);
     // Another cache file is read or written by the tracker that names it.
     const std::string cache = test::temp_path("with-options-codebook.safetensors");
     std::filesystem::remove(cache);

@@ -103,10 +103,17 @@ struct Tracker::Impl {
         std::shared_ptr<track::CodebookScorer> scorer;
     };
     std::shared_ptr<Book> book;
-    std::shared_ptr<const track::PoseShapeScorer> pose_scorer;  // likewise, where render_refined_weight > 0; hangs on the surface alone
+    // Render-and-compare at the refined poses (render_refined_weight > 0): the dense points binned,
+    // made at the first gel shape of any tracker sharing it (with_options' all do: it hangs on
+    // the surface alone).
+    struct PoseShapes {
+        std::mutex mutex;
+        std::shared_ptr<const track::PoseShapeScorer> scorer;
+    };
+    std::shared_ptr<PoseShapes> pose_shapes;
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)),
-          book(std::make_shared<Book>()) {
+          book(std::make_shared<Book>()), pose_shapes(std::make_shared<PoseShapes>()) {
         book->cache = o.codebook_cache;
         tracker.profile_steps(o.profile);
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
@@ -123,7 +130,7 @@ struct Tracker::Impl {
     // scorer and codebook (the same cache) shared, not copied or made again.
     Impl(const Impl& like, const TrackerOptions& o)
         : ctx(like.ctx), tracker(like.tracker, filter_options(o)), display(like.display), options(o), object_units(like.object_units),
-          score(score_options(o)), pose_scorer(like.pose_scorer) {
+          score(score_options(o)), pose_shapes(like.pose_shapes) {
         if (o.codebook_cache.empty() || o.codebook_cache == like.book->cache) {
             book = like.book;
         } else {
@@ -160,9 +167,14 @@ struct Tracker::Impl {
     track::PoseTerm pose_term(const GelShape* g, size_t touch) {
         if (!g || !(options.render_refined_weight > 0)) return {};
         check_shape(*g, touch);
-        if (!pose_scorer) pose_scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
+        std::shared_ptr<const track::PoseShapeScorer> sc;
+        {
+            std::lock_guard<std::mutex> lock(pose_shapes->mutex);
+            if (!pose_shapes->scorer) pose_shapes->scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
+            sc = pose_shapes->scorer;
+        }
         auto win = std::make_shared<const track::ShapeWindow>(track::shape_window(g->depth_mm, g->height, g->width, g->mm_per_px, score));
-        return [sc = pose_scorer, win, w = options.render_refined_weight, q = score.quadratic,
+        return [sc, win, w = options.render_refined_weight, q = score.quadratic,
                 f = options.render_refined_floor](const track::Rigid& x) {
             return sc->score(x, *win, w, q, f);
         };
@@ -417,7 +429,13 @@ uint64_t Tracker::device_bytes() const {
 }
 uint64_t Tracker::host_bytes() const {
     const Impl::Display& d = *impl_->display;
-    return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size());
+    std::shared_ptr<const track::PoseShapeScorer> pose;
+    {
+        std::lock_guard<std::mutex> lock(impl_->pose_shapes->mutex);
+        pose = impl_->pose_shapes->scorer;
+    }
+    return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size()) +
+           (pose ? pose->bytes() : 0);
 }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 std::vector<std::pair<std::string, double>> Tracker::step_nodes() const { return impl_->tracker.step_node_times(); }

@@ -45,6 +45,8 @@ public:
     // maps agree, and no lower than floor - log(1 + e^floor) however badly one touch's map
     // disagrees (a reader's bad frame costs a bounded amount, as a geometry term's floor).
     double score(const Rigid& pose, const ShapeWindow& m, double weight, bool quadratic, double floor = -INFINITY) const;
+    // Host memory: the binned copy of the dense points and the bins.
+    uint64_t bytes() const { return 4 * uint64_t(bins_.points.size() + bins_.bins.size()); }
 
 private:
     ops::book::BinnedPoints bins_;

@@ -543,7 +543,8 @@ public:
     // from it, each counting it), the step graphs' arenas, the codebook.
     uint64_t device_bytes() const;
     // In host memory: the surface and its tables, the registration's tree and the pair search's
-    // index once a poorly fitting window made them, the display cloud (shared with with_options').
+    // index once a poorly fitting window made them, the dense points binned for render-and-compare
+    // at the refined poses once a gel shape came, the display cloud (all shared with with_options').
     uint64_t host_bytes() const;
     double spacing_mm() const;                // the hypothesis samples' spacing
     // The last step's GPU time per node (name, ms), in run order, with options().profile
