@@ -13,9 +13,12 @@ namespace vtloc::check {
 
 namespace {
 
-OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed, ops::BufferPath path) {
+// interleave: hypotheses an invocation runs side by side (0: the device's; 3 on a CPU driver, 1
+// on a GPU), forced to check the other's code on this device too.
+OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed, ops::BufferPath path, int64_t interleave = 0) {
     OpCase c("pose_evidence", std::to_string(S) + " samples x " + std::to_string(NS) + " spins, " + std::to_string(K) +
-                                  " terms, " + ops::path_name(path));
+                                  " terms, " + ops::path_name(path) +
+                                  (interleave ? ", " + std::to_string(interleave) + " hypotheses an invocation" : ""));
     std::mt19937 rng(seed);
     std::uniform_real_distribution<float> u(-4.0f, 4.0f);
     const int64_t D = 2 * S + 3, V = 6 * 5 * 7, F = 2;
@@ -56,6 +59,7 @@ OpCase pose_case(int64_t S, int64_t NS, int64_t K, uint32_t seed, ops::BufferPat
     p.dims[0] = 6, p.dims[1] = 5, p.dims[2] = 7;
     p.own_field = 1;
     p.path = path;
+    p.interleave = interleave;
     samples = HostTensor({S, 12}, ops::pose::evidence_samples(samples.data));
     int score = ops::pose_evidence(c.g, c.input("samples", samples), c.input("dense", dense),
                                    c.input("cells", HostTensor::from_ints({V, 2}, cells)), c.input("spins", spins),
@@ -125,6 +129,8 @@ std::vector<OpCase> track_cases(const rt::DeviceInfo&) {
     v.push_back(pose_case(61, 36, 6, 3, ops::BufferPath::Texel));
     v.push_back(pose_case(7, 5, 0, 4, ops::BufferPath::Texel));
     v.push_back(pose_case(61, 36, 6, 3, ops::BufferPath::Storage));
+    for (int64_t m : {1, 3}) v.push_back(pose_case(61, 36, 6, 9, ops::BufferPath::Texel, m));
+    v.push_back(pose_case(53, 12, 4, 10, ops::BufferPath::Storage, 5));  // 636 hypotheses: the last invocation's partly past H
     v.push_back(reduce_case("log_softmax", 1031, 12, 5));
     v.push_back(reduce_case("spin_marginal", 300, 36, 6));
     v.push_back(reduce_case("expected_distance", 77, 1, 7));
