@@ -92,6 +92,49 @@ TEST_CASE("check: a corrupted GPU output fails the check and names its node", "[
     CHECK(api::check(ctx, tiny_check()).ok);
 }
 
+TEST_CASE("check: the tracker check walks the tour there and back and names a corrupted node", "[check][tracker]") {
+    api::Context ctx(test::validated());
+    api::TrackerCheckOptions o;
+    o.touches = test::source_path("examples/potato_tour.json");
+    o.hypotheses = 12000;
+    const api::TrackerCheckResult r = api::check_tracker(ctx, o);
+    for (const api::TouchCheck& t : r.touches)
+        if (!t.ok) FAIL_CHECK("touch " << t.touch << ": " << t.belief.first_mismatch);
+    for (const api::NodeCheck& n : r.nodes)
+        if (!n.ok) FAIL_CHECK("node " << n.node << " (" << n.op << "): " << n.error.first_mismatch << n.failure);
+    REQUIRE(r.ok);
+    CHECK(r.touches.size() == 15);  // 8 touches, then back over 7 motions
+    CHECK(r.object.find("potato_tour.ply") != std::string::npos);
+    CHECK(r.hypotheses > 0);
+    std::set<std::string> ops;
+    for (const api::NodeCheck& n : r.nodes) ops.insert(n.op);
+    CHECK(ops == std::set<std::string>{"pose_evidence", "log_softmax", "spin_marginal", "expected_distance"});
+    // The last step is the steady state: the window's 7 motions and the prior as terms, the
+    // prior's field read.
+    const api::NodeCheck& ev = r.nodes.front();
+    REQUIRE(ev.op == "pose_evidence");
+    REQUIRE(ev.input_shapes.size() == 6);
+    CHECK(ev.input_shapes[4] == std::vector<int64_t>{8, 16});
+    CHECK(ev.input_shapes[5][0] == 1);
+    CHECK(r.outputs.size() == 4);
+    // One probability off: the belief's node (and only the step's node check: the tours ran clean) fails.
+    FaultGuard guard;
+    check::testing::set_fault("track.belief", [](HostTensor& t) { t.data[t.data.size() / 2] += 1e-2f; });
+    const api::TrackerCheckResult bad = api::check_tracker(ctx, o);
+    check::testing::clear_fault();
+    CHECK(!bad.ok);
+    REQUIRE(bad.first_failure >= 0);
+    CHECK(bad.nodes[size_t(bad.first_failure)].node == "track.belief");
+    for (const api::TouchCheck& t : bad.touches) CHECK(t.ok);
+    // Bad input: one line naming the file.
+    api::TrackerCheckOptions missing = o;
+    missing.touches = test::source_path("examples/no_such_tour.json");
+    CHECK_THROWS_WITH(api::check_tracker(ctx, missing), Catch::Contains("no_such_tour.json"));
+    api::TrackerCheckOptions none;
+    CHECK_THROWS_WITH(api::check_tracker(ctx, none), Catch::Contains("a touches file is needed"));
+    test::require_no_validation(ctx);
+}
+
 TEST_CASE("check: a bad weight file is one api::Error line", "[check]") {
     api::Context ctx(test::validated());
     api::CheckOptions o = tiny_check();

@@ -28,11 +28,9 @@ nlohmann::json device_json(const api::CheckDevice& d) {
 
 nlohmann::json tol_json(const api::CheckTolerance& t) { return {{"abs", t.abs}, {"rel", t.rel}}; }
 
-}  // namespace
-
-nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o) {
-    nlohmann::json nodes = nlohmann::json::array(), outputs = nlohmann::json::array();
-    for (const api::NodeCheck& n : r.nodes) {
+nlohmann::json nodes_json(const std::vector<api::NodeCheck>& v) {
+    nlohmann::json nodes = nlohmann::json::array();
+    for (const api::NodeCheck& n : v) {
         nlohmann::json j{{"node", n.node},          {"op", n.op},
                          {"stage", n.stage},        {"ok", n.ok},
                          {"inputs", n.input_shapes}, {"outputs", n.output_shapes},
@@ -40,8 +38,19 @@ nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o)
         if (!n.failure.empty()) j["failure"] = n.failure;
         nodes.push_back(std::move(j));
     }
-    for (const api::OutputCheck& out : r.outputs)
-        outputs.push_back({{"name", out.name}, {"ok", out.ok}, {"error", error_json(out.error)}});
+    return nodes;
+}
+
+nlohmann::json outputs_json(const std::vector<api::OutputCheck>& v) {
+    nlohmann::json outputs = nlohmann::json::array();
+    for (const api::OutputCheck& out : v) outputs.push_back({{"name", out.name}, {"ok", out.ok}, {"error", error_json(out.error)}});
+    return outputs;
+}
+
+}  // namespace
+
+nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o) {
+    const nlohmann::json nodes = nodes_json(r.nodes), outputs = outputs_json(r.outputs);
     nlohmann::json j{{"ok", r.ok},
                      {"model", o.model},
                      {"model_name", r.model_name},
@@ -74,6 +83,26 @@ nlohmann::json ops_check_json(const api::OpsCheckResult& r) {
             {"cases", cases},
             {"uncovered_ops", r.uncovered_ops},
             {"ms", r.wall_ms}};
+}
+
+nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::TrackerCheckOptions& o) {
+    nlohmann::json touches = nlohmann::json::array();
+    for (const api::TouchCheck& t : r.touches)
+        touches.push_back({{"touch", t.touch}, {"ok", t.ok}, {"belief", error_json(t.belief)}, {"contact_mm", number(t.contact_mm)}});
+    nlohmann::json j{{"ok", r.ok},
+                     {"touches_file", o.touches},
+                     {"object", r.object},
+                     {"hypotheses", r.hypotheses},
+                     {"device", device_json(r.device)},
+                     {"tolerance", {{"belief", tol_json(r.belief_tolerance)},
+                                    {"node", tol_json(r.node_tolerance)},
+                                    {"end_to_end", tol_json(r.end_to_end_tolerance)}}},
+                     {"touches", touches},
+                     {"nodes", nodes_json(r.nodes)},
+                     {"outputs", outputs_json(r.outputs)},
+                     {"ms", {{"gpu", r.gpu_ms}, {"cpu", r.cpu_ms}, {"wall", r.wall_ms}}}};
+    j["first_failure"] = r.first_failure >= 0 ? nlohmann::json(r.nodes[size_t(r.first_failure)].node) : nlohmann::json();
+    return j;
 }
 
 }  // namespace vtloc::cli

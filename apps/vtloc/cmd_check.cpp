@@ -6,6 +6,8 @@
 #include <map>
 
 #include "apps/vtloc/check_json.h"
+#include "apps/vtloc/check_print.h"
+#include "apps/vtloc/check_tracker.h"
 #include "apps/vtloc/cli.h"
 #include "base/atomic_write.h"
 
@@ -18,6 +20,8 @@ namespace {
 const char* kHelp =
     "usage: vtloc check [--model M] [--tactile IMG --object OBJ] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --ops [--op NAME] [--device D] [--json FILE] [--verbose]\n"
+    "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way]\n"
+    "                   [--device D] [--json FILE] [--verbose]\n"
     "\n"
     "Cross-checks the Vulkan device against the engine's CPU reference.\n"
     "\n"
@@ -36,61 +40,18 @@ const char* kHelp =
     "                and on each variant (texel / storage-buffer paths, the tile shapes\n"
     "                this device's limits choose)\n"
     "  --op NAME     with --ops: only ops whose name contains NAME\n"
+    "  --tracker     the multi-touch filter instead: a GPU tracker and its CPU reference twin\n"
+    "                walk the touches file's tour (default: the shipped potato tour) and back\n"
+    "                over it in reverse (past the window: the prior's path; --one-way: not), their\n"
+    "                beliefs compared after every touch (|gpu - cpu| <= 1e-6 * peak +\n"
+    "                5e-3*|cpu|), then the last touch's step node by node as above, at the\n"
+    "                object's full size (--hypotheses, default 120000: the tables' sizes pick\n"
+    "                the shader paths); --object OBJ for a file without \"object\"\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
     "  --verbose     every node (model check) / every dispatch (--ops)\n"
     "\n"
     "Exit status 0 when everything is within tolerance, 1 on any mismatch (or bad input).\n";
-
-std::string g3(double v) {
-    if (std::isinf(v)) return "inf";
-    char b[32];
-    std::snprintf(b, sizeof b, "%.2e", v);
-    return b;
-}
-
-std::string shapes_str(const std::vector<std::vector<int64_t>>& shapes) {
-    std::string s;
-    for (const auto& sh : shapes) {
-        s += s.empty() ? "[" : " [";
-        for (size_t i = 0; i < sh.size(); ++i) s += (i ? ", " : "") + std::to_string(sh[i]);
-        s += "]";
-    }
-    return s;
-}
-
-void print_device(const api::CheckDevice& d, bool limits) {
-    std::printf("device     %s (%s), Vulkan %s\n", d.name.c_str(), d.type.c_str(), d.vulkan.c_str());
-    std::printf("driver     %s\n", d.driver.c_str());
-    if (!limits) return;
-    std::printf("limits     (what chooses workgroup sizes, tiles and texel / storage-buffer paths)\n");
-    for (auto& [k, v] : d.limits) std::printf("  %-28s %s\n", k.c_str(), v.c_str());
-}
-
-void write_json(const std::string& path, const nlohmann::json& j) {
-    try {
-        write_file_atomic(path, j.dump(2) + "\n");
-    } catch (const vtloc::Error& e) {
-        throw api::Error(e.what());
-    }
-}
-
-std::string indices_str(const api::CheckError& e) {
-    return !e.has_indices ? "-" : e.indices_equal ? "equal" : "DIFFER";
-}
-
-void print_node(const api::NodeCheck& n) {
-    std::printf("  node       %s (op %s)\n", n.node.c_str(), n.op.c_str());
-    std::printf("  inputs     %s\n  outputs    %s\n", shapes_str(n.input_shapes).c_str(),
-                shapes_str(n.output_shapes).c_str());
-    for (const std::string& d : n.dispatches) std::printf("  dispatch   %s\n", d.c_str());
-    if (n.dispatches.empty()) std::printf("  dispatch   (none: a buffer copy)\n");
-    if (!n.failure.empty()) std::printf("  reference  threw: %s\n", n.failure.c_str());
-    if (!n.error.first_mismatch.empty())
-        std::printf("  mismatch   %s; %lld elements out of tolerance; max abs %s, max rel %s\n",
-                    n.error.first_mismatch.c_str(), (long long)n.error.mismatches, g3(n.error.max_abs).c_str(),
-                    g3(n.error.max_rel).c_str());
-}
 
 int model_check(Session& s, const Args& a) {
     api::CheckOptions o;
@@ -210,17 +171,23 @@ int ops_check(Session& s, const Args& a) {
 int cmd_check(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--model"}, {"--tactile"}, {"--object"}, {"--device"}, {"--json"}, {"--ops", false}, {"--op"},
-            {"--verbose", false}});
+            {"--verbose", false}, {"--tracker", false}, {"--touches"}, {"--hypotheses"}, {"--object-units"},
+            {"--one-way", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
     }
-    const bool ops = a.flag("--ops");
+    const bool ops = a.flag("--ops"), tracker = a.flag("--tracker");
+    if (ops && tracker) throw UsageError("--ops and --tracker are two checks: one at a time");
     if (ops && (a.get("--model") || a.get("--tactile") || a.get("--object")))
         throw UsageError("--ops takes no --model, --tactile or --object");
+    if (tracker && (a.get("--model") || a.get("--tactile")))
+        throw UsageError("--tracker takes no --model or --tactile (geometry only)");
+    for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way"})
+        if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
     if (a.get("--device")) s.context.emplace(api::ContextOptions{*a.get("--device")});
-    return ops ? ops_check(s, a) : model_check(s, a);
+    return ops ? ops_check(s, a) : tracker ? tracker_check(s, a) : model_check(s, a);
 }
 
 }  // namespace vtloc::cli

@@ -2,8 +2,8 @@
 # Runs the device check packed by pack.py, on the GPU machine, from the root of a
 # checkout of the same commit:  bash .devcheck/run.sh
 # Benches first (the GPU otherwise idle), then the tests (the shards in parallel;
-# the paper goldens written by the machine's PyTorch, if it has one), the three
-# `vtloc check`s and the demo. Every step has its own timeout, and the logs are
+# the paper goldens written by the machine's PyTorch, if it has one), the
+# `vtloc check`s (the model, the ops, the tracker) and the demo. Every step has its own timeout, and the logs are
 # re-packed into $OUT every 15 s, so a run cut short still leaves what it did.
 # Env: OUT (default /tmp/vtloc-device-check), BENCH=0 (no benches), CORRECT=0 (no
 # tests), DEMO2=1 (the demo in three processes: the driver's shader cache),
@@ -114,6 +114,8 @@ if [ "${CORRECT:-1}" = 1 ]; then
   P[check_model]=$!
   VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --ops --json $L/check_ops.json >$L/check_ops.log 2>&1 &
   P[check_ops]=$!
+  VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --tracker --json $L/check_tracker.json >$L/check_tracker.log 2>&1 &
+  P[check_tracker]=$!
   if [ -n "$PY" ]; then
     mkdir -p "$GOLDENS"
     (cd "$R" && timeout 150 $PY -m weights_tools.make_goldens --paper --out "$GOLDENS") >$L/goldens.log 2>&1

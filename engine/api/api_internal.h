@@ -11,7 +11,16 @@
 #include "engine/model/vtloc_runner.h"
 #include "runtime/context.h"
 
+namespace vtloc::track {
+class Tracker;
+}
+
 namespace vtloc::api {
+
+// The filter inside an api::Tracker (engine/api/tracker.cpp; check_tracker drives it).
+struct TrackerAccess {
+    static track::Tracker& core(Tracker& t);
+};
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a
 // driver reset would (the tests include this internal header; users cannot).

@@ -1,12 +1,17 @@
 // vtloc::api::check and check_ops: the engine's checks (engine/check/) behind
 // the public API's result structs.
+#include <algorithm>
 #include <chrono>
+#include <cmath>
+#include <optional>
 
 #include "engine/api/api_internal.h"
 #include "engine/check/device_report.h"
 #include "engine/check/graph_check.h"
 #include "engine/check/op_selftest.h"
+#include "engine/io/touch_sequence.h"
 #include "engine/model/tactile_encoder.h"
+#include "engine/track/tracker.h"
 
 namespace vtloc::api {
 
@@ -42,6 +47,30 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// The graph check's nodes and outputs into the API's structs (check and check_tracker).
+void fill_graph(const check::GraphCheck& g, std::vector<NodeCheck>& nodes, std::vector<OutputCheck>& outputs) {
+    for (const check::NodeCheck& n : g.nodes) {
+        NodeCheck o;
+        o.node = n.node;
+        o.op = n.op;
+        o.stage = stage_of(n.node);
+        o.input_shapes.assign(n.input_shapes.begin(), n.input_shapes.end());
+        o.output_shapes.assign(n.output_shapes.begin(), n.output_shapes.end());
+        o.dispatches = n.dispatches;
+        o.error = to_api(n.cmp);
+        o.error.has_indices = n.has_index;
+        o.error.indices_equal = n.indices_equal;
+        o.failure = n.error;
+        o.ok = n.ok();
+        nodes.push_back(std::move(o));
+    }
+    for (const check::OutputCheck& out : g.outputs) {
+        OutputCheck o{out.name, to_api(out.cmp), out.cmp.ok};
+        o.error.indices_equal = !out.cmp.index || out.cmp.ok;
+        outputs.push_back(std::move(o));
+    }
+}
+
 }  // namespace
 
 CheckResult check(Context& context, const CheckOptions& options) {
@@ -62,30 +91,73 @@ CheckResult check(Context& context, const CheckOptions& options) {
         r.device = device_of(ctx);
         r.node_tolerance = {check::kNodeTolerance.abs, check::kNodeTolerance.rel};
         r.end_to_end_tolerance = {check::kEndToEndTolerance.abs, check::kEndToEndTolerance.rel};
-        for (const check::NodeCheck& n : g.nodes) {
-            NodeCheck o;
-            o.node = n.node;
-            o.op = n.op;
-            o.stage = stage_of(n.node);
-            o.input_shapes.assign(n.input_shapes.begin(), n.input_shapes.end());
-            o.output_shapes.assign(n.output_shapes.begin(), n.output_shapes.end());
-            o.dispatches = n.dispatches;
-            o.error = to_api(n.cmp);
-            o.error.has_indices = n.has_index;
-            o.error.indices_equal = n.indices_equal;
-            o.failure = n.error;
-            o.ok = n.ok();
-            r.nodes.push_back(std::move(o));
-        }
-        for (const check::OutputCheck& out : g.outputs) {
-            OutputCheck o{out.name, to_api(out.cmp), out.cmp.ok};
-            o.error.indices_equal = !out.cmp.index || out.cmp.ok;
-            r.outputs.push_back(std::move(o));
-        }
+        fill_graph(g, r.nodes, r.outputs);
         r.first_failure = g.first_failure;
         r.ok = g.ok();
         r.gpu_ms = g.gpu_ms;
         r.cpu_ms = g.cpu_nodes_ms + g.cpu_full_ms;
+        r.wall_ms = ms_since(t0);
+        return r;
+    });
+}
+
+
+TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& options) {
+    return guarded([&] {
+        const auto t0 = std::chrono::steady_clock::now();
+        if (options.touches.empty()) throw Error("check_tracker: a touches file is needed (its motions drive the check)");
+        const io::TouchSequence seq = io::read_touch_sequence(options.touches);
+        const std::string object = options.object.empty() ? seq.object : options.object;
+        if (object.empty()) throw Error(options.touches + ": no \"object\" in the file; name one (--object)");
+        std::vector<std::optional<track::Rigid>> motions = seq.relative_motions(options.touches);
+        if (motions.size() < 2) throw Error(options.touches + ": the tracker check needs at least two touches");
+        if (options.there_and_back)
+            for (size_t k = motions.size() - 1; k >= 1; --k) motions.push_back(track::inverse(*motions[k]));
+        TrackerOptions to;
+        to.hypotheses = options.hypotheses;
+        to.object_units = options.object_units;
+        Tracker api_gpu(context, object, to);
+        track::Tracker& gpu = TrackerAccess::core(api_gpu);
+        track::Tracker cpu = track::Tracker::cpu_reference_of(gpu);
+        gpu.capture_steps(true);
+        TrackerCheckResult r;
+        r.object = object;
+        r.hypotheses = gpu.surface().n_hypotheses();
+        double gpu_ms = 0, cpu_ms = 0;
+        for (size_t i = 0; i < motions.size(); ++i) {
+            auto a0 = std::chrono::steady_clock::now();
+            gpu.add_touch(motions[i]);
+            gpu_ms += ms_since(a0);
+            a0 = std::chrono::steady_clock::now();
+            cpu.add_touch(motions[i]);
+            cpu_ms += ms_since(a0);
+            const std::vector<float>&a = gpu.belief(), &b = cpu.belief();
+            float peak = 0;
+            for (float v : b) peak = std::max(peak, v);
+            const int64_t n = int64_t(b.size());
+            const check::Comparison c = check::compare(HostTensor({int64_t(a.size())}, a), HostTensor({n}, b),
+                                                       {r.belief_tolerance.abs * peak, r.belief_tolerance.rel});
+            TouchCheck t;
+            t.touch = int(i + 1);
+            t.belief = to_api(c);
+            t.ok = c.ok;
+            const auto ca = gpu.estimate().contact, cb = cpu.estimate().contact;
+            t.contact_mm = std::sqrt((ca[0] - cb[0]) * (ca[0] - cb[0]) + (ca[1] - cb[1]) * (ca[1] - cb[1]) + (ca[2] - cb[2]) * (ca[2] - cb[2]));
+            r.touches.push_back(std::move(t));
+        }
+        rt::Context& ctx = ContextAccess::rt(context);
+        const track::Tracker::StepCase* step = gpu.last_step_case();
+        if (!step) throw Error("check_tracker: the last step was not kept");  // capture was on: a bug
+        const check::GraphCheck g = check::check_graph(ctx, step->graph, gpu.step_weights(), step->inputs);
+        fill_graph(g, r.nodes, r.outputs);
+        r.device = device_of(ctx);
+        r.node_tolerance = {check::kNodeTolerance.abs, check::kNodeTolerance.rel};
+        r.end_to_end_tolerance = {check::kEndToEndTolerance.abs, check::kEndToEndTolerance.rel};
+        r.first_failure = g.first_failure;
+        r.ok = g.ok();
+        for (const TouchCheck& t : r.touches) r.ok = r.ok && t.ok;
+        r.gpu_ms = gpu_ms + g.gpu_ms;
+        r.cpu_ms = cpu_ms + g.cpu_nodes_ms + g.cpu_full_ms;
         r.wall_ms = ms_since(t0);
         return r;
     });

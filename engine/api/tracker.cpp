@@ -438,6 +438,7 @@ uint64_t Tracker::host_bytes() const {
            (pose ? pose->bytes() : 0);
 }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
+track::Tracker& TrackerAccess::core(Tracker& t) { return t.impl_->tracker; }
 std::vector<std::pair<std::string, double>> Tracker::step_nodes() const { return impl_->tracker.step_node_times(); }
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,

@@ -52,6 +52,8 @@ struct Tracker::Impl {
     std::shared_ptr<const LazyPairIndex> pairs;    // the deep search's pair search (null: off); shared likewise
     bool profile = false;                          // profile_steps
     std::vector<std::pair<std::string, double>> last_times;  // the last step's, while profiling
+    bool capture = false;                          // capture_steps
+    std::optional<StepCase> last_case;             // the last step's graph and inputs, while capturing
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -113,6 +115,15 @@ Tracker::Tracker(const Tracker& like, FilterOptions options)
     // executor reads: ResidentWeights::forget).
     impl_->resident = like.impl_->resident;
 }
+
+Tracker Tracker::cpu_reference_of(const Tracker& like) {
+    Tracker t(like, like.opt_);
+    t.impl_->ctx = nullptr;
+    t.impl_->resident = nullptr;
+    return t;
+}
+
+Tracker::Tracker(Tracker&&) noexcept = default;
 
 void Tracker::add_neighbours() {
     impl_->weights.add("surface.neighbours", slack_neighbours(*surface_, kSlackNeighbours, slack_radius(*surface_)));
@@ -515,6 +526,7 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
                 fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
     TensorMap in{{"terms", std::move(tr)}, {"fields", std::move(fields)}};
     if (slack_on(opt_) && F > 0) in.emplace("widths", std::move(widths));
+    if (impl_->capture) impl_->last_case = StepCase{step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1), in};
     TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
     impl_->last_times.clear();
     if (impl_->ctx && impl_->profile)
@@ -580,6 +592,15 @@ void Tracker::profile_steps(bool on) {
 }
 
 std::vector<std::pair<std::string, double>> Tracker::step_node_times() const { return impl_->last_times; }
+
+void Tracker::capture_steps(bool on) {
+    impl_->capture = on;
+    if (!on) impl_->last_case.reset();
+}
+
+const Tracker::StepCase* Tracker::last_step_case() const { return impl_->last_case ? &*impl_->last_case : nullptr; }
+
+const WeightStore& Tracker::step_weights() const { return impl_->weights; }
 
 uint64_t Tracker::host_bytes() const {
     return surface_->host_bytes() + impl_->weights.bytes() + (impl_->nearest ? impl_->nearest->bytes() : 0) +

@@ -12,16 +12,20 @@
 #include <array>
 #include <cmath>
 #include <functional>
+#include <map>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include "engine/graph.h"
 #include "engine/rigid.h"
+#include "engine/tensor.h"
 #include "engine/track/surface.h"
 
 namespace vtloc {
+class WeightStore;
 namespace rt {
 class Context;
 }
@@ -162,7 +166,11 @@ public:
     // `like`'s surface and context under other options, no touches (with_options): the
     // surface, its tables and the registration's k-d tree shared with `like`, not built again.
     Tracker(const Tracker& like, FilterOptions options);
+    // `like` under its own options with every step on the ops' CPU references, its surface and
+    // host tables shared (vtloc check's oracle beside the GPU tracker; no touches).
+    static Tracker cpu_reference_of(const Tracker& like);
     ~Tracker();
+    Tracker(Tracker&&) noexcept;
     // What the constructor refuses, without a surface (callers check before building one).
     static void check_options(const FilterOptions& options);
     Tracker(const Tracker&) = delete;
@@ -201,6 +209,16 @@ public:
     // (node name, ms); empty while off or without a GPU.
     void profile_steps(bool on);
     std::vector<std::pair<std::string, double>> step_node_times() const;
+    // Checking (vtloc check --tracker): while on, each step keeps its graph and inputs, so the
+    // last one can be run again node by node against the CPU references (check::check_graph
+    // with step_weights()); null while off or before a step.
+    struct StepCase {
+        Graph graph;
+        std::map<std::string, HostTensor> inputs;
+    };
+    void capture_steps(bool on);
+    const StepCase* last_step_case() const;
+    const WeightStore& step_weights() const;
     // What it holds in host memory: the surface, its tables as the GPU reads them, and the
     // registration's tree and the pair search's index once a window has made them (the first
     // time one fits poorly). A tracker made by with_options shares these; each counts them.

@@ -97,4 +97,46 @@ struct OpsCheckResult {
 OpsCheckResult check_ops(Context& context, const std::string& filter = "",
                          const std::function<void(size_t, size_t, const OpCheck&)>& progress = {});
 
+// ---- Checking the multi-touch filter (`vtloc check --tracker`) ---------------
+
+struct TrackerCheckOptions {
+    std::string touches;         // a touches file (vtloc sequence's format); its motions drive the check
+    std::string object;          // mesh or cloud; empty: the touches file's "object"
+    int64_t hypotheses = 120000; // as TrackerOptions::hypotheses (the tables' sizes pick shader paths)
+    double object_units = 1;     // as TrackerOptions::object_units
+    // Then back over the touches in reverse (each motion inverted: poses the tour pressed), so
+    // a tour no longer than the window (8) also reaches the steady state, the belief before
+    // the window entering as a prior.
+    bool there_and_back = true;
+};
+
+struct TouchCheck {
+    int touch = 0;               // 1-based
+    CheckError belief;           // the GPU tracker's belief against the CPU reference tracker's
+    double contact_mm = 0;       // their estimates' contacts apart (reported; the host refines both)
+    bool ok = true;
+};
+
+struct TrackerCheckResult {
+    bool ok = false;
+    CheckDevice device;
+    std::string object;
+    int64_t hypotheses = 0;      // as built (samples x spins)
+    // The belief: |gpu - cpu| <= abs * (the reference's peak) + rel * |cpu| (the GPU's exp and log
+    // are not correctly rounded and its sums run in another order: a hypothesis's log evidence
+    // may differ by ~2e-3 over a window's terms).
+    CheckTolerance belief_tolerance{1e-6, 5e-3};
+    CheckTolerance node_tolerance{1e-4, 1e-4}, end_to_end_tolerance{2e-3, 2e-3};
+    std::vector<TouchCheck> touches;   // both trackers walk the whole tour
+    std::vector<NodeCheck> nodes;      // the last touch's step, each node's CPU reference on the GPU's inputs
+    std::vector<OutputCheck> outputs;  // that step's outputs against a full CPU run
+    int first_failure = -1;            // index into nodes, -1 if none
+    double gpu_ms = 0, cpu_ms = 0, wall_ms = 0;
+};
+
+// Walks the touches file's tour on a GPU tracker and on its CPU reference twin (the same
+// surface), comparing the beliefs after every touch, then checks the last touch's step
+// graph node by node. Bad files throw Error; a mismatch does not throw (ok = false).
+TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& options);
+
 }  // namespace vtloc::api

@@ -554,6 +554,7 @@ public:
     struct Impl;
 
 private:
+    friend struct TrackerAccess;  // engine/api internals (check_tracker)
     explicit Tracker(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };

@@ -1,0 +1,70 @@
+#include "apps/vtloc/check_tracker.h"
+
+#include <cstdio>
+
+#include "apps/vtloc/check_json.h"
+#include "apps/vtloc/check_print.h"
+
+namespace vtloc::cli {
+
+int tracker_check(Session& s, const Args& a) {
+    api::TrackerCheckOptions o;
+    o.touches = a.get("--touches").value_or((shipped_dir() / "examples" / "potato_tour.json").string());
+    o.object = a.get("--object").value_or("");
+    o.hypotheses = a.integer("--hypotheses", int(o.hypotheses), 100, 2000000);
+    o.object_units = a.number("--object-units", 1.0);
+    o.there_and_back = !a.flag("--one-way");
+    std::printf("check      the multi-touch filter on %s (%s)%s\n", o.touches.c_str(),
+                o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "");
+    std::fflush(stdout);
+    const api::TrackerCheckResult r = api::check_tracker(s.gpu(), o);
+    print_device(r.device, false);
+    std::printf("object     %s: %lld hypotheses\n", r.object.c_str(), (long long)r.hypotheses);
+    std::printf("tolerance  belief after each touch |gpu - cpu| <= %g * (the reference's peak) + %g*|cpu|\n",
+                r.belief_tolerance.abs, r.belief_tolerance.rel);
+    std::printf("           the last step per node |gpu - cpu| <= %g + %g*|cpu| (each CPU node fed the GPU's inputs)\n",
+                r.node_tolerance.abs, r.node_tolerance.rel);
+    std::printf("           its outputs |gpu - cpu| <= %g + %g*|cpu| (against a full CPU run)\n\n", r.end_to_end_tolerance.abs,
+                r.end_to_end_tolerance.rel);
+    std::printf("%-6s %-9s %-9s %-8s %-12s %s\n", "touch", "max abs", "max rel", "tol used", "contacts mm", "result");
+    size_t bad_touches = 0;
+    for (const api::TouchCheck& t : r.touches) {
+        bad_touches += !t.ok;
+        std::printf("%-6d %-9s %-9s %-8s %-12.4f %s\n", t.touch, g3(t.belief.max_abs).c_str(), g3(t.belief.max_rel).c_str(),
+                    g3(t.belief.tolerance_used).c_str(), t.contact_mm,
+                    t.ok ? "ok" : ("FAILED (" + t.belief.first_mismatch + ")").c_str());
+    }
+    std::printf("\n%-40s %-18s %-9s %-9s %-8s %s\n", "the last touch's step: node", "op", "max abs", "max rel", "tol used",
+                "result");
+    size_t bad_nodes = 0;
+    for (const api::NodeCheck& n : r.nodes) {
+        bad_nodes += !n.ok;
+        std::printf("%-40s %-18s %-9s %-9s %-8s %s\n", n.node.c_str(), n.op.c_str(), g3(n.error.max_abs).c_str(),
+                    g3(n.error.max_rel).c_str(), g3(n.error.tolerance_used).c_str(), n.ok ? "ok" : "FAILED");
+        if (a.flag("--verbose"))
+            for (const std::string& d : n.dispatches) std::printf("    dispatch %s\n", d.c_str());
+    }
+    size_t bad_outputs = 0;
+    for (const api::OutputCheck& out : r.outputs) {
+        bad_outputs += !out.ok;
+        std::printf("%-40s %-18s %-9s %-9s %-8s %s\n", ("output " + out.name).c_str(), "", g3(out.error.max_abs).c_str(),
+                    g3(out.error.max_rel).c_str(), g3(out.error.tolerance_used).c_str(),
+                    out.ok ? "ok" : ("FAILED (" + out.error.first_mismatch + ")").c_str());
+    }
+    if (r.first_failure >= 0) {
+        std::printf("\nfirst node out of tolerance:\n");
+        print_node(r.nodes[size_t(r.first_failure)]);
+    }
+    std::printf("\n%s: %zu of %zu touches' beliefs, %zu of %zu nodes and %zu of %zu outputs within tolerance (GPU %.0f ms, "
+                "CPU reference %.0f ms, total %.1f s)\n",
+                r.ok ? "OK" : "FAILED", r.touches.size() - bad_touches, r.touches.size(), r.nodes.size() - bad_nodes, r.nodes.size(),
+                r.outputs.size() - bad_outputs, r.outputs.size(), r.gpu_ms, r.cpu_ms, r.wall_ms / 1000.0);
+    if (a.get("--json")) write_json(*a.get("--json"), tracker_check_json(r, o));
+    if (r.ok) return 0;
+    std::fflush(stdout);
+    std::fprintf(stderr, "vtloc: tracker check failed on %s: %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
+                 r.device.name.c_str(), bad_touches, bad_nodes, bad_outputs);
+    return 1;
+}
+
+}  // namespace vtloc::cli
