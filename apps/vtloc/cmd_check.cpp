@@ -49,7 +49,7 @@ const char* kHelp =
     "                the shader paths); --object OBJ for a file without \"object\"\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
-    "  --verbose     every node (model check) / every dispatch (--ops)\n"
+    "  --verbose     every node (model check) / every dispatch (--ops, --tracker)\n"
     "\n"
     "Exit status 0 when everything is within tolerance, 1 on any mismatch (or bad input).\n";
 
