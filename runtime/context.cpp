@@ -335,6 +335,17 @@ Context::Context(const ContextOptions& options) {
         di.pQueueCreateInfos = &qi;
         check_vk(vkCreateDevice(physical_, &di, nullptr, &device_), "vkCreateDevice");
         vkGetDeviceQueue(device_, queue_family_, 0, &queue_);
+        uint32_t texel_cap = options.max_texel_elements;
+        if (const char* t = std::getenv("VTLOC_MAX_TEXEL_ELEMENTS"); !texel_cap && t && *t) {
+            char* end = nullptr;
+            const unsigned long long v = std::strtoull(t, &end, 10);
+            if (*end || v < 65536 || v > 0xffffffffull)
+                throw Error(std::string("VTLOC_MAX_TEXEL_ELEMENTS='") + t + "' is not a whole number from 65536 (Vulkan's minimum) up");
+            texel_cap = uint32_t(v);
+        }
+        if (texel_cap && texel_cap < 65536)
+            throw Error("ContextOptions::max_texel_elements " + std::to_string(texel_cap) + " is below Vulkan's minimum, 65536");
+        if (texel_cap) info_.max_texel_elements = std::min(info_.max_texel_elements, texel_cap);
         if (options.plan_for) {
             const DeviceInfo real = info_;
             info_ = *options.plan_for;

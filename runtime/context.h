@@ -96,6 +96,11 @@ struct ContextOptions {
     // sequences record dispatches without running them (a submit that holds one
     // throws). Buffers are still real, on the device picked above.
     std::optional<DeviceInfo> plan_for;
+    // Texel-buffer elements the engine may use (0: VTLOC_MAX_TEXEL_ELEMENTS if set, else the
+    // device's): below the device's own, the ops take the storage-buffer paths a device with
+    // that limit would, on this one (vtloc check --tracker at a small GPU's limit). At least
+    // Vulkan's guaranteed 65,536.
+    uint32_t max_texel_elements = 0;
 };
 
 // A message from the validation layer (warnings and errors only).

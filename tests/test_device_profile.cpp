@@ -4,6 +4,7 @@
 // (checked against its limits) without running anything.
 #include <catch2/catch.hpp>
 #include <fstream>
+#include <set>
 #include <sstream>
 #include <tuple>
 
@@ -175,4 +176,34 @@ TEST_CASE("on a plan-only H200 FPS takes 2 points a thread and the point encoder
     CHECK(point_major_layers(plan) == 0);
     if (test::gpu().info().type == VK_PHYSICAL_DEVICE_TYPE_CPU) CHECK(point_major_layers(test::gpu()) > 0);
     CHECK(plan.take_validation_messages().empty());
+}
+
+TEST_CASE("a context held to a smaller texel limit takes the storage-buffer paths and gives the same bits", "[runtime][profile]") {
+    // ContextOptions::max_texel_elements (VTLOC_MAX_TEXEL_ELEMENTS): the device's limit, lowered.
+    rt::ContextOptions o;
+    o.validation = 1;
+    o.max_texel_elements = 70000;
+    rt::Context small(o);
+    const uint32_t own = test::gpu().info().max_texel_elements;
+    CHECK(small.info().max_texel_elements == std::min<uint32_t>(own, 70000));
+    o.max_texel_elements = 4096;
+    CHECK_THROWS_WITH(rt::Context(o), Catch::Contains("below Vulkan's minimum, 65536"));
+    // An op whose input passes the lowered limit runs its storage-buffer shader there, the
+    // same numbers as the texel one on the full limit (log_softmax: 80,000 scores).
+    Graph g;
+    const HostTensor score = test::random_tensor({80000}, 17, -30.0f, 5.0f);
+    g.output(ops::log_softmax(g, g.input("score", {80000}), "sm")[0], "log");
+    WeightStore w;
+    const TensorMap in{{"score", score}};
+    GpuExecutor full(test::gpu(), g, w, std::make_shared<ResidentWeights>(test::gpu()));
+    GpuExecutor held(small, g, w, std::make_shared<ResidentWeights>(small));
+    CHECK(held.run(in).at("log").data == full.run(in).at("log").data);
+    auto shaders = [](const GpuExecutor& e) {
+        std::set<std::string> s;
+        for (const rt::Sequence::DispatchRecord& d : e.sequence().dispatch_log()) s.insert(d.shader);
+        return s;
+    };
+    CHECK(shaders(full).count("log_softmax") == 1);
+    CHECK(shaders(held).count("log_softmax_ssbo") == 1);
+    CHECK(small.take_validation_messages().empty());
 }
