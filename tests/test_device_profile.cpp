@@ -3,6 +3,7 @@
 // and field, and a plan-only context records what the profile's GPU would get
 // (checked against its limits) without running anything.
 #include <catch2/catch.hpp>
+#include <cstdlib>
 #include <fstream>
 #include <set>
 #include <sstream>
@@ -185,7 +186,7 @@ TEST_CASE("a context held to a smaller texel limit takes the storage-buffer path
     o.max_texel_elements = 70000;
     rt::Context small(o);
     const uint32_t own = test::gpu().info().max_texel_elements;
-    CHECK(small.info().max_texel_elements == std::min<uint32_t>(own, 70000));
+    if (!std::getenv("VTLOC_MAX_TEXEL_ELEMENTS")) CHECK(small.info().max_texel_elements == std::min<uint32_t>(own, 70000));
     o.max_texel_elements = 4096;
     CHECK_THROWS_WITH(rt::Context(o), Catch::Contains("below Vulkan's minimum, 65536"));
     // An op whose input passes the lowered limit runs its storage-buffer shader there, the
@@ -203,7 +204,8 @@ TEST_CASE("a context held to a smaller texel limit takes the storage-buffer path
         for (const rt::Sequence::DispatchRecord& d : e.sequence().dispatch_log()) s.insert(d.shader);
         return s;
     };
-    CHECK(shaders(full).count("log_softmax") == 1);
+    // (Unless the tests themselves run held to the limit: VTLOC_MAX_TEXEL_ELEMENTS.)
+    if (test::gpu().info().max_texel_elements >= 80000) CHECK(shaders(full).count("log_softmax") == 1);
     CHECK(shaders(held).count("log_softmax_ssbo") == 1);
     CHECK(small.take_validation_messages().empty());
 }
