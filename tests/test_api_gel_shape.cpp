@@ -28,6 +28,18 @@ api::TactileImage press(const sensor::Calibration& c, int i) {
     return im;
 }
 
+// A gentle cap pressed into the gel, tilted a little along x (120 x 160 at the dataset's 0.1245 mm).
+api::GelShape tilted_cap() {
+    api::GelShape g;
+    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
+    for (int r = 0; r < g.height; ++r)
+        for (int c = 0; c < g.width; ++c) {
+            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
+            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
+        }
+    return g;
+}
+
 }  // namespace
 
 TEST_CASE("gel shape reader: the GPU pipeline equals the CPU one on real presses", "[api][sensor]") {
@@ -226,13 +238,7 @@ TEST_CASE("tracker: the shape term's press percentile, quadratic fit and cell ar
     api::TrackerOptions o;
     o.hypotheses = 5000;
     const std::string potato = std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply";
-    api::GelShape g;
-    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
-    for (int r = 0; r < g.height; ++r)
-        for (int c = 0; c < g.width; ++c) {
-            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
-            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
-        }
+    api::GelShape g = tilted_cap();
     for (int r = 58; r < 62; ++r)
         for (int c = 78; c < 82; ++c) g.depth_mm[size_t(r * g.width + c)] += 1.5f;  // a 0.5 mm spike, 1.5 mm high
     std::vector<float> terms[4];
@@ -282,13 +288,7 @@ TEST_CASE("tracker: with_options' trackers share the codebook, each scoring with
     rt::Context& rtc = api::ContextAccess::rt(ctx);
     api::TrackerOptions o;
     o.hypotheses = 5000;
-    api::GelShape g;
-    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
-    for (int r = 0; r < g.height; ++r)
-        for (int c = 0; c < g.width; ++c) {
-            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
-            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
-        }
+    api::GelShape g = tilted_cap();
     o.register_rounds = 0, o.deep_modes = 0;  // no search tree: host_bytes moves by the pose scorer's bins alone
     api::Tracker a(ctx, potato, o);
     const api::Tracker early = a.with_options(o);  // made before any gel shape
