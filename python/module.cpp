@@ -14,6 +14,7 @@ namespace vtloc::python {
 void bind_model(py::module_& m);
 void bind_tracker(py::module_& m);
 void bind_gel_shape(py::module_& m);
+void bind_check(py::module_& m);
 }
 
 namespace {
@@ -93,4 +94,5 @@ PYBIND11_MODULE(vtloc, m) {
     python::bind_model(m);
     python::bind_tracker(m);
     python::bind_gel_shape(m);
+    python::bind_check(m);
 }

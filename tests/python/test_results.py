@@ -260,6 +260,26 @@ def test_tracker_candidates_protocol(ctx, root):
         vtloc.Tracker(ctx, mug_path, candidates=np.zeros((4, 2)))
 
 
+def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    r = vtloc.check(ctx, tiny_path, touch, mug_path)
+    assert r["ok"] and r["first_failure"] is None and r["device"] == ctx.device["name"]
+    run_cli(cli, "check", "--model", tiny_path, "--tactile", touch, "--object", mug_path, "--json", str(tmp_path / "m.json"))
+    with open(tmp_path / "m.json") as f:
+        m = json.load(f)
+    assert [n["node"] for n in r["nodes"]] == [n["node"] for n in m["nodes"]]
+    assert [o["name"] for o in r["outputs"]] == [o["name"] for o in m["outputs"]]
+    tour = os.path.join(root, "examples", "potato_tour.json")
+    t = vtloc.check_tracker(ctx, tour, hypotheses=12000)
+    assert t["ok"] and len(t["touches"]) == 15 and all(x["ok"] for x in t["touches"])
+    assert [n["op"] for n in t["nodes"]] == ["pose_evidence", "log_softmax", "spin_marginal", "expected_distance"]
+    assert t["tolerance"]["belief"] == {"abs": 1e-6, "rel": 5e-3}
+    one_way = vtloc.check_tracker(ctx, tour, hypotheses=12000, there_and_back=False)
+    assert len(one_way["touches"]) == 8 and one_way["hypotheses"] == t["hypotheses"]
+    with pytest.raises(vtloc.Error, match="no_such_tour.json"):
+        vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
+
+
 def test_gel_shape_reader(ctx, root, tmp_path):
     reader = vtloc.GelShapeReader(ctx)
     frame = os.path.join(root, "examples", "touch_01.png")  # a real 4 mm ball press

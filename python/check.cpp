@@ -1,0 +1,112 @@
+// vtloc.check and vtloc.check_tracker: a device against the CPU reference (`vtloc check`), as dicts.
+#include <pybind11/pybind11.h>
+#include <pybind11/stl.h>
+
+#include <cmath>
+
+#include "python/arrays.h"
+
+namespace vtloc::python {
+
+namespace {
+
+py::object number(double v) { return std::isfinite(v) ? py::object(py::float_(v)) : py::object(py::none()); }
+
+py::dict error_dict(const api::CheckError& e) {
+    py::dict d;
+    d["max_abs"] = number(e.max_abs);
+    d["max_rel"] = number(e.max_rel);
+    d["tolerance_used"] = number(e.tolerance_used);
+    d["mismatches"] = e.mismatches;
+    if (e.has_indices) d["indices_equal"] = e.indices_equal;
+    if (!e.first_mismatch.empty()) d["first_mismatch"] = e.first_mismatch;
+    return d;
+}
+
+py::list nodes_list(const std::vector<api::NodeCheck>& v) {
+    py::list out;
+    for (const api::NodeCheck& n : v) {
+        py::dict d;
+        d["node"] = n.node, d["op"] = n.op, d["stage"] = n.stage, d["ok"] = n.ok;
+        d["dispatches"] = n.dispatches, d["error"] = error_dict(n.error);
+        if (!n.failure.empty()) d["failure"] = n.failure;
+        out.append(d);
+    }
+    return out;
+}
+
+py::list outputs_list(const std::vector<api::OutputCheck>& v) {
+    py::list out;
+    for (const api::OutputCheck& o : v) {
+        py::dict d;
+        d["name"] = o.name, d["ok"] = o.ok, d["error"] = error_dict(o.error);
+        out.append(d);
+    }
+    return out;
+}
+
+py::dict tol(const api::CheckTolerance& t) {
+    py::dict d;
+    d["abs"] = t.abs, d["rel"] = t.rel;
+    return d;
+}
+
+py::object first(const std::vector<api::NodeCheck>& nodes, int i) {
+    return i >= 0 ? py::object(py::str(nodes[size_t(i)].node)) : py::object(py::none());
+}
+
+}  // namespace
+
+void bind_check(py::module_& m) {
+    m.def(
+        "check",
+        [](api::Context& ctx, const std::string& model, const std::string& tactile, const std::string& object) {
+            api::CheckResult r;
+            {
+                py::gil_scoped_release release;
+                r = api::check(ctx, {model, tactile, object});
+            }
+            py::dict d;
+            d["ok"] = r.ok, d["device"] = r.device.name, d["model_name"] = r.model_name;
+            d["tolerance"] = py::dict(py::arg("node") = tol(r.node_tolerance), py::arg("end_to_end") = tol(r.end_to_end_tolerance));
+            d["nodes"] = nodes_list(r.nodes), d["outputs"] = outputs_list(r.outputs);
+            d["first_failure"] = first(r.nodes, r.first_failure);
+            d["ms"] = py::dict(py::arg("gpu") = r.gpu_ms, py::arg("cpu") = r.cpu_ms, py::arg("wall") = r.wall_ms);
+            return d;
+        },
+        py::arg("context"), py::arg("model"), py::arg("tactile"), py::arg("object"),
+        "vtloc check: the model once on the device, every node against its CPU reference fed the GPU's inputs,\n"
+        "the outputs against a full CPU run. -> dict: ok, nodes, outputs, first_failure, tolerance, ms.");
+    m.def(
+        "check_tracker",
+        [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back) {
+            api::TrackerCheckOptions o;
+            o.touches = touches, o.object = object, o.hypotheses = hypotheses, o.there_and_back = there_and_back;
+            api::TrackerCheckResult r;
+            {
+                py::gil_scoped_release release;
+                r = api::check_tracker(ctx, o);
+            }
+            py::list ts;
+            for (const api::TouchCheck& t : r.touches) {
+                py::dict d;
+                d["touch"] = t.touch, d["ok"] = t.ok, d["belief"] = error_dict(t.belief), d["contact_mm"] = number(t.contact_mm);
+                ts.append(d);
+            }
+            py::dict d;
+            d["ok"] = r.ok, d["device"] = r.device.name, d["object"] = r.object, d["hypotheses"] = r.hypotheses;
+            d["tolerance"] = py::dict(py::arg("belief") = tol(r.belief_tolerance), py::arg("node") = tol(r.node_tolerance),
+                                      py::arg("end_to_end") = tol(r.end_to_end_tolerance));
+            d["touches"] = ts, d["nodes"] = nodes_list(r.nodes), d["outputs"] = outputs_list(r.outputs);
+            d["first_failure"] = first(r.nodes, r.first_failure);
+            d["ms"] = py::dict(py::arg("gpu") = r.gpu_ms, py::arg("cpu") = r.cpu_ms, py::arg("wall") = r.wall_ms);
+            return d;
+        },
+        py::arg("context"), py::arg("touches"), py::arg("object") = "", py::arg("hypotheses") = 120000,
+        py::arg("there_and_back") = true,
+        "vtloc check --tracker: a GPU tracker and its CPU reference walk the touches file's tour (and back),\n"
+        "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
+        "outputs, first_failure, tolerance, ms. object: for a file without \"object\".");
+}
+
+}  // namespace vtloc::python
