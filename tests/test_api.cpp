@@ -138,6 +138,87 @@ TEST_CASE("api: a tracker's estimate, its modes climbed on the host's threads, i
     CHECK_THROWS_WITH(run(), Catch::Contains("threads"));
 }
 
+TEST_CASE("api: two trackers of one object on two threads at once, sharing its tables and codebook, give the results of each alone", "[api][threads][tracker]") {
+    // A tracker and one with_options made share the device tables, the codebook and the binned
+    // points, each made at its first use (engine/api/tracker.cpp). Both trackers' first touches
+    // run at once here, so the first uses race; every result must be that of a tracker made
+    // from the file alone, bit for bit.
+    const std::string potato = test::source_path("examples/potato_tour.ply");
+    api::TrackerOptions o;
+    o.hypotheses = 5000;
+    api::TrackerOptions other = o;  // the comparison's and the filter's own options differ
+    other.render_weight = 0.5, other.render_press_percentile = 90, other.odometry_mm = 0.5;
+    auto cap = [](double r0, double c0, double tilt) {  // a gentle cap pressed into the gel
+        api::GelShape g;
+        g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
+        for (int r = 0; r < g.height; ++r)
+            for (int c = 0; c < g.width; ++c) {
+                const double y = r * g.mm_per_px - r0, x = c * g.mm_per_px - c0;
+                g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + tilt * x)));
+            }
+        return g;
+    };
+    const std::vector<api::GelShape> shapes{cap(7.5, 10.0, 0.01), cap(6.0, 11.0, 0.0), cap(8.0, 9.0, -0.01)};
+    const std::vector<api::Motion> motions{{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}},
+                                           {{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}}};
+    struct Run {
+        api::TrackerEstimate online, window;
+        std::vector<float> term;
+    };
+    auto run = [&](api::Tracker& t) {
+        Run r;
+        for (size_t i = 0; i < shapes.size(); ++i)
+            t.add_touch(i == 0 ? std::nullopt : std::optional<api::Motion>(motions[i - 1]), nullptr, nullptr, &shapes[i]);
+        r.online = t.estimate();
+        r.window = t.evaluate_window(motions, {}, nullptr, {&shapes[0], &shapes[1], &shapes[2]});
+        r.term = t.shape_term(shapes[1]);
+        return r;
+    };
+    std::vector<Run> want;
+    {
+        api::Context alone(test::validated());
+        for (const api::TrackerOptions* opt : {&o, &other}) {
+            api::Tracker t(alone, potato, *opt);
+            want.push_back(run(t));
+        }
+        test::require_no_validation(alone);
+    }
+    api::Context ctx(test::validated());
+    api::Tracker a(ctx, potato, o);
+    api::Tracker b = a.with_options(other);  // made before anything is uploaded or rendered
+    for (int round = 0; round < 2; ++round) {  // the second round: all shared, already made
+        INFO("round " << round);
+        std::vector<Run> got(2);
+        std::vector<std::exception_ptr> errors(2);
+        auto work = [&](api::Tracker& t, size_t i) {
+            try {
+                t.reset();
+                got[i] = run(t);
+            } catch (...) {
+                errors[i] = std::current_exception();
+            }
+        };
+        std::thread ta(work, std::ref(a), 0), tb(work, std::ref(b), 1);
+        ta.join();
+        tb.join();
+        for (size_t i = 0; i < 2; ++i) {
+            INFO((i == 0 ? "the first tracker" : "the one with_options made"));
+            if (errors[i]) std::rethrow_exception(errors[i]);
+            for (auto [g, w] : {std::pair{&got[i].online, &want[i].online}, std::pair{&got[i].window, &want[i].window}}) {
+                CHECK(g->sample_belief == w->sample_belief);
+                CHECK(g->contact == w->contact);
+                CHECK(g->pose.R == w->pose.R);
+                CHECK(g->pose.t == w->pose.t);
+                CHECK(g->fit == w->fit);
+                CHECK(g->pose_terms == w->pose_terms);
+            }
+            CHECK(got[i].term == want[i].term);
+        }
+        CHECK(got[0].term != got[1].term);  // each scored with its own options
+    }
+    test::require_no_validation(ctx);
+}
+
 TEST_CASE("api: four threads, a context each or one shared Model and Object, give the results of one", "[api][threads]") {
     const std::string mug = test::source_path("examples/mug.glb");
     const std::vector<api::TactileImage> images{example_image(1), example_image(2), example_image(3)};
