@@ -8,7 +8,7 @@
 #include "base/error.h"
 #include "bench/clock.h"
 #include "bench/model_bench.h"
-#include "bench/tour_cycle.h"
+#include "engine/tour_cycle.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/object.h"
 #include "engine/io/touch_sequence.h"

@@ -15,7 +15,7 @@
 #include "bench/probe.h"
 #include "bench/report.h"
 #include "bench/gel_bench.h"
-#include "bench/tour_cycle.h"
+#include "engine/tour_cycle.h"
 #include "bench/tracker_bench.h"
 #include "engine/io/touch_sequence.h"
 #include "bench/validation.h"
@@ -178,7 +178,7 @@ Args parse(int argc, char** argv) {
     for (int n : a.opt.iters)
         if (n > 64) throw Error("--iters: N must be in 0..64, got " + std::to_string(n));
     if (a.opt.stepped_iters > 64) throw Error("--stepped: N must be in 0..64");
-    if (!bench::known_tour_cycle(a.tracker_cycle))
+    if (!known_tour_cycle(a.tracker_cycle))
         throw Error("--tracker-cycle takes return or repeat, got '" + a.tracker_cycle + "'");
     if (a.tracker_window > 8) throw Error("--tracker-window: 1 to 8 touches, got " + std::to_string(a.tracker_window));
     if (a.tracker_touches <= a.tracker_window)

@@ -1,15 +1,16 @@
 #pragma once
-// How vtloc-bench's tracker stage goes on past a tour's last touch (bench/README.md).
-// Header-only: tests/test_tour_cycle.cpp checks it without the bench.
+// How a tour of motions goes on past its last touch: vtloc-bench's tracker stage
+// (bench/README.md) and `vtloc check --tracker --there-and-back` (engine/api/check.cpp).
+// Header-only, beside engine/rigid.h: tests/test_tour_cycle.cpp checks it.
 #include <string>
 #include <vector>
 
 #include "base/error.h"
 #include "engine/rigid.h"
 
-namespace vtloc::bench {
+namespace vtloc {
 
-// The cycles tour_motion knows; the CLI asks before its first stage, minutes before the tracker's.
+// The cycles tour_motion knows; vtloc-bench asks before its first stage, minutes before the tracker's.
 inline bool known_tour_cycle(const std::string& cycle) { return cycle == "return" || cycle == "repeat"; }
 
 // The motion into touch i (i >= 1; touch 0 has none) of a tour of n >= 1 motions, continued:
@@ -19,10 +20,10 @@ inline bool known_tour_cycle(const std::string& cycle) { return cycle == "return
 inline Rigid tour_motion(const std::vector<Rigid>& tour, const std::string& cycle, int i) {
     if (tour.empty() || i < 1) throw Error("tour_motion: needs a motion and i >= 1");
     const size_t n = tour.size(), k = size_t(i - 1);
-    if (!known_tour_cycle(cycle)) throw Error("the tracker bench's cycle is return or repeat, got '" + cycle + "'");
+    if (!known_tour_cycle(cycle)) throw Error("a tour's cycle is return or repeat, got '" + cycle + "'");
     if (cycle == "repeat") return tour[k % n];
     const size_t j = k % (2 * n);
     return j < n ? tour[j] : inverse(tour[2 * n - 1 - j]);
 }
 
-}  // namespace vtloc::bench
+}  // namespace vtloc

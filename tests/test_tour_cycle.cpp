@@ -1,4 +1,4 @@
-// vtloc-bench's tracker stage continues a tour past its last touch (bench/tour_cycle.h).
+// vtloc-bench's tracker stage continues a tour past its last touch (engine/tour_cycle.h).
 // "return" must only revisit the tour's own poses, so that the steady touches it times are
 // ones a robot could make; "repeat" is the old cycle, kept for comparison.
 #include <catch2/catch.hpp>
@@ -6,7 +6,7 @@
 #include <cmath>
 #include <random>
 
-#include "bench/tour_cycle.h"
+#include "engine/tour_cycle.h"
 
 using namespace vtloc;
 
@@ -39,19 +39,19 @@ TEST_CASE("the bench's returning tour revisits only the tour's own poses", "[ben
         for (const Rigid& m : tour) poses.push_back(compose(poses.back(), m));
         Rigid x;  // walking the continued tour: touch i must sit where the tour's touch p(i) did
         for (int i = 1; i < int(5 * n + 3); ++i) {
-            x = compose(x, bench::tour_motion(tour, "return", i));
+            x = compose(x, tour_motion(tour, "return", i));
             const int period = int(2 * n), j = i % period, p = j <= int(n) ? j : period - j;
             INFO("n " << n << ", touch " << i << " should be the tour's touch " << p);
             REQUIRE(gap(x, poses[size_t(p)]) <= 1e-9);
         }
         // "repeat" is the tour's motions over again; past the tour it leaves its poses.
-        for (int i = 1; i <= int(2 * n); ++i) CHECK(gap(bench::tour_motion(tour, "repeat", i), tour[size_t(i - 1) % n]) == 0);
+        for (int i = 1; i <= int(2 * n); ++i) CHECK(gap(tour_motion(tour, "repeat", i), tour[size_t(i - 1) % n]) == 0);
     }
     std::vector<Rigid> one{Rigid{}};
-    CHECK_THROWS_WITH(bench::tour_motion(one, "loop", 1), Catch::Contains("return or repeat"));
-    CHECK(bench::known_tour_cycle("return"));  // what the CLI accepts, before its first stage
-    CHECK(bench::known_tour_cycle("repeat"));
-    CHECK(!bench::known_tour_cycle("loop"));
-    CHECK(!bench::known_tour_cycle(""));
-    CHECK_THROWS_WITH(bench::tour_motion({}, "return", 1), Catch::Contains("needs a motion"));
+    CHECK_THROWS_WITH(tour_motion(one, "loop", 1), Catch::Contains("return or repeat"));
+    CHECK(known_tour_cycle("return"));  // what the CLI accepts, before its first stage
+    CHECK(known_tour_cycle("repeat"));
+    CHECK(!known_tour_cycle("loop"));
+    CHECK(!known_tour_cycle(""));
+    CHECK_THROWS_WITH(tour_motion({}, "return", 1), Catch::Contains("needs a motion"));
 }

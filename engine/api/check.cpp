@@ -11,6 +11,7 @@
 #include "engine/check/op_selftest.h"
 #include "engine/io/touch_sequence.h"
 #include "engine/model/tactile_encoder.h"
+#include "engine/tour_cycle.h"
 #include "engine/track/tracker.h"
 
 namespace vtloc::api {
@@ -111,8 +112,12 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         if (object.empty()) throw Error(options.touches + ": no \"object\" in the file; name one (--object)");
         std::vector<std::optional<track::Rigid>> motions = seq.relative_motions(options.touches);
         if (motions.size() < 2) throw Error(options.touches + ": the tracker check needs at least two touches");
-        if (options.there_and_back)
-            for (size_t k = motions.size() - 1; k >= 1; --k) motions.push_back(track::inverse(*motions[k]));
+        if (options.there_and_back) {  // back over the tour to its first pose, as vtloc-bench goes on
+            std::vector<Rigid> tour;
+            for (size_t k = 1; k < motions.size(); ++k) tour.push_back(*motions[k]);
+            const int n = int(tour.size());
+            for (int i = n + 1; i <= 2 * n; ++i) motions.push_back(tour_motion(tour, "return", i));
+        }
         TrackerOptions to;
         to.hypotheses = options.hypotheses;
         to.object_units = options.object_units;
