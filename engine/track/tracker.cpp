@@ -51,9 +51,12 @@ struct Tracker::Impl {
     std::shared_ptr<const LazyNearestFacing> nearest;  // the refinement's registration (null: off); with_options' trackers share it
     std::shared_ptr<const LazyPairIndex> pairs;    // the deep search's pair search (null: off); shared likewise
     bool profile = false;                          // profile_steps
-    std::vector<std::pair<std::string, double>> last_times;  // the last step's, while profiling
+    std::optional<std::pair<int64_t, int64_t>> last_exec;  // the last step's executor (its node times, while profiling)
     bool capture = false;                          // capture_steps
-    std::optional<StepCase> last_case;             // the last step's graph and inputs, while capturing
+    // The last step's inputs, while capturing; its graph is built when last_step_case() asks
+    // (graph_of: its K, F and term field), not at every step.
+    mutable std::optional<StepCase> last_case;
+    mutable std::optional<std::array<int64_t, 3>> graph_of;
     explicit Impl(rt::Context* c) : ctx(c), resident(c ? std::make_shared<ResidentWeights>(*c) : nullptr) {}
 };
 
@@ -526,11 +529,12 @@ Tracker::Step Tracker::run_step(const std::vector<Rigid>& motions, const std::ve
                 fields.data[size_t(f * H + h)] = (f == m - 1 ? float(opt_.term_weight) : 1.0f) * (*terms[size_t(f)])[size_t(h)];
     TensorMap in{{"terms", std::move(tr)}, {"fields", std::move(fields)}};
     if (slack_on(opt_) && F > 0) in.emplace("widths", std::move(widths));
-    if (impl_->capture) impl_->last_case = StepCase{step_graph(*surface_, opt_, K, F, any_term ? m - 1 : -1), in};
     TensorMap out = impl_->ctx ? impl_->exec.at(key)->run(in) : run_cpu(impl_->graphs.at(key), impl_->weights, in);
-    impl_->last_times.clear();
-    if (impl_->ctx && impl_->profile)
-        for (const auto& t : impl_->exec.at(key)->node_times()) impl_->last_times.emplace_back(t.label, t.ms);
+    if (impl_->capture) {
+        impl_->last_case = StepCase{Graph{}, std::move(in)};
+        impl_->graph_of = std::array<int64_t, 3>{K, F, any_term ? m - 1 : -1};
+    }
+    impl_->last_exec = key;
     st.log = std::move(out.at("log").data);
     st.prob = std::move(out.at("prob").data);
     st.marginal = std::move(out.at("marginal").data);
@@ -588,17 +592,29 @@ void Tracker::profile_steps(bool on) {
     if (on == impl_->profile) return;
     impl_->profile = on;
     impl_->exec.clear();  // made again, with or without timestamps, at their next step
-    impl_->last_times.clear();
+    impl_->last_exec.reset();
 }
 
-std::vector<std::pair<std::string, double>> Tracker::step_node_times() const { return impl_->last_times; }
+std::vector<std::pair<std::string, double>> Tracker::step_node_times() const {
+    std::vector<std::pair<std::string, double>> t;
+    if (impl_->ctx && impl_->profile && impl_->last_exec)
+        for (const auto& n : impl_->exec.at(*impl_->last_exec)->node_times()) t.emplace_back(n.label, n.ms);
+    return t;
+}
 
 void Tracker::capture_steps(bool on) {
     impl_->capture = on;
-    if (!on) impl_->last_case.reset();
+    if (!on) impl_->last_case.reset(), impl_->graph_of.reset();
 }
 
-const Tracker::StepCase* Tracker::last_step_case() const { return impl_->last_case ? &*impl_->last_case : nullptr; }
+const Tracker::StepCase* Tracker::last_step_case() const {
+    if (!impl_->last_case) return nullptr;
+    if (const auto g = impl_->graph_of) {
+        impl_->last_case->graph = step_graph(*surface_, opt_, (*g)[0], (*g)[1], (*g)[2]);
+        impl_->graph_of.reset();
+    }
+    return &*impl_->last_case;
+}
 
 const WeightStore& Tracker::step_weights() const { return impl_->weights; }
 

@@ -209,9 +209,9 @@ public:
     // (node name, ms); empty while off or without a GPU.
     void profile_steps(bool on);
     std::vector<std::pair<std::string, double>> step_node_times() const;
-    // Checking (vtloc check --tracker): while on, each step keeps its graph and inputs, so the
-    // last one can be run again node by node against the CPU references (check::check_graph
-    // with step_weights()); null while off or before a step.
+    // Checking (vtloc check --tracker): while on, each step keeps its inputs, so the last one
+    // can be run again node by node against the CPU references (check::check_graph with
+    // step_weights()); its graph is built at the first ask. Null while off or before a step.
     struct StepCase {
         Graph graph;
         std::map<std::string, HostTensor> inputs;
