@@ -3,11 +3,11 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
-#include <mutex>
 
 #include "base/error.h"
 #include "engine/api/api_internal.h"
 #include "engine/api/display_sample.h"
+#include "engine/api/made_once.h"
 #include "engine/io/mesh.h"
 #include "engine/io/mesh_formats.h"
 #include "engine/io/render.h"
@@ -98,22 +98,17 @@ struct Tracker::Impl {
     // it: with_options' trackers share it unless they name another codebook_cache, whose file
     // must then be read (and checked) or written. Scores with each tracker's own options.
     struct Book {
-        std::mutex mutex;
         std::string cache;  // the codebook_cache it is read from or written to
-        std::shared_ptr<track::CodebookScorer> scorer;
+        MadeOnce<track::CodebookScorer> scorer;
     };
     std::shared_ptr<Book> book;
     // Render-and-compare at the refined poses (render_refined_weight > 0): the dense points binned,
     // made at the first gel shape of any tracker sharing it (with_options' all do: it hangs on
     // the surface alone).
-    struct PoseShapes {
-        std::mutex mutex;
-        std::shared_ptr<const track::PoseShapeScorer> scorer;
-    };
-    std::shared_ptr<PoseShapes> pose_shapes;
+    std::shared_ptr<MadeOnce<const track::PoseShapeScorer>> pose_shapes;
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)),
-          book(std::make_shared<Book>()), pose_shapes(std::make_shared<PoseShapes>()) {
+          book(std::make_shared<Book>()), pose_shapes(std::make_shared<MadeOnce<const track::PoseShapeScorer>>()) {
         book->cache = o.codebook_cache;
         tracker.profile_steps(o.profile);
         // With normals, a thin part's two faces each show their own belief (Tracker::heatmap).
@@ -150,15 +145,10 @@ struct Tracker::Impl {
     std::vector<float> shape_field(const GelShape* g, size_t touch) {
         if (!g) return {};
         check_shape(*g, touch);
-        std::shared_ptr<track::CodebookScorer> scorer;
-        {
-            std::lock_guard<std::mutex> lock(book->mutex);
-            if (!book->scorer) {
-                const track::Codebook b = track::cached_codebook(ctx, tracker.surface(), {}, book->cache);
-                book->scorer = std::make_shared<track::CodebookScorer>(ctx, b, tracker.surface(), score);
-            }
-            scorer = book->scorer;
-        }
+        const std::shared_ptr<track::CodebookScorer> scorer = book->scorer.get([&] {
+            const track::Codebook b = track::cached_codebook(ctx, tracker.surface(), {}, book->cache);
+            return std::make_shared<track::CodebookScorer>(ctx, b, tracker.surface(), score);
+        });
         // The gel's millimetres are the robot's; the surface is in the tracker's units (object_units applied).
         return scorer->term(g->depth_mm, g->height, g->width, g->mm_per_px, score);
     }
@@ -167,12 +157,8 @@ struct Tracker::Impl {
     track::PoseTerm pose_term(const GelShape* g, size_t touch) {
         if (!g || !(options.render_refined_weight > 0)) return {};
         check_shape(*g, touch);
-        std::shared_ptr<const track::PoseShapeScorer> sc;
-        {
-            std::lock_guard<std::mutex> lock(pose_shapes->mutex);
-            if (!pose_shapes->scorer) pose_shapes->scorer = std::make_shared<track::PoseShapeScorer>(tracker.surface());
-            sc = pose_shapes->scorer;
-        }
+        const std::shared_ptr<const track::PoseShapeScorer> sc =
+            pose_shapes->get([&] { return std::make_shared<const track::PoseShapeScorer>(tracker.surface()); });
         auto win = std::make_shared<const track::ShapeWindow>(track::shape_window(g->depth_mm, g->height, g->width, g->mm_per_px, score));
         return [sc, win, w = options.render_refined_weight, q = score.quadratic,
                 f = options.render_refined_floor](const track::Rigid& x) {
@@ -420,20 +406,12 @@ std::vector<float> Tracker::sample_points() const {
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
 const PointCloud& Tracker::display_cloud() const { return impl_->display->cloud; }
 uint64_t Tracker::device_bytes() const {
-    std::shared_ptr<track::CodebookScorer> scorer;
-    {
-        std::lock_guard<std::mutex> lock(impl_->book->mutex);
-        scorer = impl_->book->scorer;
-    }
+    const std::shared_ptr<track::CodebookScorer> scorer = impl_->book->scorer.peek();
     return impl_->tracker.device_bytes() + (scorer ? scorer->device_bytes() : 0);
 }
 uint64_t Tracker::host_bytes() const {
     const Impl::Display& d = *impl_->display;
-    std::shared_ptr<const track::PoseShapeScorer> pose;
-    {
-        std::lock_guard<std::mutex> lock(impl_->pose_shapes->mutex);
-        pose = impl_->pose_shapes->scorer;
-    }
+    const std::shared_ptr<const track::PoseShapeScorer> pose = impl_->pose_shapes->peek();
     return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size()) +
            (pose ? pose->bytes() : 0);
 }

@@ -3,7 +3,7 @@
 #   asan: every target built with ASan + UBSan (build-asan/), the
 #         vtloc_tests suite but the long and variant sweeps, a share per core,
 #         leaks checked (LSan) at exit;
-#   tsan: the libraries and vtloc_thread_tests (test_api.cpp alone) built with
+#   tsan: the libraries and vtloc_thread_tests (test_api.cpp, test_made_once.cpp) built with
 #         TSan (build-tsan/), the tests that use threads ([threads]).
 # Vulkan runs on lavapipe; Mesa, the loader and the validation layer are
 # Debian's, not instrumented: the suppression files next to this script name
@@ -129,7 +129,7 @@ for kind in "${kinds[@]}"; do
         UBSAN_OPTIONS="print_stacktrace=1:halt_on_error=0"
       ;;
     tsan)
-      echo "sanitize: TSan, the [threads] tests (their own binary: test_api.cpp alone)"
+      echo "sanitize: TSan, the [threads] tests (their own binary: test_api.cpp and test_made_once.cpp)"
       run build-tsan "thread" vtloc_thread_tests "WARNING: ThreadSanitizer" "[threads]" \
         TSAN_OPTIONS="suppressions=$here/tsan.supp:halt_on_error=0:second_deadlock_stack=1"
       ;;
