@@ -79,9 +79,11 @@ void bind_check(py::module_& m) {
         "the outputs against a full CPU run. -> dict: ok, nodes, outputs, first_failure, tolerance, ms.");
     m.def(
         "check_tracker",
-        [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back) {
+        [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back,
+           bool touch_terms) {
             api::TrackerCheckOptions o;
             o.touches = touches, o.object = object, o.hypotheses = hypotheses, o.there_and_back = there_and_back;
+            o.touch_terms = touch_terms;
             api::TrackerCheckResult r;
             {
                 py::gil_scoped_release release;
@@ -103,10 +105,11 @@ void bind_check(py::module_& m) {
             return d;
         },
         py::arg("context"), py::arg("touches"), py::arg("object") = "", py::arg("hypotheses") = 120000,
-        py::arg("there_and_back") = true,
+        py::arg("there_and_back") = true, py::arg("touch_terms") = false,
         "vtloc check --tracker: a GPU tracker and its CPU reference walk the touches file's tour (and back),\n"
         "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
-        "outputs, first_failure, tolerance, ms. object: for a file without \"object\".");
+        "outputs, first_failure, tolerance, ms. object: for a file without \"object\"; touch_terms: a seeded\n"
+        "log term each touch, so the step reads a field per touch.");
 }
 
 }  // namespace vtloc::python

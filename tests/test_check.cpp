@@ -117,6 +117,16 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
     CHECK(ev.input_shapes[4] == std::vector<int64_t>{8, 16});
     CHECK(ev.input_shapes[5][0] == 1);
     CHECK(r.outputs.size() == 4);
+    {  // With a term each touch the step reads a field per touch of the window, then the prior's.
+        api::TrackerCheckOptions t = o;
+        t.touch_terms = true;
+        t.hypotheses = 6000;
+        const api::TrackerCheckResult rt = api::check_tracker(ctx, t);
+        CHECK(rt.ok);
+        REQUIRE(!rt.nodes.empty());
+        REQUIRE(rt.nodes.front().input_shapes.size() == 6);
+        CHECK(rt.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rt.hypotheses});
+    }
     // One probability off: the belief's node (and only the step's node check: the tours ran clean) fails.
     FaultGuard guard;
     check::testing::set_fault("track.belief", [](HostTensor& t) { t.data[t.data.size() / 2] += 1e-2f; });

@@ -91,6 +91,7 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
         touches.push_back({{"touch", t.touch}, {"ok", t.ok}, {"belief", error_json(t.belief)}, {"contact_mm", number(t.contact_mm)}});
     nlohmann::json j{{"ok", r.ok},
                      {"touches_file", o.touches},
+                     {"touch_terms", o.touch_terms},
                      {"object", r.object},
                      {"hypotheses", r.hypotheses},
                      {"device", device_json(r.device)},

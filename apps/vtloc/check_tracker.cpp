@@ -14,8 +14,10 @@ int tracker_check(Session& s, const Args& a) {
     o.hypotheses = a.integer("--hypotheses", int(o.hypotheses), 100, 2000000);
     o.object_units = a.number("--object-units", 1.0);
     o.there_and_back = !a.flag("--one-way");
-    std::printf("check      the multi-touch filter on %s (%s)%s\n", o.touches.c_str(),
-                o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "");
+    o.touch_terms = a.flag("--terms");
+    std::printf("check      the multi-touch filter on %s (%s)%s%s\n", o.touches.c_str(),
+                o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "",
+                o.touch_terms ? ", a seeded term each touch" : "");
     std::fflush(stdout);
     const api::TrackerCheckResult r = api::check_tracker(s.gpu(), o);
     print_device(r.device, false);

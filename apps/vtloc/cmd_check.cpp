@@ -20,7 +20,7 @@ namespace {
 const char* kHelp =
     "usage: vtloc check [--model M] [--tactile IMG --object OBJ] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --ops [--op NAME] [--device D] [--json FILE] [--verbose]\n"
-    "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way]\n"
+    "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way] [--terms]\n"
     "                   [--device D] [--json FILE] [--verbose]\n"
     "\n"
     "Cross-checks the Vulkan device against the engine's CPU reference.\n"
@@ -46,7 +46,9 @@ const char* kHelp =
     "                beliefs compared after every touch (|gpu - cpu| <= 1e-6 * peak +\n"
     "                5e-3*|cpu|), then the last touch's step node by node as above, at the\n"
     "                object's full size (--hypotheses, default 120000: the tables' sizes pick\n"
-    "                the shader paths); --object OBJ for a file without \"object\"\n"
+    "                the shader paths); --object OBJ for a file without \"object\"; --terms:\n"
+    "                each touch also carries a seeded log term over the hypotheses (as\n"
+    "                render-and-compare's would), so the step reads a field per touch\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
     "  --verbose     every node (model check) / every dispatch (--ops, --tracker)\n"
@@ -172,7 +174,7 @@ int cmd_check(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--model"}, {"--tactile"}, {"--object"}, {"--device"}, {"--json"}, {"--ops", false}, {"--op"},
             {"--verbose", false}, {"--tracker", false}, {"--touches"}, {"--hypotheses"}, {"--object-units"},
-            {"--one-way", false}});
+            {"--one-way", false}, {"--terms", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -183,7 +185,7 @@ int cmd_check(Session& s, int argc, char** argv) {
         throw UsageError("--ops takes no --model, --tactile or --object");
     if (tracker && (a.get("--model") || a.get("--tactile")))
         throw UsageError("--tracker takes no --model or --tactile (geometry only)");
-    for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way"})
+    for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms"})
         if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
     if (a.get("--device")) s.context.emplace(api::ContextOptions{*a.get("--device")});

@@ -118,6 +118,8 @@ if [ "${CORRECT:-1}" = 1 ]; then
   P[check_tracker]=$!
   VTLOC_VALIDATION=1 VTLOC_MAX_TEXEL_ELEMENTS=65536 vt timeout "$TT" $V/bin/vtloc check --tracker --verbose >$L/check_tracker_small_texel.log 2>&1 &
   P[check_tracker_small_texel]=$!
+  VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --tracker --terms --json $L/check_tracker_terms.json >$L/check_tracker_terms.log 2>&1 &
+  P[check_tracker_terms]=$!
   if [ -n "$PY" ]; then
     mkdir -p "$GOLDENS"
     (cd "$R" && timeout 150 $PY -m weights_tools.make_goldens --paper --out "$GOLDENS") >$L/goldens.log 2>&1

@@ -9,6 +9,7 @@
 #include "engine/check/device_report.h"
 #include "engine/check/graph_check.h"
 #include "engine/check/op_selftest.h"
+#include "engine/io/splitmix64.h"
 #include "engine/io/touch_sequence.h"
 #include "engine/model/tactile_encoder.h"
 #include "engine/tour_cycle.h"
@@ -129,12 +130,29 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.object = object;
         r.hypotheses = gpu.surface().n_hypotheses();
         double gpu_ms = 0, cpu_ms = 0;
+        io::SplitMix64 rng(20261207);
         for (size_t i = 0; i < motions.size(); ++i) {
+            // A smooth log term over the surface's samples (a bump around a random sample, in
+            // [-2, 0]: beliefs stay spread, as a real touch term leaves them), jittered per spin.
+            std::vector<float> term;
+            if (options.touch_terms) {
+                const track::Surface& s = gpu.surface();
+                const int64_t S = s.n_samples(), NS = s.n_spin();
+                const size_t c = size_t(rng.uniform() * double(S));
+                const double w = 10 + 20 * rng.uniform();  // mm
+                term.resize(size_t(S * NS));
+                for (int64_t k = 0; k < S; ++k) {
+                    double d2 = 0;
+                    for (size_t a = 0; a < 3; ++a) d2 += std::pow(double(s.samples[9 * size_t(k) + a]) - s.samples[9 * c + a], 2);
+                    for (int64_t j = 0; j < NS; ++j)
+                        term[size_t(k * NS + j)] = float(-2 + 2 * std::exp(-d2 / (2 * w * w)) - 0.1 * rng.uniform());
+                }
+            }
             auto a0 = std::chrono::steady_clock::now();
-            gpu.add_touch(motions[i]);
+            gpu.add_touch(motions[i], term);
             gpu_ms += ms_since(a0);
             a0 = std::chrono::steady_clock::now();
-            cpu.add_touch(motions[i]);
+            cpu.add_touch(motions[i], term);
             cpu_ms += ms_since(a0);
             const std::vector<float>&a = gpu.belief(), &b = cpu.belief();
             float peak = 0;

@@ -274,8 +274,8 @@ def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
     assert t["ok"] and len(t["touches"]) == 15 and all(x["ok"] for x in t["touches"])
     assert [n["op"] for n in t["nodes"]] == ["pose_evidence", "log_softmax", "spin_marginal", "expected_distance"]
     assert t["tolerance"]["belief"] == {"abs": 1e-6, "rel": 5e-3}
-    one_way = vtloc.check_tracker(ctx, tour, hypotheses=12000, there_and_back=False)
-    assert len(one_way["touches"]) == 8 and one_way["hypotheses"] == t["hypotheses"]
+    one_way = vtloc.check_tracker(ctx, tour, hypotheses=12000, there_and_back=False, touch_terms=True)
+    assert one_way["ok"] and len(one_way["touches"]) == 8 and one_way["hypotheses"] == t["hypotheses"]
     with pytest.raises(vtloc.Error, match="no_such_tour.json"):
         vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
 

@@ -108,6 +108,11 @@ struct TrackerCheckOptions {
     // a tour no longer than the window (8) also reaches the steady state, the belief before
     // the window entering as a prior.
     bool there_and_back = true;
+    // Each touch also carries a log term over the hypotheses (seeded: the same every run), as
+    // render-and-compare's or the network's would: the step then reads a field per touch in
+    // the window, not only the prior's, through the evidence's other path (segments of terms
+    // each ending at a field, looked up at the moved pose's nearest hypothesis).
+    bool touch_terms = false;
 };
 
 struct TouchCheck {
