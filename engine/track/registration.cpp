@@ -22,13 +22,6 @@ struct Contact {
     double sd, sa;
 };
 
-std::array<double, 3> apply(const Rigid& x, const std::array<double, 3>& v, bool point) {
-    std::array<double, 3> o{};
-    for (size_t i = 0; i < 3; ++i)
-        o[i] = (point ? x.t[i] : 0) + x.R[i * 3] * v[0] + x.R[i * 3 + 1] * v[1] + x.R[i * 3 + 2] * v[2];
-    return o;
-}
-
 // The turn w (Rodrigues) about the world point ctr, then the shift v: y = Rw (x - ctr) + ctr + v.
 Rigid turned(const Rigid& x, const double d[6], const std::array<double, 3>& ctr) {
     Rigid m;
@@ -79,7 +72,7 @@ Rigid register_window(const NearestFacing& nearest, const std::vector<ops::pose:
         const double scale = std::max(1.0, o.register_scale * std::pow(0.5, 4.0 * round / last));
         std::array<double, 3> ctr{};
         for (size_t k = 0; k < cs.size(); ++k) {
-            wc[k] = apply(x, cs[k].c, true), wz[k] = apply(x, cs[k].z, false);
+            wc[k] = v3d::place(x.R, x.t, cs[k].c), wz[k] = v3d::rotate(x.R, cs[k].z);
             for (size_t i = 0; i < 3; ++i) ctr[i] += wc[k][i] / double(cs.size());
         }
         double H[6][6] = {}, g[6] = {};

@@ -21,6 +21,12 @@ inline V rotate(const M& R, const V& v) {
     return {R[0] * v[0] + R[1] * v[1] + R[2] * v[2], R[3] * v[0] + R[4] * v[1] + R[5] * v[2], R[6] * v[0] + R[7] * v[1] + R[8] * v[2]};
 }
 
+// The point v placed by the pose (R, t): t + R v, summed in compose's order (engine/rigid.h).
+inline V place(const M& R, const V& t, const V& v) {
+    return {t[0] + R[0] * v[0] + R[1] * v[1] + R[2] * v[2], t[1] + R[3] * v[0] + R[4] * v[1] + R[5] * v[2],
+            t[2] + R[6] * v[0] + R[7] * v[1] + R[8] * v[2]};
+}
+
 inline M matmul(const M& a, const M& b) {
     M o{};
     for (size_t i = 0; i < 3; ++i)
