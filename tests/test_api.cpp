@@ -1,6 +1,7 @@
 // The public API (<vtloc/vtloc.h>): results against the engine's runner,
 // batches and sequences, outputs, and contexts on concurrent threads.
 #include <catch2/catch.hpp>
+#include <atomic>
 #include <cmath>
 #include <exception>
 #include <filesystem>
@@ -216,6 +217,71 @@ TEST_CASE("api: two trackers of one object on two threads at once, sharing its t
         }
         CHECK(got[0].term != got[1].term);  // each scored with its own options
     }
+    test::require_no_validation(ctx);
+}
+
+TEST_CASE("api: one tracker read from one thread while another adds its touches", "[api][threads][tracker]") {
+    // Python releases the GIL in add_touch, so a program may read a tracker's estimate while
+    // another thread adds a touch: the calls take turns (a lock), and what the reader sees is
+    // always a whole state (a belief of the right size summing to 1, a touch count that only
+    // grows); the writer's final estimate is that of a tracker alone, bit for bit.
+    const std::string potato = test::source_path("examples/potato_tour.ply");
+    api::TrackerOptions o;
+    o.hypotheses = 5000;
+    const std::vector<api::Motion> motions{{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}},
+                                           {{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}},
+                                           {{1, 0, 0, 0, 0.866, -0.5, 0, 0.5, 0.866}, {2, -5, 0}}};
+    auto tour = [&](api::Tracker& t) {
+        t.add_touch(std::nullopt);
+        for (const api::Motion& m : motions) t.add_touch(m);
+    };
+    api::Context ctx(test::validated());
+    api::Tracker alone(ctx, potato, o), shared(ctx, potato, o);
+    tour(alone);
+    const api::TrackerEstimate want = alone.estimate();
+    std::atomic<bool> done{false};
+    std::exception_ptr writer_error, reader_error;
+    int reads = 0, last_touches = 0;
+    bool whole = true, growing = true;
+    std::thread writer([&] {
+        try {
+            tour(shared);
+        } catch (...) {
+            writer_error = std::current_exception();
+        }
+        done = true;
+    });
+    std::thread reader([&] {
+        try {
+            while (!done || reads < 3) {
+                const int n = shared.touches();
+                growing = growing && n >= last_touches;
+                last_touches = n;
+                const std::vector<float> b = shared.belief();
+                double sum = 0;
+                for (float v : b) sum += v;
+                if (n > 0) whole = whole && b.size() == want.sample_belief.size() * size_t(shared.n_spin()) && std::abs(sum - 1) < 1e-3;
+                if (n > 0) whole = whole && shared.estimate().sample_belief.size() == want.sample_belief.size();
+                whole = whole && shared.device_bytes() > 0;
+                ++reads;
+            }
+        } catch (...) {
+            reader_error = std::current_exception();
+        }
+    });
+    writer.join();
+    reader.join();
+    if (writer_error) std::rethrow_exception(writer_error);
+    if (reader_error) std::rethrow_exception(reader_error);
+    INFO(reads << " reads");
+    CHECK(whole);
+    CHECK(growing);
+    CHECK(shared.touches() == 4);
+    const api::TrackerEstimate got = shared.estimate();
+    CHECK(got.sample_belief == want.sample_belief);
+    CHECK(got.contact == want.contact);
+    CHECK(got.pose.R == want.pose.R);
+    CHECK(got.pose.t == want.pose.t);
     test::require_no_validation(ctx);
 }
 

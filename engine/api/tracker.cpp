@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstring>
 #include <memory>
+#include <mutex>
 
 #include "base/error.h"
 #include "engine/api/api_internal.h"
@@ -106,6 +107,9 @@ struct Tracker::Impl {
     // made at the first gel shape of any tracker sharing it (with_options' all do: it hangs on
     // the surface alone).
     std::shared_ptr<MadeOnce<const track::PoseShapeScorer>> pose_shapes;
+    // The tracker's calls run one at a time (Python releases the GIL in add_touch, so one thread
+    // may read the estimate while another adds a touch); with_options holds its source's.
+    mutable std::mutex mu;
     Impl(rt::Context& c, track::Surface s, const TrackerOptions& o, PointCloud disp)
         : ctx(&c), tracker(c, std::move(s), filter_options(o)), options(o), object_units(o.object_units), score(score_options(o)),
           book(std::make_shared<Book>()), pose_shapes(std::make_shared<MadeOnce<const track::PoseShapeScorer>>()) {
@@ -294,6 +298,10 @@ Tracker::Tracker(Context& context, const PointCloud& cloud, const TrackerOptions
 
 Tracker::Tracker(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 
+namespace {
+std::unique_lock<std::mutex> one_at_a_time(const Tracker::Impl& t) { return std::unique_lock<std::mutex>(t.mu); }
+}  // namespace
+
 Tracker Tracker::with_options(const TrackerOptions& o) const {
     return guarded([&] {
         check_options(o);
@@ -307,6 +315,7 @@ Tracker Tracker::with_options(const TrackerOptions& o) const {
         same("hypotheses", o.hypotheses == mine.hypotheses);
         same("candidates", o.candidates == mine.candidates);
         same("object_units", o.object_units == mine.object_units);
+        const auto lock = one_at_a_time(*impl_);
         return Tracker(std::make_unique<Impl>(*impl_, o));  // object_units as this tracker's (1 for a PointCloud's)
     });
 }
@@ -319,6 +328,7 @@ Tracker& Tracker::operator=(Tracker&&) noexcept = default;
 
 void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* network, const Object* object, const GelShape* shape) {
     guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
         const size_t n = size_t(impl_->tracker.touches() + 1);
         std::vector<float> f = impl_->touch_field(network, object, shape, n);
         impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, f, impl_->pose_term(shape, n));
@@ -327,22 +337,33 @@ void Tracker::add_touch(const std::optional<Motion>& motion, const TouchResult* 
 
 void Tracker::add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term, const GelShape* shape) {
     guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
         track::PoseTerm p = impl_->pose_term(shape, size_t(impl_->tracker.touches() + 1));
         impl_->tracker.add_touch(motion ? std::optional<track::Rigid>(to_rigid(*motion)) : std::nullopt, term, std::move(p));
     });
 }
 
-int Tracker::touches() const { return impl_->tracker.touches(); }
+int Tracker::touches() const {
+    const auto lock = one_at_a_time(*impl_);
+    return impl_->tracker.touches();
+}
 
-void Tracker::reset() { impl_->tracker.reset(); }
+void Tracker::reset() {
+    const auto lock = one_at_a_time(*impl_);
+    impl_->tracker.reset();
+}
 
 TrackerEstimate Tracker::estimate() const {
-    return guarded([&] { return impl_->convert(impl_->tracker.estimate(), impl_->tracker.touches()); });
+    return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
+        return impl_->convert(impl_->tracker.estimate(), impl_->tracker.touches());
+    });
 }
 
 TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, const std::vector<const TouchResult*>& network,
                                          const Object* object, const std::vector<const GelShape*>& shapes) {
     return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
         std::vector<track::Rigid> m;
         for (const Motion& x : motions) m.push_back(to_rigid(x));
         const size_t W = motions.size() + 1;
@@ -364,12 +385,16 @@ TrackerEstimate Tracker::evaluate_window(const std::vector<Motion>& motions, con
 }
 
 std::vector<float> Tracker::touch_term(const TouchResult* network, const Object* object, const GelShape* shape) {
-    return guarded([&] { return impl_->touch_field(network, object, shape, 1); });
+    return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
+        return impl_->touch_field(network, object, shape, 1);
+    });
 }
 
 TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motions, const std::vector<std::vector<float>>& terms,
                                                const std::vector<const GelShape*>& shapes) {
     return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
         std::vector<track::Rigid> m;
         for (const Motion& x : motions) m.push_back(to_rigid(x));
         if (!terms.empty() && terms.size() != motions.size() + 1)
@@ -383,18 +408,25 @@ TrackerEstimate Tracker::evaluate_window_terms(const std::vector<Motion>& motion
 }
 
 std::vector<float> Tracker::shape_term(const GelShape& shape) {
-    return guarded([&] { return impl_->shape_field(&shape, 1); });
+    return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
+        return impl_->shape_field(&shape, 1);
+    });
 }
 
 double Tracker::window_fit(const std::vector<Motion>& motions, const Motion& pose) const {
     return guarded([&] {
+        const auto lock = one_at_a_time(*impl_);
         std::vector<track::Rigid> m;
         for (const Motion& x : motions) m.push_back(to_rigid(x));
         return impl_->tracker.window_fit(m, to_rigid(pose));
     });
 }
 
-std::vector<float> Tracker::belief() const { return impl_->tracker.belief(); }
+std::vector<float> Tracker::belief() const {
+    const auto lock = one_at_a_time(*impl_);
+    return impl_->tracker.belief();
+}
 
 std::vector<float> Tracker::sample_points() const {
     const track::Surface& s = impl_->tracker.surface();
@@ -406,10 +438,12 @@ std::vector<float> Tracker::sample_points() const {
 int Tracker::n_spin() const { return impl_->tracker.surface().n_spin(); }
 const PointCloud& Tracker::display_cloud() const { return impl_->display->cloud; }
 uint64_t Tracker::device_bytes() const {
+    const auto lock = one_at_a_time(*impl_);
     const std::shared_ptr<track::CodebookScorer> scorer = impl_->book->scorer.peek();
     return impl_->tracker.device_bytes() + (scorer ? scorer->device_bytes() : 0);
 }
 uint64_t Tracker::host_bytes() const {
+    const auto lock = one_at_a_time(*impl_);
     const Impl::Display& d = *impl_->display;
     const std::shared_ptr<const track::PoseShapeScorer> pose = impl_->pose_shapes->peek();
     return impl_->tracker.host_bytes() + 4 * uint64_t(d.cloud.xyz.size() + d.cloud.normals.size() + d.rows.data.size()) +
@@ -417,7 +451,10 @@ uint64_t Tracker::host_bytes() const {
 }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 track::Tracker& TrackerAccess::core(Tracker& t) { return t.impl_->tracker; }
-std::vector<std::pair<std::string, double>> Tracker::step_nodes() const { return impl_->tracker.step_node_times(); }
+std::vector<std::pair<std::string, double>> Tracker::step_nodes() const {
+    const auto lock = one_at_a_time(*impl_);
+    return impl_->tracker.step_node_times();
+}
 
 void render_tracker_png(const std::string& path, const Tracker& tracker, const std::vector<TrackerEstimate>& steps,
                         const std::vector<std::string>& captions, const std::vector<std::array<double, 3>>& truths) {

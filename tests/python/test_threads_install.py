@@ -63,6 +63,36 @@ def test_models_on_threads_give_equal_results(ctx, tiny_path, touch, root):
     assert len(results) == 3 and all(np.array_equal(ref, r) for r in results.values())
 
 
+def test_tracker_read_while_another_thread_adds_touches(ctx, root):
+    # add_touch releases the GIL: the main thread reads the same tracker meanwhile; the calls take
+    # turns, each read sees a whole state, and the end is a tracker alone's, bit for bit.
+    mug_path = os.path.join(root, "examples", "mug.glb")
+    step = np.eye(4)
+    step[:3, 3] = [5.0, 0.0, 0.0]
+
+    def tour(tr):
+        tr.add_touch(None)
+        for _ in range(3):
+            tr.add_touch(step)
+
+    alone = vtloc.Tracker(ctx, mug_path, hypotheses=5000)
+    tour(alone)
+    shared = vtloc.Tracker(ctx, mug_path, hypotheses=5000)
+    writer = threading.Thread(target=tour, args=(shared,))
+    writer.start()
+    reads = 0
+    while writer.is_alive() or reads < 3:
+        if shared.touches > 0:
+            b = shared.belief
+            assert b.size == alone.belief.size and abs(float(b.sum()) - 1) < 1e-3
+            assert shared.estimate()["sample_belief"].size == alone.sample_points.shape[0]
+        reads += 1
+    writer.join()
+    assert shared.touches == 4
+    assert np.array_equal(shared.estimate()["sample_belief"], alone.estimate()["sample_belief"])
+    assert ctx.take_validation_messages() == []
+
+
 def test_install_and_import(root, tmp_path):
     build = os.environ.get("VTLOC_BUILD_DIR", os.path.join(root, "build"))
     prefix = tmp_path / "prefix"

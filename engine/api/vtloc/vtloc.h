@@ -21,10 +21,17 @@
 // - No global state: every resource hangs off a Context (its own Vulkan
 //   instance, device and queue) or a Model.
 // - A Model (and its Context) may be shared between threads: the calls on one
-//   Model run one at a time (encode_object, localize; a Tracker likewise), and
+//   Model run one at a time (encode_object, localize: a lock), and
 //   the Context serialises its queue. For parallel work make one Context (and
 //   Model) per thread; contexts share nothing, and concurrent contexts on one
 //   device give bit-identical results to a single one (both tested, 4 threads).
+// - Trackers of one object (one and those its with_options made) may run on
+//   different threads at once: what they share (the device tables, the codebook,
+//   the binned points) is made once, by whichever needs it first, under a lock
+//   (tested: two threads, bit for bit a tracker alone's results; TSan in CI).
+//   The calls on one Tracker run one at a time (a lock): one thread may read
+//   its estimate or belief while another adds a touch (tested; Python
+//   releases the GIL while a touch is added).
 // - An Object is immutable once made: it may be read from any thread and used
 //   by any Model loaded from the same weight file (another file's Model
 //   refuses it).
