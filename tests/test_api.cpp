@@ -285,6 +285,39 @@ TEST_CASE("api: one tracker read from one thread while another adds its touches"
     test::require_no_validation(ctx);
 }
 
+TEST_CASE("api: one gel shape reader on three threads at once gives each frame's shape of one thread", "[api][threads][sensor]") {
+    // The reader's GPU pipeline holds its buffers; Python releases the GIL while it reads, so
+    // the reads take turns (a lock).
+    api::Context ctx(test::validated());
+    api::GelShapeReader reader(ctx);
+    const std::vector<api::TactileImage> frames{example_image(1), example_image(2), example_image(3)};
+    std::vector<api::GelShape> want;
+    for (const auto& f : frames) want.push_back(reader.read(f));
+    std::vector<std::vector<api::GelShape>> got(3);
+    std::vector<std::exception_ptr> errors(3);
+    std::vector<std::thread> threads;
+    for (size_t t = 0; t < 3; ++t)
+        threads.emplace_back([&, t] {
+            try {
+                for (int round = 0; round < 3; ++round) got[t].push_back(reader.read(frames[(t + size_t(round)) % 3]));
+            } catch (...) {
+                errors[t] = std::current_exception();
+            }
+        });
+    for (auto& th : threads) th.join();
+    for (size_t t = 0; t < 3; ++t) {
+        if (errors[t]) std::rethrow_exception(errors[t]);
+        REQUIRE(got[t].size() == 3);
+        for (size_t r = 0; r < 3; ++r) {
+            const api::GelShape &g = got[t][r], &w = want[(t + r) % 3];
+            CHECK(g.depth_mm == w.depth_mm);  // the same device and pipelines: bit for bit
+            CHECK(g.mask == w.mask);
+            CHECK(g.grad_row == w.grad_row);
+        }
+    }
+    test::require_no_validation(ctx);
+}
+
 TEST_CASE("api: four threads, a context each or one shared Model and Object, give the results of one", "[api][threads]") {
     const std::string mug = test::source_path("examples/mug.glb");
     const std::vector<api::TactileImage> images{example_image(1), example_image(2), example_image(3)};

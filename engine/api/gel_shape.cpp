@@ -3,6 +3,7 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <mutex>
 
 #include <opencv2/imgproc.hpp>
 
@@ -20,6 +21,7 @@ namespace vtloc::api {
 struct GelShapeReader::Impl {
     sensor::GelShapeGpu gpu;
     bool match_lighting;
+    std::mutex mu;  // reads take turns: the GPU pipeline's buffers are the reader's own (Python releases the GIL)
     Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o, bool match)
         : gpu(ctx, std::move(c), std::move(lut), o), match_lighting(match) {}
 };
@@ -78,7 +80,9 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
         sensor::check_gel_frame(f, frame_name);
         if (empty) sensor::check_gel_frame(e, empty_name);
         if (impl_->match_lighting) f = sensor::match_lighting(f, e);
+        std::unique_lock<std::mutex> lock(impl_->mu);
         const sensor::GelShape s = impl_->gpu.run(f, e);
+        lock.unlock();
         GelShape out;
         out.height = s.height, out.width = s.width, out.mm_per_px = c.mm_per_px;
         out.depth_mm = s.depth_mm, out.grad_row = s.grad_row, out.grad_col = s.grad_col, out.mask = s.mask;

@@ -32,6 +32,7 @@
 //   The calls on one Tracker run one at a time (a lock): one thread may read
 //   its estimate or belief while another adds a touch (tested; Python
 //   releases the GIL while a touch is added).
+// - A GelShapeReader may be shared too: its reads take turns (a lock).
 // - An Object is immutable once made: it may be read from any thread and used
 //   by any Model loaded from the same weight file (another file's Model
 //   refuses it).
