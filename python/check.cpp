@@ -80,10 +80,10 @@ void bind_check(py::module_& m) {
     m.def(
         "check_tracker",
         [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back,
-           bool touch_terms) {
+           bool touch_terms, bool shapes) {
             api::TrackerCheckOptions o;
             o.touches = touches, o.object = object, o.hypotheses = hypotheses, o.there_and_back = there_and_back;
-            o.touch_terms = touch_terms;
+            o.touch_terms = touch_terms, o.shapes = shapes;
             api::TrackerCheckResult r;
             {
                 py::gil_scoped_release release;
@@ -98,18 +98,26 @@ void bind_check(py::module_& m) {
             py::dict d;
             d["ok"] = r.ok, d["device"] = r.device.name, d["object"] = r.object, d["hypotheses"] = r.hypotheses;
             d["tolerance"] = py::dict(py::arg("belief") = tol(r.belief_tolerance), py::arg("node") = tol(r.node_tolerance),
-                                      py::arg("end_to_end") = tol(r.end_to_end_tolerance));
+                                      py::arg("end_to_end") = tol(r.end_to_end_tolerance), py::arg("term") = tol(r.term_tolerance));
+            py::list st;
+            for (const api::ShapeTermCheck& t : r.shape_terms) {
+                py::dict e;
+                e["frame"] = t.frame, e["ok"] = t.ok, e["term"] = error_dict(t.term);
+                st.append(e);
+            }
+            d["shape_terms"] = st;
             d["touches"] = ts, d["nodes"] = nodes_list(r.nodes), d["outputs"] = outputs_list(r.outputs);
             d["first_failure"] = first(r.nodes, r.first_failure);
             d["ms"] = py::dict(py::arg("gpu") = r.gpu_ms, py::arg("cpu") = r.cpu_ms, py::arg("wall") = r.wall_ms);
             return d;
         },
         py::arg("context"), py::arg("touches"), py::arg("object") = "", py::arg("hypotheses") = 120000,
-        py::arg("there_and_back") = true, py::arg("touch_terms") = false,
+        py::arg("there_and_back") = true, py::arg("touch_terms") = false, py::arg("shapes") = false,
         "vtloc check --tracker: a GPU tracker and its CPU reference walk the touches file's tour (and back),\n"
         "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
         "outputs, first_failure, tolerance, ms. object: for a file without \"object\"; touch_terms: a seeded\n"
-        "log term each touch, so the step reads a field per touch.");
+        "log term each touch, so the step reads a field per touch; shapes: each touch's frame scored by\n"
+        "render-and-compare on the device and the CPU reference (shape_terms), the device's term given to both.");
 }
 
 }  // namespace vtloc::python

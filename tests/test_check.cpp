@@ -126,6 +126,21 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         REQUIRE(!rt.nodes.empty());
         REQUIRE(rt.nodes.front().input_shapes.size() == 6);
         CHECK(rt.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rt.hypotheses});
+        // Instead, each frame's render-and-compare term: the device's against the CPU reference
+        // scorer's, one per frame of the file, then the device's given to both trackers.
+        t.touch_terms = false, t.shapes = true;
+        const api::TrackerCheckResult rs = api::check_tracker(ctx, t);
+        CHECK(rs.ok);
+        REQUIRE(rs.shape_terms.size() == 8);
+        for (const api::ShapeTermCheck& c : rs.shape_terms) {
+            INFO(c.frame);
+            CHECK(c.ok);
+            CHECK(c.frame.find("potato_tour_") != std::string::npos);
+        }
+        CHECK(rs.touches.size() == 15);
+        CHECK(rs.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rs.hypotheses});
+        t.touch_terms = true;
+        CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("not both"));
     }
     // One probability off: the belief's node (and only the step's node check: the tours ran clean) fails.
     FaultGuard guard;

@@ -89,15 +89,21 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
     nlohmann::json touches = nlohmann::json::array();
     for (const api::TouchCheck& t : r.touches)
         touches.push_back({{"touch", t.touch}, {"ok", t.ok}, {"belief", error_json(t.belief)}, {"contact_mm", number(t.contact_mm)}});
+    nlohmann::json shape_terms = nlohmann::json::array();
+    for (const api::ShapeTermCheck& t : r.shape_terms)
+        shape_terms.push_back({{"frame", t.frame}, {"ok", t.ok}, {"term", error_json(t.term)}});
     nlohmann::json j{{"ok", r.ok},
                      {"touches_file", o.touches},
                      {"touch_terms", o.touch_terms},
+                     {"shapes", o.shapes},
                      {"object", r.object},
                      {"hypotheses", r.hypotheses},
                      {"device", device_json(r.device)},
                      {"tolerance", {{"belief", tol_json(r.belief_tolerance)},
                                     {"node", tol_json(r.node_tolerance)},
-                                    {"end_to_end", tol_json(r.end_to_end_tolerance)}}},
+                                    {"end_to_end", tol_json(r.end_to_end_tolerance)},
+                                    {"term", tol_json(r.term_tolerance)}}},
+                     {"shape_terms", shape_terms},
                      {"touches", touches},
                      {"nodes", nodes_json(r.nodes)},
                      {"outputs", outputs_json(r.outputs)},

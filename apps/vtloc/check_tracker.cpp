@@ -1,6 +1,7 @@
 #include "apps/vtloc/check_tracker.h"
 
 #include <cstdio>
+#include <filesystem>
 
 #include "apps/vtloc/check_json.h"
 #include "apps/vtloc/check_print.h"
@@ -15,9 +16,10 @@ int tracker_check(Session& s, const Args& a) {
     o.object_units = a.number("--object-units", 1.0);
     o.there_and_back = !a.flag("--one-way");
     o.touch_terms = a.flag("--terms");
+    o.shapes = a.flag("--shapes");
     std::printf("check      the multi-touch filter on %s (%s)%s%s\n", o.touches.c_str(),
                 o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "",
-                o.touch_terms ? ", a seeded term each touch" : "");
+                o.touch_terms ? ", a seeded term each touch" : o.shapes ? ", render-and-compare of each touch's frame" : "");
     std::fflush(stdout);
     const api::TrackerCheckResult r = api::check_tracker(s.gpu(), o);
     print_device(r.device, false);
@@ -26,9 +28,21 @@ int tracker_check(Session& s, const Args& a) {
                 r.belief_tolerance.abs, r.belief_tolerance.rel);
     std::printf("           the last step per node |gpu - cpu| <= %g + %g*|cpu| (each CPU node fed the GPU's inputs)\n",
                 r.node_tolerance.abs, r.node_tolerance.rel);
-    std::printf("           its outputs |gpu - cpu| <= %g + %g*|cpu| (against a full CPU run)\n\n", r.end_to_end_tolerance.abs,
+    std::printf("           its outputs |gpu - cpu| <= %g + %g*|cpu| (against a full CPU run)\n", r.end_to_end_tolerance.abs,
                 r.end_to_end_tolerance.rel);
-    std::printf("%-6s %-9s %-9s %-8s %-12s %s\n", "touch", "max abs", "max rel", "tol used", "contacts mm", "result");
+    size_t bad_terms = 0;
+    if (!r.shape_terms.empty()) {
+        std::printf("           render-and-compare's term |gpu - cpu| <= %g + %g*|cpu| (the CPU reference scorer)\n\n",
+                    r.term_tolerance.abs, r.term_tolerance.rel);
+        std::printf("%-40s %-9s %-9s %-8s %s\n", "frame: its term", "max abs", "max rel", "tol used", "result");
+        for (const api::ShapeTermCheck& t : r.shape_terms) {
+            bad_terms += !t.ok;
+            const std::string name = std::filesystem::path(t.frame).filename().string();
+            std::printf("%-40s %-9s %-9s %-8s %s\n", name.c_str(), g3(t.term.max_abs).c_str(), g3(t.term.max_rel).c_str(),
+                        g3(t.term.tolerance_used).c_str(), t.ok ? "ok" : ("FAILED (" + t.term.first_mismatch + ")").c_str());
+        }
+    }
+    std::printf("\n%-6s %-9s %-9s %-8s %-12s %s\n", "touch", "max abs", "max rel", "tol used", "contacts mm", "result");
     size_t bad_touches = 0;
     for (const api::TouchCheck& t : r.touches) {
         bad_touches += !t.ok;

@@ -20,7 +20,7 @@ namespace {
 const char* kHelp =
     "usage: vtloc check [--model M] [--tactile IMG --object OBJ] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --ops [--op NAME] [--device D] [--json FILE] [--verbose]\n"
-    "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way] [--terms]\n"
+    "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way] [--terms | --shapes]\n"
     "                   [--device D] [--json FILE] [--verbose]\n"
     "\n"
     "Cross-checks the Vulkan device against the engine's CPU reference.\n"
@@ -48,7 +48,10 @@ const char* kHelp =
     "                object's full size (--hypotheses, default 120000: the tables' sizes pick\n"
     "                the shader paths); --object OBJ for a file without \"object\"; --terms:\n"
     "                each touch also carries a seeded log term over the hypotheses (as\n"
-    "                render-and-compare's would), so the step reads a field per touch\n"
+    "                render-and-compare's would), so the step reads a field per touch;\n"
+    "                --shapes: each touch's own frame read into its gel shape and scored\n"
+    "                against the object's codebook (render-and-compare's term), on the device\n"
+    "                and by the CPU reference scorer, compared per frame, then given to both\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
     "  --verbose     every node (model check) / every dispatch (--ops, --tracker)\n"
@@ -174,7 +177,7 @@ int cmd_check(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--model"}, {"--tactile"}, {"--object"}, {"--device"}, {"--json"}, {"--ops", false}, {"--op"},
             {"--verbose", false}, {"--tracker", false}, {"--touches"}, {"--hypotheses"}, {"--object-units"},
-            {"--one-way", false}, {"--terms", false}});
+            {"--one-way", false}, {"--terms", false}, {"--shapes", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -185,7 +188,7 @@ int cmd_check(Session& s, int argc, char** argv) {
         throw UsageError("--ops takes no --model, --tactile or --object");
     if (tracker && (a.get("--model") || a.get("--tactile")))
         throw UsageError("--tracker takes no --model or --tactile (geometry only)");
-    for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms"})
+    for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms", "--shapes"})
         if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
     if (a.get("--device")) s.context.emplace(api::ContextOptions{*a.get("--device")});

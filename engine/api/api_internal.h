@@ -5,6 +5,7 @@
 #include <memory>
 #include <new>
 #include <string>
+#include <vector>
 
 #include "engine/api/vtloc/vtloc.h"
 #include "engine/model/model_file.h"
@@ -13,6 +14,7 @@
 
 namespace vtloc::track {
 class Tracker;
+class CodebookScorer;
 }
 
 namespace vtloc::api {
@@ -20,6 +22,11 @@ namespace vtloc::api {
 // The filter inside an api::Tracker (engine/api/tracker.cpp; check_tracker drives it).
 struct TrackerAccess {
     static track::Tracker& core(Tracker& t);
+    // Render-and-compare's scorer on the ops' CPU references, over the codebook the tracker's
+    // own scorer reads (rendered on the device as it renders it), and one gel shape's term
+    // through it as shape_term() scores on the device (check_tracker --shapes).
+    static std::shared_ptr<track::CodebookScorer> cpu_scorer(Tracker& t);
+    static std::vector<float> shape_term(Tracker& t, track::CodebookScorer& scorer, const GelShape& g);
 };
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a

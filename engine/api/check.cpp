@@ -13,6 +13,7 @@
 #include "engine/io/touch_sequence.h"
 #include "engine/model/tactile_encoder.h"
 #include "engine/tour_cycle.h"
+#include "engine/track/codebook.h"
 #include "engine/track/tracker.h"
 
 namespace vtloc::api {
@@ -130,11 +131,35 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.object = object;
         r.hypotheses = gpu.surface().n_hypotheses();
         double gpu_ms = 0, cpu_ms = 0;
+        // With shapes: render-and-compare's term of each frame of the file, the device's and the
+        // CPU reference scorer's compared; the device's goes to both trackers.
+        std::vector<std::vector<float>> frame_terms;
+        if (options.shapes) {
+            if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
+            GelShapeReader reader(context);
+            const std::shared_ptr<track::CodebookScorer> cpu_scorer = TrackerAccess::cpu_scorer(api_gpu);
+            for (const io::SequenceTouch& st : seq.touches) {
+                const GelShape g = reader.read(load_tactile_image(st.tactile), nullptr, st.tactile);
+                auto a0 = std::chrono::steady_clock::now();
+                frame_terms.push_back(api_gpu.shape_term(g));
+                gpu_ms += ms_since(a0);
+                a0 = std::chrono::steady_clock::now();
+                const std::vector<float> c = TrackerAccess::shape_term(api_gpu, *cpu_scorer, g);
+                cpu_ms += ms_since(a0);
+                const int64_t n = int64_t(c.size());
+                const check::Comparison cmp = check::compare(HostTensor({n}, frame_terms.back()), HostTensor({n}, c),
+                                                             {r.term_tolerance.abs, r.term_tolerance.rel});
+                r.shape_terms.push_back({st.tactile, to_api(cmp), cmp.ok});
+            }
+        }
+        const int tour_n = int(seq.touches.size()) - 1;
         io::SplitMix64 rng(20261207);
         for (size_t i = 0; i < motions.size(); ++i) {
             // A smooth log term over the surface's samples (a bump around a random sample, in
             // [-2, 0]: beliefs stay spread, as a real touch term leaves them), jittered per spin.
             std::vector<float> term;
+            if (options.shapes)  // a touch on the way back is where touch 2n - i was
+                term = frame_terms[size_t(int(i) <= tour_n ? int(i) : 2 * tour_n - int(i))];
             if (options.touch_terms) {
                 const track::Surface& s = gpu.surface();
                 const int64_t S = s.n_samples(), NS = s.n_spin();
@@ -179,6 +204,7 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.first_failure = g.first_failure;
         r.ok = g.ok();
         for (const TouchCheck& t : r.touches) r.ok = r.ok && t.ok;
+        for (const ShapeTermCheck& t : r.shape_terms) r.ok = r.ok && t.ok;
         r.gpu_ms = gpu_ms + g.gpu_ms;
         r.cpu_ms = cpu_ms + g.cpu_nodes_ms + g.cpu_full_ms;
         r.wall_ms = ms_since(t0);

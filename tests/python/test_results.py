@@ -276,6 +276,10 @@ def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
     assert t["tolerance"]["belief"] == {"abs": 1e-6, "rel": 5e-3}
     one_way = vtloc.check_tracker(ctx, tour, hypotheses=12000, there_and_back=False, touch_terms=True)
     assert one_way["ok"] and len(one_way["touches"]) == 8 and one_way["hypotheses"] == t["hypotheses"]
+    shapes = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True)
+    assert shapes["ok"] and [os.path.basename(s["frame"]) for s in shapes["shape_terms"]] == \
+        [f"potato_tour_{i}.png" for i in range(1, 9)]
+    assert all(s["ok"] for s in shapes["shape_terms"]) and shapes["tolerance"]["term"] == {"abs": 1e-4, "rel": 1e-4}
     with pytest.raises(vtloc.Error, match="no_such_tour.json"):
         vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
 

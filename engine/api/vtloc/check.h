@@ -113,6 +113,17 @@ struct TrackerCheckOptions {
     // the window, not only the prior's, through the evidence's other path (segments of terms
     // each ending at a field, looked up at the moved pose's nearest hypothesis).
     bool touch_terms = false;
+    // Instead, each touch's own frame (the touches file's "tactile") read into its gel's shape
+    // and scored against the object's codebook as render-and-compare's term, on the device and
+    // by the CPU reference scorer (compared per frame), the device's term then given to both
+    // trackers. The codebook is rendered on the device for both (check --ops checks the render).
+    bool shapes = false;
+};
+
+struct ShapeTermCheck {
+    std::string frame;           // the frame's path
+    CheckError term;             // the device's term against the CPU reference scorer's
+    bool ok = true;
 };
 
 struct TouchCheck {
@@ -132,6 +143,10 @@ struct TrackerCheckResult {
     // may differ by ~2e-3 over a window's terms).
     CheckTolerance belief_tolerance{1e-6, 5e-3};
     CheckTolerance node_tolerance{1e-4, 1e-4}, end_to_end_tolerance{2e-3, 2e-3};
+    // Render-and-compare's term (shapes): |gpu - cpu| <= abs + rel*|cpu|, fp32's tolerance (the
+    // scoring shader is `precise`, no contraction: lavapipe gives the reference's bits).
+    CheckTolerance term_tolerance{1e-4, 1e-4};
+    std::vector<ShapeTermCheck> shape_terms;  // with shapes: one per frame of the file
     std::vector<TouchCheck> touches;   // both trackers walk the whole tour
     std::vector<NodeCheck> nodes;      // the last touch's step, each node's CPU reference on the GPU's inputs
     std::vector<OutputCheck> outputs;  // that step's outputs against a full CPU run
