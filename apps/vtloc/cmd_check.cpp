@@ -187,7 +187,7 @@ int cmd_check(Session& s, int argc, char** argv) {
     if (ops && (a.get("--model") || a.get("--tactile") || a.get("--object")))
         throw UsageError("--ops takes no --model, --tactile or --object");
     if (tracker && (a.get("--model") || a.get("--tactile")))
-        throw UsageError("--tracker takes no --model or --tactile (geometry only)");
+        throw UsageError("--tracker takes no --model or --tactile (the touches file names the frames)");
     for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms", "--shapes"})
         if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
