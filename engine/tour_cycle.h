@@ -1,6 +1,6 @@
 #pragma once
 // How a tour of motions goes on past its last touch: vtloc-bench's tracker stage
-// (bench/README.md) and `vtloc check --tracker --there-and-back` (engine/api/check.cpp).
+// (bench/README.md) and `vtloc check --tracker`'s way back (engine/api/check.cpp).
 // Header-only, beside engine/rigid.h: tests/test_tour_cycle.cpp checks it.
 #include <string>
 #include <vector>
@@ -24,6 +24,14 @@ inline Rigid tour_motion(const std::vector<Rigid>& tour, const std::string& cycl
     if (cycle == "repeat") return tour[k % n];
     const size_t j = k % (2 * n);
     return j < n ? tour[j] : inverse(tour[2 * n - 1 - j]);
+}
+
+// Under "return", the tour's touch (0..n) whose pose touch i takes: the check gives a touch
+// on the way back that touch's frame.
+inline int returned_touch(int n, int i) {
+    if (n < 1 || i < 0) throw Error("returned_touch: needs a motion and i >= 0");
+    const int j = i % (2 * n);
+    return j <= n ? j : 2 * n - j;
 }
 
 }  // namespace vtloc

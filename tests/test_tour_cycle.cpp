@@ -43,6 +43,7 @@ TEST_CASE("the bench's returning tour revisits only the tour's own poses", "[ben
             const int period = int(2 * n), j = i % period, p = j <= int(n) ? j : period - j;
             INFO("n " << n << ", touch " << i << " should be the tour's touch " << p);
             REQUIRE(gap(x, poses[size_t(p)]) <= 1e-9);
+            CHECK(returned_touch(int(n), i) == p);
         }
         // "repeat" is the tour's motions over again; past the tour it leaves its poses.
         for (int i = 1; i <= int(2 * n); ++i) CHECK(gap(tour_motion(tour, "repeat", i), tour[size_t(i - 1) % n]) == 0);
@@ -54,4 +55,6 @@ TEST_CASE("the bench's returning tour revisits only the tour's own poses", "[ben
     CHECK(!known_tour_cycle("loop"));
     CHECK(!known_tour_cycle(""));
     CHECK_THROWS_WITH(tour_motion({}, "return", 1), Catch::Contains("needs a motion"));
+    CHECK(returned_touch(3, 0) == 0);
+    CHECK_THROWS_WITH(returned_touch(0, 1), Catch::Contains("needs a motion"));
 }

@@ -71,15 +71,17 @@ int tracker_check(Session& s, const Args& a) {
         std::printf("\nfirst node out of tolerance:\n");
         print_node(r.nodes[size_t(r.first_failure)]);
     }
-    std::printf("\n%s: %zu of %zu touches' beliefs, %zu of %zu nodes and %zu of %zu outputs within tolerance (GPU %.0f ms, "
+    const std::string frames = r.shape_terms.empty() ? "" : std::to_string(r.shape_terms.size() - bad_terms) + " of " +
+                                                                 std::to_string(r.shape_terms.size()) + " frames' terms, ";
+    std::printf("\n%s: %s%zu of %zu touches' beliefs, %zu of %zu nodes and %zu of %zu outputs within tolerance (GPU %.0f ms, "
                 "CPU reference %.0f ms, total %.1f s)\n",
-                r.ok ? "OK" : "FAILED", r.touches.size() - bad_touches, r.touches.size(), r.nodes.size() - bad_nodes, r.nodes.size(),
-                r.outputs.size() - bad_outputs, r.outputs.size(), r.gpu_ms, r.cpu_ms, r.wall_ms / 1000.0);
+                r.ok ? "OK" : "FAILED", frames.c_str(), r.touches.size() - bad_touches, r.touches.size(), r.nodes.size() - bad_nodes,
+                r.nodes.size(), r.outputs.size() - bad_outputs, r.outputs.size(), r.gpu_ms, r.cpu_ms, r.wall_ms / 1000.0);
     if (a.get("--json")) write_json(*a.get("--json"), tracker_check_json(r, o));
     if (r.ok) return 0;
     std::fflush(stdout);
-    std::fprintf(stderr, "vtloc: tracker check failed on %s: %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
-                 r.device.name.c_str(), bad_touches, bad_nodes, bad_outputs);
+    std::fprintf(stderr, "vtloc: tracker check failed on %s: %zu frames' terms, %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
+                 r.device.name.c_str(), bad_terms, bad_touches, bad_nodes, bad_outputs);
     return 1;
 }
 

@@ -22,10 +22,13 @@ namespace vtloc::api {
 // The filter inside an api::Tracker (engine/api/tracker.cpp; check_tracker drives it).
 struct TrackerAccess {
     static track::Tracker& core(Tracker& t);
-    // Render-and-compare's scorer on the ops' CPU references, over the codebook the tracker's
-    // own scorer reads (rendered on the device as it renders it), and one gel shape's term
-    // through it as shape_term() scores on the device (check_tracker --shapes).
-    static std::shared_ptr<track::CodebookScorer> cpu_scorer(Tracker& t);
+    // Render-and-compare's scorer on the device, as the tracker makes its own, and on the ops'
+    // CPU references, both over one codebook rendered on the device; and one gel shape's term
+    // through either as shape_term() scores it (check_tracker --shapes).
+    struct ShapeScorers {
+        std::shared_ptr<track::CodebookScorer> gpu, cpu;
+    };
+    static ShapeScorers shape_scorers(Tracker& t);
     static std::vector<float> shape_term(Tracker& t, track::CodebookScorer& scorer, const GelShape& g);
 };
 

@@ -50,6 +50,22 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// check_tracker's touch_terms: a smooth log term over the surface's samples (a bump around a
+// random sample, in [-2, 0]: beliefs stay spread, as a real touch term leaves them), jittered
+// per spin.
+std::vector<float> seeded_term(const track::Surface& s, io::SplitMix64& rng) {
+    const int64_t S = s.n_samples(), NS = s.n_spin();
+    const size_t c = size_t(rng.uniform() * double(S));
+    const double w = 10 + 20 * rng.uniform();  // mm
+    std::vector<float> term(size_t(S * NS));
+    for (int64_t k = 0; k < S; ++k) {
+        double d2 = 0;
+        for (size_t a = 0; a < 3; ++a) d2 += std::pow(double(s.samples[9 * size_t(k) + a]) - s.samples[9 * c + a], 2);
+        for (int64_t j = 0; j < NS; ++j) term[size_t(k * NS + j)] = float(-2 + 2 * std::exp(-d2 / (2 * w * w)) - 0.1 * rng.uniform());
+    }
+    return term;
+}
+
 // The graph check's nodes and outputs into the API's structs (check and check_tracker).
 void fill_graph(const check::GraphCheck& g, std::vector<NodeCheck>& nodes, std::vector<OutputCheck>& outputs) {
     for (const check::NodeCheck& n : g.nodes) {
@@ -137,14 +153,14 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         if (options.shapes) {
             if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
             GelShapeReader reader(context);
-            const std::shared_ptr<track::CodebookScorer> cpu_scorer = TrackerAccess::cpu_scorer(api_gpu);
+            const TrackerAccess::ShapeScorers scorers = TrackerAccess::shape_scorers(api_gpu);
             for (const io::SequenceTouch& st : seq.touches) {
                 const GelShape g = reader.read(load_tactile_image(st.tactile), nullptr, st.tactile);
                 auto a0 = std::chrono::steady_clock::now();
-                frame_terms.push_back(api_gpu.shape_term(g));
+                frame_terms.push_back(TrackerAccess::shape_term(api_gpu, *scorers.gpu, g));
                 gpu_ms += ms_since(a0);
                 a0 = std::chrono::steady_clock::now();
-                const std::vector<float> c = TrackerAccess::shape_term(api_gpu, *cpu_scorer, g);
+                const std::vector<float> c = TrackerAccess::shape_term(api_gpu, *scorers.cpu, g);
                 cpu_ms += ms_since(a0);
                 const int64_t n = int64_t(c.size());
                 const check::Comparison cmp = check::compare(HostTensor({n}, frame_terms.back()), HostTensor({n}, c),
@@ -152,27 +168,11 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 r.shape_terms.push_back({st.tactile, to_api(cmp), cmp.ok});
             }
         }
-        const int tour_n = int(seq.touches.size()) - 1;
         io::SplitMix64 rng(20261207);
         for (size_t i = 0; i < motions.size(); ++i) {
-            // A smooth log term over the surface's samples (a bump around a random sample, in
-            // [-2, 0]: beliefs stay spread, as a real touch term leaves them), jittered per spin.
-            std::vector<float> term;
-            if (options.shapes)  // a touch on the way back is where touch 2n - i was
-                term = frame_terms[size_t(int(i) <= tour_n ? int(i) : 2 * tour_n - int(i))];
-            if (options.touch_terms) {
-                const track::Surface& s = gpu.surface();
-                const int64_t S = s.n_samples(), NS = s.n_spin();
-                const size_t c = size_t(rng.uniform() * double(S));
-                const double w = 10 + 20 * rng.uniform();  // mm
-                term.resize(size_t(S * NS));
-                for (int64_t k = 0; k < S; ++k) {
-                    double d2 = 0;
-                    for (size_t a = 0; a < 3; ++a) d2 += std::pow(double(s.samples[9 * size_t(k) + a]) - s.samples[9 * c + a], 2);
-                    for (int64_t j = 0; j < NS; ++j)
-                        term[size_t(k * NS + j)] = float(-2 + 2 * std::exp(-d2 / (2 * w * w)) - 0.1 * rng.uniform());
-                }
-            }
+            std::vector<float> term;  // a touch on the way back takes the frame of the touch it returns to
+            if (options.shapes) term = frame_terms[size_t(returned_touch(int(seq.touches.size()) - 1, int(i)))];
+            if (options.touch_terms) term = seeded_term(gpu.surface(), rng);
             auto a0 = std::chrono::steady_clock::now();
             gpu.add_touch(motions[i], term);
             gpu_ms += ms_since(a0);

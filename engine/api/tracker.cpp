@@ -451,11 +451,12 @@ uint64_t Tracker::host_bytes() const {
 }
 double Tracker::spacing_mm() const { return impl_->tracker.surface().spacing_mm; }
 track::Tracker& TrackerAccess::core(Tracker& t) { return t.impl_->tracker; }
-std::shared_ptr<track::CodebookScorer> TrackerAccess::cpu_scorer(Tracker& t) {
+TrackerAccess::ShapeScorers TrackerAccess::shape_scorers(Tracker& t) {
     const auto lock = one_at_a_time(*t.impl_);
     const Tracker::Impl& i = *t.impl_;
     const track::Codebook b = track::cached_codebook(i.ctx, i.tracker.surface(), {}, i.book->cache);
-    return std::make_shared<track::CodebookScorer>(nullptr, b, i.tracker.surface(), i.score);
+    return {std::make_shared<track::CodebookScorer>(i.ctx, b, i.tracker.surface(), i.score),
+            std::make_shared<track::CodebookScorer>(nullptr, b, i.tracker.surface(), i.score)};
 }
 std::vector<float> TrackerAccess::shape_term(Tracker& t, track::CodebookScorer& scorer, const GelShape& g) {
     const auto lock = one_at_a_time(*t.impl_);
