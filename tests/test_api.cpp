@@ -149,17 +149,8 @@ TEST_CASE("api: two trackers of one object on two threads at once, sharing its t
     o.hypotheses = 5000;
     api::TrackerOptions other = o;  // the comparison's and the filter's own options differ
     other.render_weight = 0.5, other.render_press_percentile = 90, other.odometry_mm = 0.5;
-    auto cap = [](double r0, double c0, double tilt) {  // a gentle cap pressed into the gel
-        api::GelShape g;
-        g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
-        for (int r = 0; r < g.height; ++r)
-            for (int c = 0; c < g.width; ++c) {
-                const double y = r * g.mm_per_px - r0, x = c * g.mm_per_px - c0;
-                g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + tilt * x)));
-            }
-        return g;
-    };
-    const std::vector<api::GelShape> shapes{cap(7.5, 10.0, 0.01), cap(6.0, 11.0, 0.0), cap(8.0, 9.0, -0.01)};
+    const std::vector<api::GelShape> shapes{test::gel_cap(7.5, 10.0, 0.01), test::gel_cap(6.0, 11.0, 0.0),
+                                          test::gel_cap(8.0, 9.0, -0.01)};
     const std::vector<api::Motion> motions{{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {6, 0, 0}},
                                            {{0.866, 0, 0.5, 0, 1, 0, -0.5, 0, 0.866}, {0, 8, 1}}};
     struct Run {

@@ -11,6 +11,7 @@
 #include "engine/sensor/gel_shape.h"
 #include "engine/sensor/lighting.h"
 #include "engine/track/codebook.h"
+#include "tests/api_test_util.h"
 #include "tests/harness.h"
 #include "vtloc/vtloc.h"
 
@@ -28,17 +29,8 @@ api::TactileImage press(const sensor::Calibration& c, int i) {
     return im;
 }
 
-// A gentle cap pressed into the gel, tilted a little along x (120 x 160 at the dataset's 0.1245 mm).
-api::GelShape tilted_cap() {
-    api::GelShape g;
-    g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
-    for (int r = 0; r < g.height; ++r)
-        for (int c = 0; c < g.width; ++c) {
-            const double y = r * g.mm_per_px - 7.5, x = c * g.mm_per_px - 10.0;
-            g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0 + 0.01 * x)));
-        }
-    return g;
-}
+// A gentle cap tilted a little along x.
+api::GelShape tilted_cap() { return test::gel_cap(7.5, 10.0, 0.01); }
 
 }  // namespace
 
@@ -147,17 +139,7 @@ TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the sh
     api::TrackerOptions o;
     o.hypotheses = 20000;
     api::Tracker t(ctx, std::string(VTLOC_SOURCE_DIR) + "/examples/potato_tour.ply", o);
-    auto cap = [](double r0, double c0) {
-        api::GelShape g;
-        g.height = 120, g.width = 160, g.mm_per_px = 0.1245;
-        for (int r = 0; r < g.height; ++r)
-            for (int c = 0; c < g.width; ++c) {
-                const double y = r * g.mm_per_px - r0, x = c * g.mm_per_px - c0;
-                g.depth_mm.push_back(float(std::max(0.0, 0.8 - (x * x + y * y) / 40.0)));
-            }
-        return g;
-    };
-    const api::GelShape a = cap(7.5, 10.0), b = cap(6.0, 11.0);
+    const api::GelShape a = test::gel_cap(7.5, 10.0, 0), b = test::gel_cap(6.0, 11.0, 0);
     const api::Motion m{{1, 0, 0, 0, 1, 0, 0, 0, 1}, {3, 0, 0}};
     const api::TrackerEstimate direct = t.evaluate_window({m}, {}, nullptr, {&a, &b});
     const std::vector<std::vector<float>> terms{t.touch_term(nullptr, nullptr, &a), t.touch_term(nullptr, nullptr, &b)};
