@@ -80,10 +80,10 @@ void bind_check(py::module_& m) {
     m.def(
         "check_tracker",
         [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back,
-           bool touch_terms, bool shapes) {
+           bool touch_terms, bool shapes, const std::string& codebook_cache, int64_t codebook_samples) {
             api::TrackerCheckOptions o;
             o.touches = touches, o.object = object, o.hypotheses = hypotheses, o.there_and_back = there_and_back;
-            o.touch_terms = touch_terms, o.shapes = shapes;
+            o.touch_terms = touch_terms, o.shapes = shapes, o.codebook_cache = codebook_cache, o.codebook_samples = codebook_samples;
             api::TrackerCheckResult r;
             {
                 py::gil_scoped_release release;
@@ -98,7 +98,8 @@ void bind_check(py::module_& m) {
             py::dict d;
             d["ok"] = r.ok, d["device"] = r.device.name, d["object"] = r.object, d["hypotheses"] = r.hypotheses;
             d["tolerance"] = py::dict(py::arg("belief") = tol(r.belief_tolerance), py::arg("node") = tol(r.node_tolerance),
-                                      py::arg("end_to_end") = tol(r.end_to_end_tolerance), py::arg("term") = tol(r.term_tolerance));
+                                      py::arg("end_to_end") = tol(r.end_to_end_tolerance), py::arg("term") = tol(r.term_tolerance),
+                                      py::arg("height") = tol(r.height_tolerance));
             py::list st;
             for (const api::ShapeTermCheck& t : r.shape_terms) {
                 py::dict e;
@@ -106,6 +107,12 @@ void bind_check(py::module_& m) {
                 st.append(e);
             }
             d["shape_terms"] = st;
+            if (shapes) {
+                py::dict c;
+                c["samples"] = r.codebook.samples, c["checked"] = r.codebook.checked, c["ok"] = r.codebook.ok;
+                c["heights"] = error_dict(r.codebook.heights);
+                d["codebook"] = c;
+            }
             d["touches"] = ts, d["nodes"] = nodes_list(r.nodes), d["outputs"] = outputs_list(r.outputs);
             d["first_failure"] = first(r.nodes, r.first_failure);
             d["ms"] = py::dict(py::arg("gpu") = r.gpu_ms, py::arg("cpu") = r.cpu_ms, py::arg("wall") = r.wall_ms);
@@ -113,11 +120,14 @@ void bind_check(py::module_& m) {
         },
         py::arg("context"), py::arg("touches"), py::arg("object") = "", py::arg("hypotheses") = 120000,
         py::arg("there_and_back") = true, py::arg("touch_terms") = false, py::arg("shapes") = false,
+        py::arg("codebook_cache") = "", py::arg("codebook_samples") = 0,
         "vtloc check --tracker: a GPU tracker and its CPU reference walk the touches file's tour (and back),\n"
         "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
         "outputs, first_failure, tolerance, ms. object: for a file without \"object\"; touch_terms: a seeded\n"
         "log term each touch, so the step reads a field per touch; shapes: each touch's frame scored by\n"
-        "render-and-compare on the device and the CPU reference (shape_terms), the device's term given to both.");
+        "render-and-compare on the device and the CPU reference (shape_terms), the device's term given to both,\n"
+        "and the codebook's maps (codebook_cache's, or the device's render) against the CPU reference's render at\n"
+        "codebook_samples samples spread over it (0: all; codebook: samples, checked, ok, heights).");
 }
 
 }  // namespace vtloc::python

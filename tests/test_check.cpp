@@ -3,12 +3,14 @@
 // corrupts one node's GPU output (fp32 and index outputs), and the op
 // self-test covers every registered op and passes. Validation layer on.
 #include <catch2/catch.hpp>
+#include <filesystem>
 #include <set>
 
 #include "engine/check/fault_injection.h"
 #include "engine/executor.h"
 #include "engine/op.h"
 #include "engine/ops/build.h"
+#include "engine/safetensors.h"
 #include "tests/api_test_util.h"
 #include "tests/harness.h"
 
@@ -139,6 +141,43 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         }
         CHECK(rs.touches.size() == 15);
         CHECK(rs.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rs.hypotheses});
+        // The maps scored against, all of them, match the CPU reference's render exactly.
+        CHECK(rs.codebook.ok);
+        CHECK(rs.codebook.checked == rs.codebook.samples);
+        CHECK(rs.codebook.samples * 36 == rs.hypotheses);
+        CHECK(rs.codebook.heights.max_abs == 0);
+        // A deployed cache one cell off (well formed, so a tracker would score against it): the
+        // spot check names it; the terms, both scored over it, still agree.
+        const std::string cache = test::temp_path("check_tracker_book.safetensors");
+        std::filesystem::remove(cache);
+        t.codebook_cache = cache;
+        const api::TrackerCheckResult written = api::check_tracker(ctx, t);
+        CHECK(written.ok);
+        CHECK(written.codebook.checked == written.codebook.samples);
+        REQUIRE(std::filesystem::exists(cache));
+        {
+            const SafetensorsFile f = SafetensorsFile::load(cache, "test");
+            std::vector<float> h = f.to_f32(f.at("heights"));
+            const size_t GG = h.size() / size_t(written.codebook.samples);
+            h[5] -= 0.5f;       // sample 0's, which every spread checks
+            h[GG + 5] -= 0.5f;  // sample 1's, which 64 spread over more than 128 do not (the next is sample S / 64)
+            write_safetensors(cache, {TensorBlob::f32("heights", f.at("heights").shape, h),
+                                      TensorBlob::f32("samples", f.at("samples").shape, f.to_f32(f.at("samples")))},
+                              f.metadata());
+        }
+        REQUIRE(written.codebook.samples > 128);
+        t.codebook_samples = 64;
+        const api::TrackerCheckResult stale = api::check_tracker(ctx, t);
+        CHECK(!stale.ok);
+        CHECK(!stale.codebook.ok);
+        CHECK(stale.codebook.heights.mismatches == 1);
+        for (const api::ShapeTermCheck& c : stale.shape_terms) CHECK(c.ok);
+        t.codebook_samples = 0;
+        CHECK(api::check_tracker(ctx, t).codebook.heights.mismatches == 2);
+        t.codebook_samples = -1;
+        CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("codebook_samples"));
+        std::filesystem::remove(cache);
+        t.codebook_cache.clear(), t.codebook_samples = 0;
         t.touch_terms = true;
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("not both"));
     }

@@ -102,12 +102,16 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
                      {"tolerance", {{"belief", tol_json(r.belief_tolerance)},
                                     {"node", tol_json(r.node_tolerance)},
                                     {"end_to_end", tol_json(r.end_to_end_tolerance)},
-                                    {"term", tol_json(r.term_tolerance)}}},
+                                    {"term", tol_json(r.term_tolerance)},
+                                    {"height", tol_json(r.height_tolerance)}}},
                      {"shape_terms", shape_terms},
                      {"touches", touches},
                      {"nodes", nodes_json(r.nodes)},
                      {"outputs", outputs_json(r.outputs)},
                      {"ms", {{"gpu", r.gpu_ms}, {"cpu", r.cpu_ms}, {"wall", r.wall_ms}}}};
+    if (o.shapes)
+        j["codebook"] = {{"cache", o.codebook_cache}, {"samples", r.codebook.samples}, {"checked", r.codebook.checked},
+                         {"ok", r.codebook.ok}, {"heights", error_json(r.codebook.heights)}};
     j["first_failure"] = r.first_failure >= 0 ? nlohmann::json(r.nodes[size_t(r.first_failure)].node) : nlohmann::json();
     return j;
 }

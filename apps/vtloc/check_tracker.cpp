@@ -17,6 +17,8 @@ int tracker_check(Session& s, const Args& a) {
     o.there_and_back = !a.flag("--one-way");
     o.touch_terms = a.flag("--terms");
     o.shapes = a.flag("--shapes");
+    o.codebook_cache = a.get("--codebook-cache").value_or("");
+    o.codebook_samples = a.integer("--codebook-samples", int(o.codebook_samples), 0, 100000000);
     std::printf("check      the multi-touch filter on %s (%s)%s%s\n", o.touches.c_str(),
                 o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "",
                 o.touch_terms ? ", a seeded term each touch" : o.shapes ? ", render-and-compare of each touch's frame" : "");
@@ -41,6 +43,11 @@ int tracker_check(Session& s, const Args& a) {
             std::printf("%-40s %-9s %-9s %-8s %s\n", name.c_str(), g3(t.term.max_abs).c_str(), g3(t.term.max_rel).c_str(),
                         g3(t.term.tolerance_used).c_str(), t.ok ? "ok" : ("FAILED (" + t.term.first_mismatch + ")").c_str());
         }
+        const api::CodebookCheck& c = r.codebook;
+        std::printf("\ncodebook   %s: %lld of %lld samples' maps against the CPU reference's render, heights exactly: %s\n",
+                    o.codebook_cache.empty() ? "rendered on the device" : o.codebook_cache.c_str(), (long long)c.checked,
+                    (long long)c.samples, c.ok ? "ok" : ("FAILED (" + std::to_string(c.heights.mismatches) + " cells differ; " +
+                                                          c.heights.first_mismatch + ")").c_str());
     }
     std::printf("\n%-6s %-9s %-9s %-8s %-12s %s\n", "touch", "max abs", "max rel", "tol used", "contacts mm", "result");
     size_t bad_touches = 0;
@@ -71,7 +78,8 @@ int tracker_check(Session& s, const Args& a) {
         std::printf("\nfirst node out of tolerance:\n");
         print_node(r.nodes[size_t(r.first_failure)]);
     }
-    const std::string frames = r.shape_terms.empty() ? "" : std::to_string(r.shape_terms.size() - bad_terms) + " of " +
+    const std::string frames = r.shape_terms.empty() ? "" : std::string(r.codebook.ok ? "the codebook, " : "") +
+                                                                 std::to_string(r.shape_terms.size() - bad_terms) + " of " +
                                                                  std::to_string(r.shape_terms.size()) + " frames' terms, ";
     std::printf("\n%s: %s%zu of %zu touches' beliefs, %zu of %zu nodes and %zu of %zu outputs within tolerance (GPU %.0f ms, "
                 "CPU reference %.0f ms, total %.1f s)\n",
@@ -80,8 +88,8 @@ int tracker_check(Session& s, const Args& a) {
     if (a.get("--json")) write_json(*a.get("--json"), tracker_check_json(r, o));
     if (r.ok) return 0;
     std::fflush(stdout);
-    std::fprintf(stderr, "vtloc: tracker check failed on %s: %zu frames' terms, %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
-                 r.device.name.c_str(), bad_terms, bad_touches, bad_nodes, bad_outputs);
+    std::fprintf(stderr, "vtloc: tracker check failed on %s: %s%zu frames' terms, %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
+                 r.device.name.c_str(), r.codebook.ok ? "" : "the codebook's maps, ", bad_terms, bad_touches, bad_nodes, bad_outputs);
     return 1;
 }
 

@@ -21,7 +21,7 @@ const char* kHelp =
     "usage: vtloc check [--model M] [--tactile IMG --object OBJ] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --ops [--op NAME] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way] [--terms | --shapes]\n"
-    "                   [--device D] [--json FILE] [--verbose]\n"
+    "                   [--codebook-cache F] [--codebook-samples N] [--device D] [--json FILE] [--verbose]\n"
     "\n"
     "Cross-checks the Vulkan device against the engine's CPU reference.\n"
     "\n"
@@ -51,7 +51,10 @@ const char* kHelp =
     "                render-and-compare's would), so the step reads a field per touch;\n"
     "                --shapes: each touch's own frame read into its gel shape and scored\n"
     "                against the object's codebook (render-and-compare's term), on the device\n"
-    "                and by the CPU reference scorer, compared per frame, then given to both\n"
+    "                and by the CPU reference scorer, compared per frame, then given to both;\n"
+    "                and the codebook's maps (rendered on the device, or --codebook-cache F's,\n"
+    "                read or written as the tracker would) against the CPU reference's render\n"
+    "                at --codebook-samples N samples spread over it (default 0: all), exactly\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
     "  --verbose     every node (model check) / every dispatch (--ops, --tracker)\n"
@@ -177,7 +180,7 @@ int cmd_check(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--model"}, {"--tactile"}, {"--object"}, {"--device"}, {"--json"}, {"--ops", false}, {"--op"},
             {"--verbose", false}, {"--tracker", false}, {"--touches"}, {"--hypotheses"}, {"--object-units"},
-            {"--one-way", false}, {"--terms", false}, {"--shapes", false}});
+            {"--one-way", false}, {"--terms", false}, {"--shapes", false}, {"--codebook-cache"}, {"--codebook-samples"}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -190,6 +193,8 @@ int cmd_check(Session& s, int argc, char** argv) {
         throw UsageError("--tracker takes no --model or --tactile (the touches file names the frames)");
     for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms", "--shapes"})
         if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
+    for (const char* opt : {"--codebook-cache", "--codebook-samples"})
+        if (!a.flag("--shapes") && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker --shapes");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
     if (a.get("--device")) s.context.emplace(api::ContextOptions{*a.get("--device")});
     return ops ? ops_check(s, a) : tracker ? tracker_check(s, a) : model_check(s, a);

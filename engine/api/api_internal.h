@@ -15,6 +15,7 @@
 namespace vtloc::track {
 class Tracker;
 class CodebookScorer;
+struct Codebook;
 }
 
 namespace vtloc::api {
@@ -23,9 +24,11 @@ namespace vtloc::api {
 struct TrackerAccess {
     static track::Tracker& core(Tracker& t);
     // Render-and-compare's scorer on the device, as the tracker makes its own, and on the ops'
-    // CPU references, both over one codebook rendered on the device; and one gel shape's term
+    // CPU references, both over the codebook the tracker reads (its cache, or rendered on the
+    // device); and one gel shape's term
     // through either as shape_term() scores it (check_tracker --shapes).
     struct ShapeScorers {
+        std::shared_ptr<const track::Codebook> book;  // codebook_cache's, or the device's render
         std::shared_ptr<track::CodebookScorer> gpu, cpu;
     };
     static ShapeScorers shape_scorers(Tracker& t);

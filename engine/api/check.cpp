@@ -50,6 +50,26 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
+// check_tracker's shapes: the codebook's maps at `want` samples spread over it (0: all) against
+// the CPU reference's render of them.
+CodebookCheck check_codebook(const track::Codebook& b, const track::Surface& s, int64_t want, const CheckTolerance& tol) {
+    CodebookCheck c;
+    c.samples = b.n_samples();
+    c.checked = want == 0 ? c.samples : std::min(want, c.samples);
+    const int64_t GG = b.G * b.G;
+    std::vector<int64_t> rows;
+    std::vector<float> got;
+    for (int64_t k = 0; k < c.checked; ++k) {
+        rows.push_back(k * c.samples / c.checked);
+        got.insert(got.end(), b.heights.begin() + rows.back() * GG, b.heights.begin() + (rows.back() + 1) * GG);
+    }
+    const std::vector<float> ref = track::render_codebook_rows(nullptr, s, rows, b.options);
+    const check::Comparison cmp = check::compare(HostTensor({c.checked, GG}, got), HostTensor({c.checked, GG}, ref), {tol.abs, tol.rel});
+    c.heights = to_api(cmp);
+    c.ok = cmp.ok;
+    return c;
+}
+
 // check_tracker's touch_terms: a smooth log term over the surface's samples (a bump around a
 // random sample, in [-2, 0]: beliefs stay spread, as a real touch term leaves them), jittered
 // per spin.
@@ -139,6 +159,8 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         TrackerOptions to;
         to.hypotheses = options.hypotheses;
         to.object_units = options.object_units;
+        to.codebook_cache = options.codebook_cache;
+        if (options.codebook_samples < 0) throw Error("check_tracker: codebook_samples must be >= 0 (0: all)");
         Tracker api_gpu(context, object, to);
         track::Tracker& gpu = TrackerAccess::core(api_gpu);
         track::Tracker cpu = track::Tracker::cpu_reference_of(gpu);
@@ -154,6 +176,9 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
             if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
             GelShapeReader reader(context);
             const TrackerAccess::ShapeScorers scorers = TrackerAccess::shape_scorers(api_gpu);
+            const auto b0 = std::chrono::steady_clock::now();
+            r.codebook = check_codebook(*scorers.book, gpu.surface(), options.codebook_samples, r.height_tolerance);
+            cpu_ms += ms_since(b0);
             for (const io::SequenceTouch& st : seq.touches) {
                 const GelShape g = reader.read(load_tactile_image(st.tactile), nullptr, st.tactile);
                 auto a0 = std::chrono::steady_clock::now();
@@ -205,6 +230,7 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.ok = g.ok();
         for (const TouchCheck& t : r.touches) r.ok = r.ok && t.ok;
         for (const ShapeTermCheck& t : r.shape_terms) r.ok = r.ok && t.ok;
+        r.ok = r.ok && r.codebook.ok;
         r.gpu_ms = gpu_ms + g.gpu_ms;
         r.cpu_ms = cpu_ms + g.cpu_nodes_ms + g.cpu_full_ms;
         r.wall_ms = ms_since(t0);

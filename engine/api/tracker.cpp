@@ -454,9 +454,9 @@ track::Tracker& TrackerAccess::core(Tracker& t) { return t.impl_->tracker; }
 TrackerAccess::ShapeScorers TrackerAccess::shape_scorers(Tracker& t) {
     const auto lock = one_at_a_time(*t.impl_);
     const Tracker::Impl& i = *t.impl_;
-    const track::Codebook b = track::cached_codebook(i.ctx, i.tracker.surface(), {}, i.book->cache);
-    return {std::make_shared<track::CodebookScorer>(i.ctx, b, i.tracker.surface(), i.score),
-            std::make_shared<track::CodebookScorer>(nullptr, b, i.tracker.surface(), i.score)};
+    auto b = std::make_shared<const track::Codebook>(track::cached_codebook(i.ctx, i.tracker.surface(), {}, i.book->cache));
+    return {b, std::make_shared<track::CodebookScorer>(i.ctx, *b, i.tracker.surface(), i.score),
+            std::make_shared<track::CodebookScorer>(nullptr, *b, i.tracker.surface(), i.score)};
 }
 std::vector<float> TrackerAccess::shape_term(Tracker& t, track::CodebookScorer& scorer, const GelShape& g) {
     const auto lock = one_at_a_time(*t.impl_);

@@ -81,26 +81,25 @@ void check_render_density(const Surface& s, const CodebookOptions& o) {
                     num(density) + " per mm^2 (" + std::to_string(s.n_dense()) + " points)");
 }
 
-Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o) {
+namespace {
+// The maps [S, G*G] of `samples` ([S, 9] rows of the surface's) from its dense points.
+std::vector<float> render_maps(rt::Context* ctx, const Surface& s, const std::vector<float>& samples, const CodebookOptions& o) {
     check_options(o);
     check_render_density(s, o);
-    Codebook b;
-    b.options = o;
-    b.G = grid_cells(o);
-    b.samples = s.samples;
+    const int64_t G = grid_cells(o);
     // A bin reaches every point that can land in a map: the map's half width and the cap.
-    const double half = double(b.G - 1) / 2 * o.cell_mm + o.splat_mm;
+    const double half = double(G - 1) / 2 * o.cell_mm + o.splat_mm;
     const BinnedPoints bp = bin_points(s.dense, std::sqrt(2 * half * half + o.cap_mm * o.cap_mm));
     ops::CodebookRender p;
-    p.G = b.G, p.cell = o.cell_mm, p.splat = o.splat_mm, p.cap = o.cap_mm, p.facing = o.facing, p.coarse = bp.coarse;
+    p.G = G, p.cell = o.cell_mm, p.splat = o.splat_mm, p.cap = o.cap_mm, p.facing = o.facing, p.coarse = bp.coarse;
     p.max_bin = bp.max_bin;
     for (int k = 0; k < 3; ++k) p.origin[k] = bp.origin[k], p.dims[k] = bp.dims[k];
     Graph g;
-    const int64_t S = s.n_samples(), D = int64_t(bp.points.size() / 6);
+    const int64_t S = int64_t(samples.size() / 9), D = int64_t(bp.points.size() / 6);
     g.output(ops::codebook_render(g, g.input("samples", {S, 9}), g.input("points", {D, 6}),
                                   g.input("bins", {bp.dims[0] * bp.dims[1] * bp.dims[2], 2}, ElemType::I32), p, "codebook.render"),
              "heights");
-    const TensorMap in{{"samples", HostTensor({S, 9}, s.samples)},
+    const TensorMap in{{"samples", HostTensor({S, 9}, samples)},
                        {"points", HostTensor({D, 6}, bp.points)},
                        {"bins", HostTensor::from_ints({bp.dims[0] * bp.dims[1] * bp.dims[2], 2}, bp.bins)}};
     TensorMap out;
@@ -110,8 +109,29 @@ Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptio
     } else {
         out = run_cpu(g, WeightStore{}, in);
     }
-    b.heights = std::move(out.at("heights").data);
+    return std::move(out.at("heights").data);
+}
+}  // namespace
+
+Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o) {
+    Codebook b;
+    b.options = o;
+    b.G = grid_cells(o);
+    b.samples = s.samples;
+    b.heights = render_maps(ctx, s, s.samples, o);
     return b;
+}
+
+std::vector<float> render_codebook_rows(rt::Context* ctx, const Surface& s, const std::vector<int64_t>& rows, const CodebookOptions& o) {
+    std::vector<float> samples;
+    samples.reserve(9 * rows.size());
+    for (int64_t r : rows) {
+        if (r < 0 || r >= s.n_samples())
+            throw Error("render_codebook_rows: sample " + std::to_string(r) + " of " + std::to_string(s.n_samples()));
+        samples.insert(samples.end(), s.samples.begin() + 9 * r, s.samples.begin() + 9 * (r + 1));
+    }
+    if (rows.empty()) return {};
+    return render_maps(ctx, s, samples, o);
 }
 
 void save_codebook(const std::string& path, const Codebook& b) {

@@ -50,6 +50,9 @@ void check_render_density(const Surface& s, const CodebookOptions& o);
 // Renders every sample's map (ctx null: the op's CPU reference). Throws
 // vtloc::Error for a cloud too sparse to render (SPEC 9), naming its density.
 Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o = {});
+// The maps of some samples ([rows.size(), G*G]; rows index the surface's samples), rendered as
+// render_codebook renders them: a codebook's spot check (check_tracker).
+std::vector<float> render_codebook_rows(rt::Context* ctx, const Surface& s, const std::vector<int64_t>& rows, const CodebookOptions& o = {});
 // The cache: a safetensors file with the format, the options, the maps and the samples.
 void save_codebook(const std::string& path, const Codebook& b);
 // Throws vtloc::Error naming the path for another format or version, a malformed

@@ -280,6 +280,12 @@ def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
     assert shapes["ok"] and [os.path.basename(s["frame"]) for s in shapes["shape_terms"]] == \
         [f"potato_tour_{i}.png" for i in range(1, 9)]
     assert all(s["ok"] for s in shapes["shape_terms"]) and shapes["tolerance"]["term"] == {"abs": 1e-4, "rel": 1e-4}
+    book = shapes["codebook"]  # the maps scored against, spot-checked exactly against the CPU's render
+    assert book["ok"] and book["checked"] == book["samples"] and book["samples"] * 36 == shapes["hypotheses"]
+    assert book["heights"]["max_abs"] == 0 and shapes["tolerance"]["height"] == {"abs": 0, "rel": 0}
+    assert "codebook" not in one_way
+    spread = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True, codebook_samples=16)
+    assert spread["ok"] and spread["codebook"]["checked"] == 16
     with pytest.raises(vtloc.Error, match="no_such_tour.json"):
         vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
 

@@ -116,8 +116,20 @@ struct TrackerCheckOptions {
     // Instead, each touch's own frame (the touches file's "tactile") read into its gel's shape
     // and scored against the object's codebook as render-and-compare's term, on the device and
     // by the CPU reference scorer (compared per frame), the device's term then given to both
-    // trackers. The codebook is rendered on the device for both (check --ops checks the render).
+    // trackers. Both score against the maps the tracker would (codebook_cache's, or rendered on
+    // the device), whose spot check against the CPU reference's render is `codebook`.
     bool shapes = false;
+    std::string codebook_cache;       // as TrackerOptions::codebook_cache: a deployed cache checked too
+    int64_t codebook_samples = 0;     // with shapes: codebook maps re-rendered on the CPU, spread; 0: all (~1 s a 3,333)
+};
+
+// The maps render-and-compare scores against, a spread subset of the codebook's samples
+// re-rendered by the CPU reference.
+struct CodebookCheck {
+    int64_t samples = 0;         // the codebook's
+    int64_t checked = 0;         // of them compared
+    CheckError heights;
+    bool ok = true;
 };
 
 struct ShapeTermCheck {
@@ -147,6 +159,10 @@ struct TrackerCheckResult {
     // scoring shader is `precise`, no contraction: lavapipe gives the reference's bits).
     CheckTolerance term_tolerance{1e-4, 1e-4};
     std::vector<ShapeTermCheck> shape_terms;  // with shapes: one per frame of the file
+    // The codebook's heights must match exactly: each is the least of identical fp32 values (the
+    // render shader is `precise`, and Vulkan rounds +, -, * correctly), on any device.
+    CheckTolerance height_tolerance{0, 0};
+    CodebookCheck codebook;      // with shapes
     std::vector<TouchCheck> touches;   // both trackers walk the whole tour
     std::vector<NodeCheck> nodes;      // the last touch's step, each node's CPU reference on the GPU's inputs
     std::vector<OutputCheck> outputs;  // that step's outputs against a full CPU run
