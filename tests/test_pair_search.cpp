@@ -21,6 +21,7 @@
 #include "engine/track/surface.h"
 #include "engine/track/tracker.h"
 #include "engine/track/vec3d.h"
+#include "engine/track/window_fit.h"
 #include "tests/harness.h"
 #include "tests/track_poses.h"
 
@@ -44,9 +45,7 @@ HostTensor tube_dense(int64_t n) {
 // rel's rows as a term at the tight widths (the tracker's own fit terms).
 ops::pose::Term term_of(const Rigid& rel) {
     float r[16];
-    for (int i = 0; i < 9; ++i) r[i] = float(rel.R[size_t(i)]);
-    for (int i = 0; i < 3; ++i) r[9 + i] = float(rel.t[size_t(i)]);
-    r[12] = 1, r[13] = float(6 * M_PI / 180), r[14] = -1, r[15] = 0;
+    track::term_row(r, rel, 0, track::FilterOptions{}, -1, 0);
     return ops::pose::term_from_row(r);
 }
 
@@ -86,23 +85,16 @@ struct Found {
 };
 
 Found search_window(const track::PairIndex& index, const ops::pose::Grid& grid, const std::vector<Rigid>& poses) {
-    const float floor = -9, exp_floor = std::exp(floor);
+    // The tracker's window fit and terms at its default widths, press (0.8 mm) and floor (-9).
+    const track::FilterOptions fo;
     const Rigid cur = poses.back();
-    std::vector<ops::pose::Term> touches;
-    for (const Rigid& x : poses) touches.push_back(term_of(track::compose(track::inverse(cur), x)));
-    auto fit = [&](const Rigid& x) {
-        const ops::pose::Frame f{{float(x.R[0]), float(x.R[3]), float(x.R[6])},
-                                 {float(x.R[1]), float(x.R[4]), float(x.R[7])},
-                                 {float(x.R[2]), float(x.R[5]), float(x.R[8])},
-                                 {float(x.t[0]), float(x.t[1]), float(x.t[2])}};
-        double v = 0;
-        for (const auto& t : touches) {
-            const ops::pose::Frame m = ops::pose::moved(f, t);
-            v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, 0.8f, t.sigma_d, t.sigma_a, floor, exp_floor);
-        }
-        return v;
-    };
-    const std::vector<Rigid> c = track::pair_candidates(index, grid, touches, 0.8, floor, fit);
+    std::vector<Rigid> to_window;
+    for (size_t k = 0; k + 1 < poses.size(); ++k) to_window.push_back(track::compose(track::inverse(cur), poses[k]));
+    const std::vector<ops::pose::Term> window = track::fit_terms(to_window, fo);
+    auto fit = [&](const Rigid& x) { return track::pose_fit(grid, window, fo, x); };
+    std::vector<ops::pose::Term> touches = window;  // the pair search takes the current touch's own too
+    touches.push_back(track::own_term(fo));
+    const std::vector<Rigid> c = track::pair_candidates(index, grid, touches, fo.press_mm, fo.log_floor, fit);
     Found o;
     o.n = c.size();
     if (c.empty()) return o;

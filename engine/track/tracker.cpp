@@ -17,6 +17,7 @@
 #include "engine/track/pair_search.h"
 #include "engine/track/parallel.h"
 #include "engine/track/registration.h"
+#include "engine/track/window_fit.h"
 #include "engine/weights.h"
 
 namespace vtloc::track {
@@ -186,29 +187,6 @@ Graph step_graph(const Surface& s, const FilterOptions& o, int64_t K, int64_t F,
     return g;
 }
 
-// The term row of a touch whose pose is `rel` in the hypothesis' frame, `steps` motions away.
-// q_mm, q_rad: how far a grid hypothesis may sit from the true pose (half the
-// sample spacing, half the spin step); the lever arm turns the latter into distance.
-void term_row(float* r, const Rigid& rel, int steps, const FilterOptions& o, int field, double weight, double q_mm = 0,
-              double q_rad = 0) {
-    for (int i = 0; i < 9; ++i) r[i] = float(rel.R[size_t(i)]);
-    for (int i = 0; i < 3; ++i) r[9 + i] = float(rel.t[size_t(i)]);
-    const double lever = std::sqrt(rel.t[0] * rel.t[0] + rel.t[1] * rel.t[1] + rel.t[2] * rel.t[2]);
-    const double od = o.odometry_deg * M_PI / 180;
-    r[12] = float(std::sqrt(o.sigma_d_mm * o.sigma_d_mm + steps * (o.odometry_mm * o.odometry_mm + od * od * lever * lever) +
-                            q_mm * q_mm + (lever * q_rad) * (lever * q_rad)));
-    const double sa = o.sigma_a_deg * M_PI / 180;
-    r[13] = float(std::sqrt(sa * sa + steps * od * od + q_rad * q_rad));
-    r[14] = float(field);
-    r[15] = float(weight);
-}
-
-ops::pose::Frame frame_of(const Rigid& x) {
-    const auto& R = x.R;
-    return {P{float(R[0]), float(R[3]), float(R[6])}, P{float(R[1]), float(R[4]), float(R[7])},
-            P{float(R[2]), float(R[5]), float(R[8])}, P{float(x.t[0]), float(x.t[1]), float(x.t[2])}};
-}
-
 Rigid rigid_of(const ops::pose::Frame& f) {
     Rigid r;
     r.R = {f.x.x, f.y.x, f.z.x, f.x.y, f.y.y, f.z.y, f.x.z, f.y.z, f.z.z};
@@ -249,19 +227,6 @@ std::array<double, 3> axis_contact(const Surface& s, const ops::pose::Grid& grid
     return c;
 }
 
-// The window's geometry at the tight widths (no grid allowance: a continuous pose
-// needs none) and the current touch's own (its pose on the surface): what the
-// refinement climbs and Estimate::fit reports.
-std::vector<ops::pose::Term> fit_terms(const std::vector<Rigid>& to_window, const FilterOptions& o, double q_mm = 0, double q_rad = 0) {
-    std::vector<ops::pose::Term> terms;
-    for (size_t k = 0; k < to_window.size(); ++k) {
-        float r[16];
-        term_row(r, to_window[k], int(to_window.size() - k), o, -1, 0, q_mm, q_rad);
-        terms.push_back(ops::pose::term_from_row(r));
-    }
-    return terms;
-}
-
 // FilterOptions::free_space_mm: a 5 x 4 grid of pad points that far behind the gel plane; each
 // one the grid finds inside the object (behind its nearest dense point's tangent plane) costs
 // the robust Gaussian of that depth, zero when outside. Points the grid holds nothing for (far
@@ -282,18 +247,6 @@ double free_space_log(const ops::pose::Grid& g, const ops::pose::Frame& f, const
             if (depth > 0) v += robust_log((depth / s) * (depth / s), exp_floor) - zero;
         }
     return v;
-}
-
-double pose_fit(const ops::pose::Grid& grid, const std::vector<ops::pose::Term>& terms, const FilterOptions& o, const Rigid& x) {
-    const ops::pose::Frame f = frame_of(x);
-    const float press = float(o.press_mm), floor = float(o.log_floor), exp_floor = std::exp(floor);
-    double v = 0;
-    for (const ops::pose::Term& t : terms) {
-        const ops::pose::Frame m = ops::pose::moved(f, t);
-        v += ops::pose::geometry_log(grid, ops::pose::cell_of(grid, m.t), m, press, t.sigma_d, t.sigma_a, floor, exp_floor);
-    }
-    return v + double(ops::pose::geometry_log(grid, ops::pose::cell_of(grid, f.t), f, press, float(o.sigma_d_mm),
-                                              float(o.sigma_a_deg * M_PI / 180), floor, exp_floor));
 }
 
 // Pattern search over six degrees of freedom from x on objective f (rotations about the
@@ -776,8 +729,7 @@ Estimate Tracker::finish(const std::vector<float>& log, const std::vector<float>
         // better than that mode's registered seed (as it is or registered, the better).
         if (impl_->pairs && opt_.pair_modes > 0 && n_seeds > 0) {
             std::vector<ops::pose::Term> touches = refiner.tight;
-            float own[16] = {1, 0, 0, 0, 1, 0, 0, 0, 1, 0, 0, 0, float(opt_.sigma_d_mm), float(opt_.sigma_a_deg * M_PI / 180), -1, 0};
-            touches.push_back(ops::pose::term_from_row(own));
+            touches.push_back(own_term(opt_));
             PairSearchOptions po;
             po.top = opt_.pair_modes;
             po.threads = opt_.threads;
