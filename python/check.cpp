@@ -80,10 +80,12 @@ void bind_check(py::module_& m) {
     m.def(
         "check_tracker",
         [](api::Context& ctx, const std::string& touches, const std::string& object, int64_t hypotheses, bool there_and_back,
-           bool touch_terms, bool shapes, const std::string& codebook_cache, int64_t codebook_samples) {
+           bool touch_terms, bool shapes, bool rendered_frames, const std::string& calibration, const std::string& background,
+           const std::string& codebook_cache, int64_t codebook_samples) {
             api::TrackerCheckOptions o;
             o.touches = touches, o.object = object, o.hypotheses = hypotheses, o.there_and_back = there_and_back;
             o.touch_terms = touch_terms, o.shapes = shapes, o.codebook_cache = codebook_cache, o.codebook_samples = codebook_samples;
+            o.rendered_frames = rendered_frames, o.calibration = calibration, o.background = background;
             api::TrackerCheckResult r;
             {
                 py::gil_scoped_release release;
@@ -104,6 +106,7 @@ void bind_check(py::module_& m) {
             for (const api::ShapeTermCheck& t : r.shape_terms) {
                 py::dict e;
                 e["frame"] = t.frame, e["ok"] = t.ok, e["term"] = error_dict(t.term);
+                e["shape"] = py::dict(py::arg("nodes") = nodes_list(t.shape_nodes), py::arg("outputs") = outputs_list(t.shape_outputs));
                 st.append(e);
             }
             d["shape_terms"] = st;
@@ -120,12 +123,15 @@ void bind_check(py::module_& m) {
         },
         py::arg("context"), py::arg("touches"), py::arg("object") = "", py::arg("hypotheses") = 120000,
         py::arg("there_and_back") = true, py::arg("touch_terms") = false, py::arg("shapes") = false,
+        py::arg("rendered_frames") = false, py::arg("calibration") = "", py::arg("background") = "",
         py::arg("codebook_cache") = "", py::arg("codebook_samples") = 0,
         "vtloc check --tracker: a GPU tracker and its CPU reference walk the touches file's tour (and back),\n"
         "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
         "outputs, first_failure, tolerance, ms. object: for a file without \"object\"; touch_terms: a seeded\n"
-        "log term each touch, so the step reads a field per touch; shapes: each touch's frame scored by\n"
-        "render-and-compare on the device and the CPU reference (shape_terms), the device's term given to both,\n"
+        "log term each touch, so the step reads a field per touch; shapes: each touch's frame read into its gel\n"
+        "shape, the reader's graph checked node by node (shape_terms[i]['shape']; rendered_frames, calibration,\n"
+        "background: the reader's, as vtloc sequence takes them), then scored by render-and-compare on the device\n"
+        "and the CPU reference (shape_terms), the device's term given to both,\n"
         "and the codebook's maps (codebook_cache's, or the device's render) against the CPU reference's render at\n"
         "codebook_samples samples spread over it (0: all; codebook: samples, checked, ok, heights).");
 }

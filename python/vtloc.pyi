@@ -21,7 +21,8 @@ def check(context: "Context", model: str, tactile: str, object: str) -> Dict[str
 # vtloc check --tracker: the same and touches (each touch's belief against the CPU reference's)
 def check_tracker(context: "Context", touches: str, object: str = "", hypotheses: int = 120000,
                   there_and_back: bool = True, touch_terms: bool = False,
-                  shapes: bool = False, codebook_cache: str = "",
+                  shapes: bool = False, rendered_frames: bool = False, calibration: str = "",
+                  background: str = "", codebook_cache: str = "",
                   codebook_samples: int = 0) -> Dict[str, Any]: ...
 
 class Context:

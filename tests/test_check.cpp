@@ -138,6 +138,11 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
             INFO(c.frame);
             CHECK(c.ok);
             CHECK(c.frame.find("potato_tour_") != std::string::npos);
+            // The real frames' reader: gradients, the mask, 50 sweeps from zeros.
+            std::vector<std::string> ops;
+            for (const api::NodeCheck& n : c.shape_nodes) ops.push_back(n.op);
+            CHECK(ops == std::vector<std::string>{"gel_gradient", "gel_contact_mask", "masked_poisson"});
+            CHECK(c.shape_outputs.size() == 3);
         }
         CHECK(rs.touches.size() == 15);
         CHECK(rs.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rs.hypotheses});
@@ -178,6 +183,22 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("codebook_samples"));
         std::filesystem::remove(cache);
         t.codebook_cache.clear(), t.codebook_samples = 0;
+        {  // The shape's solve off by half a pixel in one pixel: each frame names that node, the
+           // terms (scored on the reader's own shapes) still agree.
+            FaultGuard g;
+            check::testing::set_fault("gel.height", [](HostTensor& z) { z.data[z.data.size() / 2] += 0.5f; });
+            t.rendered_frames = true;  // and the rendered frames' reader: its coarse start's nodes too
+            const api::TrackerCheckResult bad_shape = api::check_tracker(ctx, t);
+            t.rendered_frames = false;
+            CHECK(!bad_shape.ok);
+            REQUIRE(bad_shape.shape_terms.size() == 8);
+            for (const api::ShapeTermCheck& c : bad_shape.shape_terms) {
+                CHECK(!c.ok);
+                CHECK(c.term.mismatches == 0);
+                REQUIRE(c.shape_nodes.size() == 11);
+                for (const api::NodeCheck& n : c.shape_nodes) CHECK(n.ok == (n.node != "gel.height"));
+            }
+        }
         t.touch_terms = true;
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("not both"));
     }

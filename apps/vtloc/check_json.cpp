@@ -91,7 +91,10 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
         touches.push_back({{"touch", t.touch}, {"ok", t.ok}, {"belief", error_json(t.belief)}, {"contact_mm", number(t.contact_mm)}});
     nlohmann::json shape_terms = nlohmann::json::array();
     for (const api::ShapeTermCheck& t : r.shape_terms)
-        shape_terms.push_back({{"frame", t.frame}, {"ok", t.ok}, {"term", error_json(t.term)}});
+        shape_terms.push_back({{"frame", t.frame},
+                               {"ok", t.ok},
+                               {"shape", {{"nodes", nodes_json(t.shape_nodes)}, {"outputs", outputs_json(t.shape_outputs)}}},
+                               {"term", error_json(t.term)}});
     nlohmann::json j{{"ok", r.ok},
                      {"touches_file", o.touches},
                      {"touch_terms", o.touch_terms},

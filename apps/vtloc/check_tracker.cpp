@@ -18,6 +18,9 @@ int tracker_check(Session& s, const Args& a) {
     o.touch_terms = a.flag("--terms");
     o.shapes = a.flag("--shapes");
     o.codebook_cache = a.get("--codebook-cache").value_or("");
+    o.rendered_frames = a.flag("--rendered");
+    o.calibration = a.get("--calibration").value_or("");
+    o.background = a.get("--background").value_or("");
     o.codebook_samples = a.integer("--codebook-samples", int(o.codebook_samples), 0, 100000000);
     std::printf("check      the multi-touch filter on %s (%s)%s%s\n", o.touches.c_str(),
                 o.object.empty() ? "the file's object" : o.object.c_str(), o.there_and_back ? ", there and back" : "",
@@ -34,14 +37,32 @@ int tracker_check(Session& s, const Args& a) {
                 r.end_to_end_tolerance.rel);
     size_t bad_terms = 0;
     if (!r.shape_terms.empty()) {
+        std::printf("           each frame's gel shape: the reader's graph per node and end to end, as above\n");
         std::printf("           render-and-compare's term |gpu - cpu| <= %g + %g*|cpu| (the CPU reference scorer)\n\n",
                     r.term_tolerance.abs, r.term_tolerance.rel);
-        std::printf("%-40s %-9s %-9s %-8s %s\n", "frame: its term", "max abs", "max rel", "tol used", "result");
+        std::printf("%-28s %-20s %-9s %-9s %-8s %s\n", "frame", "shape: nodes, outs", "term abs", "term rel", "tol used", "result");
         for (const api::ShapeTermCheck& t : r.shape_terms) {
             bad_terms += !t.ok;
             const std::string name = std::filesystem::path(t.frame).filename().string();
-            std::printf("%-40s %-9s %-9s %-8s %s\n", name.c_str(), g3(t.term.max_abs).c_str(), g3(t.term.max_rel).c_str(),
-                        g3(t.term.tolerance_used).c_str(), t.ok ? "ok" : ("FAILED (" + t.term.first_mismatch + ")").c_str());
+            size_t nodes_ok = 0, outs_ok = 0;
+            for (const api::NodeCheck& n : t.shape_nodes) nodes_ok += n.ok;
+            for (const api::OutputCheck& o : t.shape_outputs) outs_ok += o.ok;
+            const std::string shape = std::to_string(nodes_ok) + "/" + std::to_string(t.shape_nodes.size()) + ", " +
+                                      std::to_string(outs_ok) + "/" + std::to_string(t.shape_outputs.size());
+            const bool term_ok = t.term.mismatches == 0;
+            std::printf("%-28s %-20s %-9s %-9s %-8s %s\n", name.c_str(), shape.c_str(), g3(t.term.max_abs).c_str(),
+                        g3(t.term.max_rel).c_str(), g3(t.term.tolerance_used).c_str(),
+                        t.ok ? "ok" : term_ok ? "FAILED (its shape)" : ("FAILED (" + t.term.first_mismatch + ")").c_str());
+            for (const api::NodeCheck& n : t.shape_nodes)
+                if (!n.ok || a.flag("--verbose"))
+                    std::printf("    node %-26s %-18s %-9s %-9s %-8s %s\n", n.node.c_str(), n.op.c_str(), g3(n.error.max_abs).c_str(),
+                                g3(n.error.max_rel).c_str(), g3(n.error.tolerance_used).c_str(),
+                                n.ok ? "ok" : ("FAILED " + n.error.first_mismatch + n.failure).c_str());
+            for (const api::OutputCheck& o : t.shape_outputs)
+                if (!o.ok || a.flag("--verbose"))
+                    std::printf("    output %-24s %-18s %-9s %-9s %-8s %s\n", o.name.c_str(), "", g3(o.error.max_abs).c_str(),
+                                g3(o.error.max_rel).c_str(), g3(o.error.tolerance_used).c_str(),
+                                o.ok ? "ok" : ("FAILED " + o.error.first_mismatch).c_str());
         }
         const api::CodebookCheck& c = r.codebook;
         std::printf("\ncodebook   %s: %lld of %lld samples' maps against the CPU reference's render, heights exactly: %s\n",
@@ -80,7 +101,7 @@ int tracker_check(Session& s, const Args& a) {
     }
     const std::string frames = r.shape_terms.empty() ? "" : std::string(r.codebook.ok ? "the codebook, " : "") +
                                                                  std::to_string(r.shape_terms.size() - bad_terms) + " of " +
-                                                                 std::to_string(r.shape_terms.size()) + " frames' terms, ";
+                                                                 std::to_string(r.shape_terms.size()) + " frames' shapes and terms, ";
     std::printf("\n%s: %s%zu of %zu touches' beliefs, %zu of %zu nodes and %zu of %zu outputs within tolerance (GPU %.0f ms, "
                 "CPU reference %.0f ms, total %.1f s)\n",
                 r.ok ? "OK" : "FAILED", frames.c_str(), r.touches.size() - bad_touches, r.touches.size(), r.nodes.size() - bad_nodes,
@@ -88,7 +109,7 @@ int tracker_check(Session& s, const Args& a) {
     if (a.get("--json")) write_json(*a.get("--json"), tracker_check_json(r, o));
     if (r.ok) return 0;
     std::fflush(stdout);
-    std::fprintf(stderr, "vtloc: tracker check failed on %s: %s%zu frames' terms, %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
+    std::fprintf(stderr, "vtloc: tracker check failed on %s: %s%zu frames' shapes or terms, %zu touches' beliefs, %zu nodes, %zu outputs differ from the CPU reference\n",
                  r.device.name.c_str(), r.codebook.ok ? "" : "the codebook's maps, ", bad_terms, bad_touches, bad_nodes, bad_outputs);
     return 1;
 }

@@ -21,7 +21,8 @@ const char* kHelp =
     "usage: vtloc check [--model M] [--tactile IMG --object OBJ] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --ops [--op NAME] [--device D] [--json FILE] [--verbose]\n"
     "       vtloc check --tracker [--touches SEQ.json] [--object OBJ] [--hypotheses N] [--one-way] [--terms | --shapes]\n"
-    "                   [--codebook-cache F] [--codebook-samples N] [--device D] [--json FILE] [--verbose]\n"
+    "                   [--rendered] [--calibration C] [--background BG] [--codebook-cache F] [--codebook-samples N]\n"
+    "                   [--device D] [--json FILE] [--verbose]\n"
     "\n"
     "Cross-checks the Vulkan device against the engine's CPU reference.\n"
     "\n"
@@ -49,12 +50,15 @@ const char* kHelp =
     "                the shader paths); --object OBJ for a file without \"object\"; --terms:\n"
     "                each touch also carries a seeded log term over the hypotheses (as\n"
     "                render-and-compare's would), so the step reads a field per touch;\n"
-    "                --shapes: each touch's own frame read into its gel shape and scored\n"
-    "                against the object's codebook (render-and-compare's term), on the device\n"
-    "                and by the CPU reference scorer, compared per frame, then given to both;\n"
-    "                and the codebook's maps (rendered on the device, or --codebook-cache F's,\n"
-    "                read or written as the tracker would) against the CPU reference's render\n"
-    "                at --codebook-samples N samples spread over it (default 0: all), exactly\n"
+    "                --shapes: each touch's own frame read into its gel shape, the reader's\n"
+    "                graph checked node by node on it (--rendered: the reader for frames vtloc\n"
+    "                synth rendered; --calibration C, --background BG as vtloc sequence takes\n"
+    "                them), then scored against the object's codebook (render-and-compare's\n"
+    "                term) on the device and by the CPU reference scorer, compared per frame,\n"
+    "                the device's term given to both trackers; and the codebook's maps (the\n"
+    "                device's render, or --codebook-cache F's, read or written as the tracker\n"
+    "                would) against the CPU reference's render at --codebook-samples N samples\n"
+    "                spread over it (default 0: all), exactly\n"
     "  --device D    device index or name substring (default: VTLOC_DEVICE, else the best)\n"
     "  --json FILE   also write the full result (every node / case) as JSON\n"
     "  --verbose     every node (model check) / every dispatch (--ops, --tracker)\n"
@@ -180,7 +184,8 @@ int cmd_check(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--model"}, {"--tactile"}, {"--object"}, {"--device"}, {"--json"}, {"--ops", false}, {"--op"},
             {"--verbose", false}, {"--tracker", false}, {"--touches"}, {"--hypotheses"}, {"--object-units"},
-            {"--one-way", false}, {"--terms", false}, {"--shapes", false}, {"--codebook-cache"}, {"--codebook-samples"}});
+            {"--one-way", false}, {"--terms", false}, {"--shapes", false}, {"--codebook-cache"}, {"--codebook-samples"},
+            {"--rendered", false}, {"--calibration"}, {"--background"}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -193,7 +198,7 @@ int cmd_check(Session& s, int argc, char** argv) {
         throw UsageError("--tracker takes no --model or --tactile (the touches file names the frames)");
     for (const char* opt : {"--touches", "--hypotheses", "--object-units", "--one-way", "--terms", "--shapes"})
         if (!tracker && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker");
-    for (const char* opt : {"--codebook-cache", "--codebook-samples"})
+    for (const char* opt : {"--codebook-cache", "--codebook-samples", "--rendered", "--calibration", "--background"})
         if (!a.flag("--shapes") && a.get(opt)) throw UsageError(std::string(opt) + " needs --tracker --shapes");
     if (!ops && a.get("--op")) throw UsageError("--op needs --ops");
     if (a.get("--device")) s.context.emplace(api::ContextOptions{*a.get("--device")});

@@ -12,6 +12,9 @@
 #include "engine/model/vtloc_runner.h"
 #include "runtime/context.h"
 
+namespace vtloc::check {
+struct GraphCheck;
+}
 namespace vtloc::track {
 class Tracker;
 class CodebookScorer;
@@ -33,6 +36,14 @@ struct TrackerAccess {
     };
     static ShapeScorers shape_scorers(Tracker& t);
     static std::vector<float> shape_term(Tracker& t, track::CodebookScorer& scorer, const GelShape& g);
+};
+
+// The reader inside an api::GelShapeReader (engine/api/gel_shape.cpp; check_tracker --shapes).
+struct GelShapeAccess {
+    // The reader's graph checked node by node against the CPU references (check::check_graph) on
+    // the inputs read() gives it for this frame and empty frame (null: the calibration's).
+    static check::GraphCheck check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
+                                   const std::string& frame_name, const std::string& empty_name);
 };
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a

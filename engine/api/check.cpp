@@ -169,18 +169,30 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.object = object;
         r.hypotheses = gpu.surface().n_hypotheses();
         double gpu_ms = 0, cpu_ms = 0;
-        // With shapes: render-and-compare's term of each frame of the file, the device's and the
-        // CPU reference scorer's compared; the device's goes to both trackers.
+        // With shapes, each frame of the file: the reader's graph checked node by node on it, then
+        // render-and-compare's term of its shape, the device's and the CPU reference scorer's
+        // compared; the device's goes to both trackers.
         std::vector<std::vector<float>> frame_terms;
         if (options.shapes) {
             if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
-            GelShapeReader reader(context);
+            GelShapeOptions go = options.rendered_frames ? GelShapeOptions::rendered_frames() : GelShapeOptions{};
+            go.calibration = options.calibration;
+            GelShapeReader reader(context, go);
+            std::optional<TactileImage> background;
+            if (!options.background.empty()) background = load_tactile_image(options.background);
             const TrackerAccess::ShapeScorers scorers = TrackerAccess::shape_scorers(api_gpu);
             const auto b0 = std::chrono::steady_clock::now();
             r.codebook = check_codebook(*scorers.book, gpu.surface(), options.codebook_samples, r.height_tolerance);
             cpu_ms += ms_since(b0);
             for (const io::SequenceTouch& st : seq.touches) {
-                const GelShape g = reader.read(load_tactile_image(st.tactile), nullptr, st.tactile);
+                const TactileImage image = load_tactile_image(st.tactile);
+                const GelShape g = reader.read(image, background ? &*background : nullptr, st.tactile, options.background);
+                ShapeTermCheck tc;
+                tc.frame = st.tactile;
+                const check::GraphCheck sg = GelShapeAccess::check(reader, ContextAccess::rt(context), image,
+                                                                   background ? &*background : nullptr, st.tactile, options.background);
+                fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
+                gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;
                 auto a0 = std::chrono::steady_clock::now();
                 frame_terms.push_back(TrackerAccess::shape_term(api_gpu, *scorers.gpu, g));
                 gpu_ms += ms_since(a0);
@@ -190,7 +202,9 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const int64_t n = int64_t(c.size());
                 const check::Comparison cmp = check::compare(HostTensor({n}, frame_terms.back()), HostTensor({n}, c),
                                                              {r.term_tolerance.abs, r.term_tolerance.rel});
-                r.shape_terms.push_back({st.tactile, to_api(cmp), cmp.ok});
+                tc.term = to_api(cmp);
+                tc.ok = cmp.ok && sg.ok();
+                r.shape_terms.push_back(std::move(tc));
             }
         }
         io::SplitMix64 rng(20261207);

@@ -4,12 +4,14 @@
 #include <cstdio>
 #include <filesystem>
 #include <mutex>
+#include <utility>
 
 #include <opencv2/imgproc.hpp>
 
 #include "base/atomic_write.h"
 
 #include "engine/api/api_internal.h"
+#include "engine/check/graph_check.h"
 #include "engine/io/image.h"
 #include "engine/io/image_mat.h"
 #include "engine/sensor/frame_check.h"
@@ -24,6 +26,8 @@ struct GelShapeReader::Impl {
     std::mutex mu;  // reads take turns: the GPU pipeline's buffers are the reader's own (Python releases the GIL)
     Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o, bool match)
         : gpu(ctx, std::move(c), std::move(lut), o), match_lighting(match) {}
+    std::pair<std::vector<uint8_t>, std::vector<uint8_t>> prepared(const TactileImage& frame, const TactileImage* empty,
+                                                                   const std::string& frame_name, const std::string& empty_name) const;
 };
 
 namespace {
@@ -70,16 +74,26 @@ GelShapeReader& GelShapeReader::operator=(GelShapeReader&&) noexcept = default;
 int GelShapeReader::height() const { return impl_->gpu.calibration().height; }
 int GelShapeReader::width() const { return impl_->gpu.calibration().width; }
 
+// The frame and the empty frame as the GPU pipeline takes them: the calibration's size and
+// channel order, checked, the frame's lighting matched to the empty one's where asked.
+std::pair<std::vector<uint8_t>, std::vector<uint8_t>> GelShapeReader::Impl::prepared(const TactileImage& frame, const TactileImage* empty,
+                                                                                     const std::string& frame_name,
+                                                                                     const std::string& empty_name) const {
+    const sensor::Calibration& c = gpu.calibration();
+    std::vector<uint8_t> f = to_calibration(frame, c, frame_name);
+    std::vector<uint8_t> e = empty ? to_calibration(*empty, c, empty_name) : c.press_f0;
+    if (e.empty()) throw Error("gel shape: this calibration has no empty frame; give the sensor's own");
+    sensor::check_gel_frame(f, frame_name);
+    if (empty) sensor::check_gel_frame(e, empty_name);
+    if (match_lighting) f = sensor::match_lighting(f, e);
+    return {std::move(f), std::move(e)};
+}
+
 GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
                               const std::string& empty_name) {
     return guarded([&] {
         const sensor::Calibration& c = impl_->gpu.calibration();
-        std::vector<uint8_t> f = to_calibration(frame, c, frame_name);
-        std::vector<uint8_t> e = empty ? to_calibration(*empty, c, empty_name) : c.press_f0;
-        if (e.empty()) throw Error("gel shape: this calibration has no empty frame; give the sensor's own");
-        sensor::check_gel_frame(f, frame_name);
-        if (empty) sensor::check_gel_frame(e, empty_name);
-        if (impl_->match_lighting) f = sensor::match_lighting(f, e);
+        const auto [f, e] = impl_->prepared(frame, empty, frame_name, empty_name);
         std::unique_lock<std::mutex> lock(impl_->mu);
         const sensor::GelShape s = impl_->gpu.run(f, e);
         lock.unlock();
@@ -88,6 +102,13 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
         out.depth_mm = s.depth_mm, out.grad_row = s.grad_row, out.grad_col = s.grad_col, out.mask = s.mask;
         return out;
     });
+}
+
+check::GraphCheck GelShapeAccess::check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
+                                        const std::string& frame_name, const std::string& empty_name) {
+    const auto [f, e] = r.impl_->prepared(frame, empty, frame_name, empty_name);
+    const std::lock_guard<std::mutex> lock(r.impl_->mu);
+    return check::check_graph(ctx, r.impl_->gpu.graph(), r.impl_->gpu.weights(), r.impl_->gpu.inputs_of(f, e));
 }
 
 namespace {

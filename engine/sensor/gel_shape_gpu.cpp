@@ -9,6 +9,7 @@ namespace vtloc::sensor {
 
 struct GelShapeGpu::Impl {
     WeightStore weights;
+    Graph graph;
     std::unique_ptr<GpuExecutor> exec;
 };
 
@@ -39,7 +40,7 @@ GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, S
     if (lut.linear.size() != size_t(H * W * 6)) throw Error("gel shape: the gradient table has no linear inverse");
     impl_->weights.add("gel.tables", HostTensor({T, n * n * n, 2}, std::move(lut.table)));
     impl_->weights.add("gel.linear", HostTensor({H, W, 6}, std::move(lut.linear)));
-    Graph g;
+    Graph& g = impl_->graph;
     const int grad = ops::gel_gradient(g, g.input("frame", {H, W, 3}), g.input("empty", {H, W, 3}),
                                        g.weight("gel.tables", {T, n * n * n, 2}), g.weight("gel.linear", {H, W, 6}), n,
                                        lut.tiles_y, lut.tiles_x, opt_.gentle_slope, "gel.gradient");
@@ -58,14 +59,23 @@ std::vector<std::pair<std::string, double>> GelShapeGpu::node_times() const {
     return t;
 }
 
-GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) {
+const Graph& GelShapeGpu::graph() const { return impl_->graph; }
+const WeightStore& GelShapeGpu::weights() const { return impl_->weights; }
+
+TensorMap GelShapeGpu::inputs_of(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const {
     const int H = calib_.height, W = calib_.width;
     const size_t HW = size_t(H) * size_t(W);
     if (frame.size() != HW * 3 || empty.size() != HW * 3)
         throw Error("gel shape: frames must be " + std::to_string(W) + "x" + std::to_string(H) + " RGB, the calibration's size");
     HostTensor f({H, W, 3}), e({H, W, 3});
     for (size_t i = 0; i < HW * 3; ++i) f.data[i] = frame[i], e.data[i] = empty[i];
-    const TensorMap out = impl_->exec->run({{"frame", f}, {"empty", e}});
+    return {{"frame", f}, {"empty", e}};
+}
+
+GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) {
+    const int H = calib_.height, W = calib_.width;
+    const size_t HW = size_t(H) * size_t(W);
+    const TensorMap out = impl_->exec->run(inputs_of(frame, empty));
     const HostTensor &grad = out.at("gradient"), &mask = out.at("mask"), &z = out.at("height");
     GelShape s;
     s.height = H, s.width = W;

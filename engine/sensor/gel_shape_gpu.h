@@ -8,11 +8,12 @@
 #include <utility>
 #include <vector>
 
+#include "engine/executor.h"
 #include "engine/sensor/calibration.h"
 #include "engine/sensor/gel_shape.h"
+#include "engine/weights.h"
 
 namespace vtloc {
-class Graph;
 namespace rt {
 class Context;
 }
@@ -31,6 +32,11 @@ public:
     const Calibration& calibration() const { return calib_; }
     // GPU ms per node of the last run (label, ms); empty unless profiling.
     std::vector<std::pair<std::string, double>> node_times() const;
+    // What run() executes: its graph, the tables as weights, and a frame's inputs (check_graph's
+    // case: vtloc check --tracker --shapes checks the graph node by node on each frame).
+    const Graph& graph() const;
+    const WeightStore& weights() const;
+    TensorMap inputs_of(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const;
 
 private:
     int solve(Graph& g, int grad, int mask, int H, int W) const;

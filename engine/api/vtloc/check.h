@@ -114,11 +114,17 @@ struct TrackerCheckOptions {
     // each ending at a field, looked up at the moved pose's nearest hypothesis).
     bool touch_terms = false;
     // Instead, each touch's own frame (the touches file's "tactile") read into its gel's shape
-    // and scored against the object's codebook as render-and-compare's term, on the device and
-    // by the CPU reference scorer (compared per frame), the device's term then given to both
-    // trackers. Both score against the maps the tracker would (codebook_cache's, or rendered on
+    // (the reader's graph checked node by node on it) and scored against the object's codebook as
+    // render-and-compare's term, on the device and by the CPU reference scorer (compared per
+    // frame), the device's term then given to both trackers. Both score against the maps the tracker would (codebook_cache's, or rendered on
     // the device), whose spot check against the CPU reference's render is `codebook`.
     bool shapes = false;
+    // With shapes, how the frames are read (as vtloc sequence --render-compare reads them): the
+    // reader for frames vtloc synth rendered (GelShapeOptions::rendered_frames(): the solve from a
+    // coarse start, its pooling and prolongation nodes checked too), a calibration file (empty:
+    // the shipped one) and the sensor's empty frame (empty: the calibration's).
+    bool rendered_frames = false;
+    std::string calibration, background;
     std::string codebook_cache;       // as TrackerOptions::codebook_cache: a deployed cache checked too
     int64_t codebook_samples = 0;     // with shapes: codebook maps re-rendered on the CPU, spread; 0: all (~1 s a 3,333)
 };
@@ -134,8 +140,12 @@ struct CodebookCheck {
 
 struct ShapeTermCheck {
     std::string frame;           // the frame's path
+    // The gel's shape read from it: the reader's graph node by node (each CPU node fed the
+    // device's inputs; node_tolerance) and its outputs against a full CPU run (end_to_end_tolerance).
+    std::vector<NodeCheck> shape_nodes;
+    std::vector<OutputCheck> shape_outputs;
     CheckError term;             // the device's term against the CPU reference scorer's
-    bool ok = true;
+    bool ok = true;              // the shape's nodes and outputs and the term
 };
 
 struct TouchCheck {

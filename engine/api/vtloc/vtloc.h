@@ -627,6 +627,7 @@ public:
     int width() const;
 
 private:
+    friend struct GelShapeAccess;  // engine/api internals (check_tracker)
     struct Impl;
     std::unique_ptr<Impl> impl_;
 };
