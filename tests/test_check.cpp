@@ -130,7 +130,10 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         CHECK(rt.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rt.hypotheses});
         // Instead, each frame's render-and-compare term: the device's against the CPU reference
         // scorer's, one per frame of the file, then the device's given to both trackers.
-        t.touch_terms = false, t.shapes = true;
+        // The codebook goes to a cache (written, as a tracker would, from the device's render).
+        const std::string cache = test::temp_path("check_tracker_book.safetensors");
+        std::filesystem::remove(cache);
+        t.touch_terms = false, t.shapes = true, t.codebook_cache = cache;
         const api::TrackerCheckResult rs = api::check_tracker(ctx, t);
         CHECK(rs.ok);
         REQUIRE(rs.shape_terms.size() == 8);
@@ -152,25 +155,21 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         CHECK(rs.codebook.samples * 36 == rs.hypotheses);
         CHECK(rs.codebook.heights.max_abs == 0);
         // A deployed cache one cell off (well formed, so a tracker would score against it): the
-        // spot check names it; the terms, both scored over it, still agree.
-        const std::string cache = test::temp_path("check_tracker_book.safetensors");
-        std::filesystem::remove(cache);
-        t.codebook_cache = cache;
-        const api::TrackerCheckResult written = api::check_tracker(ctx, t);
-        CHECK(written.ok);
-        CHECK(written.codebook.checked == written.codebook.samples);
+        // check names it; the terms, both scored over it, still agree. One way from here: these
+        // runs are about the frames and the codebook, not the tour.
         REQUIRE(std::filesystem::exists(cache));
+        t.there_and_back = false;
         {
             const SafetensorsFile f = SafetensorsFile::load(cache, "test");
             std::vector<float> h = f.to_f32(f.at("heights"));
-            const size_t GG = h.size() / size_t(written.codebook.samples);
+            const size_t GG = h.size() / size_t(rs.codebook.samples);
             h[5] -= 0.5f;       // sample 0's, which every spread checks
             h[GG + 5] -= 0.5f;  // sample 1's, which 64 spread over more than 128 do not (the next is sample S / 64)
             write_safetensors(cache, {TensorBlob::f32("heights", f.at("heights").shape, h),
                                       TensorBlob::f32("samples", f.at("samples").shape, f.to_f32(f.at("samples")))},
                               f.metadata());
         }
-        REQUIRE(written.codebook.samples > 128);
+        REQUIRE(rs.codebook.samples > 128);
         t.codebook_samples = 64;
         const api::TrackerCheckResult stale = api::check_tracker(ctx, t);
         CHECK(!stale.ok);
