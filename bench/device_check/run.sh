@@ -120,7 +120,7 @@ if [ "${CORRECT:-1}" = 1 ]; then
   P[check_tracker_small_texel]=$!
   VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --tracker --terms --json $L/check_tracker_terms.json >$L/check_tracker_terms.log 2>&1 &
   P[check_tracker_terms]=$!
-  VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --tracker --shapes --json $L/check_tracker_shapes.json >$L/check_tracker_shapes.log 2>&1 &
+  VTLOC_VALIDATION=1 vt timeout "$TT" $V/bin/vtloc check --tracker --shapes --rendered --json $L/check_tracker_shapes.json >$L/check_tracker_shapes.log 2>&1 &
   P[check_tracker_shapes]=$!
   if [ -n "$PY" ]; then
     mkdir -p "$GOLDENS"
