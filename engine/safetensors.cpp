@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <bit>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <limits>
 #include <nlohmann/json.hpp>
@@ -59,6 +60,9 @@ float half_to_float(uint16_t h) {
 }
 
 SafetensorsFile SafetensorsFile::load(const std::string& path, const std::string& kind) {
+    // A directory opens and reports a size on some libstdc++s (a huge one: bad_alloc, "out of memory").
+    std::error_code ec;
+    if (std::filesystem::is_directory(path, ec)) throw Error(path + ": is a directory, not a " + (kind.empty() ? "safetensors file" : kind));
     std::ifstream in(path, std::ios::binary | std::ios::ate);
     if (!in) throw Error(path + ": cannot open file");
     std::streamsize size = in.tellg();

@@ -390,6 +390,10 @@ TEST_CASE("the codebook cache round-trips and refuses stale, foreign and corrupt
     // Not tensors at all (a JSON given as the cache): the error says what it likely is.
     const std::string json = test::write_temp("not.codebook", "{\"x\": 1}\n");
     test::require_error([&] { track::load_codebook(json, s); }, {json, "not a codebook cache?"});
+    // A directory named as the cache (it exists, so it is read, not written): named, not "out of memory".
+    const std::string dir = test::temp_path("a_codebook_dir");
+    std::filesystem::create_directories(dir);
+    test::require_error([&] { track::cached_codebook(nullptr, s, {}, dir); }, {dir, "is a directory, not a codebook cache"});
     test::require_no_validation_messages();
 }
 

@@ -3,6 +3,7 @@
 #include <catch2/catch.hpp>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 
 #include "base/error.h"
@@ -160,6 +161,10 @@ TEST_CASE("malformed weight files each give their own error", "[weights]") {
 TEST_CASE("an unreadable weight file is named", "[weights]") {
     REQUIRE_THROWS_WITH(WeightStore::load("/nonexistent/model.safetensors"),
                         Catch::Contains("/nonexistent/model.safetensors: cannot open file"));
+    // A directory: named as one (libstdc++ opens it and reports a size, which read as a huge buffer).
+    const std::string dir = test::temp_path("a_weights_dir");
+    std::filesystem::create_directories(dir);
+    REQUIRE_THROWS_WITH(WeightStore::load(dir), Catch::Contains(dir + ": is a directory, not a safetensors weight file"));
 }
 
 TEST_CASE("WeightStore::load: a file that is not tensors says it is likely no weight file; a missing one does not",
