@@ -2,6 +2,7 @@
 // relative motions it forms, and one-line errors naming the file and the touch.
 #include <catch2/catch.hpp>
 #include <cmath>
+#include <filesystem>
 
 #include "engine/io/touch_sequence.h"
 #include "engine/rigid.h"
@@ -94,7 +95,11 @@ TEST_CASE("touches file: bad files fail in one line naming the file and the touc
                   {"\"motion\" must be"});
     require_error([] { parse(R"({"format": "vtloc-touches/2", "touches": [{"tactile": "a.png", "contact": [1, 2]}]})"); },
                   {"touch 1", "\"contact\" must be [x, y, z]"});
-    require_error([] { io::read_touch_sequence("/no/such/seq.json"); }, {"/no/such/seq.json", "cannot open"});
+    require_error([] { io::read_touch_sequence("/no/such/seq.json"); }, {"/no/such/seq.json", "no such file"});
+    // A directory opens as an empty stream: named as one, not as bad JSON.
+    const std::string dir = test::temp_path("a_touches_dir");
+    std::filesystem::create_directories(dir);
+    require_error([&] { io::read_touch_sequence(dir); }, {dir, "is a directory, not a file"});
 }
 
 TEST_CASE("a 4x4 given row by row: a NaN or inf anywhere is named as one, before the last row's check", "[io][touches][errors]") {

@@ -1,9 +1,10 @@
 #include "engine/io/touch_sequence.h"
 
-#include <fstream>
-#include <sstream>
+#include <string_view>
 
 #include <nlohmann/json.hpp>
+
+#include "engine/io/file_bytes.h"
 
 namespace vtloc::io {
 
@@ -118,11 +119,9 @@ TouchSequence parse_touch_sequence(std::string_view text, const std::filesystem:
 }
 
 TouchSequence read_touch_sequence(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) throw Error(path + ": cannot open");
-    std::ostringstream text;
-    text << in.rdbuf();
-    return parse_touch_sequence(text.str(), std::filesystem::path(path).parent_path(), path);
+    const std::vector<uint8_t> bytes = read_file_bytes(path);  // names a missing file or a directory as such
+    return parse_touch_sequence(std::string_view(reinterpret_cast<const char*>(bytes.data()), bytes.size()),
+                                std::filesystem::path(path).parent_path(), path);
 }
 
 }  // namespace vtloc::io
