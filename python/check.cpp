@@ -106,13 +106,14 @@ void bind_check(py::module_& m) {
             for (const api::ShapeTermCheck& t : r.shape_terms) {
                 py::dict e;
                 e["frame"] = t.frame, e["ok"] = t.ok, e["term"] = error_dict(t.term);
-                e["shape"] = py::dict(py::arg("nodes") = nodes_list(t.shape_nodes), py::arg("outputs") = outputs_list(t.shape_outputs));
+                e["shape"] = py::dict(py::arg("nodes") = nodes_list(t.shape_nodes), py::arg("outputs") = outputs_list(t.shape_outputs),
+                                      py::arg("depth") = error_dict(t.depth), py::arg("mask_pixels_differ") = t.mask_pixels_differ);
                 st.append(e);
             }
             d["shape_terms"] = st;
             if (shapes) {
                 py::dict c;
-                c["samples"] = r.codebook.samples, c["checked"] = r.codebook.checked, c["ok"] = r.codebook.ok;
+                c["cache"] = codebook_cache, c["samples"] = r.codebook.samples, c["checked"] = r.codebook.checked, c["ok"] = r.codebook.ok;
                 c["heights"] = error_dict(r.codebook.heights);
                 d["codebook"] = c;
             }

@@ -146,6 +146,9 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
             for (const api::NodeCheck& n : c.shape_nodes) ops.push_back(n.op);
             CHECK(ops == std::vector<std::string>{"gel_gradient", "gel_contact_mask", "masked_poisson"});
             CHECK(c.shape_outputs.size() == 3);
+            // The shape the term scored (the reader's own executor) is the CPU reference run's.
+            CHECK(c.depth.max_abs == 0);
+            CHECK(c.mask_pixels_differ == 0);
         }
         CHECK(rs.touches.size() == 15);
         CHECK(rs.nodes.front().input_shapes[5] == std::vector<int64_t>{9, rs.hypotheses});
@@ -175,7 +178,9 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         CHECK(!stale.ok);
         CHECK(!stale.codebook.ok);
         CHECK(stale.codebook.heights.mismatches == 1);
+        REQUIRE(stale.shape_terms.size() == 8);
         for (const api::ShapeTermCheck& c : stale.shape_terms) CHECK(c.ok);
+        CHECK(std::filesystem::exists(cache));  // a cache the check did not write stays
         t.codebook_samples = 0;
         CHECK(api::check_tracker(ctx, t).codebook.heights.mismatches == 2);
         t.codebook_samples = -1;
@@ -196,10 +201,14 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
                 CHECK(c.term.mismatches == 0);
                 REQUIRE(c.shape_nodes.size() == 11);
                 for (const api::NodeCheck& n : c.shape_nodes) CHECK(n.ok == (n.node != "gel.height"));
+                CHECK(c.depth.mismatches == 0);  // the fault is the checked copy's: the reader's own shape is sound
             }
         }
         t.touch_terms = true;
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("not both"));
+        // The shapes' options without shapes: refused, not ignored.
+        t.touch_terms = false, t.shapes = false, t.background = "bg.png";
+        CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("are for shapes"));
     }
     // One probability off: the belief's node (and only the step's node check: the tours ran clean) fails.
     FaultGuard guard;

@@ -93,7 +93,10 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
     for (const api::ShapeTermCheck& t : r.shape_terms)
         shape_terms.push_back({{"frame", t.frame},
                                {"ok", t.ok},
-                               {"shape", {{"nodes", nodes_json(t.shape_nodes)}, {"outputs", outputs_json(t.shape_outputs)}}},
+                               {"shape", {{"nodes", nodes_json(t.shape_nodes)},
+                                          {"outputs", outputs_json(t.shape_outputs)},
+                                          {"depth", error_json(t.depth)},
+                                          {"mask_pixels_differ", t.mask_pixels_differ}}},
                                {"term", error_json(t.term)}});
     nlohmann::json j{{"ok", r.ok},
                      {"touches_file", o.touches},

@@ -37,10 +37,12 @@ int tracker_check(Session& s, const Args& a) {
                 r.end_to_end_tolerance.rel);
     size_t bad_terms = 0;
     if (!r.shape_terms.empty()) {
-        std::printf("           each frame's gel shape: the reader's graph per node and end to end, as above\n");
+        std::printf("           each frame's gel shape: the reader's graph per node and end to end, as above, and\n"
+                    "           the shape it read against the CPU reference run's (depth mm as end to end, the contact exactly)\n");
         std::printf("           render-and-compare's term |gpu - cpu| <= %g + %g*|cpu| (the CPU reference scorer)\n\n",
                     r.term_tolerance.abs, r.term_tolerance.rel);
-        std::printf("%-28s %-20s %-9s %-9s %-8s %s\n", "frame", "shape: nodes, outs", "term abs", "term rel", "tol used", "result");
+        std::printf("%-28s %-18s %-10s %-9s %-9s %-8s %s\n", "frame", "shape: nodes, outs", "depth abs", "term abs", "term rel",
+                    "tol used", "result");
         for (const api::ShapeTermCheck& t : r.shape_terms) {
             bad_terms += !t.ok;
             const std::string name = std::filesystem::path(t.frame).filename().string();
@@ -49,10 +51,14 @@ int tracker_check(Session& s, const Args& a) {
             for (const api::OutputCheck& o : t.shape_outputs) outs_ok += o.ok;
             const std::string shape = std::to_string(nodes_ok) + "/" + std::to_string(t.shape_nodes.size()) + ", " +
                                       std::to_string(outs_ok) + "/" + std::to_string(t.shape_outputs.size());
-            const bool term_ok = t.term.mismatches == 0;
-            std::printf("%-28s %-20s %-9s %-9s %-8s %s\n", name.c_str(), shape.c_str(), g3(t.term.max_abs).c_str(),
-                        g3(t.term.max_rel).c_str(), g3(t.term.tolerance_used).c_str(),
-                        t.ok ? "ok" : term_ok ? "FAILED (its shape)" : ("FAILED (" + t.term.first_mismatch + ")").c_str());
+            const bool term_ok = t.term.mismatches == 0, read_ok = t.depth.mismatches == 0 && t.mask_pixels_differ == 0;
+            const std::string why = !read_ok ? "FAILED (the shape read: " + std::to_string(t.depth.mismatches) + " depths, " +
+                                                   std::to_string(t.mask_pixels_differ) + " contact pixels differ)"
+                                    : !term_ok ? "FAILED (" + t.term.first_mismatch + ")"
+                                               : "FAILED (its shape's graph)";
+            std::printf("%-28s %-18s %-10s %-9s %-9s %-8s %s\n", name.c_str(), shape.c_str(), g3(t.depth.max_abs).c_str(),
+                        g3(t.term.max_abs).c_str(), g3(t.term.max_rel).c_str(), g3(t.term.tolerance_used).c_str(),
+                        t.ok ? "ok" : why.c_str());
             for (const api::NodeCheck& n : t.shape_nodes)
                 if (!n.ok || a.flag("--verbose"))
                     std::printf("    node %-26s %-18s %-9s %-9s %-8s %s\n", n.node.c_str(), n.op.c_str(), g3(n.error.max_abs).c_str(),

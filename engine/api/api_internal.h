@@ -44,6 +44,9 @@ struct GelShapeAccess {
     // the inputs read() gives it for this frame and empty frame (null: the calibration's).
     static check::GraphCheck check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
                                    const std::string& frame_name, const std::string& empty_name);
+    // read() with the graph run by the ops' CPU references.
+    static GelShape reference(GelShapeReader& r, const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
+                              const std::string& empty_name);
 };
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <filesystem>
 #include <optional>
 
 #include "engine/api/api_internal.h"
@@ -161,6 +162,9 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         to.object_units = options.object_units;
         to.codebook_cache = options.codebook_cache;
         if (options.codebook_samples < 0) throw Error("check_tracker: codebook_samples must be >= 0 (0: all)");
+        if (!options.shapes && (options.rendered_frames || !options.calibration.empty() || !options.background.empty() ||
+                                !options.codebook_cache.empty() || options.codebook_samples != 0))
+            throw Error("check_tracker: rendered_frames, calibration, background, codebook_cache and codebook_samples are for shapes");
         Tracker api_gpu(context, object, to);
         track::Tracker& gpu = TrackerAccess::core(api_gpu);
         track::Tracker cpu = track::Tracker::cpu_reference_of(gpu);
@@ -180,19 +184,33 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
             GelShapeReader reader(context, go);
             std::optional<TactileImage> background;
             if (!options.background.empty()) background = load_tactile_image(options.background);
+            std::error_code ec;
+            const bool had_cache = !options.codebook_cache.empty() && std::filesystem::exists(options.codebook_cache, ec);
             const TrackerAccess::ShapeScorers scorers = TrackerAccess::shape_scorers(api_gpu);
             const auto b0 = std::chrono::steady_clock::now();
             r.codebook = check_codebook(*scorers.book, gpu.surface(), options.codebook_samples, r.height_tolerance);
             cpu_ms += ms_since(b0);
+            // A cache this check wrote from a render that failed would mislead the next tracker.
+            if (!r.codebook.ok && !had_cache && !options.codebook_cache.empty()) std::filesystem::remove(options.codebook_cache, ec);
             for (const io::SequenceTouch& st : seq.touches) {
                 const TactileImage image = load_tactile_image(st.tactile);
                 const GelShape g = reader.read(image, background ? &*background : nullptr, st.tactile, options.background);
                 ShapeTermCheck tc;
                 tc.frame = st.tactile;
-                const check::GraphCheck sg = GelShapeAccess::check(reader, ContextAccess::rt(context), image,
-                                                                   background ? &*background : nullptr, st.tactile, options.background);
+                const TactileImage* bg = background ? &*background : nullptr;
+                const check::GraphCheck sg = GelShapeAccess::check(reader, ContextAccess::rt(context), image, bg, st.tactile, options.background);
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
                 gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;
+                // The shape the term scores comes from the reader's own executor (its memory plan, not
+                // the check's keep-all one): against the CPU reference run of the same graph.
+                const auto c0 = std::chrono::steady_clock::now();
+                const GelShape ref = GelShapeAccess::reference(reader, image, bg, st.tactile, options.background);
+                cpu_ms += ms_since(c0);
+                const int64_t px = int64_t(ref.depth_mm.size());
+                const check::Comparison dc = check::compare(HostTensor({px}, g.depth_mm), HostTensor({px}, ref.depth_mm),
+                                                            {r.end_to_end_tolerance.abs, r.end_to_end_tolerance.rel});
+                tc.depth = to_api(dc);
+                for (size_t p = 0; p < ref.mask.size(); ++p) tc.mask_pixels_differ += g.mask[p] != ref.mask[p];
                 auto a0 = std::chrono::steady_clock::now();
                 frame_terms.push_back(TrackerAccess::shape_term(api_gpu, *scorers.gpu, g));
                 gpu_ms += ms_since(a0);
@@ -203,7 +221,7 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const check::Comparison cmp = check::compare(HostTensor({n}, frame_terms.back()), HostTensor({n}, c),
                                                              {r.term_tolerance.abs, r.term_tolerance.rel});
                 tc.term = to_api(cmp);
-                tc.ok = cmp.ok && sg.ok();
+                tc.ok = cmp.ok && sg.ok() && dc.ok && tc.mask_pixels_differ == 0;
                 r.shape_terms.push_back(std::move(tc));
             }
         }

@@ -48,6 +48,13 @@ std::vector<uint8_t> to_calibration(const TactileImage& im, const sensor::Calibr
     return std::vector<uint8_t>(bgr.datastart, bgr.dataend);
 }
 
+GelShape to_api(const sensor::GelShape& s, double mm_per_px) {
+    GelShape out;
+    out.height = s.height, out.width = s.width, out.mm_per_px = mm_per_px;
+    out.depth_mm = s.depth_mm, out.grad_row = s.grad_row, out.grad_col = s.grad_col, out.mask = s.mask;
+    return out;
+}
+
 }  // namespace
 
 GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
@@ -97,11 +104,14 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
         std::unique_lock<std::mutex> lock(impl_->mu);
         const sensor::GelShape s = impl_->gpu.run(f, e);
         lock.unlock();
-        GelShape out;
-        out.height = s.height, out.width = s.width, out.mm_per_px = c.mm_per_px;
-        out.depth_mm = s.depth_mm, out.grad_row = s.grad_row, out.grad_col = s.grad_col, out.mask = s.mask;
-        return out;
+        return to_api(s, c.mm_per_px);
     });
+}
+
+GelShape GelShapeAccess::reference(GelShapeReader& r, const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
+                                   const std::string& empty_name) {
+    const auto [f, e] = r.impl_->prepared(frame, empty, frame_name, empty_name);
+    return to_api(r.impl_->gpu.run_reference(f, e), r.impl_->gpu.calibration().mm_per_px);
 }
 
 check::GraphCheck GelShapeAccess::check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,

@@ -73,9 +73,16 @@ TensorMap GelShapeGpu::inputs_of(const std::vector<uint8_t>& frame, const std::v
 }
 
 GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) {
+    return shape_of(impl_->exec->run(inputs_of(frame, empty)));
+}
+
+GelShape GelShapeGpu::run_reference(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const {
+    return shape_of(run_cpu(impl_->graph, impl_->weights, inputs_of(frame, empty)));
+}
+
+GelShape GelShapeGpu::shape_of(const TensorMap& out) const {
     const int H = calib_.height, W = calib_.width;
     const size_t HW = size_t(H) * size_t(W);
-    const TensorMap out = impl_->exec->run(inputs_of(frame, empty));
     const HostTensor &grad = out.at("gradient"), &mask = out.at("mask"), &z = out.at("height");
     GelShape s;
     s.height = H, s.width = W;

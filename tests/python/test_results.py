@@ -284,13 +284,15 @@ def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
     assert book["ok"] and book["checked"] == book["samples"] and book["samples"] * 36 == shapes["hypotheses"]
     assert book["heights"]["max_abs"] == 0 and shapes["tolerance"]["height"] == {"abs": 0, "rel": 0}
     assert "codebook" not in one_way
-    for s in shapes["shape_terms"]:  # the reader's graph on each frame, node by node
+    assert len(shapes["shape_terms"]) == 8
+    for s in shapes["shape_terms"]:  # the reader's graph on each frame, node by node, and the shape it read
         assert [n["op"] for n in s["shape"]["nodes"]] == ["gel_gradient", "gel_contact_mask", "masked_poisson"]
         assert all(n["ok"] for n in s["shape"]["nodes"]) and len(s["shape"]["outputs"]) == 3
+        assert s["shape"]["depth"]["max_abs"] == 0 and s["shape"]["mask_pixels_differ"] == 0
     spread = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True, codebook_samples=16,
                                  rendered_frames=True)
-    assert spread["ok"] and spread["codebook"]["checked"] == 16
-    assert all(len(s["shape"]["nodes"]) == 11 for s in spread["shape_terms"])  # the coarse start's nodes too
+    assert spread["ok"] and spread["codebook"]["checked"] == 16 and spread["codebook"]["cache"] == ""
+    assert len(spread["shape_terms"]) == 8 and all(len(s["shape"]["nodes"]) == 11 for s in spread["shape_terms"])  # the coarse start's nodes too
     with pytest.raises(vtloc.Error, match="no_such_tour.json"):
         vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
 

@@ -125,8 +125,12 @@ struct TrackerCheckOptions {
     // the shipped one) and the sensor's empty frame (empty: the calibration's).
     bool rendered_frames = false;
     std::string calibration, background;
-    std::string codebook_cache;       // as TrackerOptions::codebook_cache: a deployed cache checked too
-    int64_t codebook_samples = 0;     // with shapes: codebook maps re-rendered on the CPU, spread; 0: all (~1 s a 3,333)
+    // With shapes: TrackerOptions::codebook_cache (a deployed cache checked too; written from the
+    // device's render where missing, as a tracker would, and removed again if that render fails)
+    // and how many of its maps the CPU reference re-renders, spread over them (0: all; ~1 s a 3,333).
+    // Without shapes these five options must keep their defaults.
+    std::string codebook_cache;
+    int64_t codebook_samples = 0;
 };
 
 // The maps render-and-compare scores against, a spread subset of the codebook's samples
@@ -144,8 +148,12 @@ struct ShapeTermCheck {
     // device's inputs; node_tolerance) and its outputs against a full CPU run (end_to_end_tolerance).
     std::vector<NodeCheck> shape_nodes;
     std::vector<OutputCheck> shape_outputs;
+    // The shape the term scores (the reader's, from its own executor) against the CPU reference
+    // run's: the depth in mm (end_to_end_tolerance) and the contact (every pixel alike).
+    CheckError depth;
+    int64_t mask_pixels_differ = 0;
     CheckError term;             // the device's term against the CPU reference scorer's
-    bool ok = true;              // the shape's nodes and outputs and the term
+    bool ok = true;              // the shape's nodes and outputs, the read shape, and the term
 };
 
 struct TouchCheck {
