@@ -1,5 +1,6 @@
 #include "apps/vtloc/check_tracker.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
 
@@ -104,6 +105,13 @@ int tracker_check(Session& s, const Args& a) {
     if (r.first_failure >= 0) {
         std::printf("\nfirst node out of tolerance:\n");
         print_node(r.nodes[size_t(r.first_failure)]);
+    }
+    for (const api::ShapeTermCheck& t : r.shape_terms) {  // and the first frame's whose shape graph failed
+        const auto bad = std::find_if(t.shape_nodes.begin(), t.shape_nodes.end(), [](const api::NodeCheck& n) { return !n.ok; });
+        if (bad == t.shape_nodes.end()) continue;
+        std::printf("\nfirst gel shape node out of tolerance (%s):\n", std::filesystem::path(t.frame).filename().string().c_str());
+        print_node(*bad);
+        break;
     }
     const std::string frames = r.shape_terms.empty() ? "" : std::string(r.codebook.ok ? "the codebook, " : "") +
                                                                  std::to_string(r.shape_terms.size() - bad_terms) + " of " +

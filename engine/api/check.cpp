@@ -173,9 +173,10 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         r.object = object;
         r.hypotheses = gpu.surface().n_hypotheses();
         double gpu_ms = 0, cpu_ms = 0;
-        // With shapes, each frame of the file: the reader's graph checked node by node on it, then
-        // render-and-compare's term of its shape, the device's and the CPU reference scorer's
-        // compared; the device's goes to both trackers.
+        // With shapes: the codebook's maps against the CPU reference's render; then each frame of the
+        // file: the reader's graph checked node by node on it, the shape it read against the CPU
+        // reference run's, render-and-compare's term of that shape, the device's and the CPU
+        // reference scorer's compared; the device's goes to both trackers.
         std::vector<std::vector<float>> frame_terms;
         if (options.shapes) {
             if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
@@ -194,10 +195,10 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
             if (!r.codebook.ok && !had_cache && !options.codebook_cache.empty()) std::filesystem::remove(options.codebook_cache, ec);
             for (const io::SequenceTouch& st : seq.touches) {
                 const TactileImage image = load_tactile_image(st.tactile);
-                const GelShape g = reader.read(image, background ? &*background : nullptr, st.tactile, options.background);
+                const TactileImage* bg = background ? &*background : nullptr;
+                const GelShape g = reader.read(image, bg, st.tactile, options.background);
                 ShapeTermCheck tc;
                 tc.frame = st.tactile;
-                const TactileImage* bg = background ? &*background : nullptr;
                 const check::GraphCheck sg = GelShapeAccess::check(reader, ContextAccess::rt(context), image, bg, st.tactile, options.background);
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
                 gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;
