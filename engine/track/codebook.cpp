@@ -116,9 +116,9 @@ std::vector<float> render_maps(rt::Context* ctx, const Surface& s, const std::ve
 Codebook render_codebook(rt::Context* ctx, const Surface& s, const CodebookOptions& o) {
     Codebook b;
     b.options = o;
+    b.heights = render_maps(ctx, s, s.samples, o);  // checks the options first
     b.G = grid_cells(o);
     b.samples = s.samples;
-    b.heights = render_maps(ctx, s, s.samples, o);
     return b;
 }
 
