@@ -405,7 +405,17 @@ TEST_CASE("render-and-compare refuses sparse clouds and bad maps by name", "[cod
     track::SurfaceOptions few;
     few.target_hypotheses = 2000;
     const track::Surface dense = track::build_surface(io::sample_surface(prism(), 40000, 7, "prism"), false, few, "dense.ply");
-    CHECK(track::render_codebook(nullptr, dense, {}).n_samples() == dense.n_samples());
+    // Options out of range are refused before anything is sized from them (a 0 mm cell divides).
+    track::CodebookOptions zero;
+    zero.cell_mm = 0;
+    test::require_error([&] { track::render_codebook(nullptr, dense, zero); }, {"cell 0.1-10 mm"});
+    test::require_error([&] { track::render_codebook_rows(nullptr, dense, {0, 1}, zero); }, {"cell 0.1-10 mm"});
+    test::require_error([&] { track::render_codebook_rows(nullptr, dense, {dense.n_samples()}, {}); }, {"sample"});
+    const track::Codebook all = track::render_codebook(nullptr, dense, {});  // one row of it, rendered alone: the same bits
+    REQUIRE(all.G == 27);
+    CHECK(all.n_samples() == dense.n_samples());
+    CHECK(track::render_codebook_rows(nullptr, dense, {3}, {}) ==
+          std::vector<float>(all.heights.begin() + 3 * 27 * 27, all.heights.begin() + 4 * 27 * 27));
     double win = 0;
     test::require_error([&] { track::window_map({1, 2, 3}, 2, 2, 0.1, 1, &win); }, {"3 values for 2 x 2"});
     test::require_error([&] { track::window_map({1, NAN, 3, 4}, 2, 2, 0.1, 1, &win); }, {"NaN"});
