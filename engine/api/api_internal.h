@@ -8,13 +8,11 @@
 #include <vector>
 
 #include "engine/api/vtloc/vtloc.h"
+#include "engine/check/graph_check.h"
 #include "engine/model/model_file.h"
 #include "engine/model/vtloc_runner.h"
 #include "runtime/context.h"
 
-namespace vtloc::check {
-struct GraphCheck;
-}
 namespace vtloc::track {
 class Tracker;
 class CodebookScorer;
@@ -41,12 +39,14 @@ struct TrackerAccess {
 // The reader inside an api::GelShapeReader (engine/api/gel_shape.cpp; check_tracker --shapes).
 struct GelShapeAccess {
     // The reader's graph checked node by node against the CPU references (check::check_graph) on
-    // the inputs read() gives it for this frame and empty frame (null: the calibration's).
-    static check::GraphCheck check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
-                                   const std::string& frame_name, const std::string& empty_name);
-    // read() with the graph run by the ops' CPU references.
-    static GelShape reference(GelShapeReader& r, const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
-                              const std::string& empty_name);
+    // the inputs read() gives it for this frame and empty frame (null: the calibration's), and
+    // the shape its full CPU reference run gives (what read() should return).
+    struct Checked {
+        check::GraphCheck graph;
+        GelShape reference;
+    };
+    static Checked check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
+                         const std::string& frame_name, const std::string& empty_name);
 };
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a

@@ -199,14 +199,14 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const GelShape g = reader.read(image, bg, st.tactile, options.background);
                 ShapeTermCheck tc;
                 tc.frame = st.tactile;
-                const check::GraphCheck sg = GelShapeAccess::check(reader, ContextAccess::rt(context), image, bg, st.tactile, options.background);
+                const GelShapeAccess::Checked checked =
+                    GelShapeAccess::check(reader, ContextAccess::rt(context), image, bg, st.tactile, options.background);
+                const check::GraphCheck& sg = checked.graph;
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
                 gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;
                 // The shape the term scores comes from the reader's own executor (its memory plan, not
-                // the check's keep-all one): against the CPU reference run of the same graph.
-                const auto c0 = std::chrono::steady_clock::now();
-                const GelShape ref = GelShapeAccess::reference(reader, image, bg, st.tactile, options.background);
-                cpu_ms += ms_since(c0);
+                // the check's keep-all one): against the check's CPU reference run of the same graph.
+                const GelShape& ref = checked.reference;
                 const int64_t px = int64_t(ref.depth_mm.size());
                 const check::Comparison dc = check::compare(HostTensor({px}, g.depth_mm), HostTensor({px}, ref.depth_mm),
                                                             {r.end_to_end_tolerance.abs, r.end_to_end_tolerance.rel});

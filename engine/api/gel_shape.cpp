@@ -108,17 +108,14 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
     });
 }
 
-GelShape GelShapeAccess::reference(GelShapeReader& r, const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
-                                   const std::string& empty_name) {
+GelShapeAccess::Checked GelShapeAccess::check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
+                                              const std::string& frame_name, const std::string& empty_name) {
     const auto [f, e] = r.impl_->prepared(frame, empty, frame_name, empty_name);
-    return to_api(r.impl_->gpu.run_reference(f, e), r.impl_->gpu.calibration().mm_per_px);
-}
-
-check::GraphCheck GelShapeAccess::check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
-                                        const std::string& frame_name, const std::string& empty_name) {
-    const auto [f, e] = r.impl_->prepared(frame, empty, frame_name, empty_name);
+    const sensor::GelShapeGpu& gpu = r.impl_->gpu;
     const std::lock_guard<std::mutex> lock(r.impl_->mu);
-    return check::check_graph(ctx, r.impl_->gpu.graph(), r.impl_->gpu.weights(), r.impl_->gpu.inputs_of(f, e));
+    Checked c{check::check_graph(ctx, gpu.graph(), gpu.weights(), gpu.inputs_of(f, e)), {}};
+    c.reference = to_api(gpu.shape_of(c.graph.cpu_outputs), gpu.calibration().mm_per_px);
+    return c;
 }
 
 namespace {

@@ -131,6 +131,7 @@ GraphCheck check_graph(rt::Context& ctx, const Graph& g, const WeightStore& weig
     r.cpu_full_ms = ms_since(t0);
     for (auto& [name, id] : g.outputs())
         r.outputs.push_back({name, compare(gpu_out.at(name), cpu_out.at(name), end_to_end_tol)});
+    r.cpu_outputs = std::move(cpu_out);
     return r;
 }
 

@@ -37,6 +37,7 @@ struct GraphCheck {
     std::vector<NodeCheck> nodes;      // schedule order
     std::vector<OutputCheck> outputs;  // the graph's outputs, end to end
     int first_failure = -1;            // index into nodes
+    TensorMap cpu_outputs;             // the full CPU reference run's outputs (a caller may compare another run with them)
     double gpu_ms = 0, cpu_nodes_ms = 0, cpu_full_ms = 0;
     bool ok() const;
 };

@@ -76,10 +76,6 @@ GelShape GelShapeGpu::run(const std::vector<uint8_t>& frame, const std::vector<u
     return shape_of(impl_->exec->run(inputs_of(frame, empty)));
 }
 
-GelShape GelShapeGpu::run_reference(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const {
-    return shape_of(run_cpu(impl_->graph, impl_->weights, inputs_of(frame, empty)));
-}
-
 GelShape GelShapeGpu::shape_of(const TensorMap& out) const {
     const int H = calib_.height, W = calib_.width;
     const size_t HW = size_t(H) * size_t(W);

@@ -29,8 +29,6 @@ public:
 
     // frame, empty: the calibration's size, its stored channel order.
     GelShape run(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty);
-    // The same graph run by the ops' CPU references (vtloc check --tracker --shapes).
-    GelShape run_reference(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const;
     const Calibration& calibration() const { return calib_; }
     // GPU ms per node of the last run (label, ms); empty unless profiling.
     std::vector<std::pair<std::string, double>> node_times() const;
@@ -39,10 +37,10 @@ public:
     const Graph& graph() const;
     const WeightStore& weights() const;
     TensorMap inputs_of(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const;
+    GelShape shape_of(const TensorMap& out) const;  // the graph's outputs as a shape (depth in mm)
 
 private:
     int solve(Graph& g, int grad, int mask, int H, int W) const;
-    GelShape shape_of(const TensorMap& out) const;  // the graph's outputs as a shape (depth in mm)
     struct Impl;
     Calibration calib_;
     ShapeOptions opt_;
