@@ -3,11 +3,22 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <string>
 
 #include "apps/vtloc/check_json.h"
 #include "apps/vtloc/check_print.h"
 
 namespace vtloc::cli {
+
+namespace {
+
+// One row of a node or output table: label, op, the error's columns, the result.
+void print_row(const std::string& label, const std::string& op, const api::CheckError& e, bool ok, const std::string& failed) {
+    std::printf("%-40s %-18s %-9s %-9s %-8s %s\n", label.c_str(), op.c_str(), g3(e.max_abs).c_str(), g3(e.max_rel).c_str(),
+                g3(e.tolerance_used).c_str(), ok ? "ok" : failed.c_str());
+}
+
+}  // namespace
 
 int tracker_check(Session& s, const Args& a) {
     api::TrackerCheckOptions o;
@@ -62,14 +73,10 @@ int tracker_check(Session& s, const Args& a) {
                         t.ok ? "ok" : why.c_str());
             for (const api::NodeCheck& n : t.shape_nodes)
                 if (!n.ok || a.flag("--verbose"))
-                    std::printf("    node %-26s %-18s %-9s %-9s %-8s %s\n", n.node.c_str(), n.op.c_str(), g3(n.error.max_abs).c_str(),
-                                g3(n.error.max_rel).c_str(), g3(n.error.tolerance_used).c_str(),
-                                n.ok ? "ok" : ("FAILED " + n.error.first_mismatch + n.failure).c_str());
+                    print_row("    node " + n.node, n.op, n.error, n.ok, "FAILED (" + n.error.first_mismatch + n.failure + ")");
             for (const api::OutputCheck& o : t.shape_outputs)
                 if (!o.ok || a.flag("--verbose"))
-                    std::printf("    output %-24s %-18s %-9s %-9s %-8s %s\n", o.name.c_str(), "", g3(o.error.max_abs).c_str(),
-                                g3(o.error.max_rel).c_str(), g3(o.error.tolerance_used).c_str(),
-                                o.ok ? "ok" : ("FAILED " + o.error.first_mismatch).c_str());
+                    print_row("    output " + o.name, "", o.error, o.ok, "FAILED (" + o.error.first_mismatch + ")");
         }
         const api::CodebookCheck& c = r.codebook;
         std::printf("\ncodebook   %s: %lld of %lld samples' maps against the CPU reference's render, heights exactly: %s\n",
@@ -90,17 +97,14 @@ int tracker_check(Session& s, const Args& a) {
     size_t bad_nodes = 0;
     for (const api::NodeCheck& n : r.nodes) {
         bad_nodes += !n.ok;
-        std::printf("%-40s %-18s %-9s %-9s %-8s %s\n", n.node.c_str(), n.op.c_str(), g3(n.error.max_abs).c_str(),
-                    g3(n.error.max_rel).c_str(), g3(n.error.tolerance_used).c_str(), n.ok ? "ok" : "FAILED");
+        print_row(n.node, n.op, n.error, n.ok, "FAILED");
         if (a.flag("--verbose"))
             for (const std::string& d : n.dispatches) std::printf("    dispatch %s\n", d.c_str());
     }
     size_t bad_outputs = 0;
     for (const api::OutputCheck& out : r.outputs) {
         bad_outputs += !out.ok;
-        std::printf("%-40s %-18s %-9s %-9s %-8s %s\n", ("output " + out.name).c_str(), "", g3(out.error.max_abs).c_str(),
-                    g3(out.error.max_rel).c_str(), g3(out.error.tolerance_used).c_str(),
-                    out.ok ? "ok" : ("FAILED (" + out.error.first_mismatch + ")").c_str());
+        print_row("output " + out.name, "", out.error, out.ok, "FAILED (" + out.error.first_mismatch + ")");
     }
     if (r.first_failure >= 0) {
         std::printf("\nfirst node out of tolerance:\n");
