@@ -114,10 +114,11 @@ struct TrackerCheckOptions {
     // each ending at a field, looked up at the moved pose's nearest hypothesis).
     bool touch_terms = false;
     // Instead, each touch's own frame (the touches file's "tactile") read into its gel's shape
-    // (the reader's graph checked node by node on it) and scored against the object's codebook as
-    // render-and-compare's term, on the device and by the CPU reference scorer (compared per
-    // frame), the device's term then given to both trackers. Both score against the maps the tracker would (codebook_cache's, or rendered on
-    // the device), whose spot check against the CPU reference's render is `codebook`.
+    // (the reader's graph checked node by node on it, and the shape read against the CPU
+    // reference run's) and scored against the object's codebook as render-and-compare's term, on
+    // the device and by the CPU reference scorer (compared per frame), the device's term then
+    // given to both trackers. Both score against the maps the tracker would (codebook_cache's, or
+    // rendered on the device), checked against the CPU reference's render in `codebook`.
     bool shapes = false;
     // With shapes, how the frames are read (as vtloc sequence --render-compare reads them): the
     // reader for frames vtloc synth rendered (GelShapeOptions::rendered_frames(): the solve from a
@@ -133,8 +134,8 @@ struct TrackerCheckOptions {
     int64_t codebook_samples = 0;
 };
 
-// The maps render-and-compare scores against, a spread subset of the codebook's samples
-// re-rendered by the CPU reference.
+// The maps render-and-compare scores against, every sample's (or codebook_samples spread over
+// them) re-rendered by the CPU reference.
 struct CodebookCheck {
     int64_t samples = 0;         // the codebook's
     int64_t checked = 0;         // of them compared
