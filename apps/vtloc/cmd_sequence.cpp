@@ -126,6 +126,22 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         to.codebook_cache = a.get("--codebook-cache").value_or("");
     }
 
+    // Every touch's frame read (and with render-and-compare, its gel shape) before the model, the
+    // object and the tracker are made: a bad frame late in the file is refused without that wait.
+    std::vector<api::TactileImage> frames;
+    std::vector<api::GelShape> shapes;
+    for (size_t i = 0; i < file.touches.size(); ++i) {
+        const std::string& f = file.touches[i].tactile;
+        const std::string where = " (touch " + std::to_string(i + 1) + " of " + touches_path + ")";
+        if (geometry_only && !reader) {
+            if (!std::filesystem::exists(f)) throw api::Error(f + ": no such file" + where);
+            continue;
+        }
+        api::TactileImage im = api::load_tactile_image(f);
+        if (reader) shapes.push_back(read_gel_shape(*reader, f, im, empty ? &*empty : nullptr, background, where));
+        if (!geometry_only) frames.push_back(std::move(im));
+    }
+
     std::optional<api::Model> model;
     std::optional<api::Object> object;
     std::string model_file;
@@ -150,18 +166,9 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     }
     for (size_t i = 0; i < file.touches.size(); ++i) {
         std::optional<api::TouchResult> r;
-        if (model) {
-            const api::TactileImage im = api::load_tactile_image(file.touches[i].tactile);
-            r = model->localize(*object, im);
-        } else if (!std::filesystem::exists(file.touches[i].tactile)) {
-            throw api::Error(file.touches[i].tactile + ": no such file (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
-        }
-        std::optional<api::GelShape> shape;
-        if (reader)
-            shape = read_gel_shape(*reader, file.touches[i].tactile, api::load_tactile_image(file.touches[i].tactile), empty ? &*empty : nullptr,
-                                   background, " (touch " + std::to_string(i + 1) + " of " + touches_path + ")");
+        if (model) r = model->localize(*object, frames[i]);
         const auto t0 = std::chrono::steady_clock::now();
-        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, shape ? &*shape : nullptr);
+        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, reader ? &shapes[i] : nullptr);
         const auto t1 = std::chrono::steady_clock::now();
         const api::TrackerEstimate e = tracker.estimate();
         const auto t2 = std::chrono::steady_clock::now();
