@@ -39,14 +39,26 @@ struct TrackerAccess {
 // The reader inside an api::GelShapeReader (engine/api/gel_shape.cpp; check_tracker --shapes).
 struct GelShapeAccess {
     // The reader's graph checked node by node against the CPU references (check::check_graph) on
-    // the inputs read() gives it for this frame and empty frame (null: the calibration's), and
-    // the shape its full CPU reference run gives (what read() should return).
+    // the inputs read() gives it for a frame and empty frame (null: the calibration's), and the
+    // shape its full CPU reference run gives (what read() should return).
     struct Checked {
         check::GraphCheck graph;
         GelShape reference;
     };
-    static Checked check(GelShapeReader& r, rt::Context& ctx, const TactileImage& frame, const TactileImage* empty,
-                         const std::string& frame_name, const std::string& empty_name);
+    // One keep-all executor of the reader's graph for every frame checked (made at the first:
+    // its tables uploaded and its memory planned once a tour, not once a frame).
+    class Checker {
+    public:
+        Checker(GelShapeReader& r, rt::Context& ctx);
+        ~Checker();
+        Checked check(const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
+                      const std::string& empty_name);
+
+    private:
+        GelShapeReader& reader_;
+        rt::Context& ctx_;
+        std::unique_ptr<GpuExecutor> exec_;
+    };
 };
 
 // TEST-ONLY: the context's next submit fails with VK_ERROR_DEVICE_LOST, as a

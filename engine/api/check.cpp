@@ -183,6 +183,7 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
             GelShapeOptions go = options.rendered_frames ? GelShapeOptions::rendered_frames() : GelShapeOptions{};
             go.calibration = options.calibration;
             GelShapeReader reader(context, go);
+            GelShapeAccess::Checker shape_check(reader, ContextAccess::rt(context));
             std::optional<TactileImage> background;
             if (!options.background.empty()) background = load_tactile_image(options.background);
             std::error_code ec;
@@ -199,8 +200,7 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const GelShape g = reader.read(image, bg, st.tactile, options.background);
                 ShapeTermCheck tc;
                 tc.frame = st.tactile;
-                const GelShapeAccess::Checked checked =
-                    GelShapeAccess::check(reader, ContextAccess::rt(context), image, bg, st.tactile, options.background);
+                const GelShapeAccess::Checked checked = shape_check.check(image, bg, st.tactile, options.background);
                 const check::GraphCheck& sg = checked.graph;
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
                 gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;

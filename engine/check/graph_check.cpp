@@ -54,8 +54,13 @@ bool GraphCheck::ok() const {
 
 GraphCheck check_graph(rt::Context& ctx, const Graph& g, const WeightStore& weights, const TensorMap& inputs,
                        Tolerance node_tol, Tolerance end_to_end_tol) {
-    GraphCheck r;
     GpuExecutor exec(ctx, g, weights, false, /*keep_all=*/true);
+    return check_graph(exec, g, weights, inputs, node_tol, end_to_end_tol);
+}
+
+GraphCheck check_graph(GpuExecutor& exec, const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                       Tolerance node_tol, Tolerance end_to_end_tol) {
+    GraphCheck r;
     auto t0 = std::chrono::steady_clock::now();
     TensorMap gpu_out = exec.run(inputs);
     r.gpu_ms = ms_since(t0);

@@ -44,6 +44,10 @@ struct GraphCheck {
 
 GraphCheck check_graph(rt::Context& ctx, const Graph& g, const WeightStore& weights, const TensorMap& inputs,
                        Tolerance node_tol = kNodeTolerance, Tolerance end_to_end_tol = kEndToEndTolerance);
+// The same on an executor made for g and weights with keep_all: a caller checking one graph on
+// many inputs (each frame of a tour) uploads the weights and plans the memory once.
+GraphCheck check_graph(GpuExecutor& keep_all_exec, const Graph& g, const WeightStore& weights, const TensorMap& inputs,
+                       Tolerance node_tol = kNodeTolerance, Tolerance end_to_end_tol = kEndToEndTolerance);
 
 // One line per dispatch: "shader spec=[a, b, ...] texel=0x3 groups=4x1x1".
 std::string dispatch_str(const std::string& shader, const std::vector<uint32_t>& spec, uint32_t texel_bindings,
