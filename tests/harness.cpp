@@ -7,6 +7,8 @@
 #include <random>
 #include <sstream>
 
+#include <unistd.h>
+
 namespace vtloc::test {
 
 namespace {
@@ -87,10 +89,20 @@ TensorMap run_gpu_and_compare(const Graph& g, const WeightStore& w, const Tensor
     return got;
 }
 
+// A folder per test process, removed at its exit: the same case runs in several ctest shards at
+// once (cpp/check beside long/texel64k/check), and a shared name raced (one wrote a codebook
+// cache while the other checked it was removed).
 std::string temp_path(const std::string& name) {
-    auto dir = std::filesystem::temp_directory_path() / "vtloc-tests";
-    std::filesystem::create_directories(dir);
-    return (dir / name).string();
+    struct Dir {
+        std::filesystem::path path = std::filesystem::temp_directory_path() / "vtloc-tests" / std::to_string(::getpid());
+        ~Dir() {
+            std::error_code ec;
+            std::filesystem::remove_all(path, ec);
+        }
+    };
+    static const Dir dir;
+    std::filesystem::create_directories(dir.path);
+    return (dir.path / name).string();
 }
 
 }  // namespace vtloc::test
