@@ -39,10 +39,20 @@ def test_localize_equals_the_cli(cli, tiny, tiny_path, mug, touch, root, tmp_pat
     assert (tmp_path / "py.ply").read_bytes() == (tmp_path / "cli.ply").read_bytes()
 
 
-def test_tracker_equals_the_cli(cli, ctx, root):
+SEQUENCE_ARGS = ("sequence", "--object", "examples/mug.glb", "--touches", "tests/cli/data/sequence.json",
+                 "--geometry-only", "--json")
+
+
+@pytest.fixture(scope="module")
+def mug_sequence(cli, root):
+    """`vtloc sequence`'s JSON on the three-touch mug file, geometry alone (run once, read twice)."""
+    return json.loads(run_cli(cli, *(os.path.join(root, a) if "/" in a else a for a in SEQUENCE_ARGS)))
+
+
+def test_tracker_equals_the_cli(mug_sequence, ctx, root):
     seq = os.path.join(root, "tests", "cli", "data", "sequence.json")
     mug_path = os.path.join(root, "examples", "mug.glb")
-    out = json.loads(run_cli(cli, "sequence", "--object", mug_path, "--touches", seq, "--geometry-only", "--json"))
+    out = mug_sequence
     with open(seq) as f:
         spec = json.load(f)
     t = vtloc.Tracker(ctx, mug_path)
@@ -72,12 +82,10 @@ def test_tracker_equals_the_cli(cli, ctx, root):
         t.window_fit([np.eye(4)], bad)
 
 
-def test_tracker_profile_times_the_nodes_and_changes_nothing(cli, ctx, root):
-    seq = os.path.join(root, "tests", "cli", "data", "sequence.json")
+def test_tracker_profile_times_the_nodes_and_changes_nothing(mug_sequence, cli, ctx, root):
     mug_path = os.path.join(root, "examples", "mug.glb")
-    args = ("sequence", "--object", mug_path, "--touches", seq, "--geometry-only", "--json")
-    plain = json.loads(run_cli(cli, *args))
-    timed = json.loads(run_cli(cli, *args, "--profile"))
+    plain = mug_sequence
+    timed = json.loads(run_cli(cli, *(os.path.join(root, a) if "/" in a else a for a in SEQUENCE_ARGS), "--profile"))
     for a, b in zip(plain["touches"], timed["touches"]):
         assert "ms" not in a
         assert b["contact"] == a["contact"] and b["pose"] == a["pose"]
@@ -276,23 +284,23 @@ def test_checks_match_the_cli(cli, ctx, root, tiny_path, touch, tmp_path):
     assert t["tolerance"]["belief"] == {"abs": 1e-6, "rel": 5e-3}
     one_way = vtloc.check_tracker(ctx, tour, hypotheses=12000, there_and_back=False, touch_terms=True)
     assert one_way["ok"] and len(one_way["touches"]) == 8 and one_way["hypotheses"] == t["hypotheses"]
-    shapes = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True)
+    # The frames' shapes (the rendered frames' reader: its coarse start's nodes too) and 16 of the
+    # codebook's maps, checked exactly against the CPU's render (all of them by default: C++'s test).
+    shapes = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True, codebook_samples=16,
+                                 rendered_frames=True)
     assert shapes["ok"] and [os.path.basename(s["frame"]) for s in shapes["shape_terms"]] == \
         [f"potato_tour_{i}.png" for i in range(1, 9)]
     assert all(s["ok"] for s in shapes["shape_terms"]) and shapes["tolerance"]["term"] == {"abs": 1e-4, "rel": 1e-4}
-    book = shapes["codebook"]  # the maps scored against, spot-checked exactly against the CPU's render
-    assert book["ok"] and book["checked"] == book["samples"] and book["samples"] * 36 == shapes["hypotheses"]
+    book = shapes["codebook"]
+    assert book["ok"] and book["checked"] == 16 and book["samples"] * 36 == shapes["hypotheses"] and book["cache"] == ""
     assert book["heights"]["max_abs"] == 0 and shapes["tolerance"]["height"] == {"abs": 0, "rel": 0}
-    assert "codebook" not in one_way
-    assert len(shapes["shape_terms"]) == 8
+    assert "codebook" not in one_way and shapes["first_shape_failure"] is None and one_way["first_shape_failure"] is None
     for s in shapes["shape_terms"]:  # the reader's graph on each frame, node by node, and the shape it read
-        assert [n["op"] for n in s["shape"]["nodes"]] == ["gel_gradient", "gel_contact_mask", "masked_poisson"]
+        ops = [n["op"] for n in s["shape"]["nodes"]]
+        assert len(ops) == 11 and ops[:2] == ["gel_gradient", "gel_contact_mask"] and ops[-1] == "masked_poisson"
         assert all(n["ok"] for n in s["shape"]["nodes"]) and len(s["shape"]["outputs"]) == 3
+        assert s["shape"]["first_failure"] is None
         assert s["shape"]["depth"]["max_abs"] == 0 and s["shape"]["mask_pixels_differ"] == 0
-    spread = vtloc.check_tracker(ctx, tour, hypotheses=6000, there_and_back=False, shapes=True, codebook_samples=16,
-                                 rendered_frames=True)
-    assert spread["ok"] and spread["codebook"]["checked"] == 16 and spread["codebook"]["cache"] == ""
-    assert len(spread["shape_terms"]) == 8 and all(len(s["shape"]["nodes"]) == 11 for s in spread["shape_terms"])  # the coarse start's nodes too
     with pytest.raises(vtloc.Error, match="no_such_tour.json"):
         vtloc.check_tracker(ctx, os.path.join(root, "examples", "no_such_tour.json"))
 
