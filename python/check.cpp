@@ -107,7 +107,8 @@ void bind_check(py::module_& m) {
                 py::dict e;
                 e["frame"] = t.frame, e["ok"] = t.ok, e["term"] = error_dict(t.term);
                 e["shape"] = py::dict(py::arg("nodes") = nodes_list(t.shape_nodes), py::arg("outputs") = outputs_list(t.shape_outputs),
-                                      py::arg("depth") = error_dict(t.depth), py::arg("mask_pixels_differ") = t.mask_pixels_differ);
+                                      py::arg("depth") = error_dict(t.depth), py::arg("mask_pixels_differ") = t.mask_pixels_differ,
+                                      py::arg("first_failure") = first(t.shape_nodes, t.first_failure));
                 st.append(e);
             }
             d["shape_terms"] = st;
@@ -119,6 +120,12 @@ void bind_check(py::module_& m) {
             }
             d["touches"] = ts, d["nodes"] = nodes_list(r.nodes), d["outputs"] = outputs_list(r.outputs);
             d["first_failure"] = first(r.nodes, r.first_failure);
+            py::object shape_failure = py::none();  // the first frame whose gel shape graph failed
+            if (r.first_shape_failure >= 0) {
+                const api::ShapeTermCheck& t = r.shape_terms[size_t(r.first_shape_failure)];
+                shape_failure = py::dict(py::arg("frame") = t.frame, py::arg("node") = first(t.shape_nodes, t.first_failure));
+            }
+            d["first_shape_failure"] = shape_failure;
             d["ms"] = py::dict(py::arg("gpu") = r.gpu_ms, py::arg("cpu") = r.cpu_ms, py::arg("wall") = r.wall_ms);
             return d;
         },
@@ -130,7 +137,8 @@ void bind_check(py::module_& m) {
         "beliefs compared after every touch, then the last step node by node. -> dict: ok, touches, nodes,\n"
         "outputs, first_failure, tolerance, ms. object: for a file without \"object\"; touch_terms: a seeded\n"
         "log term each touch, so the step reads a field per touch; shapes: each touch's frame read into its gel\n"
-        "shape, the reader's graph checked node by node (shape_terms[i]['shape']; rendered_frames, calibration,\n"
+        "shape, the reader's graph checked node by node (shape_terms[i]['shape'], its first_failure; the first\n"
+        "frame with one: first_shape_failure {frame, node}; rendered_frames, calibration,\n"
         "background: the reader's, as vtloc sequence takes them), then scored by render-and-compare on the device\n"
         "and the CPU reference (shape_terms), the device's term given to both,\n"
         "and the codebook's maps (codebook_cache's, or the device's render) against the CPU reference's render at\n"

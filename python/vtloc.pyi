@@ -18,7 +18,9 @@ def inspect_model(path: str) -> Dict[str, Any]: ...
 def load_tactile_image(path: str) -> npt.NDArray[np.uint8]: ...
 # vtloc check: ok, nodes, outputs, first_failure (a node's name or None), tolerance, ms
 def check(context: "Context", model: str, tactile: str, object: str) -> Dict[str, Any]: ...
-# vtloc check --tracker: the same and touches (each touch's belief against the CPU reference's)
+# vtloc check --tracker: the same and touches (each touch's belief against the CPU reference's); with
+# shapes, shape_terms (each frame's gel shape nodes, first_failure among them) and first_shape_failure
+# ({"frame", "node"} of the first frame whose shape graph failed, or None)
 def check_tracker(context: "Context", touches: str, object: str = "", hypotheses: int = 120000,
                   there_and_back: bool = True, touch_terms: bool = False,
                   shapes: bool = False, rendered_frames: bool = False, calibration: str = "",

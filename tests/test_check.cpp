@@ -136,6 +136,7 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         t.touch_terms = false, t.shapes = true, t.codebook_cache = cache;
         const api::TrackerCheckResult rs = api::check_tracker(ctx, t);
         CHECK(rs.ok);
+        CHECK(rs.first_shape_failure == -1);
         REQUIRE(rs.shape_terms.size() == 8);
         for (const api::ShapeTermCheck& c : rs.shape_terms) {
             INFO(c.frame);
@@ -186,24 +187,34 @@ TEST_CASE("check: the tracker check walks the tour there and back and names a co
         t.codebook_samples = -1;
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("codebook_samples"));
         std::filesystem::remove(cache);
-        t.codebook_cache.clear(), t.codebook_samples = 0;
+        t.codebook_samples = 0;
         {  // The shape's solve off by half a pixel in one pixel: each frame names that node, the
-           // terms (scored on the reader's own shapes) still agree.
+           // terms (scored on the reader's own shapes) still agree. And the device's render of the
+           // codebook one cell off: the cache this check wrote from it is removed again.
             FaultGuard g;
             check::testing::set_fault("gel.height", [](HostTensor& z) { z.data[z.data.size() / 2] += 0.5f; });
+            check::testing::set_fault("codebook.heights", [](HostTensor& h) { h.data[7] += 0.25f; });
             t.rendered_frames = true;  // and the rendered frames' reader: its coarse start's nodes too
             const api::TrackerCheckResult bad_shape = api::check_tracker(ctx, t);
             t.rendered_frames = false;
             CHECK(!bad_shape.ok);
+            CHECK(!bad_shape.codebook.ok);
+            CHECK(bad_shape.codebook.heights.mismatches == 1);
+            CHECK(!std::filesystem::exists(cache));
             REQUIRE(bad_shape.shape_terms.size() == 8);
+            CHECK(bad_shape.first_shape_failure == 0);
+            CHECK(bad_shape.first_failure == -1);  // the step itself is sound
             for (const api::ShapeTermCheck& c : bad_shape.shape_terms) {
                 CHECK(!c.ok);
                 CHECK(c.term.mismatches == 0);
                 REQUIRE(c.shape_nodes.size() == 11);
                 for (const api::NodeCheck& n : c.shape_nodes) CHECK(n.ok == (n.node != "gel.height"));
+                REQUIRE(c.first_failure >= 0);
+                CHECK(c.shape_nodes[size_t(c.first_failure)].node == "gel.height");
                 CHECK(c.depth.mismatches == 0);  // the fault is the checked copy's: the reader's own shape is sound
             }
         }
+        t.codebook_cache.clear();
         t.touch_terms = true;
         CHECK_THROWS_WITH(api::check_tracker(ctx, t), Catch::Contains("not both"));
         // The shapes' options without shapes: refused, not ignored.

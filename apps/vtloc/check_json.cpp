@@ -41,6 +41,11 @@ nlohmann::json nodes_json(const std::vector<api::NodeCheck>& v) {
     return nodes;
 }
 
+// A failing node's name, null if none.
+nlohmann::json first_json(const std::vector<api::NodeCheck>& nodes, int i) {
+    return i >= 0 ? nlohmann::json(nodes[size_t(i)].node) : nlohmann::json();
+}
+
 nlohmann::json outputs_json(const std::vector<api::OutputCheck>& v) {
     nlohmann::json outputs = nlohmann::json::array();
     for (const api::OutputCheck& out : v) outputs.push_back({{"name", out.name}, {"ok", out.ok}, {"error", error_json(out.error)}});
@@ -61,7 +66,7 @@ nlohmann::json check_json(const api::CheckResult& r, const api::CheckOptions& o)
                      {"nodes", nodes},
                      {"outputs", outputs},
                      {"ms", {{"gpu", r.gpu_ms}, {"cpu", r.cpu_ms}, {"wall", r.wall_ms}}}};
-    j["first_failure"] = r.first_failure >= 0 ? nlohmann::json(r.nodes[size_t(r.first_failure)].node) : nlohmann::json();
+    j["first_failure"] = first_json(r.nodes, r.first_failure);
     return j;
 }
 
@@ -95,6 +100,7 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
                                {"ok", t.ok},
                                {"shape", {{"nodes", nodes_json(t.shape_nodes)},
                                           {"outputs", outputs_json(t.shape_outputs)},
+                                          {"first_failure", first_json(t.shape_nodes, t.first_failure)},
                                           {"depth", error_json(t.depth)},
                                           {"mask_pixels_differ", t.mask_pixels_differ}}},
                                {"term", error_json(t.term)}});
@@ -118,7 +124,14 @@ nlohmann::json tracker_check_json(const api::TrackerCheckResult& r, const api::T
     if (o.shapes)
         j["codebook"] = {{"cache", o.codebook_cache}, {"samples", r.codebook.samples}, {"checked", r.codebook.checked},
                          {"ok", r.codebook.ok}, {"heights", error_json(r.codebook.heights)}};
-    j["first_failure"] = r.first_failure >= 0 ? nlohmann::json(r.nodes[size_t(r.first_failure)].node) : nlohmann::json();
+    j["first_failure"] = first_json(r.nodes, r.first_failure);
+    // The step's first failing node, then the first frame's whose gel shape graph failed.
+    nlohmann::json shape_failure;
+    if (r.first_shape_failure >= 0) {
+        const api::ShapeTermCheck& t = r.shape_terms[size_t(r.first_shape_failure)];
+        shape_failure = {{"frame", t.frame}, {"node", first_json(t.shape_nodes, t.first_failure)}};
+    }
+    j["first_shape_failure"] = shape_failure;
     return j;
 }
 

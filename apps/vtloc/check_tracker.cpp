@@ -110,12 +110,10 @@ int tracker_check(Session& s, const Args& a) {
         std::printf("\nfirst node out of tolerance:\n");
         print_node(r.nodes[size_t(r.first_failure)]);
     }
-    for (const api::ShapeTermCheck& t : r.shape_terms) {  // and the first frame's whose shape graph failed
-        const auto bad = std::find_if(t.shape_nodes.begin(), t.shape_nodes.end(), [](const api::NodeCheck& n) { return !n.ok; });
-        if (bad == t.shape_nodes.end()) continue;
+    if (r.first_shape_failure >= 0) {  // and the first frame's whose shape graph failed
+        const api::ShapeTermCheck& t = r.shape_terms[size_t(r.first_shape_failure)];
         std::printf("\nfirst gel shape node out of tolerance (%s):\n", std::filesystem::path(t.frame).filename().string().c_str());
-        print_node(*bad);
-        break;
+        print_node(t.shape_nodes[size_t(t.first_failure)]);
     }
     const std::string frames = r.shape_terms.empty() ? "" : std::string(r.codebook.ok ? "the codebook, " : "") +
                                                                  std::to_string(r.shape_terms.size() - bad_terms) + " of " +

@@ -8,6 +8,7 @@
 
 #include "engine/api/api_internal.h"
 #include "engine/check/device_report.h"
+#include "engine/check/fault_injection.h"
 #include "engine/check/graph_check.h"
 #include "engine/check/op_selftest.h"
 #include "engine/io/splitmix64.h"
@@ -65,7 +66,9 @@ CodebookCheck check_codebook(const track::Codebook& b, const track::Surface& s, 
         got.insert(got.end(), b.heights.begin() + rows.back() * GG, b.heights.begin() + (rows.back() + 1) * GG);
     }
     const std::vector<float> ref = track::render_codebook_rows(nullptr, s, rows, b.options);
-    const check::Comparison cmp = check::compare(HostTensor({c.checked, GG}, got), HostTensor({c.checked, GG}, ref), {tol.abs, tol.rel});
+    HostTensor rows_got({c.checked, GG}, got);
+    check::testing::apply_fault("codebook.heights", rows_got);  // tests only: a render gone wrong
+    const check::Comparison cmp = check::compare(rows_got, HostTensor({c.checked, GG}, ref), {tol.abs, tol.rel});
     c.heights = to_api(cmp);
     c.ok = cmp.ok;
     return c;
@@ -165,6 +168,14 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         if (!options.shapes && (options.rendered_frames || !options.calibration.empty() || !options.background.empty() ||
                                 !options.codebook_cache.empty() || options.codebook_samples != 0))
             throw Error("check_tracker: rendered_frames, calibration, background, codebook_cache and codebook_samples are for shapes");
+        if (options.shapes && options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
+        // The frames (and the empty frame) read before the trackers are made: a missing one is named at once.
+        std::optional<TactileImage> background;
+        std::vector<TactileImage> images;
+        if (options.shapes) {
+            if (!options.background.empty()) background = load_tactile_image(options.background);
+            for (const io::SequenceTouch& st : seq.touches) images.push_back(load_tactile_image(st.tactile));
+        }
         Tracker api_gpu(context, object, to);
         track::Tracker& gpu = TrackerAccess::core(api_gpu);
         track::Tracker cpu = track::Tracker::cpu_reference_of(gpu);
@@ -179,13 +190,10 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
         // reference scorer's compared; the device's goes to both trackers.
         std::vector<std::vector<float>> frame_terms;
         if (options.shapes) {
-            if (options.touch_terms) throw Error("check_tracker: seeded terms or the frames' shapes, not both");
             GelShapeOptions go = options.rendered_frames ? GelShapeOptions::rendered_frames() : GelShapeOptions{};
             go.calibration = options.calibration;
             GelShapeReader reader(context, go);
             GelShapeAccess::Checker shape_check(reader, ContextAccess::rt(context));
-            std::optional<TactileImage> background;
-            if (!options.background.empty()) background = load_tactile_image(options.background);
             std::error_code ec;
             const bool had_cache = !options.codebook_cache.empty() && std::filesystem::exists(options.codebook_cache, ec);
             const TrackerAccess::ShapeScorers scorers = TrackerAccess::shape_scorers(api_gpu);
@@ -194,8 +202,9 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
             cpu_ms += ms_since(b0);
             // A cache this check wrote from a render that failed would mislead the next tracker.
             if (!r.codebook.ok && !had_cache && !options.codebook_cache.empty()) std::filesystem::remove(options.codebook_cache, ec);
-            for (const io::SequenceTouch& st : seq.touches) {
-                const TactileImage image = load_tactile_image(st.tactile);
+            for (size_t i = 0; i < seq.touches.size(); ++i) {
+                const io::SequenceTouch& st = seq.touches[i];
+                const TactileImage& image = images[i];
                 const TactileImage* bg = background ? &*background : nullptr;
                 const GelShape g = reader.read(image, bg, st.tactile, options.background);
                 ShapeTermCheck tc;
@@ -203,6 +212,8 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const GelShapeAccess::Checked checked = shape_check.check(image, bg, st.tactile, options.background);
                 const check::GraphCheck& sg = checked.graph;
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
+                tc.first_failure = sg.first_failure;
+                if (tc.first_failure >= 0 && r.first_shape_failure < 0) r.first_shape_failure = int(r.shape_terms.size());
                 gpu_ms += sg.gpu_ms, cpu_ms += sg.cpu_nodes_ms + sg.cpu_full_ms;
                 // The shape the term scores comes from the reader's own executor (its memory plan, not
                 // the check's keep-all one): against the check's CPU reference run of the same graph.

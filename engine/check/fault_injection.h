@@ -12,8 +12,12 @@
 namespace vtloc::check::testing {
 
 // corrupt(output) is called on the named node's first output (as read back
-// from the GPU) in every check_graph on this thread, until cleared.
+// from the GPU) in every check_graph on this thread, until cleared. One fault
+// per name (a second call for a name replaces it); several names may be set.
 void set_fault(const std::string& node, std::function<void(HostTensor&)> corrupt);
-void clear_fault();
+void clear_fault();  // all of them
+// Applies the fault set for `name`, if any, to t: for values a check compares
+// outside check_graph ("codebook.heights": check_tracker's codebook rows).
+void apply_fault(const std::string& name, HostTensor& t);
 
 }  // namespace vtloc::check::testing

@@ -12,11 +12,7 @@ namespace vtloc::check {
 
 namespace {
 
-struct Fault {
-    std::string node;
-    std::function<void(HostTensor&)> corrupt;
-};
-thread_local Fault t_fault;
+thread_local std::map<std::string, std::function<void(HostTensor&)>> t_faults;
 
 double ms_since(std::chrono::steady_clock::time_point t0) {
     return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
@@ -26,9 +22,13 @@ double ms_since(std::chrono::steady_clock::time_point t0) {
 
 namespace testing {
 void set_fault(const std::string& node, std::function<void(HostTensor&)> corrupt) {
-    t_fault = {node, std::move(corrupt)};
+    t_faults[node] = std::move(corrupt);
 }
-void clear_fault() { t_fault = {}; }
+void clear_fault() { t_faults.clear(); }
+void apply_fault(const std::string& name, HostTensor& t) {
+    const auto f = t_faults.find(name);
+    if (f != t_faults.end() && f->second) f->second(t);
+}
 }  // namespace testing
 
 std::string dispatch_str(const std::string& shader, const std::vector<uint32_t>& spec, uint32_t texel_bindings,
@@ -79,8 +79,7 @@ GraphCheck check_graph(GpuExecutor& exec, const Graph& g, const WeightStore& wei
         else feed[i] = &(gpu[i] = exec.value(int(i)));
     }
     for (const Node& n : g.nodes())
-        if (t_fault.corrupt && n.name == t_fault.node && !n.outputs.empty())
-            t_fault.corrupt(gpu[size_t(n.outputs[0])]);
+        if (!n.outputs.empty()) testing::apply_fault(n.name, gpu[size_t(n.outputs[0])]);
 
     // Each node's reference on the GPU's own inputs to it.
     t0 = std::chrono::steady_clock::now();

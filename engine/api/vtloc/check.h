@@ -149,6 +149,7 @@ struct ShapeTermCheck {
     // device's inputs; node_tolerance) and its outputs against a full CPU run (end_to_end_tolerance).
     std::vector<NodeCheck> shape_nodes;
     std::vector<OutputCheck> shape_outputs;
+    int first_failure = -1;      // index into shape_nodes, -1 if none
     // The shape the term scores (the reader's, from its own executor) against the CPU reference
     // run's: the depth in mm (end_to_end_tolerance) and the contact (every pixel alike).
     CheckError depth;
@@ -178,6 +179,7 @@ struct TrackerCheckResult {
     // scoring shader is `precise`, no contraction: lavapipe gives the reference's bits).
     CheckTolerance term_tolerance{1e-4, 1e-4};
     std::vector<ShapeTermCheck> shape_terms;  // with shapes: one per frame of the file
+    int first_shape_failure = -1;             // the first frame whose gel shape node failed, -1 if none
     // The codebook's heights must match exactly: each is the least of identical fp32 values (the
     // render shader is `precise`, and Vulkan rounds +, -, * correctly), on any device.
     CheckTolerance height_tolerance{0, 0};
