@@ -126,20 +126,19 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         to.codebook_cache = a.get("--codebook-cache").value_or("");
     }
 
-    // Every touch's frame read (and with render-and-compare, its gel shape) before the model, the
-    // object and the tracker are made: a bad frame late in the file is refused without that wait.
-    std::vector<api::TactileImage> frames;
-    std::vector<api::GelShape> shapes;
+    // Every touch's frame looked at before the model, the object and the tracker are made (decoded,
+    // and with render-and-compare read into its gel shape): a bad frame late in the file is refused
+    // without that wait. Nothing is kept: the loop below reads each again, so memory stays flat over
+    // a long file (a shape costs a few ms).
+    const auto where = [&](size_t i) { return " (touch " + std::to_string(i + 1) + " of " + touches_path + ")"; };
     for (size_t i = 0; i < file.touches.size(); ++i) {
         const std::string& f = file.touches[i].tactile;
-        const std::string where = " (touch " + std::to_string(i + 1) + " of " + touches_path + ")";
         if (geometry_only && !reader) {
-            if (!std::filesystem::exists(f)) throw api::Error(f + ": no such file" + where);
+            if (!std::filesystem::exists(f)) throw api::Error(f + ": no such file" + where(i));
             continue;
         }
-        api::TactileImage im = api::load_tactile_image(f);
-        if (reader) shapes.push_back(read_gel_shape(*reader, f, im, empty ? &*empty : nullptr, background, where));
-        if (!geometry_only) frames.push_back(std::move(im));
+        const api::TactileImage im = api::load_tactile_image(f);
+        if (reader) read_gel_shape(*reader, f, im, empty ? &*empty : nullptr, background, where(i));
     }
 
     std::optional<api::Model> model;
@@ -165,10 +164,15 @@ int cmd_sequence(Session& s, int argc, char** argv) {
                                   : (render_compare ? ", network + render-and-compare" : ""));
     }
     for (size_t i = 0; i < file.touches.size(); ++i) {
+        const std::string& f = file.touches[i].tactile;
+        std::optional<api::TactileImage> im;
+        if (model || reader) im = api::load_tactile_image(f);
         std::optional<api::TouchResult> r;
-        if (model) r = model->localize(*object, frames[i]);
+        if (model) r = model->localize(*object, *im);
+        std::optional<api::GelShape> shape;
+        if (reader) shape = read_gel_shape(*reader, f, *im, empty ? &*empty : nullptr, background, where(i));
         const auto t0 = std::chrono::steady_clock::now();
-        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, reader ? &shapes[i] : nullptr);
+        tracker.add_touch(motions[i], r ? &*r : nullptr, object ? &*object : nullptr, shape ? &*shape : nullptr);
         const auto t1 = std::chrono::steady_clock::now();
         const api::TrackerEstimate e = tracker.estimate();
         const auto t2 = std::chrono::steady_clock::now();
