@@ -4,6 +4,7 @@
 #include <vector>
 
 #include "base/error.h"
+#include "engine/parallel.h"
 #include "engine/sensor/gel_shading.h"
 
 namespace vtloc::sensor {
@@ -29,7 +30,8 @@ std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) 
             ring_gr.push_back(mag * std::sin(ph)), ring_gc.push_back(mag * std::cos(ph));
         }
     std::vector<float> L(size_t(H) * size_t(W) * 6);
-    for (int r = 0; r < H; ++r)
+    parallel_for(size_t(H), 0, [&](size_t row) {  // rows on the host's threads, each writing its own
+        const int r = int(row);
         for (int col = 0; col < W; ++col) {
             const auto [br, bc] = height_gradient(c.depth_bg, H, W, r, col);
             double c0[3];
@@ -58,6 +60,7 @@ std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) 
                 out[3 + ch] = float((-A[1] * J[ch][0] + A[0] * J[ch][1]) / dA);
             }
         }
+    });
     return L;
 }
 

@@ -6,6 +6,7 @@
 
 #include "base/error.h"
 #include "engine/ops/gel_mask.h"
+#include "engine/parallel.h"
 #include "engine/ops/gel_ops.h"
 #include "engine/sensor/gel_linear_inverse.h"
 #include "engine/sensor/gel_shading.h"
@@ -89,42 +90,44 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
                 for (int k = 0; k < 6; ++k)
                     coef[(size_t(ch) * 6 + size_t(k)) * nbin + size_t(m) * NB + size_t(d)] =
                         double(c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6 + size_t(k)]);
-    std::vector<double> sum(nbin);
-    std::vector<uint32_t> cell(nbin);  // n <= 256: n^3 fits
-    for (int a = 0; a < tiles_y; ++a)
-        for (int b = 0; b < tiles_x; ++b) {
-            std::vector<double> val(size_t(n) * n * n * 2, 0), cnt(size_t(n) * n * n, 0);
-            for (int y = a * H / tiles_y + step / 2; y < (a + 1) * H / tiles_y; y += step)
-                for (int x = b * W / tiles_x + step / 2; x < (b + 1) * W / tiles_x; x += step) {
-                    const double basis[6] = {double(x) * x, double(y) * y, double(x) * y, double(x), double(y), 1};
-                    const float* f = &flat[(size_t(y) * W + size_t(x)) * 3];
-                    for (int ch = 0; ch < 3; ++ch) {
-                        const double* p = &coef[size_t(ch) * 6 * nbin];
-                        for (size_t i = 0; i < nbin; ++i) {
-                            double s = 0;
-                            for (int k = 0; k < 6; ++k) s += p[size_t(k) * nbin + i] * basis[k];
-                            sum[i] = s;
-                        }
-                        const float fc = f[ch];
-                        for (size_t i = 0; i < nbin; ++i) {  // the cell the lookup reads
-                            const uint32_t q = uint32_t(ops::gel::cell_of(float(sum[i] - fc), n));
-                            cell[i] = ch == 0 ? q : cell[i] * uint32_t(n) + q;
-                        }
+    // The tiles on the host's threads: each fills its own part of the table from its own sums,
+    // so the table is the same bits on any number of threads.
+    parallel_for(size_t(tiles_y) * size_t(tiles_x), 0, [&](size_t tile) {
+        const int a = int(tile / size_t(tiles_x)), b = int(tile % size_t(tiles_x));
+        std::vector<double> sum(nbin);
+        std::vector<uint32_t> cell(nbin);  // n <= 256: n^3 fits
+        std::vector<double> val(size_t(n) * n * n * 2, 0), cnt(size_t(n) * n * n, 0);
+        for (int y = a * H / tiles_y + step / 2; y < (a + 1) * H / tiles_y; y += step)
+            for (int x = b * W / tiles_x + step / 2; x < (b + 1) * W / tiles_x; x += step) {
+                const double basis[6] = {double(x) * x, double(y) * y, double(x) * y, double(x), double(y), 1};
+                const float* f = &flat[(size_t(y) * W + size_t(x)) * 3];
+                for (int ch = 0; ch < 3; ++ch) {
+                    const double* p = &coef[size_t(ch) * 6 * nbin];
+                    for (size_t i = 0; i < nbin; ++i) {
+                        double s = 0;
+                        for (int k = 0; k < 6; ++k) s += p[size_t(k) * nbin + i] * basis[k];
+                        sum[i] = s;
                     }
-                    for (size_t i = 0; i < nbin; ++i) {  // bins in the order (m, d), as before
-                        val[2 * size_t(cell[i])] += nr[i], val[2 * size_t(cell[i]) + 1] += nc[i], cnt[cell[i]] += 1;
+                    const float fc = f[ch];
+                    for (size_t i = 0; i < nbin; ++i) {  // the cell the lookup reads
+                        const uint32_t q = uint32_t(ops::gel::cell_of(float(sum[i] - fc), n));
+                        cell[i] = ch == 0 ? q : cell[i] * uint32_t(n) + q;
                     }
                 }
-            for (size_t i = 0; i < cnt.size(); ++i)
-                if (cnt[i] > 0) val[2 * i] /= cnt[i], val[2 * i + 1] /= cnt[i];
-            fill_empty(val, cnt, n);
-            float* out = &lut.table[(size_t(a) * tiles_x + size_t(b)) * n * n * n * 2];
-            for (size_t i = 0; i < cnt.size(); ++i) {  // normals back to gradients, |n| below 1
-                const double len = std::hypot(val[2 * i], val[2 * i + 1]), cap = std::min(len, 0.999);
-                const double s = (len > 0 ? cap / len : 0) / std::sqrt(1 - cap * cap);
-                out[2 * i] = float(val[2 * i] * s), out[2 * i + 1] = float(val[2 * i + 1] * s);
+                for (size_t i = 0; i < nbin; ++i) {  // bins in the order (m, d), as before
+                    val[2 * size_t(cell[i])] += nr[i], val[2 * size_t(cell[i]) + 1] += nc[i], cnt[cell[i]] += 1;
+                }
             }
+        for (size_t i = 0; i < cnt.size(); ++i)
+            if (cnt[i] > 0) val[2 * i] /= cnt[i], val[2 * i + 1] /= cnt[i];
+        fill_empty(val, cnt, n);
+        float* out = &lut.table[(size_t(a) * tiles_x + size_t(b)) * n * n * n * 2];
+        for (size_t i = 0; i < cnt.size(); ++i) {  // normals back to gradients, |n| below 1
+            const double len = std::hypot(val[2 * i], val[2 * i + 1]), cap = std::min(len, 0.999);
+            const double s = (len > 0 ? cap / len : 0) / std::sqrt(1 - cap * cap);
+            out[2 * i] = float(val[2 * i] * s), out[2 * i + 1] = float(val[2 * i + 1] * s);
         }
+    });
     return lut;
 }
 

@@ -1,6 +1,6 @@
 #include "engine/track/pair_search.h"
 
-#include "engine/track/parallel.h"
+#include "engine/parallel.h"
 #include "engine/track/vec3d.h"
 
 #include <algorithm>

@@ -55,7 +55,7 @@ struct PairSearchOptions {
     double roll_step_deg = 2; // then refined to a quarter of this
     double min_span_mm = 60;  // shorter windows: none (fitted on train windows: docs/multitouch.md)
     int top = 8;              // candidates returned, best first, 3 mm apart
-    int threads = 1;          // host threads (track::parallel_for's; the result does not depend on it)
+    int threads = 1;          // host threads (parallel_for's; the result does not depend on it)
 };
 
 // Candidates for the current touch's pose. touches: every touch of the window as a term (its

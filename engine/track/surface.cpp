@@ -9,7 +9,7 @@
 #include "base/error.h"
 #include "engine/cell_key.h"
 #include "engine/ops/codebook_math.h"
-#include "engine/track/parallel.h"
+#include "engine/parallel.h"
 
 namespace vtloc::track {
 

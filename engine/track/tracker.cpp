@@ -15,7 +15,7 @@
 #include "engine/resident_weights.h"
 #include "engine/track/nearest_facing.h"
 #include "engine/track/pair_search.h"
-#include "engine/track/parallel.h"
+#include "engine/parallel.h"
 #include "engine/track/registration.h"
 #include "engine/track/window_fit.h"
 #include "engine/weights.h"

@@ -1,4 +1,4 @@
-#include "engine/track/parallel.h"
+#include "engine/parallel.h"
 
 #include <algorithm>
 #include <atomic>
@@ -6,7 +6,7 @@
 #include <thread>
 #include <vector>
 
-namespace vtloc::track {
+namespace vtloc {
 
 void parallel_for(size_t n, int most, const std::function<void(size_t)>& body) {
     const size_t cap = most > 0 ? size_t(most) : std::min<size_t>(4, std::max(1u, std::thread::hardware_concurrency()));
@@ -31,4 +31,4 @@ void parallel_for(size_t n, int most, const std::function<void(size_t)>& body) {
         if (e) std::rethrow_exception(e);
 }
 
-}  // namespace vtloc::track
+}  // namespace vtloc
