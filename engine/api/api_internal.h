@@ -39,11 +39,12 @@ struct TrackerAccess {
 // The reader inside an api::GelShapeReader (engine/api/gel_shape.cpp; check_tracker --shapes).
 struct GelShapeAccess {
     // The reader's graph checked node by node against the CPU references (check::check_graph) on
-    // the inputs read() gives it for a frame and empty frame (null: the calibration's), and the
-    // shape its full CPU reference run gives (what read() should return).
+    // the inputs read() gives it for a frame and empty frame (null: the calibration's), the shape
+    // read() returns for them (the reader's own executor), and the shape its full CPU reference run
+    // gives (what read() should return). The frame is prepared once for all three.
     struct Checked {
         check::GraphCheck graph;
-        GelShape reference;
+        GelShape read, reference;
     };
     // One keep-all executor of the reader's graph for every frame checked (made at the first:
     // its tables uploaded and its memory planned once a tour, not once a frame).

@@ -206,10 +206,10 @@ TrackerCheckResult check_tracker(Context& context, const TrackerCheckOptions& op
                 const io::SequenceTouch& st = seq.touches[i];
                 const TactileImage& image = images[i];
                 const TactileImage* bg = background ? &*background : nullptr;
-                const GelShape g = reader.read(image, bg, st.tactile, options.background);
                 ShapeTermCheck tc;
                 tc.frame = st.tactile;
                 const GelShapeAccess::Checked checked = shape_check.check(image, bg, st.tactile, options.background);
+                const GelShape& g = checked.read;  // what reader.read() returns for this frame
                 const check::GraphCheck& sg = checked.graph;
                 fill_graph(sg, tc.shape_nodes, tc.shape_outputs);
                 tc.first_failure = sg.first_failure;

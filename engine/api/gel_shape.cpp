@@ -114,11 +114,13 @@ GelShapeAccess::Checker::~Checker() = default;
 GelShapeAccess::Checked GelShapeAccess::Checker::check(const TactileImage& frame, const TactileImage* empty,
                                                        const std::string& frame_name, const std::string& empty_name) {
     const auto [f, e] = reader_.impl_->prepared(frame, empty, frame_name, empty_name);
-    const sensor::GelShapeGpu& gpu = reader_.impl_->gpu;
+    sensor::GelShapeGpu& gpu = reader_.impl_->gpu;
     const std::lock_guard<std::mutex> lock(reader_.impl_->mu);
     if (!exec_) exec_ = std::make_unique<GpuExecutor>(ctx_, gpu.graph(), gpu.weights(), false, /*keep_all=*/true);
-    Checked c{check::check_graph(*exec_, gpu.graph(), gpu.weights(), gpu.inputs_of(f, e)), {}};
-    c.reference = to_api(gpu.shape_of(c.graph.cpu_outputs), gpu.calibration().mm_per_px);
+    Checked c{check::check_graph(*exec_, gpu.graph(), gpu.weights(), gpu.inputs_of(f, e)), {}, {}};
+    const double mm_per_px = gpu.calibration().mm_per_px;
+    c.read = to_api(gpu.run(f, e), mm_per_px);
+    c.reference = to_api(gpu.shape_of(c.graph.cpu_outputs), mm_per_px);
     return c;
 }
 
