@@ -3,6 +3,9 @@
 #include <pybind11/numpy.h>
 #include <pybind11/stl.h>
 
+#include <optional>
+#include <string>
+
 #include "python/arrays.h"
 
 namespace vtloc::python {
@@ -15,6 +18,21 @@ py::array_t<float> grid(const std::vector<float>& v, int H, int W) {
     return a;
 }
 
+// A frame and an optional empty frame as the reader takes them; one given as a path names its
+// file in the reader's errors.
+struct Frames {
+    api::TactileImage frame;
+    std::optional<api::TactileImage> empty;
+    std::string frame_name, empty_name;
+    Frames(const py::object& f, const py::object& e)
+        : frame(to_image(f, "frame")),
+          frame_name(py::isinstance<py::str>(f) ? f.cast<std::string>() : "frame"),
+          empty_name(py::isinstance<py::str>(e) ? e.cast<std::string>() : "empty frame") {
+        if (!e.is_none()) empty = to_image(e, "empty");
+    }
+    const api::TactileImage* empty_ptr() const { return empty ? &*empty : nullptr; }
+};
+
 }  // namespace
 
 void bind_gel_shape(py::module_& m) {
@@ -23,29 +41,24 @@ void bind_gel_shape(py::module_& m) {
                                     "-> dict of depth_mm, grad_row, grad_col (H x W float32), mask (H x W uint8), mm_per_px.\n"
                                     "Frames: H x W x 3 uint8 RGB or a path; larger frames of the calibration's aspect are resampled.")
         .def(py::init([](api::Context& ctx, const std::string& calibration, double mask_threshold, int iterations, bool match_lighting,
-                         int levels, int coarse_iterations) {
+                         int levels, int coarse_iterations, int threads) {
                  api::GelShapeOptions o;
                  o.calibration = calibration, o.mask_threshold = mask_threshold, o.iterations = iterations;
                  o.levels = levels, o.coarse_iterations = coarse_iterations;
-                 o.match_lighting = match_lighting;
+                 o.match_lighting = match_lighting, o.threads = threads;
                  return api::GelShapeReader(ctx, o);
              }),
              py::arg("context"), py::arg("calibration") = "", py::arg("mask_threshold") = 0.7, py::arg("iterations") = api::GelShapeOptions{}.iterations,
              py::arg("match_lighting") = true, py::arg("levels") = api::GelShapeOptions{}.levels,
-             py::arg("coarse_iterations") = api::GelShapeOptions{}.coarse_iterations, py::keep_alive<1, 2>())
+             py::arg("coarse_iterations") = api::GelShapeOptions{}.coarse_iterations, py::arg("threads") = 0, py::keep_alive<1, 2>())
         .def(
             "read",
             [](api::GelShapeReader& r, const py::object& frame, const py::object& empty) {
-                const api::TactileImage f = to_image(frame, "frame");
-                std::optional<api::TactileImage> e;
-                if (!empty.is_none()) e = to_image(empty, "empty");
-                // A frame given as a path names its file in the reader's errors.
-                const std::string fname = py::isinstance<py::str>(frame) ? frame.cast<std::string>() : "frame";
-                const std::string ename = py::isinstance<py::str>(empty) ? empty.cast<std::string>() : "empty frame";
+                const Frames in(frame, empty);
                 api::GelShape s;
                 {
                     py::gil_scoped_release release;
-                    s = r.read(f, e ? &*e : nullptr, fname, ename);
+                    s = r.read(in.frame, in.empty_ptr(), in.frame_name, in.empty_name);
                 }
                 py::dict d;
                 d["depth_mm"] = grid(s.depth_mm, s.height, s.width);
@@ -58,6 +71,14 @@ void bind_gel_shape(py::module_& m) {
                 return d;
             },
             py::arg("frame"), py::arg("empty") = py::none())
+        .def(
+            "check_frame",
+            [](const api::GelShapeReader& r, const py::object& frame, const py::object& empty) {
+                const Frames in(frame, empty);
+                r.check_frame(in.frame, in.empty_ptr(), in.frame_name, in.empty_name);
+            },
+            py::arg("frame"), py::arg("empty") = py::none(),
+            "Raises what read() would for these frames (size, aspect, a black or saturated frame), without the GPU.")
         .def_property_readonly("height", &api::GelShapeReader::height)
         .def_property_readonly("width", &api::GelShapeReader::width);
 }

@@ -141,11 +141,15 @@ class GelShapeReader:
     """The gel's shape from a GelSight frame (SPEC section 9), on the GPU."""
     def __init__(self, context: Context, calibration: str = "", mask_threshold: float = 0.7,
                  iterations: int = 50, match_lighting: bool = True, levels: int = 0,
-                 coarse_iterations: int = 30) -> None: ...  # levels > 0: the solve from a coarse start
+                 coarse_iterations: int = 30, threads: int = 0) -> None: ...
+    # levels > 0: the solve from a coarse start; threads: the tables' host threads (0: up to 4)
     def read(self, frame: Union[str, npt.NDArray[np.uint8]],
              empty: Optional[Union[str, npt.NDArray[np.uint8]]] = None) -> Dict[str, Any]: ...
     # depth_mm, grad_row, grad_col: H x W float32; mask: H x W uint8; mm_per_px: float
     # errors about a frame begin with its path where it is given as one ("frame" / "empty frame" otherwise)
+    def check_frame(self, frame: Union[str, npt.NDArray[np.uint8]],
+                    empty: Optional[Union[str, npt.NDArray[np.uint8]]] = None) -> None: ...
+    # raises what read() would for these frames, without the GPU
     @property
     def height(self) -> int: ...
     @property

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <functional>
 #include <string>
 #include <vector>
 
@@ -29,6 +30,16 @@ api::TactileImage press(const sensor::Calibration& c, int i) {
     return im;
 }
 
+// What f throws (empty: nothing).
+std::string refusal(const std::function<void()>& f) {
+    try {
+        f();
+    } catch (const api::Error& e) {
+        return e.what();
+    }
+    return "";
+}
+
 // A gentle cap tilted a little along x.
 api::GelShape tilted_cap() { return test::gel_cap(7.5, 10.0, 0.01); }
 
@@ -45,8 +56,10 @@ TEST_CASE("gel shape reader: the GPU pipeline equals the CPU one on real presses
     CHECK(rendered.mask_threshold == cpu_rendered.mask_threshold);
     CHECK((rendered.levels == cpu_rendered.sor_levels && rendered.coarse_iterations == cpu_rendered.sor_coarse_iterations &&
            rendered.iterations == cpu_rendered.sor_iterations));
+    api::GelShapeOptions one_thread;
+    one_thread.threads = 1;  // its tables built on one host thread: the same bits (test_sensor_gel_shape)
     for (bool wide : {false, true}) {
-        api::GelShapeReader reader(ctx, wide ? rendered : api::GelShapeOptions{});
+        api::GelShapeReader reader(ctx, wide ? rendered : one_thread);
         CHECK((reader.width() == 160 && reader.height() == 120));
         for (int i : {0, 17, 40}) {
             INFO("press " << i << (wide ? ", the rendered frames' reader" : ""));
@@ -97,6 +110,11 @@ TEST_CASE("gel shape reader: a larger frame of the same aspect is resampled, oth
     api::GelShapeOptions bad;
     bad.calibration = "/no/such/calib.safetensors";
     CHECK_THROWS_WITH(api::GelShapeReader(ctx, bad), Catch::Contains("/no/such/calib.safetensors"));
+    for (int threads : {-1, 257}) {
+        api::GelShapeOptions o;
+        o.threads = threads;
+        CHECK_THROWS_WITH(api::GelShapeReader(ctx, o), Catch::Contains("threads must be 0..256"));
+    }
 }
 
 TEST_CASE("gel shape reader: black, over-exposed and flat frames are refused, naming which frame", "[api][sensor][errors]") {
@@ -130,6 +148,18 @@ TEST_CASE("gel shape reader: black, over-exposed and flat frames are refused, na
     api::TactileImage dim = real;
     for (uint8_t& v : dim.rgb) v = uint8_t(v / 7);
     CHECK(reader.read(dim).depth_mm.size() == size_t(c.height) * size_t(c.width));
+    // check_frame refuses what read refuses, with the same words, and passes what it reads.
+    api::TactileImage square;
+    square.height = square.width = 120;
+    square.rgb.assign(120 * 120 * 3, 100);
+    for (const auto& [f, e] : std::vector<std::pair<api::TactileImage, const api::TactileImage*>>{
+             {flat(0), nullptr}, {flat(255), nullptr}, {flat(128), nullptr}, {real, &dark}, {square, nullptr}, {real, &square}}) {
+        const std::string read = refusal([&] { reader.read(f, e, "touches/3.png", "bg.png"); });
+        CHECK(!read.empty());
+        CHECK(refusal([&] { reader.check_frame(f, e, "touches/3.png", "bg.png"); }) == read);
+    }
+    CHECK(refusal([&] { reader.check_frame(real); }).empty());
+    CHECK(refusal([&] { reader.check_frame(dim, &real); }).empty());
 }
 
 TEST_CASE("tracker: precomputed touch terms give the windowed estimate of the shapes themselves", "[api][tracker]") {

@@ -57,6 +57,17 @@ TEST_CASE("gel shape: the sphere fit recovers a known sphere", "[sensor]") {
     CHECK_THROWS(fit_sphere({0, 0, 0, 1, 0, 0, 0, 1, 0, 1, 1, 0}));  // coplanar
 }
 
+TEST_CASE("gel shape: the tables are the same bits on any number of host threads", "[sensor]") {
+    // A coarser grid than the reader's (n 32, every 8th pixel): the same code, a quarter of the work.
+    const LutGrid grid{32, 3, 4, 8};
+    const GradientLut one = build_gradient_lut(calib(), 1, grid), three = build_gradient_lut(calib(), 3, grid);
+    REQUIRE(one.table.size() == size_t(12) * 32 * 32 * 32 * 2);
+    CHECK(one.table == three.table);
+    CHECK(one.linear == three.linear);
+    CHECK(std::any_of(one.table.begin(), one.table.end(), [](float v) { return v != 0; }));
+    CHECK_THROWS_WITH(build_gradient_lut(calib(), -1, grid), Catch::Contains("threads must be >= 0"));
+}
+
 TEST_CASE("gel shape: a ball press rendered with the calibration comes back", "[sensor]") {
     const Calibration& c = calib();
     const int H = c.height, W = c.width;

@@ -163,14 +163,33 @@ void make_folder(const std::string& path) {
     if (ec) throw api::Error(path + ": cannot create the folder (" + ec.message() + ")");
 }
 
-api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
-                             const api::TactileImage* empty, const std::string& empty_path, const std::string& where) {
+namespace {
+
+// f's result; its refusal ends with `where`.
+template <class F>
+auto with_where(const std::string& where, F&& f) -> decltype(f()) {
     try {
-        return reader.read(frame, empty, frame_path.empty() ? "frame" : frame_path, empty_path.empty() ? "empty frame" : empty_path);
+        return f();
     } catch (const api::Error& e) {
         if (where.empty()) throw;
         throw api::Error(e.what() + where);
     }
+}
+
+}  // namespace
+
+api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
+                             const api::TactileImage* empty, const std::string& empty_path, const std::string& where) {
+    return with_where(where, [&] {
+        return reader.read(frame, empty, frame_path.empty() ? "frame" : frame_path, empty_path.empty() ? "empty frame" : empty_path);
+    });
+}
+
+void check_gel_frame(const api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
+                     const api::TactileImage* empty, const std::string& empty_path, const std::string& where) {
+    with_where(where, [&] {
+        reader.check_frame(frame, empty, frame_path.empty() ? "frame" : frame_path, empty_path.empty() ? "empty frame" : empty_path);
+    });
 }
 
 std::string point_str(const std::array<double, 3>& p, int digits) {

@@ -97,6 +97,9 @@ void make_folder(const std::string& path);
 // every refusal ends with `where` (e.g. " (touch 2 of tour.json)").
 api::GelShape read_gel_shape(api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
                              const api::TactileImage* empty, const std::string& empty_path, const std::string& where = "");
+// The same refusals without reading the shape (no GPU work).
+void check_gel_frame(const api::GelShapeReader& reader, const std::string& frame_path, const api::TactileImage& frame,
+                     const api::TactileImage* empty, const std::string& empty_path, const std::string& where = "");
 
 // Formats a point "(x, y, z)" with `digits` decimals.
 std::string point_str(const std::array<double, 3>& p, int digits = 2);

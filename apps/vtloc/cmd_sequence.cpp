@@ -55,6 +55,9 @@ const char* kHelp =
     "  --model M                 weight file for the network term (default: the shipped model)\n"
     "  --json                    print the result as JSON\n"
     "  --render OUT.png          the belief after each touch, side by side on the object\n"
+    "  --threads N               host threads the filter's estimates and tables (and with\n"
+    "                            --render-compare the reader's) are built on, 0..256 (default 0:\n"
+    "                            up to 4; the outputs do not depend on it)\n"
     "  --profile                 each touch's times: add_touch and estimate (wall clock, ms) and\n"
     "                            the GPU step per node (run node by node with timestamps: slower,\n"
     "                            the same outputs)\n"
@@ -76,7 +79,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     std::vector<OptionSpec> specs{{"--object"}, {"--touches"}, {"--tool"}, {"--object-units"}, {"--geometry-only", false},
                                   {"--window"}, {"--model"}, {"--json", false}, {"--render"}, {"--odometry-noise"},
                                   {"--render-compare", false}, {"--background"}, {"--calibration"}, {"--rendered", false},
-                                  {"--codebook-cache"}, {"--profile", false}};
+                                  {"--codebook-cache"}, {"--profile", false}, {"--threads"}};
     Args a(argc, argv, 2, specs);
     if (a.help()) {
         std::fputs(kHelp, stdout);
@@ -103,6 +106,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         throw UsageError("--window " + std::to_string(to.window) + " is longer than the " + std::to_string(file.touches.size()) +
                          " touches of " + touches_path);
     to.object_units = a.number("--object-units", 1.0);
+    to.threads = a.integer("--threads", to.threads, 0, 256);
     const bool geometry_only = a.flag("--geometry-only");
     if (auto n = a.get("--odometry-noise")) {
         const std::vector<double> v = parse_numbers(*n, 2, "--odometry-noise");
@@ -121,15 +125,16 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     if (render_compare) {
         api::GelShapeOptions go = a.flag("--rendered") ? api::GelShapeOptions::rendered_frames() : api::GelShapeOptions{};
         go.calibration = a.get("--calibration").value_or("");
+        go.threads = to.threads;
         reader.emplace(s.gpu(), go);
         if (!background.empty()) empty = api::load_tactile_image(background);
         to.codebook_cache = a.get("--codebook-cache").value_or("");
     }
 
     // Every touch's frame looked at before the model, the object and the tracker are made (decoded,
-    // and with render-and-compare read into its gel shape): a bad frame late in the file is refused
-    // without that wait. Nothing is kept: the loop below reads each again, so memory stays flat over
-    // a long file (a shape costs a few ms).
+    // and with render-and-compare checked as the gel shape's reader takes it, without the GPU): a bad
+    // frame late in the file is refused without that wait. Nothing is kept: the loop below decodes
+    // each again, so memory stays flat over a long file.
     const auto where = [&](size_t i) { return " (touch " + std::to_string(i + 1) + " of " + touches_path + ")"; };
     for (size_t i = 0; i < file.touches.size(); ++i) {
         const std::string& f = file.touches[i].tactile;
@@ -138,7 +143,7 @@ int cmd_sequence(Session& s, int argc, char** argv) {
             continue;
         }
         const api::TactileImage im = api::load_tactile_image(f);
-        if (reader) read_gel_shape(*reader, f, im, empty ? &*empty : nullptr, background, where(i));
+        if (reader) check_gel_frame(*reader, f, im, empty ? &*empty : nullptr, background, where(i));
     }
 
     std::optional<api::Model> model;

@@ -11,7 +11,7 @@ namespace {
 const char* kHelp =
     "usage: vtloc shape --tactile FRAME.png --out DIR [--background EMPTY.png] [--calibration C]\n"
     "                   [--rendered] [--mask-threshold T] [--sweeps N] [--levels L]\n"
-    "                   [--coarse-sweeps N] [--json]\n"
+    "                   [--coarse-sweeps N] [--threads N] [--json]\n"
     "\n"
     "The gel's shape from a GelSight frame (SPEC section 9): the colour change against the sensor's\n"
     "empty frame, inverted through the calibration into the gel's slopes, a contact mask, and the\n"
@@ -35,6 +35,8 @@ const char* kHelp =
     "                         zeros; a wide contact needs it)\n"
     "  --coarse-sweeps N      sweeps on each coarse grid, 1..10000 (default 30; only with levels\n"
     "                         above 0)\n"
+    "  --threads N            host threads the reader's tables are built on, 0..256 (default 0:\n"
+    "                         up to 4; the outputs do not depend on it)\n"
     "  --json                 print the summary as JSON\n";
 
 }  // namespace
@@ -42,7 +44,7 @@ const char* kHelp =
 int cmd_shape(Session& s, int argc, char** argv) {
     Args a(argc, argv, 2,
            {{"--tactile"}, {"--background"}, {"--calibration"}, {"--out"}, {"--rendered", false}, {"--mask-threshold"},
-            {"--sweeps"}, {"--levels"}, {"--coarse-sweeps"}, {"--json", false}});
+            {"--sweeps"}, {"--levels"}, {"--coarse-sweeps"}, {"--threads"}, {"--json", false}});
     if (a.help()) {
         std::fputs(kHelp, stdout);
         return 0;
@@ -55,6 +57,7 @@ int cmd_shape(Session& s, int argc, char** argv) {
     o.iterations = a.integer("--sweeps", o.iterations, 1, 10000);
     o.levels = a.integer("--levels", o.levels, 0, 8);
     o.coarse_iterations = a.integer("--coarse-sweeps", o.coarse_iterations, 1, 10000);
+    o.threads = a.integer("--threads", o.threads, 0, 256);
     const api::TactileImage frame = api::load_tactile_image(tactile);
     std::optional<api::TactileImage> empty;
     const std::string background = a.get("--background").value_or("");

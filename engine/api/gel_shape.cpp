@@ -63,8 +63,9 @@ GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
             throw Error("gel shape: mask_threshold must be > 0 and iterations 1..10000");
         if (o.levels < 0 || o.levels > 8 || (o.levels > 0 && (o.coarse_iterations < 1 || o.coarse_iterations > 10000)))
             throw Error("gel shape: levels must be 0..8 and, with levels, coarse_iterations 1..10000");
+        if (o.threads < 0 || o.threads > 256) throw Error("gel shape: threads must be 0..256 (0: up to 4)");
         sensor::Calibration c = sensor::load_calibration(o.calibration.empty() ? sensor::default_calibration_path() : o.calibration);
-        sensor::GradientLut lut = sensor::build_gradient_lut(c);
+        sensor::GradientLut lut = sensor::build_gradient_lut(c, o.threads);
         static_assert(sensor::kRenderedMaskThreshold == 0.05, "GelShapeOptions::rendered_frames() repeats it");
         // (and the rendered frames' solve, sensor::rendered_frame_options(): tests/test_api_gel_shape.cpp checks they agree)
         sensor::ShapeOptions so;
@@ -106,6 +107,11 @@ GelShape GelShapeReader::read(const TactileImage& frame, const TactileImage* emp
         lock.unlock();
         return to_api(s, c.mm_per_px);
     });
+}
+
+void GelShapeReader::check_frame(const TactileImage& frame, const TactileImage* empty, const std::string& frame_name,
+                                 const std::string& empty_name) const {
+    guarded([&] { (void)impl_->prepared(frame, empty, frame_name, empty_name); });
 }
 
 GelShapeAccess::Checker::Checker(GelShapeReader& r, rt::Context& ctx) : reader_(r), ctx_(ctx) {}

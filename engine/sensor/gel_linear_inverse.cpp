@@ -9,7 +9,7 @@
 
 namespace vtloc::sensor {
 
-std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) {
+std::vector<float> build_linear_inverse(const Calibration& c, double max_slope, int threads) {
     if (!(max_slope > 0 && max_slope < 10)) throw Error("linear inverse: max_slope must be in (0, 10)");
     const int H = c.height, W = c.width, B = c.bins;
     auto colour = [&](double gr, double gc, int r, int col, double out[3]) {
@@ -30,7 +30,7 @@ std::vector<float> build_linear_inverse(const Calibration& c, double max_slope) 
             ring_gr.push_back(mag * std::sin(ph)), ring_gc.push_back(mag * std::cos(ph));
         }
     std::vector<float> L(size_t(H) * size_t(W) * 6);
-    parallel_for(size_t(H), 0, [&](size_t row) {  // rows on the host's threads, each writing its own
+    parallel_for(size_t(H), threads, [&](size_t row) {  // rows on the host's threads, each writing its own
         const int r = int(row);
         for (int col = 0; col < W; ++col) {
             const auto [br, bc] = height_gradient(c.depth_bg, H, W, r, col);

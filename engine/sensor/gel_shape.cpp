@@ -64,10 +64,12 @@ void fill_empty(std::vector<double>& val, const std::vector<double>& cnt, int n)
 
 }  // namespace
 
-GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int tiles_x, int step) {
+GradientLut build_gradient_lut(const Calibration& c, int threads, const LutGrid& grid) {
+    const int n = grid.n, tiles_y = grid.tiles_y, tiles_x = grid.tiles_x, step = grid.step;
     if (n < 2 || n > 256 || tiles_y < 1 || tiles_x < 1 || step < 1) throw Error("gradient table: bad size");
+    if (threads < 0) throw Error("gradient table: threads must be >= 0 (0: up to 4)");
     const int H = c.height, W = c.width, NB = c.bins - 1;  // the last bins are reached only at exactly 90 deg / +pi
-    GradientLut lut{n, tiles_y, tiles_x, H, W, {}, build_linear_inverse(c)};
+    GradientLut lut{n, tiles_y, tiles_x, H, W, {}, build_linear_inverse(c, kLinearMaxSlope, threads)};
     lut.table.assign(size_t(tiles_y) * tiles_x * n * n * n * 2, 0.f);
     std::vector<float> flat;
     GelShader(c).shade(c.depth_bg, flat);
@@ -92,7 +94,7 @@ GradientLut build_gradient_lut(const Calibration& c, int n, int tiles_y, int til
                         double(c.poly[ch][(size_t(m) * c.bins + size_t(d)) * 6 + size_t(k)]);
     // The tiles on the host's threads: each fills its own part of the table from its own sums,
     // so the table is the same bits on any number of threads.
-    parallel_for(size_t(tiles_y) * size_t(tiles_x), 0, [&](size_t tile) {
+    parallel_for(size_t(tiles_y) * size_t(tiles_x), threads, [&](size_t tile) {
         const int a = int(tile / size_t(tiles_x)), b = int(tile % size_t(tiles_x));
         std::vector<double> sum(nbin);
         std::vector<uint32_t> cell(nbin);  // n <= 256: n^3 fits

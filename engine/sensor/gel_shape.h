@@ -20,13 +20,17 @@ namespace vtloc::sensor {
 // 512 / n) holding the gel's gradient (g_row, g_col) whose predicted colour
 // change falls there, averaged as surface normals over the tile's pixels on a
 // `step`-pixel grid and every (magnitude, direction) bin but the last; empty
-// cells take the mean of their filled neighbours, repeatedly.
+// cells take the mean of their filled neighbours, repeatedly. Tiles (and the linear inverse's
+// rows) on up to `threads` host threads (0: up to 4); the same bits on any number.
 struct GradientLut {
     int n = 64, tiles_y = 3, tiles_x = 4, height = 0, width = 0;
     std::vector<float> table;   // [tiles_y][tiles_x][n][n][n][2]
     std::vector<float> linear;  // [H][W][6]: build_linear_inverse, for gentle slopes
 };
-GradientLut build_gradient_lut(const Calibration& c, int n = 64, int tiles_y = 3, int tiles_x = 4, int step = 4);
+struct LutGrid {
+    int n = 64, tiles_y = 3, tiles_x = 4, step = 4;
+};
+GradientLut build_gradient_lut(const Calibration& c, int threads = 0, const LutGrid& grid = {});
 
 // The mask threshold for frames rendered by vtloc synth's renderer, whose presses (a large object,
 // 0.3-1.5 mm) are gentle: chosen on renders of the procedural solids (docs/gel_shape.md). The

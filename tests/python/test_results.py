@@ -324,14 +324,22 @@ def test_gel_shape_reader(ctx, root, tmp_path):
         reader.read(crop)
     with pytest.raises(vtloc.Error, match="^" + re.escape(crop) + ": .*another aspect"):
         reader.read(frame, empty=crop)
+    # check_frame: the same refusals without reading; nothing for a frame read() takes.
+    assert reader.check_frame(frame) is None and reader.check_frame(frame, empty=frame) is None
+    with pytest.raises(vtloc.Error, match="^" + re.escape(crop) + ": .*another aspect"):
+        reader.check_frame(frame, empty=crop)
+    with pytest.raises(vtloc.Error, match="^frame: the frame is black"):
+        reader.check_frame(np.zeros((120, 160, 3), np.uint8))
     # The solve from a coarse start (the rendered frames' reader): the same contact, the same
     # depth within 3 % of the deepest point (measured 1.5 %: 54 um of 3.6 mm; the 50 sweeps from
     # zeros are within 3 um of 1000 on this small contact, where the coarse grids see little).
-    coarse = vtloc.GelShapeReader(ctx, levels=2, coarse_iterations=30, iterations=10).read(frame)
+    coarse = vtloc.GelShapeReader(ctx, levels=2, coarse_iterations=30, iterations=10, threads=1).read(frame)
     assert np.array_equal(coarse["mask"], s["mask"])
     assert float(np.abs(coarse["depth_mm"] - s["depth_mm"]).max()) < 0.03 * float(s["depth_mm"].max())
     with pytest.raises(vtloc.Error, match="levels must be 0..8"):
         vtloc.GelShapeReader(ctx, levels=9)
+    with pytest.raises(vtloc.Error, match="threads must be 0..256"):
+        vtloc.GelShapeReader(ctx, threads=-1)
 
 
 def test_tracker_render_and_compare(ctx, root, tmp_path):

@@ -589,6 +589,9 @@ struct GelShapeOptions {
     // Undo a gain and offset per channel between the frame and the empty frame (LED drift,
     // exposure; our renderer's training frames vary both) before the calibration reads shading.
     bool match_lighting = true;
+    // Host threads the reader's tables (the calibration inverted, once per reader: about half a
+    // second on two cores) are built on: 0, up to 4; n, at most n. Reads do not depend on it.
+    int threads = 0;
     // For frames rendered by `vtloc synth` (gentle presses of large objects, no optical halo): a
     // mask threshold of 0.05, chosen on renders of the procedural solids, and the solve from a
     // coarse start for their wide contacts (docs/gel_shape.md).
@@ -623,6 +626,10 @@ public:
     // errors begin with its name (give its file's path where it came from one).
     GelShape read(const TactileImage& frame, const TactileImage* empty = nullptr, const std::string& frame_name = "frame",
                   const std::string& empty_name = "empty frame");
+    // Throws what read() would for these frames (decoded size, aspect, a black or saturated
+    // frame), without the GPU: a caller checks a whole sequence before reading any.
+    void check_frame(const TactileImage& frame, const TactileImage* empty = nullptr, const std::string& frame_name = "frame",
+                     const std::string& empty_name = "empty frame") const;
     int height() const;
     int width() const;
 
