@@ -47,7 +47,7 @@ struct GelShapeAccess {
         GelShape read, reference;
     };
     // One keep-all executor of the reader's graph for every frame checked (made at the first:
-    // its tables uploaded and its memory planned once a tour, not once a frame).
+    // its tables built, uploaded and its memory planned once a tour, not once a frame).
     class Checker {
     public:
         Checker(GelShapeReader& r, rt::Context& ctx);
@@ -58,6 +58,7 @@ struct GelShapeAccess {
     private:
         GelShapeReader& reader_;
         rt::Context& ctx_;
+        std::unique_ptr<WeightStore> weights_;  // the reader's tables, built again (it keeps none on the host)
         std::unique_ptr<GpuExecutor> exec_;
     };
 };

@@ -23,9 +23,10 @@ namespace vtloc::api {
 struct GelShapeReader::Impl {
     sensor::GelShapeGpu gpu;
     bool match_lighting;
+    int threads;  // the tables' host threads, for a check's rebuild of them
     std::mutex mu;  // reads take turns: the GPU pipeline's buffers are the reader's own (Python releases the GIL)
-    Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o, bool match)
-        : gpu(ctx, std::move(c), std::move(lut), o), match_lighting(match) {}
+    Impl(rt::Context& ctx, sensor::Calibration c, sensor::GradientLut lut, sensor::ShapeOptions o, bool match, int threads)
+        : gpu(ctx, std::move(c), std::move(lut), o), match_lighting(match), threads(threads) {}
     std::pair<std::vector<uint8_t>, std::vector<uint8_t>> prepared(const TactileImage& frame, const TactileImage* empty,
                                                                    const std::string& frame_name, const std::string& empty_name) const;
 };
@@ -71,7 +72,7 @@ GelShapeReader::GelShapeReader(Context& context, const GelShapeOptions& o) {
         sensor::ShapeOptions so;
         so.mask_threshold = o.mask_threshold, so.sor_iterations = o.iterations;
         so.sor_levels = o.levels, so.sor_coarse_iterations = o.coarse_iterations;
-        impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so, o.match_lighting);
+        impl_ = std::make_unique<Impl>(ContextAccess::rt(context), std::move(c), std::move(lut), so, o.match_lighting, o.threads);
     });
 }
 
@@ -122,8 +123,11 @@ GelShapeAccess::Checked GelShapeAccess::Checker::check(const TactileImage& frame
     const auto [f, e] = reader_.impl_->prepared(frame, empty, frame_name, empty_name);
     sensor::GelShapeGpu& gpu = reader_.impl_->gpu;
     const std::lock_guard<std::mutex> lock(reader_.impl_->mu);
-    if (!exec_) exec_ = std::make_unique<GpuExecutor>(ctx_, gpu.graph(), gpu.weights(), false, /*keep_all=*/true);
-    Checked c{check::check_graph(*exec_, gpu.graph(), gpu.weights(), gpu.inputs_of(f, e)), {}, {}};
+    if (!exec_) {  // the reader keeps its tables on the device only: the CPU reference builds them again
+        weights_ = std::make_unique<WeightStore>(gpu.weights_of(sensor::build_gradient_lut(gpu.calibration(), reader_.impl_->threads)));
+        exec_ = std::make_unique<GpuExecutor>(ctx_, gpu.graph(), *weights_, false, /*keep_all=*/true);
+    }
+    Checked c{check::check_graph(*exec_, gpu.graph(), *weights_, gpu.inputs_of(f, e)), {}, {}};
     const double mm_per_px = gpu.calibration().mm_per_px;
     c.read = to_api(gpu.run(f, e), mm_per_px);
     c.reference = to_api(gpu.shape_of(c.graph.cpu_outputs), mm_per_px);

@@ -8,10 +8,23 @@
 namespace vtloc::sensor {
 
 struct GelShapeGpu::Impl {
-    WeightStore weights;
     Graph graph;
     std::unique_ptr<GpuExecutor> exec;
 };
+
+namespace {
+
+WeightStore tables(GradientLut lut, int64_t H, int64_t W) {
+    if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
+    if (lut.linear.size() != size_t(H * W * 6)) throw Error("gel shape: the gradient table has no linear inverse");
+    const int64_t n = lut.n, T = int64_t(lut.tiles_y) * lut.tiles_x;
+    WeightStore w;
+    w.add("gel.tables", HostTensor({T, n * n * n, 2}, std::move(lut.table)));
+    w.add("gel.linear", HostTensor({H, W, 6}, std::move(lut.linear)));
+    return w;
+}
+
+}  // namespace
 
 // The height from the gradient and mask: ops::gel::masked_poisson_multilevel's steps as nodes
 // (gel.height.1, .2, ...: the coarse grids, coarsest solved first).
@@ -36,19 +49,18 @@ int GelShapeGpu::solve(Graph& g, int grad, int mask, int H, int W) const {
 GelShapeGpu::GelShapeGpu(rt::Context& ctx, Calibration calib, GradientLut lut, ShapeOptions options, bool profile)
     : calib_(std::move(calib)), opt_(options), impl_(std::make_unique<Impl>()) {
     const int64_t H = calib_.height, W = calib_.width, n = lut.n, T = int64_t(lut.tiles_y) * lut.tiles_x;
-    if (lut.height != H || lut.width != W) throw Error("gel shape: the gradient table belongs to another calibration");
-    if (lut.linear.size() != size_t(H * W * 6)) throw Error("gel shape: the gradient table has no linear inverse");
-    impl_->weights.add("gel.tables", HostTensor({T, n * n * n, 2}, std::move(lut.table)));
-    impl_->weights.add("gel.linear", HostTensor({H, W, 6}, std::move(lut.linear)));
+    const int tiles_y = lut.tiles_y, tiles_x = lut.tiles_x;
+    // Uploaded by the executor, then dropped at the end of the constructor: reads need only the device's.
+    const WeightStore weights = tables(std::move(lut), H, W);
     Graph& g = impl_->graph;
     const int grad = ops::gel_gradient(g, g.input("frame", {H, W, 3}), g.input("empty", {H, W, 3}),
                                        g.weight("gel.tables", {T, n * n * n, 2}), g.weight("gel.linear", {H, W, 6}), n,
-                                       lut.tiles_y, lut.tiles_x, opt_.gentle_slope, "gel.gradient");
+                                       tiles_y, tiles_x, opt_.gentle_slope, "gel.gradient");
     const int mask = ops::gel_contact_mask(g, grad, opt_.mask_threshold, opt_.close_radius, opt_.open_radius, "gel.mask");
     g.output(grad, "gradient");
     g.output(mask, "mask");
     g.output(solve(g, grad, mask, int(H), int(W)), "height");
-    impl_->exec = std::make_unique<GpuExecutor>(ctx, g, impl_->weights, profile);
+    impl_->exec = std::make_unique<GpuExecutor>(ctx, g, weights, profile);
 }
 
 GelShapeGpu::~GelShapeGpu() = default;
@@ -60,7 +72,12 @@ std::vector<std::pair<std::string, double>> GelShapeGpu::node_times() const {
 }
 
 const Graph& GelShapeGpu::graph() const { return impl_->graph; }
-const WeightStore& GelShapeGpu::weights() const { return impl_->weights; }
+WeightStore GelShapeGpu::weights_of(GradientLut lut) const {
+    WeightStore w = tables(std::move(lut), calib_.height, calib_.width);
+    for (const Value& v : impl_->graph.values())  // a table of another grid: an error naming it, here
+        if (v.kind == ValueKind::Weight) (void)w.get(v.name, v.shape);
+    return w;
+}
 
 TensorMap GelShapeGpu::inputs_of(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const {
     const int H = calib_.height, W = calib_.width;

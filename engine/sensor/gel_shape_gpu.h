@@ -1,7 +1,8 @@
 #pragma once
 // The gel's shape from a frame on the GPU (SPEC 9): ops gel_gradient,
 // gel_contact_mask and masked_poisson in one graph, one submit a frame. Holds
-// the calibration's tables as resident weights.
+// the calibration's tables on the device only: the host's copy (25 MB) goes
+// after the upload.
 #include <cstdint>
 #include <memory>
 #include <string>
@@ -33,9 +34,11 @@ public:
     // GPU ms per node of the last run (label, ms); empty unless profiling.
     std::vector<std::pair<std::string, double>> node_times() const;
     // What run() executes: its graph, the tables as weights, and a frame's inputs (check_graph's
-    // case: vtloc check --tracker --shapes checks the graph node by node on each frame).
+    // case: vtloc check --tracker --shapes checks the graph node by node on each frame). The
+    // weights from `lut`, which must be the tables the pipeline was made with, built again
+    // (build_gradient_lut gives the same bits every time, on any number of threads).
     const Graph& graph() const;
-    const WeightStore& weights() const;
+    WeightStore weights_of(GradientLut lut) const;
     TensorMap inputs_of(const std::vector<uint8_t>& frame, const std::vector<uint8_t>& empty) const;
     GelShape shape_of(const TensorMap& out) const;  // the graph's outputs as a shape (depth in mm)
 

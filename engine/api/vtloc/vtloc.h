@@ -615,7 +615,8 @@ struct GelShape {
 // sensor's empty frame inverted through the calibration into gradients, a
 // contact mask, and the height inside it. A frame larger than the calibration
 // with the same aspect is resampled to it (real frames: 240x320, 480x640);
-// another aspect or a smaller frame is an error.
+// another aspect or a smaller frame is an error. A reader holds the calibration's
+// tables (25 MB) on the device only, none on the host.
 class GelShapeReader {
 public:
     explicit GelShapeReader(Context& context, const GelShapeOptions& options = {});
