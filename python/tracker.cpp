@@ -191,6 +191,15 @@ void bind_tracker(py::module_& m) {
             },
             py::arg("motion") = py::none(), py::arg("result") = nullptr, py::arg("object") = nullptr, py::arg("shape") = py::none())
         .def(
+            "check_motion",
+            [](const api::Tracker& t, const py::object& motion, int touch) { t.check_motion(to_motion(motion, "motion"), touch); },
+            py::arg("motion"), py::arg("touch"),
+            "Raises what add_touch would for this motion arriving as touch `touch` (2 and later), and nothing else: "
+            "not a rigid motion, or the sensor moved farther than max_hop.")
+        .def_property_readonly("max_hop", &api::Tracker::max_hop,
+                               "How far the sensor can move between two touches of this object (its bounding box's diagonal, "
+                               "the presses, the odometry noise; the tracker's units): a motion farther is refused.")
+        .def(
             "add_touch_term",
             [](api::Tracker& t, const py::object& motion, const py::object& term, const py::object& shape) {
                 std::optional<api::Motion> mo;

@@ -106,6 +106,9 @@ class Tracker:
     def add_touch(self, motion: Optional[npt.NDArray[np.floating]] = None, result: Optional[TouchResult] = None,
                   object: Optional[Object] = None,
                   shape: Optional[Dict[str, Any]] = None) -> None: ...  # GelShapeReader.read's dict
+    def check_motion(self, motion: npt.NDArray[np.floating], touch: int) -> None: ...  # raises what add_touch would
+    @property
+    def max_hop(self) -> float: ...  # the farthest motion between two touches it accepts
     def shape_term(self, shape: Dict[str, Any]) -> npt.NDArray[np.float32]: ...  # render-and-compare, belief order
     def estimate(self) -> Dict[str, Any]: ...   # contact, pose (4x4), pose_contact, window_poses, modes, ...
     def evaluate_window(self, motions: List[npt.NDArray[np.floating]],

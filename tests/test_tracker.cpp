@@ -631,7 +631,26 @@ TEST_CASE("the tracker refuses bad motions and terms by touch", "[track]") {
     nan.t[1] = NAN;
     CHECK_THROWS_WITH(tr.add_touch(nan), Catch::Contains("NaN or inf"));
     CHECK_THROWS_WITH(tr.add_touch(id, std::vector<float>(3, 0.0f)), Catch::Contains("its term has 3 values"));
+    // A hop no two touches on the prism can make (its box's diagonal, two presses of 0.8 mm and
+    // 5 mm each beyond them): refused by touch, in the windowed forms too; just inside, taken.
+    const double most = tr.surface().diameter + 2 * (0.8 + track::Tracker::kHopSlackMm);
+    CHECK(tr.max_hop_mm() == Approx(most).epsilon(1e-12));
+    CHECK(tr.surface().diameter > 75);  // 60 x 45 x 20: a diagonal of 77.6
+    Rigid far = id;
+    far.t = {0, most * 1.001, 0};
+    CHECK_THROWS_WITH(tr.add_touch(far), Catch::Contains("touch 2's motion: the sensor moves") && Catch::Contains("object_units"));
+    CHECK_THROWS_WITH(tr.evaluate_window({id, far}), Catch::Contains("touch 3's motion: the sensor moves"));
+    CHECK_THROWS_WITH(tr.window_fit({far}, id), Catch::Contains("touch 2's motion: the sensor moves"));
+    Rigid odd = id;
+    odd.t = {1e30, 0, 0};
+    CHECK_THROWS_WITH(tr.add_touch(odd), Catch::Contains("moves 1e+30 mm"));
     CHECK(tr.touches() == 1);
+    far.t = {0, most * 0.999, 0};
+    CHECK_NOTHROW(tr.check_motion(far, 2));
+    // Odometry noise widens the bound by six of its widths along the hop.
+    track::FilterOptions noisy;
+    noisy.odometry_mm = 0.5;
+    CHECK(track::Tracker(tr, noisy).max_hop_mm() == Approx(most + 6 * std::sqrt(3.0) * 0.5).epsilon(1e-12));
     CHECK_THROWS_WITH(track::build_surface(HostTensor({0, 6}), true), Catch::Contains("[N > 0, 6]"));
     HostTensor zero({1, 6});
     CHECK_THROWS_WITH(track::build_surface(zero, true, {}, "cloud.ply"), Catch::Contains("cloud.ply: point 0 has a zero normal"));

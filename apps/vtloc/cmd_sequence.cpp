@@ -157,6 +157,16 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     const bool profile = a.flag("--profile");
     to.profile = profile;
     api::Tracker tracker(s.gpu(), object_path, to);
+    // Every motion checked against the object before the first touch (a unit mismatch is refused
+    // at once, not at the first long hop).
+    for (size_t i = 0; i < motions.size(); ++i)
+        if (motions[i]) {
+            try {
+                tracker.check_motion(*motions[i], int(i + 1));
+            } catch (const api::Error& e) {
+                throw api::Error(std::string(e.what()) + " (" + touches_path + ")");
+            }
+        }
     std::vector<api::TrackerEstimate> steps;
     nlohmann::json jt = nlohmann::json::array();
     const bool json = a.flag("--json");

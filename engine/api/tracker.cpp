@@ -343,6 +343,15 @@ void Tracker::add_touch_term(const std::optional<Motion>& motion, const std::vec
     });
 }
 
+double Tracker::max_hop() const { return impl_->tracker.max_hop_mm(); }
+
+void Tracker::check_motion(const Motion& motion, int touch) const {
+    guarded([&] {
+        if (touch < 2) throw Error("check_motion: touch " + std::to_string(touch) + " has no motion (the first is touch 1)");
+        impl_->tracker.check_motion(to_rigid(motion), size_t(touch));
+    });
+}
+
 int Tracker::touches() const {
     const auto lock = one_at_a_time(*impl_);
     return impl_->tracker.touches();

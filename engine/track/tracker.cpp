@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <exception>
 #include <functional>
 #include <map>
@@ -431,6 +432,25 @@ std::array<float, 2> slack_widths(const Rigid& rel, int steps, const FilterOptio
     return {sl.sigma_t > 0 ? float(0.5 / (sl.sigma_t * sl.sigma_t)) : 0.0f, sl.sigma_r > 0 ? float(0.5 / (sl.sigma_r * sl.sigma_r)) : 0.0f};
 }
 
+double Tracker::max_hop_mm() const {
+    return surface_->diameter + 2 * (std::abs(opt_.press_mm) + kHopSlackMm) + 6 * std::sqrt(3.0) * opt_.odometry_mm;
+}
+
+void Tracker::check_motion(const Rigid& m, size_t touch) const {
+    const std::string what = "touch " + std::to_string(touch) + "'s motion";
+    check_rigid(m, what);
+    const double hop = std::sqrt(m.t[0] * m.t[0] + m.t[1] * m.t[1] + m.t[2] * m.t[2]), most = max_hop_mm();
+    if (hop > most) {
+        char buf[320];
+        std::snprintf(buf, sizeof buf,
+                      ": the sensor moves %.4g mm, farther than two touches on this object can be apart (%.4g mm: its bounding "
+                      "box's diagonal, %.4g, the presses and the odometry noise); is the object file in the robot's units? "
+                      "(object_units, --object-units)",
+                      hop, most, surface_->diameter);
+        throw Error(what + buf);
+    }
+}
+
 void Tracker::check_term(const std::vector<float>& term, size_t touch) const {
     const int64_t H = surface_->n_hypotheses();
     if (!term.empty() && int64_t(term.size()) != H)
@@ -499,7 +519,7 @@ void Tracker::add_touch(const std::optional<Rigid>& motion, const std::vector<fl
     const size_t n = size_t(touches_) + 1;
     if (touches_ == 0 && motion) throw Error("touch 1: the first touch has no previous one to move from");
     if (touches_ > 0 && !motion) throw Error("touch " + std::to_string(n) + ": needs the motion from the previous touch");
-    if (motion) check_rigid(*motion, "touch " + std::to_string(n) + "'s motion");
+    if (motion) check_motion(*motion, n);
     check_term(term, n);
     // The window: the last online_window touches, this one included; the belief of
     // the touch before it (when there is one) enters as a prior.
@@ -588,7 +608,7 @@ Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::
         throw Error("window: " + std::to_string(terms.size()) + " touch terms for " + std::to_string(W) + " touches");
     if (!pose_terms.empty() && pose_terms.size() != W)
         throw Error("window: " + std::to_string(pose_terms.size()) + " pose terms for " + std::to_string(W) + " touches");
-    for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
+    for (size_t i = 0; i < motions.size(); ++i) check_motion(motions[i], i + 2);
     std::vector<const std::vector<float>*> tp(W, nullptr);
     for (size_t i = 0; i < terms.size(); ++i) check_term(terms[i], i + 1), tp[i] = &terms[i];
     Step st = run_step(motions, tp, nullptr, nullptr);
@@ -596,7 +616,7 @@ Estimate Tracker::evaluate_window(const std::vector<Rigid>& motions, const std::
 }
 
 double Tracker::window_fit(const std::vector<Rigid>& motions, const Rigid& pose) const {
-    for (size_t i = 0; i < motions.size(); ++i) check_rigid(motions[i], "touch " + std::to_string(i + 2) + "'s motion");
+    for (size_t i = 0; i < motions.size(); ++i) check_motion(motions[i], i + 2);
     check_rigid(pose, "the pose to fit");
     const ops::pose::Grid grid = surface_->grid();
     double f = 0;

@@ -173,6 +173,13 @@ public:
     Tracker(Tracker&&) noexcept;
     // What the constructor refuses, without a surface (callers check before building one).
     static void check_options(const FilterOptions& options);
+    // How far the sensor can move between two touches of this object: its size, and each
+    // touch's window centre within the press and kHopSlackMm of the surface, and six widths
+    // of the odometry noise. A motion farther than this is refused (a unit mismatch or a
+    // glitch: no pose fits it, and the belief would say nothing it could mean).
+    static constexpr double kHopSlackMm = 5;
+    double max_hop_mm() const;
+    void check_motion(const Rigid& motion, size_t touch) const;  // check_rigid, then max_hop_mm
     Tracker(const Tracker&) = delete;
     Tracker& operator=(const Tracker&) = delete;
 

@@ -91,4 +91,13 @@ def test_bad_tracker_inputs(ctx, root):
     last = np.eye(4)
     last[3, 3] = np.inf  # named as such, not as a last row that is not 0 0 0 1
     expect("motion: row 3, column 3 holds NaN or inf", tr.add_touch, last)
+    # A hop longer than the mug allows (a glitch, or an object file in other units than the robot's).
+    far = np.eye(4)
+    far[0, 3] = 1.01 * tr.max_hop
+    expect("touch 2's motion: the sensor moves", tr.add_touch, far)
+    expect("object_units", tr.check_motion, far, 2)
+    far[0, 3] = 0.99 * tr.max_hop
+    tr.check_motion(far, 2)
+    expect("check_motion: touch 1 has no motion", tr.check_motion, far, 1)
+    assert tr.touches == 1
     expect("needs a normal per point", vtloc.Tracker, ctx, np.zeros((10, 3), np.float32))

@@ -519,6 +519,12 @@ public:
     // add_touch with a precomputed touch_term() (empty: geometry only); shape: the touch's gel
     // shape for render-and-compare at the refined poses (render_refined_weight), or null.
     void add_touch_term(const std::optional<Motion>& motion, const std::vector<float>& term, const GelShape* shape = nullptr);
+    // How far the sensor can move between two touches of this object (its bounding box's
+    // diagonal, the presses, the odometry noise; the tracker's units): add_touch and the
+    // windowed forms refuse a motion farther, naming its touch (1-based: the motion from touch
+    // - 1), as a unit mismatch or a glitch. check_motion throws what they would, and nothing else.
+    double max_hop() const;
+    void check_motion(const Motion& motion, int touch) const;
     int touches() const;
     // Forgets every touch (a new grasp, the object moved); the object's tables stay.
     void reset();
