@@ -15,6 +15,14 @@ namespace vtloc::python {
 
 namespace py = pybind11;
 
+// f() with the GIL released: engine work, or a wait for an object's lock, must not stop the
+// caller's other Python threads. Its result is converted to Python after the GIL is back.
+template <class F>
+auto without_gil(F&& f) -> decltype(f()) {
+    py::gil_scoped_release release;
+    return f();
+}
+
 // "float32 array of shape (3, 4)" for error messages.
 std::string describe(const py::array& a);
 

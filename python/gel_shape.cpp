@@ -46,6 +46,7 @@ void bind_gel_shape(py::module_& m) {
                  o.calibration = calibration, o.mask_threshold = mask_threshold, o.iterations = iterations;
                  o.levels = levels, o.coarse_iterations = coarse_iterations;
                  o.match_lighting = match_lighting, o.threads = threads;
+                 py::gil_scoped_release release;  // the tables' build, about half a second
                  return api::GelShapeReader(ctx, o);
              }),
              py::arg("context"), py::arg("calibration") = "", py::arg("mask_threshold") = 0.7, py::arg("iterations") = api::GelShapeOptions{}.iterations,

@@ -160,9 +160,16 @@ void bind_tracker(py::module_& m) {
                      const auto r = c.unchecked<2>();
                      for (py::ssize_t i = 0; i < c.shape(0); ++i) o.candidates.push_back({r(i, 0), r(i, 1), r(i, 2)});
                  }
-                 if (py::isinstance<py::str>(object)) return api::Tracker(ctx, object.cast<std::string>(), o);
+                 // The surface's build (up to a second) runs without the GIL, as every call does that
+                 // works or waits for the tracker's lock.
+                 if (py::isinstance<py::str>(object)) {
+                     const std::string path = object.cast<std::string>();
+                     py::gil_scoped_release release;
+                     return api::Tracker(ctx, path, o);
+                 }
                  api::PointCloud c = to_cloud(object, "object");
                  for (float& v : c.xyz) v = float(v * object_units);
+                 py::gil_scoped_release release;
                  return api::Tracker(ctx, c, o);
              }),
              py::arg("context"), py::arg("object"), py::arg("press_mm") = 0.8, py::arg("sigma_d_mm") = 1.0,
@@ -229,13 +236,13 @@ void bind_tracker(py::module_& m) {
                 return floats(v);
             },
             py::arg("shape"), "Render-and-compare's log term of one gel shape over the hypotheses (belief order).")
-        .def("estimate", [](const api::Tracker& t) { return estimate_dict(t.estimate()); })
+        .def("estimate", [](const api::Tracker& t) { return estimate_dict(without_gil([&] { return t.estimate(); })); })
         .def(
             "evaluate_window",
             [](api::Tracker& t, const py::list& motions, const py::object& terms, const py::object& shapes) {
                 std::vector<api::Motion> ms;
                 for (size_t i = 0; i < motions.size(); ++i) ms.push_back(to_motion(motions[i], "motions[" + std::to_string(i) + "]"));
-                if (terms.is_none() && shapes.is_none()) return estimate_dict(t.evaluate_window(ms));
+                if (terms.is_none() && shapes.is_none()) return estimate_dict(without_gil([&] { return t.evaluate_window(ms); }));
                 std::vector<std::vector<float>> ts;
                 if (!terms.is_none())
                     for (const py::handle& h : terms.cast<py::list>()) {
@@ -251,7 +258,7 @@ void bind_tracker(py::module_& m) {
                     for (const py::handle& h : shapes.cast<py::list>()) gs.push_back(h.is_none() ? std::nullopt : std::optional(to_shape(py::reinterpret_borrow<py::object>(h))));
                 std::vector<const api::GelShape*> gp;
                 for (const auto& g : gs) gp.push_back(g ? &*g : nullptr);
-                return estimate_dict(t.evaluate_window_terms(ms, ts, gp));
+                return estimate_dict(without_gil([&] { return t.evaluate_window_terms(ms, ts, gp); }));
             },
             py::arg("motions"), py::arg("terms") = py::none(), py::arg("shapes") = py::none(),
             "The windowed form: a list of the W - 1 motions between W touches; terms: one log term per touch "
@@ -295,9 +302,10 @@ void bind_tracker(py::module_& m) {
             py::keep_alive<0, 1>())
         .def_property_readonly("options", [](const api::Tracker& t) { return options_dict(t.options()); },
                                "Every option of this tracker by name (candidates as a C x 3 array or None).")
-        .def("reset", &api::Tracker::reset, "Forgets every touch (a new grasp); the object's tables stay.")
-        .def_property_readonly("touches", &api::Tracker::touches)
-        .def_property_readonly("belief", [](const api::Tracker& t) { return floats(t.belief()); })
+        .def("reset", &api::Tracker::reset, py::call_guard<py::gil_scoped_release>(),
+             "Forgets every touch (a new grasp); the object's tables stay.")
+        .def_property_readonly("touches", py::cpp_function(&api::Tracker::touches, py::call_guard<py::gil_scoped_release>()))
+        .def_property_readonly("belief", [](const api::Tracker& t) { return floats(without_gil([&] { return t.belief(); })); })
         .def_property_readonly("sample_points", [](const api::Tracker& t) {
             std::vector<float> p = t.sample_points();
             py::array_t<float> a({py::ssize_t(p.size() / 3), py::ssize_t(3)});
@@ -306,9 +314,9 @@ void bind_tracker(py::module_& m) {
         })
         .def_property_readonly("n_spin", &api::Tracker::n_spin)
         .def_property_readonly("spacing_mm", &api::Tracker::spacing_mm)
-        .def_property_readonly("device_bytes", &api::Tracker::device_bytes)
-        .def_property_readonly("host_bytes", &api::Tracker::host_bytes)
-        .def_property_readonly("step_nodes", &api::Tracker::step_nodes,
+        .def_property_readonly("device_bytes", py::cpp_function(&api::Tracker::device_bytes, py::call_guard<py::gil_scoped_release>()))
+        .def_property_readonly("host_bytes", py::cpp_function(&api::Tracker::host_bytes, py::call_guard<py::gil_scoped_release>()))
+        .def_property_readonly("step_nodes", py::cpp_function(&api::Tracker::step_nodes, py::call_guard<py::gil_scoped_release>()),
                                "The last step's GPU time per node: (name, ms) pairs in run order; profile=True only.");
 }
 

@@ -87,6 +87,9 @@ def test_tracker_read_while_another_thread_adds_touches(ctx, root):
             assert b.size == alone.belief.size and abs(float(b.sum()) - 1) < 1e-3
             assert shared.estimate()["sample_belief"].size == alone.sample_points.shape[0]
         reads += 1
+        # A breath between reads: a reader spinning on the tracker's lock starved the writer
+        # (6.6 s and 23,626 reads for four touches after other tests had run; 0.05 s alone).
+        time.sleep(0.001)
     writer.join()
     assert shared.touches == 4
     assert np.array_equal(shared.estimate()["sample_belief"], alone.estimate()["sample_belief"])
@@ -105,3 +108,52 @@ def test_install_and_import(root, tmp_path):
     p = subprocess.run([sys.executable, "-c", code, str(prefix)], env=env, capture_output=True, text=True,
                        cwd=str(tmp_path))
     assert p.returncode == 0 and p.stdout.strip() == vtloc.version(), p.stderr
+
+
+
+def test_tracker_calls_wait_for_its_lock_without_the_gil(ctx, root):
+    # A tracker's calls take turns on its lock. One that waits for it must not hold the GIL
+    # meanwhile, or every Python thread (a robot's control loop) stops until the call holding
+    # the lock ends (until 2026-12-08 estimate, evaluate_window, belief, touches, reset and the
+    # byte counts did). The lock's holder here is shape_term's first call, which renders the
+    # object's codebook (0.3 s at 40,000 hypotheses); a ticker thread measures how long it is
+    # kept out while this thread waits behind the holder.
+    r, c = np.mgrid[0:120, 0:160] * 0.1245
+    shape = {"depth_mm": np.maximum(0.0, 0.8 - ((r - 7.5) ** 2 + (c - 10.0) ** 2) / 40.0).astype(np.float32), "mm_per_px": 0.1245}
+    calls = {"touches": lambda t: t.touches, "belief": lambda t: t.belief, "estimate": lambda t: t.estimate(),
+             "evaluate_window": lambda t: t.evaluate_window([]), "reset": lambda t: t.reset()}
+    for name, call in calls.items():
+        t = vtloc.Tracker(ctx, os.path.join(root, "examples", "potato_tour.ply"), hypotheses=40000)
+        t.add_touch()
+        inside = threading.Event()
+        held = []
+
+        def render():
+            inside.set()
+            t0 = time.perf_counter()
+            t.shape_term(shape)
+            held.append(time.perf_counter() - t0)
+
+        holder = threading.Thread(target=render)
+        holder.start()
+        inside.wait()
+        time.sleep(0.03)  # the holder is in the engine, its lock taken
+        gaps, stop = [0.0], threading.Event()
+
+        def tick():
+            last = time.perf_counter()
+            while not stop.is_set():
+                now = time.perf_counter()
+                gaps[0] = max(gaps[0], now - last)
+                last = now
+
+        ticker = threading.Thread(target=tick)
+        ticker.start()
+        time.sleep(0.01)
+        call(t)  # waits for the holder
+        stop.set()
+        ticker.join()
+        holder.join()
+        assert held[0] > 0.15, (name, held)
+        # Held, the GIL would keep the ticker out for the rest of the render (0.2-0.3 s).
+        assert gaps[0] < 0.5 * held[0], (name, gaps[0], held[0])
