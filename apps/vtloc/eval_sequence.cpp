@@ -283,6 +283,16 @@ int run_sequence(Session& s, const Args& a) {
         for (size_t i = 0; i < tour.size(); ++i)
             if (tour[i]->order != int(i))
                 throw api::Error(o.folder + "/touches.csv: the collection order skips " + std::to_string(i));
+        // Each motion of the tour checked against the object before any window (the filter refuses
+        // a hop no two touches on it can make): named by the file and the touch's id.
+        for (size_t i = 1; i < tour.size(); ++i) {
+            try {
+                clean.check_motion(api::Motion{tour[i]->rel_R, tour[i]->rel_t}, tour[i]->order + 1);
+            } catch (const api::Error& e) {
+                throw api::Error(o.folder + "/touches.csv, id " + std::to_string(tour[i]->id) + " (the tour's touch " +
+                                 std::to_string(tour[i]->order + 1) + "): " + e.what());
+            }
+        }
         std::optional<api::Object> encoded;
         std::map<size_t, api::TouchResult> results;
         // (hypothesis set: 0 surface, 1 candidates; row; tour index) -> that touch's term.
