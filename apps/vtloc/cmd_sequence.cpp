@@ -53,7 +53,8 @@ const char* kHelp =
     "                            was made for this object and options (else an error), write it after\n"
     "                            the first render\n"
     "  --model M                 weight file for the network term (default: the shipped model)\n"
-    "  --json                    print the result as JSON\n"
+    "  --json                    print the result as JSON (each touch's contact, pose and modes; the\n"
+    "                            hypotheses, and the tracker's device and host bytes after the last)\n"
     "  --render OUT.png          the belief after each touch, side by side on the object\n"
     "  --threads N               host threads the filter's estimates and tables (and with\n"
     "                            --render-compare the reader's) are built on, 0..256 (default 0:\n"
@@ -172,9 +173,10 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     const bool json = a.flag("--json");
     if (!json) {
         if (model) print_model(model->info(), is_shipped_random_model(model_file));
-        std::printf("object    %s: hypotheses %zu surface samples x %d spins (%.2f mm apart), %.1f MiB on the GPU%s\n",
+        std::printf("object    %s: hypotheses %zu surface samples x %d spins (%.2f mm apart), %.1f MiB on the GPU, "
+                    "%.1f MiB of host memory%s\n",
                     object_path.c_str(), tracker.sample_points().size() / 3, tracker.n_spin(), tracker.spacing_mm(),
-                    double(tracker.device_bytes()) / 1048576.0,
+                    double(tracker.device_bytes()) / 1048576.0, double(tracker.host_bytes()) / 1048576.0,
                     geometry_only ? (render_compare ? ", geometry + render-and-compare" : ", geometry only")
                                   : (render_compare ? ", network + render-and-compare" : ""));
     }
@@ -229,7 +231,10 @@ int cmd_sequence(Session& s, int argc, char** argv) {
     }
     if (json) {
         nlohmann::json j{{"object", object_path}, {"geometry_only", geometry_only}, {"render_compare", render_compare},
-                         {"odometry_noise", {to.odometry_mm, to.odometry_deg}}, {"touches", jt}, {"outputs", outputs}};
+                         {"odometry_noise", {to.odometry_mm, to.odometry_deg}}, {"touches", jt}, {"outputs", outputs},
+                         {"hypotheses", tracker.sample_points().size() / 3 * size_t(tracker.n_spin())},
+                         // After the last touch: what the tracker holds then (its tables and graphs).
+                         {"memory", {{"device_bytes", tracker.device_bytes()}, {"host_bytes", tracker.host_bytes()}}}};
         if (model) j["model"] = model_json(model->info(), is_shipped_random_model(model_file));
         if (s.context) j["device"] = s.context->device().name;
         std::printf("%s\n", j.dump(2).c_str());

@@ -66,6 +66,8 @@ def test_tracker_equals_the_cli(mug_sequence, ctx, root):
         assert e["pose"].tolist() == cli_touch["pose"]
         assert abs(float(e["sample_belief"].sum()) - 1.0) < 1e-4
     assert t.touches == 3 and t.belief.shape == (t.sample_points.shape[0] * t.n_spin,)
+    assert out["hypotheses"] == t.sample_points.shape[0] * t.n_spin
+    assert out["memory"] == {"device_bytes": t.device_bytes, "host_bytes": t.host_bytes}  # after the same three touches
     win = t.evaluate_window([np.eye(4)])
     assert len(win["window_poses"]) == 2 and win["pose"].shape == (4, 4)
     # window_fit: the estimate's own pose, refined again, fits at least as well as its `fit`.
