@@ -147,19 +147,11 @@ int cmd_sequence(Session& s, int argc, char** argv) {
         if (reader) check_gel_frame(*reader, f, im, empty ? &*empty : nullptr, background, where(i));
     }
 
-    std::optional<api::Model> model;
-    std::optional<api::Object> object;
-    std::string model_file;
-    if (!geometry_only) {
-        model_file = a.get("--model").value_or(default_model_path());
-        model.emplace(load_model(s, model_file, api::Backend::Gpu));
-        object = model->encode_object(object_path);
-    }
     const bool profile = a.flag("--profile");
     to.profile = profile;
     api::Tracker tracker(s.gpu(), object_path, to);
     // Every motion checked against the object before the first touch (a unit mismatch is refused
-    // at once, not at the first long hop).
+    // at once, not at the first long hop), and before the model is loaded.
     for (size_t i = 0; i < motions.size(); ++i)
         if (motions[i]) {
             try {
@@ -168,6 +160,14 @@ int cmd_sequence(Session& s, int argc, char** argv) {
                 throw api::Error(std::string(e.what()) + " (" + touches_path + ")");
             }
         }
+    std::optional<api::Model> model;
+    std::optional<api::Object> object;
+    std::string model_file;
+    if (!geometry_only) {
+        model_file = a.get("--model").value_or(default_model_path());
+        model.emplace(load_model(s, model_file, api::Backend::Gpu));
+        object = model->encode_object(object_path);
+    }
     std::vector<api::TrackerEstimate> steps;
     nlohmann::json jt = nlohmann::json::array();
     const bool json = a.flag("--json");
