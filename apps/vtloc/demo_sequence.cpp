@@ -59,7 +59,9 @@ int demo_sequence(Session& s, const fs::path& json_path, const fs::path& model_p
     const std::string png = (out / "belief.png").string();
     api::render_tracker_png(png, tracker, steps, captions, truths);
     std::printf("\nThe first touches leave the place open (many surface patches feel alike); each motion\n"
-                "rules out the poses it would carry off the surface, until one place remains.\n");
+                "rules out the poses it would carry off the surface, until one place remains.\n"
+                "A touch's time is the network, the filter's step and its estimate; the first one's also\n"
+                "builds their GPU executors (pipelines, memory, recorded commands: once per process).\n");
     std::printf("wrote     %s (the belief after each touch; crosshair: the estimate, diamond: the truth)\n", png.c_str());
     return 0;
 }
