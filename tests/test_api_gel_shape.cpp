@@ -152,8 +152,10 @@ TEST_CASE("gel shape reader: black, over-exposed and flat frames are refused, na
     api::TactileImage square;
     square.height = square.width = 120;
     square.rgb.assign(120 * 120 * 3, 100);
-    for (const auto& [f, e] : std::vector<std::pair<api::TactileImage, const api::TactileImage*>>{
+    for (const auto& fe : std::vector<std::pair<api::TactileImage, const api::TactileImage*>>{
              {flat(0), nullptr}, {flat(255), nullptr}, {flat(128), nullptr}, {real, &dark}, {square, nullptr}, {real, &square}}) {
+        const api::TactileImage& f = fe.first;  // not a structured binding: clang 14 cannot capture one
+        const api::TactileImage* e = fe.second;
         const std::string read = refusal([&] { reader.read(f, e, "touches/3.png", "bg.png"); });
         CHECK(!read.empty());
         CHECK(refusal([&] { reader.check_frame(f, e, "touches/3.png", "bg.png"); }) == read);
